@@ -1,0 +1,57 @@
+# billow — common jobs. `make demo` is the main job on the bundled sample; `make test` is
+# the whole test suite (what CI runs). Both work on a fresh machine with only Rust installed.
+
+CARGO   ?= cargo
+BILLOW  := target/release/billow
+SAMPLE  := fixtures/oak/eztree_oak_medium.gltf
+OUT     ?= out
+
+# Batch conversion: every mesh under IN_DIR becomes an asset under OUT_DIR (make -j safe:
+# each output is its own target, written atomically by billow, and the binary is built once
+# by the order-only prerequisite before any job starts).
+IN_DIR  ?= fixtures
+OUT_DIR ?= $(OUT)/batch
+MESHES  := $(shell find $(IN_DIR) -type f \( -name '*.gltf' -o -name '*.glb' -o -name '*.obj' \) 2>/dev/null | grep -v ' ')
+REPORTS := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.inspect.json,$(MESHES))
+
+.PHONY: all build demo test lint fmt batch clean fixtures
+
+all: build
+
+build:
+	$(CARGO) build --release --locked
+
+$(BILLOW): build
+
+## The main job on the bundled oak: inspect it, then a round trip through the asset format.
+demo: build
+	@mkdir -p $(OUT)
+	$(BILLOW) inspect $(SAMPLE)
+	$(BILLOW) info fixtures/format/v1_volume_3x2x1.billow
+
+## The whole test suite: format, lint, unit + integration tests (also what .ci/run runs).
+test:
+	$(CARGO) fmt --all -- --check
+	$(CARGO) clippy --locked --workspace --all-targets -- -D warnings
+	$(CARGO) test --locked --workspace
+
+lint:
+	$(CARGO) fmt --all -- --check
+	$(CARGO) clippy --locked --workspace --all-targets -- -D warnings
+
+fmt:
+	$(CARGO) fmt --all
+
+## Batch rule: `make -j2 batch IN_DIR=some/folder` maps every mesh in the folder to an output.
+batch: $(REPORTS)
+
+$(OUT_DIR)/%.inspect.json: $(IN_DIR)/% | build
+	@mkdir -p $(dir $@)
+	$(BILLOW) inspect --json $< > $@.tmp && mv $@.tmp $@
+
+## Regenerate the procedural hard-case shapes (truss, furry torus, fur tile) as OBJ files.
+fixtures:
+	$(CARGO) run --release --example gen_fixtures -- $(OUT)/procedural
+
+clean:
+	rm -rf $(OUT)

@@ -1,0 +1,49 @@
+//! `billow inspect MESH [--json] [--strict]`: an artist's first sanity check of a mesh.
+
+use std::path::PathBuf;
+
+use billow::import::{import, ImportError, ImportErrorKind, ImportOptions};
+use billow::inspect::inspect;
+
+use crate::exit::{CliError, Code};
+use crate::output::{print_json, warn};
+use crate::Ctx;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The mesh to import: .gltf, .glb or .obj (+ .mtl).
+    mesh: PathBuf,
+    /// Print a machine-readable JSON report on stdout instead of text.
+    #[arg(long)]
+    json: bool,
+    /// Treat warnings (missing textures, skipped primitives) as errors.
+    #[arg(long)]
+    strict: bool,
+}
+
+/// Exit code for an import error (shared by every command that reads meshes).
+pub fn import_code(e: &ImportError) -> Code {
+    match e.kind() {
+        ImportErrorKind::Io => Code::InputIo,
+        ImportErrorKind::Parse | ImportErrorKind::Invalid => Code::InvalidInput,
+        ImportErrorKind::Unsupported => Code::Unsupported,
+        ImportErrorKind::Strict => Code::Strict,
+    }
+}
+
+pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
+    let opts = ImportOptions {
+        strict: args.strict,
+    };
+    let scene = import(&args.mesh, &opts).map_err(|e| CliError::new(import_code(&e), &e))?;
+    let report = inspect(&scene, &args.mesh);
+    if args.json {
+        print_json(&report)?;
+    } else {
+        for w in &scene.warnings {
+            warn(ctx, &format!("{}: {}", args.mesh.display(), w.message));
+        }
+        print!("{report}");
+    }
+    Ok(())
+}

@@ -1,0 +1,53 @@
+//! The `billow` command line: argument parsing, progress, messages and exit codes.
+//! All the work happens in the `billow` library; this binary only talks to the user.
+
+mod exit;
+mod info;
+mod inspect;
+mod output;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+use crate::exit::CliError;
+
+/// billow bakes meshes into image-based level-of-detail assets.
+#[derive(Parser, Debug)]
+#[command(name = "billow", version, about, long_about = None)]
+pub struct Cli {
+    /// Print nothing but errors (no warnings, no progress).
+    #[arg(long, short, global = true)]
+    quiet: bool,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Import a mesh (glTF, GLB, OBJ) and report what billow sees: triangles, materials, textures, bounds.
+    Inspect(inspect::Args),
+    /// Describe a .billow asset: version, kind, header, chunks and their checksums.
+    Info(info::Args),
+}
+
+/// Things every command may need from the global flags.
+pub struct Ctx {
+    pub quiet: bool,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let ctx = Ctx { quiet: cli.quiet };
+    let result: Result<(), CliError> = match cli.command {
+        Command::Inspect(a) => inspect::run(a, &ctx),
+        Command::Info(a) => info::run(a, &ctx),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {}", e.message);
+            ExitCode::from(e.code as u8)
+        }
+    }
+}

@@ -1,0 +1,473 @@
+//! The binary container: preamble, chunks, END. See `SPEC.md` for every byte.
+
+use std::io::Write;
+use std::path::Path;
+
+use crate::error::tag_str;
+use crate::{AssetKind, FormatError, Header, FORMAT_MAJOR, FORMAT_MINOR, MAGIC, PREAMBLE_LEN};
+
+/// Size of a chunk header in bytes.
+pub const CHUNK_HEADER_LEN: usize = 24;
+/// Tag of the RON header chunk (always first).
+pub const TAG_HEAD: [u8; 4] = *b"HEAD";
+/// Tag of the terminating chunk (always last, empty).
+pub const TAG_END: [u8; 4] = *b"END ";
+
+/// Element type of a chunk payload. The payload length must be a multiple of
+/// [`ElemType::size`]. The table is closed for major version 1; data of any
+/// other kind goes in an `Opaque` chunk.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ElemType {
+    /// Untyped bytes (also UTF-8 text).
+    Opaque,
+    U8,
+    U16,
+    U32,
+    F32,
+    F16,
+    U64,
+    F64,
+    I8,
+    I16,
+    I32,
+    I64,
+}
+
+impl ElemType {
+    const ALL: [ElemType; 12] = [
+        ElemType::Opaque,
+        ElemType::U8,
+        ElemType::U16,
+        ElemType::U32,
+        ElemType::F32,
+        ElemType::F16,
+        ElemType::U64,
+        ElemType::F64,
+        ElemType::I8,
+        ElemType::I16,
+        ElemType::I32,
+        ElemType::I64,
+    ];
+
+    /// The `u32` stored in the chunk header.
+    pub const fn code(self) -> u32 {
+        self as u32
+    }
+
+    /// Inverse of [`ElemType::code`].
+    pub fn from_code(code: u32) -> Option<ElemType> {
+        Self::ALL.get(usize::try_from(code).ok()?).copied()
+    }
+
+    /// Size of one element in bytes.
+    pub const fn size(self) -> u64 {
+        match self {
+            ElemType::Opaque | ElemType::U8 | ElemType::I8 => 1,
+            ElemType::U16 | ElemType::F16 | ElemType::I16 => 2,
+            ElemType::U32 | ElemType::F32 | ElemType::I32 => 4,
+            ElemType::U64 | ElemType::F64 | ElemType::I64 => 8,
+        }
+    }
+}
+
+/// One binary chunk (not HEAD or END).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Chunk {
+    pub tag: [u8; 4],
+    pub elem: ElemType,
+    pub data: Vec<u8>,
+}
+
+/// A decoded asset file: the header plus every chunk between HEAD and END,
+/// in file order, unknown tags included.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Container {
+    pub header: Header,
+    pub chunks: Vec<Chunk>,
+}
+
+/// A tag is four printable ASCII bytes (0x20..=0x7E), not starting with a space.
+pub fn valid_tag(tag: &[u8; 4]) -> bool {
+    tag[0] != b' ' && tag.iter().all(|b| (0x20..=0x7e).contains(b))
+}
+
+/// CRC-32/ISO-HDLC (the zlib/PNG CRC) of the concatenation of `parts`.
+fn crc(parts: &[&[u8]]) -> u32 {
+    let mut h = crc32fast::Hasher::new();
+    for p in parts {
+        h.update(p);
+    }
+    h.finalize()
+}
+
+fn pad8(n: usize) -> usize {
+    (8 - n % 8) % 8
+}
+
+fn push_chunk(out: &mut Vec<u8>, tag: [u8; 4], elem: ElemType, data: &[u8]) {
+    let mut head = [0u8; CHUNK_HEADER_LEN];
+    head[0..4].copy_from_slice(&tag);
+    head[4..8].copy_from_slice(&elem.code().to_le_bytes());
+    head[8..16].copy_from_slice(&(data.len() as u64).to_le_bytes());
+    // head[16..20]: reserved, zero.
+    let c = crc(&[&head[..20], data]);
+    head[20..24].copy_from_slice(&c.to_le_bytes());
+    out.extend_from_slice(&head);
+    out.extend_from_slice(data);
+    out.resize(out.len() + pad8(data.len()), 0);
+}
+
+/// Encode a container. Deterministic: the same container always gives the same bytes.
+pub fn to_bytes(c: &Container) -> Result<Vec<u8>, FormatError> {
+    let refs: Vec<ChunkRef<'_>> = c
+        .chunks
+        .iter()
+        .map(|ch| ChunkRef {
+            tag: ch.tag,
+            elem: ch.elem,
+            data: &ch.data,
+        })
+        .collect();
+    encode(&c.header, &refs)
+}
+
+/// A chunk to encode, borrowing its payload.
+pub(crate) struct ChunkRef<'a> {
+    pub tag: [u8; 4],
+    pub elem: ElemType,
+    pub data: &'a [u8],
+}
+
+/// Encode header + chunks without copying the payloads first.
+pub(crate) fn encode(header: &Header, chunks: &[ChunkRef<'_>]) -> Result<Vec<u8>, FormatError> {
+    header.validate()?;
+    let ron = header.to_ron()?;
+    let mut total = PREAMBLE_LEN + 2 * CHUNK_HEADER_LEN + ron.len() + 8;
+    for (i, ch) in chunks.iter().enumerate() {
+        let fail = |m: String| {
+            Err(FormatError::Encode(format!(
+                "chunk #{} '{}': {m}",
+                i + 1,
+                tag_str(&ch.tag)
+            )))
+        };
+        if !valid_tag(&ch.tag) {
+            return fail("tag must be 4 printable ASCII bytes, not starting with a space".into());
+        }
+        if ch.tag == TAG_HEAD || ch.tag == TAG_END {
+            return fail("HEAD and END are written by the encoder".into());
+        }
+        if !(ch.data.len() as u64).is_multiple_of(ch.elem.size()) {
+            return fail(format!(
+                "{} bytes is not a multiple of the {:?} element size {}",
+                ch.data.len(),
+                ch.elem,
+                ch.elem.size()
+            ));
+        }
+        total += CHUNK_HEADER_LEN + ch.data.len() + pad8(ch.data.len());
+    }
+    let mut out = Vec::with_capacity(total);
+    out.resize(PREAMBLE_LEN, 0);
+    push_chunk(&mut out, TAG_HEAD, ElemType::Opaque, ron.as_bytes());
+    for ch in chunks {
+        push_chunk(&mut out, ch.tag, ch.elem, ch.data);
+    }
+    push_chunk(&mut out, TAG_END, ElemType::Opaque, &[]);
+    write_preamble(&mut out, FORMAT_MAJOR, FORMAT_MINOR, header.kind.code());
+    Ok(out)
+}
+
+/// Fill in the 32-byte preamble at the start of `out` (file length = `out.len()`).
+pub(crate) fn write_preamble(out: &mut [u8], major: u16, minor: u16, kind: u32) {
+    let len = out.len() as u64;
+    let p = &mut out[..PREAMBLE_LEN];
+    p[0..8].copy_from_slice(&MAGIC);
+    p[8..10].copy_from_slice(&major.to_le_bytes());
+    p[10..12].copy_from_slice(&minor.to_le_bytes());
+    p[12..16].copy_from_slice(&kind.to_le_bytes());
+    p[16..24].copy_from_slice(&len.to_le_bytes());
+    p[24..28].fill(0);
+    let c = crc(&[&p[..28]]);
+    p[28..32].copy_from_slice(&c.to_le_bytes());
+}
+
+fn u16_at(b: &[u8], o: usize) -> u16 {
+    u16::from_le_bytes([b[o], b[o + 1]])
+}
+fn u32_at(b: &[u8], o: usize) -> u32 {
+    u32::from_le_bytes(b[o..o + 4].try_into().expect("4 bytes"))
+}
+fn u64_at(b: &[u8], o: usize) -> u64 {
+    u64::from_le_bytes(b[o..o + 8].try_into().expect("8 bytes"))
+}
+
+/// A chunk located by the parser; `data` borrows from the file.
+pub(crate) struct RawChunk<'a> {
+    pub tag: [u8; 4],
+    pub elem: ElemType,
+    pub offset: u64,
+    pub data: &'a [u8],
+    pub crc_stored: u32,
+    pub crc_computed: u32,
+}
+
+/// The structure of a file, as found by [`parse`].
+pub(crate) struct Parsed<'a> {
+    pub major: u16,
+    pub minor: u16,
+    pub kind: AssetKind,
+    /// Every chunk in file order, HEAD first and END last.
+    pub chunks: Vec<RawChunk<'a>>,
+}
+
+/// Walk the file structure. With `strict`, a chunk checksum mismatch is an
+/// error; otherwise it is only recorded (for `inspect_bytes`). Every length is
+/// checked against the file size before it is used; nothing is allocated
+/// except the chunk list, whose length is bounded by `bytes.len() / 24`.
+pub(crate) fn parse(bytes: &[u8], strict: bool) -> Result<Parsed<'_>, FormatError> {
+    let n = bytes.len();
+    let magic_len = n.min(MAGIC.len());
+    if bytes[..magic_len] != MAGIC[..magic_len] {
+        return Err(FormatError::BadMagic {
+            found: bytes[..magic_len].to_vec(),
+        });
+    }
+    if n < 12 {
+        return Err(FormatError::Truncated(format!(
+            "file is {n} bytes, shorter than the {PREAMBLE_LEN}-byte preamble"
+        )));
+    }
+    // Magic and version fields are frozen for all majors: check them first.
+    let (major, minor) = (u16_at(bytes, 8), u16_at(bytes, 10));
+    if major > FORMAT_MAJOR {
+        return Err(FormatError::NewerMajor { major, minor });
+    }
+    if major < FORMAT_MAJOR {
+        return Err(FormatError::OlderMajor { major, minor });
+    }
+    if n < PREAMBLE_LEN {
+        return Err(FormatError::Truncated(format!(
+            "file is {n} bytes, shorter than the {PREAMBLE_LEN}-byte preamble"
+        )));
+    }
+    let pre = |m: String| Err(FormatError::Preamble(m));
+    let (stored, computed) = (u32_at(bytes, 28), crc(&[&bytes[..28]]));
+    if stored != computed {
+        return pre(format!(
+            "checksum mismatch (stored 0x{stored:08x}, computed 0x{computed:08x})"
+        ));
+    }
+    let kind_code = u32_at(bytes, 12);
+    let Some(kind) = AssetKind::from_code(kind_code) else {
+        return pre(format!("unknown asset kind {kind_code}"));
+    };
+    let file_len = u64_at(bytes, 16);
+    if u32_at(bytes, 24) != 0 {
+        return pre(format!(
+            "reserved field is 0x{:08x}, must be 0",
+            u32_at(bytes, 24)
+        ));
+    }
+    if (n as u64) < file_len {
+        return Err(FormatError::Truncated(format!(
+            "file is {n} bytes but the preamble says {file_len}"
+        )));
+    }
+    if (n as u64) > file_len {
+        return pre(format!(
+            "file is {n} bytes but the preamble says {file_len} (trailing data)"
+        ));
+    }
+    if !n.is_multiple_of(8) {
+        return pre(format!("file length {n} is not a multiple of 8"));
+    }
+
+    let mut chunks = Vec::new();
+    let mut off = PREAMBLE_LEN;
+    loop {
+        let index = chunks.len();
+        if off == n {
+            return Err(FormatError::Truncated(format!(
+                "file ends at offset {n} without an END chunk"
+            )));
+        }
+        if n - off < CHUNK_HEADER_LEN {
+            return Err(FormatError::Truncated(format!(
+                "chunk #{index} at offset {off}: only {} bytes left for its {CHUNK_HEADER_LEN}-byte header",
+                n - off
+            )));
+        }
+        let h = &bytes[off..off + CHUNK_HEADER_LEN];
+        let tag: [u8; 4] = h[0..4].try_into().expect("4 bytes");
+        let at = off as u64;
+        let err = move |problem: String| {
+            Err(FormatError::Chunk {
+                tag,
+                index,
+                offset: at,
+                problem,
+            })
+        };
+        let elem_code = u32_at(h, 4);
+        let len = u64_at(h, 8);
+        let crc_stored = u32_at(h, 20);
+        let payload_at = off + CHUNK_HEADER_LEN;
+        let room = (n - payload_at) as u64;
+        if len > room {
+            return err(format!(
+                "payload length {len} exceeds the {room} bytes left in the file"
+            ));
+        }
+        let len = len as usize; // <= room, so fits
+        let end = payload_at + len + pad8(len);
+        if end > n {
+            return err(format!(
+                "payload of {len} bytes plus {} padding runs past the end of the file ({n} bytes)",
+                pad8(len)
+            ));
+        }
+        let data = &bytes[payload_at..payload_at + len];
+        let crc_computed = crc(&[&h[..20], data]);
+        if crc_stored != crc_computed && strict {
+            return err(format!(
+                "checksum mismatch (stored 0x{crc_stored:08x}, computed 0x{crc_computed:08x})"
+            ));
+        }
+        if !valid_tag(&tag) {
+            return err("tag is not 4 printable ASCII bytes".into());
+        }
+        let Some(elem) = ElemType::from_code(elem_code) else {
+            return err(format!("unknown element type {elem_code}"));
+        };
+        if u32_at(h, 16) != 0 {
+            return err(format!(
+                "reserved field is 0x{:08x}, must be 0",
+                u32_at(h, 16)
+            ));
+        }
+        if !(len as u64).is_multiple_of(elem.size()) {
+            return err(format!(
+                "payload length {len} is not a multiple of the {elem:?} element size {}",
+                elem.size()
+            ));
+        }
+        if bytes[payload_at + len..end].iter().any(|&b| b != 0) {
+            return err("padding bytes after the payload are not zero".into());
+        }
+        if (index == 0) != (tag == TAG_HEAD) {
+            return err(if index == 0 {
+                "the first chunk must be HEAD".into()
+            } else {
+                "HEAD may only appear once, as the first chunk".into()
+            });
+        }
+        if (tag == TAG_HEAD || tag == TAG_END) && elem != ElemType::Opaque {
+            return err(format!("element type must be Opaque (0), found {elem:?}"));
+        }
+        if tag == TAG_END && len != 0 {
+            return err(format!("END must be empty, has {len} bytes"));
+        }
+        chunks.push(RawChunk {
+            tag,
+            elem,
+            offset: off as u64,
+            data,
+            crc_stored,
+            crc_computed,
+        });
+        off = end;
+        if tag == TAG_END {
+            if end != n {
+                return err(format!("{} trailing bytes after the END chunk", n - end));
+            }
+            return Ok(Parsed {
+                major,
+                minor,
+                kind,
+                chunks,
+            });
+        }
+    }
+}
+
+/// Parse the RON text of a HEAD chunk and check it against the preamble kind.
+pub(crate) fn decode_header(raw: &RawChunk<'_>, kind: AssetKind) -> Result<Header, FormatError> {
+    let text = std::str::from_utf8(raw.data).map_err(|e| {
+        FormatError::Header(format!("HEAD at offset {} is not UTF-8: {e}", raw.offset))
+    })?;
+    let header = Header::from_ron(text)?;
+    if header.kind != kind {
+        return Err(FormatError::Header(format!(
+            "kind {:?} disagrees with the preamble kind {kind:?}",
+            header.kind
+        )));
+    }
+    header.validate()?;
+    Ok(header)
+}
+
+/// Decode and fully validate a container (every checksum, every length).
+/// Unknown chunks are kept in [`Container::chunks`]; skipping them is up to
+/// the typed layer.
+pub fn from_bytes(bytes: &[u8]) -> Result<Container, FormatError> {
+    let parsed = parse(bytes, true)?;
+    let (head, rest) = parsed.chunks.split_first().expect("parse guarantees HEAD");
+    let header = decode_header(head, parsed.kind)?;
+    let body = &rest[..rest.len() - 1]; // drop END
+    let chunks = body
+        .iter()
+        .map(|r| Chunk {
+            tag: r.tag,
+            elem: r.elem,
+            data: r.data.to_vec(),
+        })
+        .collect();
+    Ok(Container { header, chunks })
+}
+
+/// Write `bytes` to `path` atomically: a temporary file in the same directory
+/// is written, fsynced and renamed over `path`. On error the temporary file is
+/// removed and an existing `path` is untouched.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FormatError> {
+    let io = |source: std::io::Error| FormatError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    // `.<name>.<random>.billow.tmp`: hidden, recognisable, matches `*.billow.tmp*`.
+    let name = path
+        .file_name()
+        .map_or_else(|| "asset".into(), |n| n.to_string_lossy().into_owned());
+    let prefix = format!(".{name}.");
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(&prefix).suffix(".billow.tmp");
+    #[cfg(unix)]
+    {
+        // Like `File::create`: 0o666 minus the umask (NamedTempFile defaults to 0o600).
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let mut tmp = builder.tempfile_in(dir).map_err(io)?;
+    tmp.write_all(bytes).map_err(io)?;
+    tmp.as_file().sync_all().map_err(io)?;
+    tmp.persist(path).map_err(|e| io(e.error))?;
+    // Make the rename itself durable; best effort (not possible on every platform).
+    #[cfg(unix)]
+    if let Ok(d) = std::fs::File::open(dir) {
+        let _ = d.sync_all();
+    }
+    Ok(())
+}
+
+/// Read and decode an asset file. Errors carry the path: `"<path>: <problem>"`.
+pub fn read_file(path: &Path) -> Result<Container, FormatError> {
+    let bytes = std::fs::read(path).map_err(|source| FormatError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    from_bytes(&bytes).map_err(|e| e.in_file(path))
+}

@@ -1,0 +1,182 @@
+//! The human-readable RON header (chunk `HEAD`).
+//!
+//! Unknown fields are ignored when reading (a newer minor version may add
+//! fields), so none of these types use `deny_unknown_fields`. Fields added in a
+//! later minor version must be `Option` or have a `#[serde(default)]`.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+use crate::FormatError;
+
+/// What an asset contains. Stored as a `u32` in the preamble and by name in the header.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum AssetKind {
+    /// A volumetric billboard: a 3D RGBA texture with MIP levels plus prism cells.
+    Volume,
+    /// A billboard cloud (reserved; the typed API comes later).
+    Cloud,
+}
+
+impl AssetKind {
+    /// The `u32` stored at preamble offset 12.
+    pub const fn code(self) -> u32 {
+        match self {
+            AssetKind::Volume => 1,
+            AssetKind::Cloud => 2,
+        }
+    }
+
+    /// Inverse of [`AssetKind::code`].
+    pub const fn from_code(code: u32) -> Option<AssetKind> {
+        match code {
+            1 => Some(AssetKind::Volume),
+            2 => Some(AssetKind::Cloud),
+            _ => None,
+        }
+    }
+}
+
+/// The asset header, serialized as RON in the `HEAD` chunk.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+pub struct Header {
+    pub kind: AssetKind,
+    /// Tool and version that wrote the asset, e.g. `"billow 0.1.0"`.
+    pub tool: String,
+    /// The input file the asset was baked from, if any.
+    pub source: Option<SourceInfo>,
+    /// World-space axis-aligned bounds of the baked content.
+    pub bounds: Bounds,
+    pub colour_space: ColourSpace,
+    /// Random seed of the bake, if it used one.
+    pub seed: Option<u64>,
+    /// Bake parameters as given on the command line, e.g. `"res" -> "128x128x128"`.
+    pub params: BTreeMap<String, String>,
+    /// Present iff `kind == Volume`.
+    pub volume: Option<VolumeHeader>,
+}
+
+/// Identity of the input file. Only the file name is kept (no directories) so
+/// the same bake on two machines gives identical bytes.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Eq)]
+pub struct SourceInfo {
+    pub file_name: String,
+    /// SHA-256 of the file's bytes, 64 lowercase hex digits.
+    pub sha256: String,
+    /// Size of the file in bytes.
+    pub bytes: u64,
+}
+
+/// World-space axis-aligned box; `min[i] <= max[i]`, all finite.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+pub struct Bounds {
+    pub min: [f32; 3],
+    pub max: [f32; 3],
+}
+
+/// How colour texels are encoded. Both are premultiplied by alpha.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ColourSpace {
+    /// `rgb = srgb_oetf(linear_rgb * alpha)`, alpha linear. Decode with the sRGB
+    /// EOTF to get linear premultiplied colour (what blending needs).
+    SrgbPremultiplied,
+    /// `rgb = linear_rgb * alpha`, alpha linear.
+    LinearPremultiplied,
+}
+
+/// Volume-specific header fields.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq)]
+pub struct VolumeHeader {
+    /// Level-0 size in texels, x, y, z.
+    pub dims: [u32; 3],
+    /// Number of MIP levels stored, `1..=full_mip_count(dims)`.
+    pub mip_count: u32,
+    pub texel: TexelFormat,
+    /// Per-texel normals, if baked.
+    pub normals: Option<NormalEncoding>,
+}
+
+/// Colour texel format.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum TexelFormat {
+    /// 4 bytes per texel: r, g, b, a, each `value / 255`.
+    Rgba8Unorm,
+}
+
+/// Normal texel encoding.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum NormalEncoding {
+    /// 4 signed bytes per texel: x, y, z, w, each `max(value / 127, -1)`.
+    /// xyz is the Toksvig-shortened mean normal: the average of the unit
+    /// normals inside the texel, so a length below 1 means the normals spread
+    /// (length 0: no preferred direction). w is unused and written as 0.
+    Rgba8Snorm,
+}
+
+impl Header {
+    /// Check the rules a header must follow, independent of the chunks.
+    pub fn validate(&self) -> Result<(), FormatError> {
+        let bad = |m: String| Err(FormatError::Header(m));
+        let b = &self.bounds;
+        for i in 0..3 {
+            if !b.min[i].is_finite() || !b.max[i].is_finite() {
+                return bad(format!("bounds {:?}..{:?} are not finite", b.min, b.max));
+            }
+            if b.min[i] > b.max[i] {
+                return bad(format!("bounds min {:?} exceeds max {:?}", b.min, b.max));
+            }
+        }
+        if let Some(s) = &self.source {
+            if s.file_name.contains(['/', '\\']) {
+                return bad(format!(
+                    "source.file_name {:?} must be a bare file name without directories",
+                    s.file_name
+                ));
+            }
+            let hex_ok = s.sha256.len() == 64
+                && s.sha256
+                    .bytes()
+                    .all(|c| c.is_ascii_digit() || (b'a'..=b'f').contains(&c));
+            if !hex_ok {
+                return bad(format!(
+                    "source.sha256 {:?} is not 64 lowercase hex digits",
+                    s.sha256
+                ));
+            }
+        }
+        match (self.kind, self.volume.is_some()) {
+            (AssetKind::Volume, false) => bad("kind is Volume but `volume` is missing".into()),
+            (AssetKind::Cloud, true) => bad("kind is Cloud but `volume` is present".into()),
+            _ => Ok(()),
+        }
+    }
+
+    /// Serialize to the canonical RON text stored in `HEAD` (deterministic:
+    /// fixed pretty-printing settings, `\n` line ends, maps sorted).
+    pub fn to_ron(&self) -> Result<String, FormatError> {
+        let config = ron::ser::PrettyConfig::new()
+            .depth_limit(8)
+            .new_line("\n")
+            .indentor("    ")
+            .separator(" ")
+            .struct_names(false)
+            .separate_tuple_members(false)
+            .enumerate_arrays(false)
+            .compact_arrays(true)
+            .extensions(ron::extensions::Extensions::empty())
+            .escape_strings(true)
+            .compact_structs(false)
+            .compact_maps(false)
+            .number_suffixes(false);
+        let mut text = ron::ser::to_string_pretty(self, config)
+            .map_err(|e| FormatError::Encode(format!("header to RON: {e}")))?;
+        text.push('\n');
+        Ok(text)
+    }
+
+    /// Parse RON header text (unknown fields are ignored).
+    pub fn from_ron(text: &str) -> Result<Header, FormatError> {
+        ron::from_str(text).map_err(|e| FormatError::Header(format!("invalid RON: {e}")))
+    }
+}

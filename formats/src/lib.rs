@@ -1,0 +1,44 @@
+//! The billow asset container, format v1: the only contract between baker and viewer.
+//!
+//! A file is a 32-byte preamble (magic, version, kind, total length, CRC),
+//! then 8-byte-aligned chunks (tag, element type, length, CRC, payload):
+//! `HEAD` (RON header) first, `END ` last. `SPEC.md` next to this crate
+//! describes every byte.
+//!
+//! - [`to_bytes`] / [`from_bytes`]: the untyped [`Container`].
+//! - [`VolumeAsset`]: the typed volumetric billboard on top of it.
+//! - [`write_atomic`] / [`read_file`]: files.
+//! - [`inspect_bytes`]: a structural [`Report`] for `billow info`.
+
+#![forbid(unsafe_code)]
+
+mod container;
+mod error;
+mod header;
+mod inspect;
+mod volume;
+
+pub use container::{
+    from_bytes, read_file, to_bytes, valid_tag, write_atomic, Chunk, Container, ElemType,
+    CHUNK_HEADER_LEN, TAG_END, TAG_HEAD,
+};
+pub use error::{tag_str, FormatError};
+pub use header::{
+    AssetKind, Bounds, ColourSpace, Header, NormalEncoding, SourceInfo, TexelFormat, VolumeHeader,
+};
+pub use inspect::{inspect_bytes, ChunkInfo, Report};
+pub use volume::{
+    full_mip_count, mip_dims, Prism, VolumeAsset, MAX_DIM, PRISM_BYTES, TAG_CELL, TAG_VLEV,
+    TAG_VNRM, TEXEL_BYTES,
+};
+
+/// Major format version: a reader refuses files with a different major.
+pub const FORMAT_MAJOR: u16 = 1;
+/// Minor format version: additive changes (new chunks, new optional header fields).
+pub const FORMAT_MINOR: u16 = 0;
+/// The first 8 bytes of every billow asset.
+pub const MAGIC: [u8; 8] = *b"\x89BLW\r\n\x1a\n";
+/// Size of the fixed preamble in bytes.
+pub const PREAMBLE_LEN: usize = 32;
+/// Conventional file extension.
+pub const EXTENSION: &str = "billow";

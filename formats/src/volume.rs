@@ -1,0 +1,320 @@
+//! The typed Volume asset (volumetric billboard) on top of the container.
+//!
+//! Chunks, in the order the writer emits them:
+//! - `VLEV` × `mip_count`, element `U8`: colour texels of level 0, 1, …
+//! - `VNRM` × `mip_count`, element `I8`, iff `volume.normals` is set: normals per level.
+//! - `CELL` × 1, element `F32`: the prisms, [`PRISM_BYTES`] each.
+
+use std::path::Path;
+
+use crate::container::{encode, ChunkRef};
+use crate::{
+    from_bytes, write_atomic, AssetKind, Chunk, Container, ElemType, FormatError, Header,
+    NormalEncoding, TexelFormat, VolumeHeader,
+};
+
+/// Tag of a colour MIP level chunk (one per level, in level order).
+pub const TAG_VLEV: [u8; 4] = *b"VLEV";
+/// Tag of a normal MIP level chunk (one per level, in level order).
+pub const TAG_VNRM: [u8; 4] = *b"VNRM";
+/// Tag of the prism cell chunk (exactly one).
+pub const TAG_CELL: [u8; 4] = *b"CELL";
+/// Largest allowed size of level 0 along any axis.
+pub const MAX_DIM: u32 = 4096;
+/// Bytes per colour or normal texel.
+pub const TEXEL_BYTES: u64 = 4;
+/// Bytes per prism in a `CELL` chunk: 36 little-endian f32.
+pub const PRISM_BYTES: usize = 144;
+
+/// A triangular prism cell mapping a slab of the volume texture into the world.
+/// Vertices 0,1,2 are the bottom triangle, 3,4,5 the top one, vertex 3 above
+/// 0, 4 above 1, 5 above 2. Seen from the top, 0→1→2 is counter-clockwise
+/// (the bottom triangle's right-handed normal points towards the top). A box
+/// is two prisms.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Prism {
+    /// World-space vertex positions.
+    pub pos: [[f32; 3]; 6],
+    /// Texture coordinates in `[0,1]³` of the volume (u along x, v along y, w along z).
+    pub uvw: [[f32; 3]; 6],
+}
+
+impl Prism {
+    fn write_le(&self, out: &mut Vec<u8>) {
+        for v in self.pos.iter().chain(self.uvw.iter()) {
+            for c in v {
+                out.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+    }
+
+    fn read_le(b: &[u8]) -> Prism {
+        let f = |i: usize| f32::from_le_bytes(b[4 * i..4 * i + 4].try_into().expect("4 bytes"));
+        let v = |k: usize| [f(3 * k), f(3 * k + 1), f(3 * k + 2)];
+        Prism {
+            pos: std::array::from_fn(v),
+            uvw: std::array::from_fn(|k| v(6 + k)),
+        }
+    }
+}
+
+/// A volumetric billboard asset.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VolumeAsset {
+    /// `kind == Volume`, `volume: Some(..)`.
+    pub header: Header,
+    /// MIP level i: RGBA8 texels, x fastest then y then z, `mip_dims(dims, i)`.
+    pub levels: Vec<Vec<u8>>,
+    /// Normals per level, same layout, 4 bytes (i8) per texel.
+    pub normals: Option<Vec<Vec<u8>>>,
+    pub cells: Vec<Prism>,
+}
+
+/// Size of MIP level `level`: `max(1, d >> level)` per axis.
+pub fn mip_dims(dims0: [u32; 3], level: u32) -> [u32; 3] {
+    dims0.map(|d| d.checked_shr(level).unwrap_or(0).max(1))
+}
+
+/// Number of levels from `dims0` down to 1×1×1 inclusive: `floor(log2(max d)) + 1`.
+pub fn full_mip_count(dims0: [u32; 3]) -> u32 {
+    let m = dims0.iter().copied().max().unwrap_or(1).max(1);
+    32 - m.leading_zeros()
+}
+
+fn level_bytes(dims: [u32; 3]) -> u64 {
+    dims.iter().map(|&d| u64::from(d)).product::<u64>() * TEXEL_BYTES
+}
+
+fn bad<T>(m: String) -> Result<T, FormatError> {
+    Err(FormatError::Volume(m))
+}
+
+impl VolumeAsset {
+    /// Size of MIP level `level`; `[0, 0, 0]` if the header has no volume part.
+    pub fn level_dims(&self, level: u32) -> [u32; 3] {
+        self.header
+            .volume
+            .map_or([0; 3], |v| mip_dims(v.dims, level))
+    }
+
+    /// Check the asset against its header and the format rules.
+    pub fn validate(&self) -> Result<(), FormatError> {
+        self.header.validate()?;
+        if self.header.kind != AssetKind::Volume {
+            return bad(format!("header kind is {:?}, not Volume", self.header.kind));
+        }
+        let Some(v) = self.header.volume else {
+            return bad("header has no `volume` section".into());
+        };
+        validate_volume_header(&v)?;
+        check_levels("VLEV", &self.levels, v)?;
+        match (&self.normals, v.normals) {
+            (Some(n), Some(NormalEncoding::Rgba8Snorm)) => check_levels("VNRM", n, v)?,
+            (None, None) => {}
+            (Some(_), None) => return bad("normals given but header.volume.normals is None".into()),
+            (None, Some(_)) => {
+                return bad("header.volume.normals is set but no normals given".into())
+            }
+        }
+        for (i, p) in self.cells.iter().enumerate() {
+            if !p
+                .pos
+                .iter()
+                .chain(p.uvw.iter())
+                .flatten()
+                .all(|c| c.is_finite())
+            {
+                return bad(format!("CELL prism {i} has a non-finite coordinate"));
+            }
+        }
+        Ok(())
+    }
+
+    fn cell_bytes(&self) -> Vec<u8> {
+        let mut out = Vec::with_capacity(self.cells.len() * PRISM_BYTES);
+        for p in &self.cells {
+            p.write_le(&mut out);
+        }
+        out
+    }
+
+    fn with_chunks<R>(&self, f: impl FnOnce(&[ChunkRef<'_>]) -> R) -> Result<R, FormatError> {
+        self.validate()?;
+        let cells = self.cell_bytes();
+        let mut refs: Vec<ChunkRef<'_>> = self
+            .levels
+            .iter()
+            .map(|l| ChunkRef {
+                tag: TAG_VLEV,
+                elem: ElemType::U8,
+                data: l,
+            })
+            .collect();
+        for n in self.normals.iter().flatten() {
+            refs.push(ChunkRef {
+                tag: TAG_VNRM,
+                elem: ElemType::I8,
+                data: n,
+            });
+        }
+        refs.push(ChunkRef {
+            tag: TAG_CELL,
+            elem: ElemType::F32,
+            data: &cells,
+        });
+        Ok(f(&refs))
+    }
+
+    /// The container for this asset (validates first).
+    pub fn to_container(&self) -> Result<Container, FormatError> {
+        self.with_chunks(|refs| Container {
+            header: self.header.clone(),
+            chunks: refs
+                .iter()
+                .map(|r| Chunk {
+                    tag: r.tag,
+                    elem: r.elem,
+                    data: r.data.to_vec(),
+                })
+                .collect(),
+        })
+    }
+
+    /// Encode to file bytes without copying the texel data into a [`Container`] first.
+    pub fn to_bytes(&self) -> Result<Vec<u8>, FormatError> {
+        self.with_chunks(|refs| encode(&self.header, refs))?
+    }
+
+    /// Decode and validate a volume asset from a container. Chunks with
+    /// unknown tags are skipped.
+    pub fn from_container(c: Container) -> Result<Self, FormatError> {
+        let Container { header, chunks } = c;
+        if header.kind != AssetKind::Volume {
+            return bad(format!("asset kind is {:?}, not Volume", header.kind));
+        }
+        let Some(v) = header.volume else {
+            return bad("header has no `volume` section".into());
+        };
+        validate_volume_header(&v)?;
+        let (mut levels, mut normals, mut cells) = (Vec::new(), Vec::new(), None);
+        for (i, ch) in chunks.into_iter().enumerate() {
+            let (want, list) = match &ch.tag {
+                b"VLEV" => (ElemType::U8, &mut levels),
+                b"VNRM" => (ElemType::I8, &mut normals),
+                b"CELL" => {
+                    if ch.elem != ElemType::F32 {
+                        return bad(format!(
+                            "CELL chunk has element type {:?}, expected F32",
+                            ch.elem
+                        ));
+                    }
+                    if cells.is_some() {
+                        return bad("more than one CELL chunk".into());
+                    }
+                    cells = Some(ch.data);
+                    continue;
+                }
+                _ => continue, // unknown chunk from a newer minor version: skip
+            };
+            if ch.elem != want {
+                let tag = crate::error::tag_str(&ch.tag);
+                return bad(format!(
+                    "{tag} chunk (container chunk {i}) has element type {:?}, expected {want:?}",
+                    ch.elem
+                ));
+            }
+            if list.len() as u64 >= u64::from(v.mip_count) {
+                let tag = crate::error::tag_str(&ch.tag);
+                return bad(format!("more {tag} chunks than mip_count {}", v.mip_count));
+            }
+            list.push(ch.data);
+        }
+        let Some(cells) = cells else {
+            return bad("missing CELL chunk".into());
+        };
+        if !cells.len().is_multiple_of(PRISM_BYTES) {
+            return bad(format!(
+                "CELL length {} is not a multiple of the {PRISM_BYTES}-byte prism",
+                cells.len()
+            ));
+        }
+        let normals = match (v.normals, normals.is_empty()) {
+            (None, true) => None,
+            (None, false) => {
+                return bad("VNRM chunks present but header.volume.normals is None".into())
+            }
+            (Some(_), _) => Some(normals),
+        };
+        let asset = VolumeAsset {
+            header,
+            levels,
+            normals,
+            cells: cells
+                .chunks_exact(PRISM_BYTES)
+                .map(Prism::read_le)
+                .collect(),
+        };
+        asset.validate()?;
+        Ok(asset)
+    }
+
+    /// Decode and validate a volume asset from file bytes.
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, FormatError> {
+        Self::from_container(from_bytes(bytes)?)
+    }
+
+    /// Read a volume asset file. Errors carry the path.
+    pub fn read(path: &Path) -> Result<Self, FormatError> {
+        let bytes = std::fs::read(path).map_err(|source| FormatError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::from_bytes(&bytes).map_err(|e| e.in_file(path))
+    }
+
+    /// Encode and write atomically (see [`write_atomic`]).
+    pub fn write(&self, path: &Path) -> Result<(), FormatError> {
+        let bytes = self.to_bytes()?;
+        write_atomic(path, &bytes)
+    }
+}
+
+fn validate_volume_header(v: &VolumeHeader) -> Result<(), FormatError> {
+    if v.dims.iter().any(|&d| d == 0 || d > MAX_DIM) {
+        return bad(format!("dims {:?} must each be in 1..={MAX_DIM}", v.dims));
+    }
+    let full = full_mip_count(v.dims);
+    if v.mip_count == 0 || v.mip_count > full {
+        return bad(format!(
+            "mip_count {} must be in 1..={full} for dims {:?}",
+            v.mip_count, v.dims
+        ));
+    }
+    match v.texel {
+        TexelFormat::Rgba8Unorm => Ok(()),
+    }
+}
+
+fn check_levels(tag: &str, levels: &[Vec<u8>], v: VolumeHeader) -> Result<(), FormatError> {
+    if levels.len() as u64 != u64::from(v.mip_count) {
+        return bad(format!(
+            "{} {tag} levels but mip_count is {}",
+            levels.len(),
+            v.mip_count
+        ));
+    }
+    for (i, l) in levels.iter().enumerate() {
+        let d = mip_dims(v.dims, i as u32);
+        let want = level_bytes(d);
+        if l.len() as u64 != want {
+            return bad(format!(
+                "{tag} level {i} is {} bytes, expected {want} ({}x{}x{} texels x 4)",
+                l.len(),
+                d[0],
+                d[1],
+                d[2]
+            ));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,310 @@
+//! Mesh import: glTF 2.0 (`.gltf`/`.glb`) and OBJ+MTL into one in-memory [`Scene`].
+//!
+//! Every importer validates its input before trusting it (lengths against buffer sizes,
+//! index ranges, finite positions) and reports a non-fatal problem — a missing texture,
+//! a skipped point/line primitive, a missing MTL — as a [`Warning`] in
+//! [`Scene::warnings`]. With [`ImportOptions::strict`] the first warning becomes an error.
+//!
+//! Library code never prints: all problems come back as [`ImportError`] or [`Warning`].
+
+mod accessor;
+mod gltf;
+mod images;
+mod obj;
+
+use std::collections::HashSet;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+
+use crate::scene::{Aabb, MeshInfo, Scene, Triangle, Warning};
+
+/// Upper bound on the number of triangles one import may produce. A hostile file can
+/// instance one mesh many times; this keeps that from exhausting memory (each triangle
+/// costs ~150 bytes, so the cap is ~10 GB).
+pub const MAX_TRIANGLES: usize = 64 << 20;
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ImportOptions {
+    /// Treat every warning as an error ([`ImportError::Strict`]).
+    pub strict: bool,
+}
+
+/// What went wrong, coarsely, so that a binary can map it to an exit code.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ImportErrorKind {
+    /// The file (or a file it references, such as a `.bin` buffer) could not be read.
+    Io,
+    /// The file is not well-formed (bad JSON, bad GLB container, unparsable OBJ).
+    Parse,
+    /// Well-formed, but uses something billow does not implement (a required extension,
+    /// an unknown file extension).
+    Unsupported,
+    /// Well-formed but inconsistent or hostile (out-of-range indices, lengths beyond the
+    /// buffer, NaN/Inf positions, node cycles).
+    Invalid,
+    /// A warning raised to an error by [`ImportOptions::strict`].
+    Strict,
+}
+
+/// An import failure. `Display` is one line: `<file>: <problem>`.
+#[derive(Debug, thiserror::Error)]
+pub enum ImportError {
+    #[error("{file}: {source}")]
+    Io {
+        file: String,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{file}: parse error: {message}")]
+    Parse { file: String, message: String },
+    #[error("{file}: unsupported: {message}")]
+    Unsupported { file: String, message: String },
+    #[error("{file}: invalid: {message}")]
+    Invalid { file: String, message: String },
+    #[error("{file}: warning treated as error (strict): {}", warning.message)]
+    Strict { file: String, warning: Warning },
+}
+
+impl ImportError {
+    pub fn kind(&self) -> ImportErrorKind {
+        match self {
+            ImportError::Io { .. } => ImportErrorKind::Io,
+            ImportError::Parse { .. } => ImportErrorKind::Parse,
+            ImportError::Unsupported { .. } => ImportErrorKind::Unsupported,
+            ImportError::Invalid { .. } => ImportErrorKind::Invalid,
+            ImportError::Strict { .. } => ImportErrorKind::Strict,
+        }
+    }
+
+    /// The file the error is about (as given, or the referenced file for Io errors).
+    pub fn file(&self) -> &str {
+        match self {
+            ImportError::Io { file, .. }
+            | ImportError::Parse { file, .. }
+            | ImportError::Unsupported { file, .. }
+            | ImportError::Invalid { file, .. }
+            | ImportError::Strict { file, .. } => file,
+        }
+    }
+}
+
+/// Imports `path` into a [`Scene`], dispatching on the (case-insensitive) extension:
+/// `.gltf`, `.glb`, `.obj`.
+pub fn import(path: &Path, opts: &ImportOptions) -> Result<Scene, ImportError> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+        .unwrap_or_default();
+    let file = path.display().to_string();
+    let mut ctx = Ctx {
+        file,
+        opts: *opts,
+        warnings: Vec::new(),
+        seen: HashSet::new(),
+    };
+    let builder = match ext.as_str() {
+        "gltf" | "glb" => gltf::load(path, &mut ctx)?,
+        "obj" => obj::load(path, &mut ctx)?,
+        _ => {
+            return Err(ctx.unsupported(format!(
+                "unknown mesh file extension {:?} (expected .gltf, .glb or .obj)",
+                ext
+            )))
+        }
+    };
+    Ok(builder.finish(ctx.warnings))
+}
+
+/// Per-import context: the file name for messages, options and collected warnings.
+pub(crate) struct Ctx {
+    pub file: String,
+    pub opts: ImportOptions,
+    pub warnings: Vec<Warning>,
+    seen: HashSet<String>,
+}
+
+impl Ctx {
+    /// Records a warning (identical messages once, e.g. for an instanced mesh), or
+    /// fails with [`ImportError::Strict`] in strict mode.
+    pub fn warn(&mut self, message: impl fmt::Display) -> Result<(), ImportError> {
+        let warning = Warning {
+            message: one_line(message),
+        };
+        if self.opts.strict {
+            return Err(ImportError::Strict {
+                file: self.file.clone(),
+                warning,
+            });
+        }
+        if self.seen.insert(warning.message.clone()) {
+            self.warnings.push(warning);
+        }
+        Ok(())
+    }
+    pub fn parse(&self, message: impl fmt::Display) -> ImportError {
+        ImportError::Parse {
+            file: self.file.clone(),
+            message: one_line(message),
+        }
+    }
+    pub fn unsupported(&self, message: impl fmt::Display) -> ImportError {
+        ImportError::Unsupported {
+            file: self.file.clone(),
+            message: one_line(message),
+        }
+    }
+    pub fn invalid(&self, message: impl fmt::Display) -> ImportError {
+        ImportError::Invalid {
+            file: self.file.clone(),
+            message: one_line(message),
+        }
+    }
+    pub fn io(&self, path: &Path, source: std::io::Error) -> ImportError {
+        let file = if path.display().to_string() == self.file {
+            self.file.clone()
+        } else {
+            format!("{} (referenced by {})", path.display(), self.file)
+        };
+        ImportError::Io { file, source }
+    }
+}
+
+/// Collapses any line breaks so that every message stays on one line.
+fn one_line(message: impl fmt::Display) -> String {
+    let s = message.to_string();
+    if s.contains(['\n', '\r']) {
+        s.split(['\n', '\r'])
+            .map(str::trim)
+            .filter(|l| !l.is_empty())
+            .collect::<Vec<_>>()
+            .join("; ")
+    } else {
+        s
+    }
+}
+
+/// Accumulates triangles, dropping zero-area ones, and tracks bounds and mesh counts.
+#[derive(Default)]
+pub(crate) struct SceneBuilder {
+    pub scene: Option<Scene>,
+}
+
+impl SceneBuilder {
+    pub fn new() -> Self {
+        SceneBuilder {
+            scene: Some(Scene {
+                triangles: Vec::new(),
+                materials: Vec::new(),
+                textures: Vec::new(),
+                meshes: Vec::new(),
+                texture_report: Vec::new(),
+                warnings: Vec::new(),
+                dropped_triangles: 0,
+                bounds: Aabb::EMPTY,
+            }),
+        }
+    }
+    pub fn scene(&mut self) -> &mut Scene {
+        self.scene.as_mut().expect("builder already finished")
+    }
+    /// Adds a mesh entry and returns its index.
+    pub fn add_mesh(&mut self, name: String) -> u32 {
+        let s = self.scene();
+        s.meshes.push(MeshInfo { name, triangles: 0 });
+        (s.meshes.len() - 1) as u32
+    }
+    /// Adds a triangle unless its area is zero or not finite (then it is counted as dropped).
+    /// The caller has already checked that positions are finite.
+    pub fn push(&mut self, t: Triangle) {
+        let s = self.scene();
+        let area = t.area();
+        if !(area > 0.0 && area.is_finite()) {
+            s.dropped_triangles += 1;
+            return;
+        }
+        for v in &t.v {
+            s.bounds.grow(v.position);
+        }
+        s.meshes[t.mesh as usize].triangles += 1;
+        s.triangles.push(t);
+    }
+    /// Fails when adding `n` more triangles would exceed [`MAX_TRIANGLES`].
+    pub fn reserve(&mut self, n: usize, ctx: &Ctx) -> Result<(), ImportError> {
+        let s = self.scene();
+        let total = s
+            .triangles
+            .len()
+            .saturating_add(s.dropped_triangles)
+            .saturating_add(n);
+        if total > MAX_TRIANGLES {
+            return Err(ctx.invalid(format!(
+                "more than {MAX_TRIANGLES} triangles after instancing; refusing to expand"
+            )));
+        }
+        s.triangles.reserve(n);
+        Ok(())
+    }
+    fn finish(mut self, warnings: Vec<Warning>) -> Scene {
+        let mut s = self.scene.take().expect("builder already finished");
+        s.warnings = warnings;
+        s
+    }
+}
+
+/// Unit normal of the counter-clockwise triangle (a, b, c), or +Z when degenerate.
+pub(crate) fn face_normal(a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
+    (b - a).cross(c - a).try_normalize().unwrap_or(Vec3::Z)
+}
+
+/// Decodes `%XX` escapes in a URI path (invalid escapes are kept verbatim).
+pub(crate) fn percent_decode(s: &str) -> String {
+    let bytes = s.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        if bytes[i] == b'%' && i + 2 < bytes.len() {
+            let hex = |b: u8| (b as char).to_digit(16);
+            if let (Some(h), Some(l)) = (hex(bytes[i + 1]), hex(bytes[i + 2])) {
+                out.push((h * 16 + l) as u8);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(bytes[i]);
+        i += 1;
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+/// Resolves a relative reference (URI or MTL path) against `base_dir`:
+/// backslashes become slashes; absolute paths are kept.
+pub(crate) fn resolve_relative(base_dir: &Path, reference: &str) -> PathBuf {
+    let normalized = reference.replace('\\', "/");
+    let p = Path::new(&normalized);
+    if p.is_absolute() {
+        p.to_path_buf()
+    } else {
+        base_dir.join(p)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn percent_decoding() {
+        assert_eq!(percent_decode("a%20b.png"), "a b.png");
+        assert_eq!(percent_decode("100%"), "100%");
+        assert_eq!(percent_decode("%4"), "%4");
+        assert_eq!(percent_decode("%zz%41"), "%zzA");
+    }
+
+    #[test]
+    fn one_line_messages() {
+        assert_eq!(one_line("a\nb\r\n c"), "a; b; c");
+    }
+}

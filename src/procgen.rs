@@ -1,0 +1,394 @@
+//! Procedural test shapes for the hard cases no bundled asset covers.
+//!
+//! - [`truss`]: an Eiffel-like lattice tower of beams much thinner than a voxel at
+//!   typical bake resolutions — the case where volumetric billboards must keep partial
+//!   opacity instead of aliasing (VB paper, Figure 7's Eiffel tower).
+//! - [`furry_torus`]: strands of fur growing out of a torus (VB paper, Figure 11), as
+//!   explicit geometry: thousands of thin double-sided triangles with vertex colours.
+//! - [`torus`] and [`fur_tile`]: the surface and the tileable fur volume source used to
+//!   build the same torus as a *shell* of prisms (volumetric texture).
+//!
+//! Everything is deterministic for a given seed (see [`crate::rng`]).
+
+use std::f32::consts::TAU;
+use std::io::Write;
+use std::path::Path;
+
+use glam::{Vec2, Vec3, Vec4};
+
+use crate::rng::Pcg32;
+use crate::scene::{Aabb, AlphaMode, Material, MeshInfo, Scene, Triangle, Vertex};
+
+/// Accumulates triangles into a [`Scene`].
+pub struct SceneBuilder {
+    scene: Scene,
+}
+
+impl SceneBuilder {
+    pub fn new() -> Self {
+        SceneBuilder {
+            scene: Scene {
+                triangles: Vec::new(),
+                materials: Vec::new(),
+                textures: Vec::new(),
+                meshes: Vec::new(),
+                texture_report: Vec::new(),
+                warnings: Vec::new(),
+                dropped_triangles: 0,
+                bounds: Aabb::EMPTY,
+            },
+        }
+    }
+
+    pub fn material(&mut self, m: Material) -> u32 {
+        self.scene.materials.push(m);
+        (self.scene.materials.len() - 1) as u32
+    }
+
+    pub fn mesh(&mut self, name: &str) -> u32 {
+        self.scene.meshes.push(MeshInfo {
+            name: name.into(),
+            triangles: 0,
+        });
+        (self.scene.meshes.len() - 1) as u32
+    }
+
+    /// Adds a triangle (counter-clockwise front face); zero-area ones are dropped and counted.
+    pub fn triangle(&mut self, v: [Vertex; 3], material: u32, mesh: u32) {
+        let t = Triangle { v, material, mesh };
+        let area = t.area();
+        if area.is_nan() || area <= 0.0 {
+            self.scene.dropped_triangles += 1;
+            return;
+        }
+        for p in &v {
+            self.scene.bounds.grow(p.position);
+        }
+        self.scene.meshes[mesh as usize].triangles += 1;
+        self.scene.triangles.push(t);
+    }
+
+    /// Adds the quad a-b-c-d (counter-clockwise) as two triangles with flat normal.
+    pub fn quad(&mut self, p: [Vec3; 4], color: Vec4, material: u32, mesh: u32) {
+        let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
+        let uv = [
+            Vec2::new(0.0, 1.0),
+            Vec2::new(1.0, 1.0),
+            Vec2::ONE,
+            Vec2::ZERO,
+        ];
+        let v = |i: usize| vertex(p[i], n, uv[i], color);
+        self.triangle([v(0), v(1), v(2)], material, mesh);
+        self.triangle([v(0), v(2), v(3)], material, mesh);
+    }
+
+    pub fn finish(self) -> Scene {
+        self.scene
+    }
+}
+
+impl Default for SceneBuilder {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+fn vertex(position: Vec3, normal: Vec3, uv: Vec2, color: Vec4) -> Vertex {
+    Vertex {
+        position,
+        normal,
+        uv,
+        color,
+    }
+}
+
+fn opaque(name: &str, rgb: Vec3, double_sided: bool) -> Material {
+    Material {
+        name: name.into(),
+        base_color_factor: rgb.extend(1.0),
+        base_color_texture: None,
+        alpha_mode: AlphaMode::Opaque,
+        double_sided,
+    }
+}
+
+/// A closed box beam from `a` to `b` with square cross-section of side `width`.
+pub fn beam(sb: &mut SceneBuilder, a: Vec3, b: Vec3, width: f32, material: u32, mesh: u32) {
+    let axis = (b - a).normalize_or_zero();
+    if axis == Vec3::ZERO {
+        return;
+    }
+    let u = axis.any_orthonormal_vector() * (0.5 * width);
+    let v = axis.cross(u.normalize()) * (0.5 * width);
+    let corners = |c: Vec3| [c - u - v, c + u - v, c + u + v, c - u + v];
+    let (ca, cb) = (corners(a), corners(b));
+    let white = Vec4::ONE;
+    for i in 0..4 {
+        let j = (i + 1) % 4;
+        sb.quad([ca[i], ca[j], cb[j], cb[i]], white, material, mesh);
+    }
+    sb.quad([ca[3], ca[2], ca[1], ca[0]], white, material, mesh);
+    sb.quad([cb[0], cb[1], cb[2], cb[3]], white, material, mesh);
+}
+
+/// A lattice tower (+Y up) `height` tall with `levels` storeys, legs tapering from
+/// `base` to `base / 4`, braced by horizontals and crossing diagonals, every beam
+/// `beam_width` thick (choose it well below a voxel: e.g. height/1000).
+pub fn truss(height: f32, base: f32, levels: u32, beam_width: f32) -> Scene {
+    let mut sb = SceneBuilder::new();
+    let m = sb.material(opaque("steel", Vec3::new(0.45, 0.33, 0.25), false));
+    let mesh = sb.mesh("truss");
+    let levels = levels.max(1);
+    let corner = |lvl: u32, k: usize| {
+        let t = lvl as f32 / levels as f32;
+        let half = 0.5 * base * (1.0 - 0.75 * t);
+        let s = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)][k];
+        Vec3::new(s.0 * half, t * height, s.1 * half)
+    };
+    for lvl in 0..levels {
+        for k in 0..4 {
+            let j = (k + 1) % 4;
+            beam(
+                &mut sb,
+                corner(lvl, k),
+                corner(lvl + 1, k),
+                beam_width,
+                m,
+                mesh,
+            );
+            beam(
+                &mut sb,
+                corner(lvl + 1, k),
+                corner(lvl + 1, j),
+                beam_width,
+                m,
+                mesh,
+            );
+            beam(
+                &mut sb,
+                corner(lvl, k),
+                corner(lvl + 1, j),
+                beam_width,
+                m,
+                mesh,
+            );
+            beam(
+                &mut sb,
+                corner(lvl, j),
+                corner(lvl + 1, k),
+                beam_width,
+                m,
+                mesh,
+            );
+        }
+    }
+    sb.finish()
+}
+
+/// Position and outward normal on a torus around +Y (major radius `r_major`, tube `r_minor`)
+/// at angles (u, v) in [0, 1)².
+pub fn torus_point(r_major: f32, r_minor: f32, u: f32, v: f32) -> (Vec3, Vec3) {
+    let (su, cu) = (u * TAU).sin_cos();
+    let (sv, cv) = (v * TAU).sin_cos();
+    let n = Vec3::new(cu * cv, sv, su * cv);
+    let centre = Vec3::new(cu * r_major, 0.0, su * r_major);
+    (centre + n * r_minor, n)
+}
+
+/// A torus surface with UVs (u around the ring, v around the tube), outward normals.
+pub fn torus(r_major: f32, r_minor: f32, segments: u32, sides: u32) -> Scene {
+    let mut sb = SceneBuilder::new();
+    let m = sb.material(opaque("skin", Vec3::new(0.30, 0.18, 0.10), false));
+    let mesh = sb.mesh("torus");
+    let (segments, sides) = (segments.max(3), sides.max(3));
+    let vert = |i: u32, j: u32| {
+        let (u, v) = (i as f32 / segments as f32, j as f32 / sides as f32);
+        let (p, n) = torus_point(r_major, r_minor, u, v);
+        vertex(p, n, Vec2::new(u, v), Vec4::ONE)
+    };
+    for i in 0..segments {
+        for j in 0..sides {
+            let (a, b, c, d) = (
+                vert(i, j),
+                vert(i + 1, j),
+                vert(i + 1, j + 1),
+                vert(i, j + 1),
+            );
+            // Counter-clockwise seen from outside.
+            sb.triangle([a, c, b], m, mesh);
+            sb.triangle([a, d, c], m, mesh);
+        }
+    }
+    sb.finish()
+}
+
+/// One strand: a thin double-sided ribbon from `root` along `dir` with a gentle curl,
+/// `segments` pieces, tapering to a point; colour from dark root to light tip.
+#[allow(clippy::too_many_arguments)]
+fn strand(
+    sb: &mut SceneBuilder,
+    root: Vec3,
+    dir: Vec3,
+    side: Vec3,
+    curl: Vec3,
+    length: f32,
+    width: f32,
+    segments: u32,
+    material: u32,
+    mesh: u32,
+) {
+    let root_c = Vec4::new(0.20, 0.12, 0.06, 1.0);
+    let tip_c = Vec4::new(0.85, 0.70, 0.45, 1.0);
+    let point = |t: f32| root + (dir * t + curl * (t * t)) * length;
+    let normal = dir.cross(side).normalize_or_zero();
+    for s in 0..segments {
+        let (t0, t1) = (s as f32 / segments as f32, (s + 1) as f32 / segments as f32);
+        let (w0, w1) = (0.5 * width * (1.0 - t0), 0.5 * width * (1.0 - t1));
+        let (c0, c1) = (root_c.lerp(tip_c, t0), root_c.lerp(tip_c, t1));
+        let (p0, p1) = (point(t0), point(t1));
+        let v = |p: Vec3, c: Vec4, v: f32| vertex(p, normal, Vec2::new(0.5, v), c);
+        let a = v(p0 - side * w0, c0, 1.0 - t0);
+        let b = v(p0 + side * w0, c0, 1.0 - t0);
+        let c = v(p1 + side * w1, c1, 1.0 - t1);
+        let d = v(p1 - side * w1, c1, 1.0 - t1);
+        sb.triangle([a, b, c], material, mesh);
+        if s + 1 < segments {
+            sb.triangle([a, c, d], material, mesh);
+        }
+    }
+}
+
+/// A torus with `count` strands of fur (explicit geometry; VB paper Figure 11).
+pub fn furry_torus(count: u32, seed: u64) -> Scene {
+    let (r_major, r_minor) = (1.0, 0.35);
+    let mut sb = SceneBuilder::new();
+    let skin = sb.material(opaque("skin", Vec3::new(0.30, 0.18, 0.10), false));
+    let fur = sb.material(opaque("fur", Vec3::ONE, true));
+    let torus_mesh = sb.mesh("torus");
+    let fur_mesh = sb.mesh("fur");
+    for t in torus(r_major, r_minor, 48, 24).triangles {
+        sb.triangle(t.v, skin, torus_mesh);
+    }
+    let mut rng = Pcg32::seeded(seed, 1);
+    for _ in 0..count {
+        let (p, n) = torus_point(r_major, r_minor, rng.next_f32(), rng.next_f32());
+        let side = n.any_orthonormal_vector();
+        let side = Quat2::rotate(side, n, rng.range_f32(0.0, TAU));
+        let curl = Quat2::rotate(side, n, 1.0) * 0.35;
+        let length = rng.range_f32(0.10, 0.16);
+        strand(&mut sb, p, n, side, curl, length, 0.008, 3, fur, fur_mesh);
+    }
+    sb.finish()
+}
+
+/// A tileable patch of fur for shell texturing: strands rooted in the unit square of the
+/// x–z plane growing along +Y up to height 1; strands near an edge wrap to the opposite
+/// edge, so tiles join seamlessly.
+pub fn fur_tile(count: u32, seed: u64) -> Scene {
+    let mut sb = SceneBuilder::new();
+    let fur = sb.material(opaque("fur", Vec3::ONE, true));
+    let mesh = sb.mesh("fur_tile");
+    let mut rng = Pcg32::seeded(seed, 2);
+    for _ in 0..count {
+        let root = Vec3::new(rng.next_f32(), 0.0, rng.next_f32());
+        let side = Quat2::rotate(Vec3::X, Vec3::Y, rng.range_f32(0.0, TAU));
+        let lean = Quat2::rotate(Vec3::X, Vec3::Y, rng.range_f32(0.0, TAU)) * 0.25;
+        let length = rng.range_f32(0.75, 0.98);
+        // Draw the strand and its copies shifted by ±1 in x and z; keep only what lies in the tile.
+        for dx in [-1.0f32, 0.0, 1.0] {
+            for dz in [-1.0f32, 0.0, 1.0] {
+                let r = root + Vec3::new(dx, 0.0, dz);
+                let reach = 0.3;
+                if r.x < -reach || r.x > 1.0 + reach || r.z < -reach || r.z > 1.0 + reach {
+                    continue;
+                }
+                strand(&mut sb, r, Vec3::Y, side, lean, length, 0.03, 3, fur, mesh);
+            }
+        }
+    }
+    sb.finish()
+}
+
+/// Rotation of a vector about a unit axis (Rodrigues), kept local to avoid a quaternion import.
+struct Quat2;
+impl Quat2 {
+    fn rotate(v: Vec3, axis: Vec3, angle: f32) -> Vec3 {
+        let (s, c) = angle.sin_cos();
+        v * c + axis.cross(v) * s + axis * axis.dot(v) * (1.0 - c)
+    }
+}
+
+/// Writes a scene as Wavefront OBJ + MTL (positions, normals, UVs; vertex colours as the
+/// common `v x y z r g b` extension). Used to ship the procedural shapes as fixture files.
+pub fn write_obj(scene: &Scene, obj_path: &Path) -> std::io::Result<()> {
+    let mtl_path = obj_path.with_extension("mtl");
+    let mtl_name = mtl_path
+        .file_name()
+        .and_then(|s| s.to_str())
+        .unwrap_or("out.mtl");
+    let mut mtl = Vec::new();
+    for m in &scene.materials {
+        let c = m.base_color_factor;
+        writeln!(
+            mtl,
+            "newmtl {}\nKd {} {} {}\nd {}\n",
+            m.name, c.x, c.y, c.z, c.w
+        )?;
+    }
+    let mut obj = Vec::new();
+    writeln!(obj, "# generated by billow::procgen\nmtllib {mtl_name}")?;
+    let mut current: Option<(u32, u32)> = None;
+    for (i, t) in scene.triangles.iter().enumerate() {
+        if current != Some((t.mesh, t.material)) {
+            let mesh = &scene.meshes[t.mesh as usize].name;
+            writeln!(
+                obj,
+                "o {mesh}\nusemtl {}",
+                scene.materials[t.material as usize].name
+            )?;
+            current = Some((t.mesh, t.material));
+        }
+        for v in &t.v {
+            let (p, c) = (v.position, v.color);
+            writeln!(obj, "v {} {} {} {} {} {}", p.x, p.y, p.z, c.x, c.y, c.z)?;
+            writeln!(obj, "vn {} {} {}", v.normal.x, v.normal.y, v.normal.z)?;
+            // OBJ's v axis points up; the scene's (glTF's) points down.
+            writeln!(obj, "vt {} {}", v.uv.x, 1.0 - v.uv.y)?;
+        }
+        let b = 3 * i + 1;
+        writeln!(obj, "f {b}/{b}/{b} {0}/{0}/{0} {1}/{1}/{1}", b + 1, b + 2)?;
+    }
+    std::fs::write(&mtl_path, mtl)?;
+    std::fs::write(obj_path, obj)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn truss_beams_are_thin_and_closed() {
+        let s = truss(10.0, 3.0, 6, 0.01);
+        // 4 legs + 4 horizontals + 8 diagonals per level, 12 triangles per beam.
+        assert_eq!(s.triangles.len(), 6 * 16 * 12);
+        assert_eq!(s.dropped_triangles, 0);
+        assert!((s.bounds.size().y - 10.0).abs() < 0.02);
+    }
+
+    #[test]
+    fn furry_torus_is_deterministic() {
+        let a = furry_torus(200, 3);
+        let b = furry_torus(200, 3);
+        let c = furry_torus(200, 4);
+        assert_eq!(a, b);
+        assert_ne!(a.triangles, c.triangles);
+        assert_eq!(a.meshes[1].triangles, 200 * 5);
+    }
+
+    #[test]
+    fn fur_tile_stays_near_unit_tile() {
+        let s = fur_tile(100, 1);
+        assert!(s.bounds.min.y >= -1e-6 && s.bounds.max.y <= 1.0 + 1e-3);
+        assert!(s.bounds.min.x > -0.6 && s.bounds.max.x < 1.6);
+    }
+}

@@ -1,0 +1,98 @@
+//! Helpers for driving the real `billow` binary in integration tests.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+pub fn bin() -> PathBuf {
+    PathBuf::from(env!("CARGO_BIN_EXE_billow"))
+}
+
+pub fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// `../shared/assets`, or `None` (and a plain line saying the test skips) when absent.
+pub fn shared_assets(test: &str) -> Option<PathBuf> {
+    let p = repo().join("../shared/assets");
+    if p.is_dir() {
+        Some(p)
+    } else {
+        println!("skipping {test}: ../shared/assets not found");
+        None
+    }
+}
+
+pub struct Run {
+    /// `None` when killed by a signal or the timeout.
+    pub code: Option<i32>,
+    pub stdout: String,
+    pub stderr: String,
+    pub timed_out: bool,
+}
+
+impl Run {
+    /// The single `error: ...` line a failing command must print, or a description of what is wrong.
+    pub fn error_line(&self) -> Result<&str, String> {
+        let lines: Vec<&str> = self
+            .stderr
+            .lines()
+            .filter(|l| !l.starts_with("warning:"))
+            .collect();
+        match lines.as_slice() {
+            [l] if l.starts_with("error: ") => Ok(l),
+            _ => Err(format!(
+                "expected one 'error:' line on stderr, got {:?}",
+                self.stderr
+            )),
+        }
+    }
+}
+
+/// Runs `billow args...` with a wall-clock limit and an address-space limit (`ulimit -v`,
+/// in KiB) so that a hang or an allocation bomb fails the test instead of the machine.
+pub fn run_limited(args: &[&str], dir: &Path, timeout: Duration, mem_kib: u64) -> Run {
+    let mut cmd = Command::new("sh");
+    cmd.arg("-c")
+        .arg(format!("ulimit -v {mem_kib}; exec \"$0\" \"$@\""))
+        .arg(bin())
+        .args(args)
+        .current_dir(dir)
+        .env("RAYON_NUM_THREADS", "2")
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped());
+    let mut child = cmd.spawn().expect("spawn billow");
+    let start = Instant::now();
+    let mut timed_out = false;
+    loop {
+        if child.try_wait().expect("wait").is_some() {
+            break;
+        }
+        if start.elapsed() > timeout {
+            let _ = child.kill();
+            timed_out = true;
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    let out = child.wait_with_output().expect("output");
+    Run {
+        code: if timed_out { None } else { out.status.code() },
+        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+        timed_out,
+    }
+}
+
+/// Runs `billow args...` in `dir` (generous limits).
+pub fn run(args: &[&str], dir: &Path) -> Run {
+    run_limited(args, dir, Duration::from_secs(120), 8 << 20)
+}
+
+pub fn sha256(path: &Path) -> String {
+    use sha2::{Digest, Sha256};
+    let bytes = std::fs::read(path).unwrap();
+    format!("{:x}", Sha256::digest(bytes))
+}
