@@ -1,8 +1,14 @@
 //! billow: bakes meshes into image-based level-of-detail assets.
+pub mod bvh;
+pub mod camera;
+pub mod eval;
+pub mod export;
 pub mod import;
 pub mod inspect;
 pub mod procgen;
 pub mod provenance;
 pub mod rng;
 pub mod scene;
+pub mod shell;
 pub mod texture;
+pub mod voxelize;

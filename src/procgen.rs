@@ -71,10 +71,11 @@ impl SceneBuilder {
     /// Adds the quad a-b-c-d (counter-clockwise) as two triangles with flat normal.
     pub fn quad(&mut self, p: [Vec3; 4], color: Vec4, material: u32, mesh: u32) {
         let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
+        // glTF convention (origin top-left): a bottom-left, b bottom-right, c top-right.
         let uv = [
             Vec2::new(0.0, 1.0),
-            Vec2::new(1.0, 1.0),
             Vec2::ONE,
+            Vec2::new(1.0, 0.0),
             Vec2::ZERO,
         ];
         let v = |i: usize| vertex(p[i], n, uv[i], color);
@@ -373,6 +374,25 @@ mod tests {
         assert_eq!(s.triangles.len(), 6 * 16 * 12);
         assert_eq!(s.dropped_triangles, 0);
         assert!((s.bounds.size().y - 10.0).abs() < 0.02);
+    }
+
+    #[test]
+    fn quad_uvs_span_the_unit_square() {
+        let mut sb = SceneBuilder::new();
+        let m = sb.material(Material::default());
+        let mesh = sb.mesh("q");
+        let p = [Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y];
+        sb.quad(p, Vec4::ONE, m, mesh);
+        let s = sb.finish();
+        for t in &s.triangles {
+            let (a, b, c) = (t.v[0].uv, t.v[1].uv, t.v[2].uv);
+            let uv_area = 0.5 * (b - a).perp_dot(c - a).abs();
+            assert!((uv_area - 0.5).abs() < 1e-6, "{t:?}");
+            for v in &t.v {
+                // uv = (x, 1 - y): top-left origin.
+                assert_eq!(v.uv, Vec2::new(v.position.x, 1.0 - v.position.y));
+            }
+        }
     }
 
     #[test]

@@ -4,7 +4,6 @@ use std::fmt::Display;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(u8)]
-#[allow(dead_code)] // OutputIo and BadParameter are for the baking commands
 pub enum Code {
     /// Something unexpected inside billow.
     Internal = 1,

@@ -1,10 +1,13 @@
 //! The `billow` command line: argument parsing, progress, messages and exit codes.
 //! All the work happens in the `billow` library; this binary only talks to the user.
 
+mod eval;
 mod exit;
 mod info;
 mod inspect;
 mod output;
+mod shell;
+mod voxelize;
 
 use std::process::ExitCode;
 
@@ -29,6 +32,12 @@ enum Command {
     Inspect(inspect::Args),
     /// Describe a .billow asset: version, kind, header, chunks and their checksums.
     Info(info::Args),
+    /// Bake a mesh into a volumetric billboard: six-direction slices, composited MIPs, combined.
+    Voxelize(voxelize::Args),
+    /// Cover a surface mesh with a tileable volume: one prism cell per triangle (volumetric textures).
+    Shell(shell::Args),
+    /// Compare a volume asset with its source mesh: reference vs asset renders, errors and timings per view.
+    Eval(eval::Args),
 }
 
 /// Things every command may need from the global flags.
@@ -42,6 +51,9 @@ fn main() -> ExitCode {
     let result: Result<(), CliError> = match cli.command {
         Command::Inspect(a) => inspect::run(a, &ctx),
         Command::Info(a) => info::run(a, &ctx),
+        Command::Voxelize(a) => voxelize::run(a, &ctx),
+        Command::Shell(a) => shell::run(a, &ctx),
+        Command::Eval(a) => eval::run(a, &ctx),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -23,7 +23,6 @@ pub fn warn(ctx: &Ctx, message: &str) {
 }
 
 /// A progress bar on stderr, shown only on a terminal and without `--quiet`.
-#[allow(dead_code)] // for the baking commands
 pub fn progress(ctx: &Ctx, len: u64, what: &str) -> ProgressBar {
     if ctx.quiet || !std::io::stderr().is_terminal() {
         return ProgressBar::hidden();
@@ -36,4 +35,12 @@ pub fn progress(ctx: &Ctx, len: u64, what: &str) -> ProgressBar {
     );
     bar.set_prefix(what.to_string());
     bar
+}
+
+/// Peak resident memory of this process so far (Linux `VmHWM`), if the OS tells.
+pub fn peak_rss_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
 }

@@ -53,13 +53,24 @@ impl Run {
 /// Runs `billow args...` with a wall-clock limit and an address-space limit (`ulimit -v`,
 /// in KiB) so that a hang or an allocation bomb fails the test instead of the machine.
 pub fn run_limited(args: &[&str], dir: &Path, timeout: Duration, mem_kib: u64) -> Run {
+    run_with(args, dir, timeout, mem_kib, &[("RAYON_NUM_THREADS", "2")])
+}
+
+/// [`run_limited`] with extra environment variables.
+pub fn run_with(
+    args: &[&str],
+    dir: &Path,
+    timeout: Duration,
+    mem_kib: u64,
+    envs: &[(&str, &str)],
+) -> Run {
     let mut cmd = Command::new("sh");
     cmd.arg("-c")
         .arg(format!("ulimit -v {mem_kib}; exec \"$0\" \"$@\""))
         .arg(bin())
         .args(args)
         .current_dir(dir)
-        .env("RAYON_NUM_THREADS", "2")
+        .envs(envs.iter().copied())
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped());

@@ -1,0 +1,474 @@
+//! `billow eval SOURCE ASSET`: how close a volume asset looks to its source mesh, view by
+//! view, against a supersampled ray-traced reference (docs/eval.md).
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use billow::camera::{parse_direction, view_directions, views_of, ViewDirections, ViewSpec};
+use billow::eval::image::write_comparisons_png;
+use billow::eval::slicer::{SlicerParams, Spacing};
+use billow::eval::suite::{
+    lighting_note, mean_errors, means_by_distance, view_file_stem, DistanceMeans, EvalOptions,
+    Evaluator, MeanErrors, PreparedAsset, ViewResult, EVAL_FOV_Y,
+};
+use billow::eval::EvalError;
+use billow::import::{import, ImportOptions};
+use billow_format::{read_file, AssetKind, VolumeAsset};
+use serde::Serialize;
+
+use crate::exit::{CliError, Code};
+use crate::info::format_code;
+use crate::inspect::import_code;
+use crate::output::{print_json, progress, warn};
+use crate::Ctx;
+
+/// Heatmap gain of the difference panels: a difference of 1/4 or more is white.
+const DIFF_GAIN: f32 = 4.0;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The source mesh (.gltf, .glb, .obj): the reference is ray-traced from it.
+    source: PathBuf,
+    /// The volume asset (.billow) baked from it.
+    asset: PathBuf,
+    /// Which views: axes (±x ±y ±z), diagonals (the 8 corners), all, or a comma list of
+    /// directions (`+x`, `-y`, `+x-y+z`) and exact views (`+x@4x`). Write `--views=-z`
+    /// when the list starts with a minus sign.
+    #[arg(long, default_value = "axes")]
+    views: String,
+    /// Distance factors: multiples of the framed distance (the mesh's bounding sphere just
+    /// fills the image); the image size stays the same.
+    #[arg(long, default_value = "1,4,16")]
+    distances: String,
+    /// Image size WxH in pixels.
+    #[arg(long, default_value = "128x128")]
+    size: String,
+    /// Reference samples per pixel: a square number (1, 4, 9, 16, …, 256), stratified.
+    #[arg(long, default_value_t = 16)]
+    spp: u32,
+    /// Slice spacing of the asset render: adaptive (the paper: one pixel's footprint, never
+    /// finer than a voxel), adaptive:BIAS (spacing × BIAS), or uniform[:VOXELS] (a constant
+    /// spacing of VOXELS level-0 voxels, default 1, which always samples MIP level 0).
+    #[arg(long, default_value = "adaptive")]
+    spacing: String,
+    /// Write one comparison image per view here (reference | asset | difference | 1-spp
+    /// mesh | difference) and eval.json; created if missing. Written atomically.
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// Treat import warnings (e.g. a missing texture) as errors.
+    #[arg(long)]
+    strict: bool,
+    /// Print one machine-readable JSON document on stdout instead of the table.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize)]
+struct Seconds {
+    import: f64,
+    read_asset: f64,
+    reference: f64,
+    asset: f64,
+    raster_1spp: f64,
+    total: f64,
+}
+
+#[derive(Serialize)]
+struct Lighting {
+    /// The asset's `bake` parameter (`none` when absent).
+    asset: String,
+    /// Always `unlit` for now.
+    reference: &'static str,
+}
+
+#[derive(Serialize)]
+struct Means {
+    asset: MeanErrors,
+    raster_1spp: MeanErrors,
+}
+
+#[derive(Serialize)]
+struct Summary {
+    source: String,
+    asset: String,
+    asset_dims: [u32; 3],
+    asset_params: std::collections::BTreeMap<String, String>,
+    size: [u32; 2],
+    fov_y_degrees: f32,
+    reference_spp: u32,
+    spacing: String,
+    lighting: Lighting,
+    notes: Vec<String>,
+    views: Vec<ViewResult>,
+    mean: Means,
+    by_distance: Vec<DistanceMeans>,
+    slices: usize,
+    fragments: u64,
+    seconds: Seconds,
+    images: Vec<String>,
+}
+
+fn bad(flag: &str, e: impl std::fmt::Display) -> CliError {
+    CliError::new(Code::BadParameter, format!("{flag}: {e}"))
+}
+
+/// `WxH`, each 1..=4096.
+pub fn parse_size(s: &str) -> Result<(u32, u32), CliError> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| bad("--size", format!("'{s}': expected WxH, e.g. 128x128")))?;
+    let p = |v: &str| -> Result<u32, CliError> {
+        let n: u32 = v
+            .trim()
+            .parse()
+            .map_err(|e| bad("--size", format!("'{s}': {e}")))?;
+        if !(1..=4096).contains(&n) {
+            return Err(bad(
+                "--size",
+                format!("'{s}': each side must be 1 to 4096 pixels"),
+            ));
+        }
+        Ok(n)
+    };
+    Ok((p(w)?, p(h)?))
+}
+
+/// `1,4,16`: positive finite factors up to 1000.
+pub fn parse_distances(s: &str) -> Result<Vec<f32>, CliError> {
+    let mut out: Vec<f32> = Vec::new();
+    for part in s.split(',') {
+        let f: f32 = part
+            .trim()
+            .parse()
+            .map_err(|e| bad("--distances", format!("'{part}': {e}")))?;
+        if !(f.is_finite() && f > 0.0 && f <= 1000.0) {
+            return Err(bad(
+                "--distances",
+                format!("'{part}': a factor must be above 0 and at most 1000"),
+            ));
+        }
+        if !out.contains(&f) {
+            out.push(f);
+        }
+    }
+    Ok(out)
+}
+
+/// See `--views`.
+pub fn parse_views(s: &str, distances: &[f32]) -> Result<Vec<ViewSpec>, CliError> {
+    let mut out: Vec<ViewSpec> = Vec::new();
+    let mut push = |v: ViewSpec| {
+        if !out.iter().any(|o| o.name == v.name) {
+            out.push(v);
+        }
+    };
+    for item in s.split(',').map(str::trim) {
+        let set = match item {
+            "axes" => Some(ViewDirections::Axes),
+            "diagonals" => Some(ViewDirections::Diagonals),
+            "all" => Some(ViewDirections::All),
+            _ => None,
+        };
+        if let Some(set) = set {
+            views_of(view_directions(set), distances)
+                .into_iter()
+                .for_each(&mut push);
+            continue;
+        }
+        let unknown = || {
+            bad(
+                "--views",
+                format!(
+                    "unknown view '{item}': expected axes, diagonals, all, a direction like +x or \
+                     +x-y+z, or a view like +x@4x"
+                ),
+            )
+        };
+        let (dir_name, factor) = match item.split_once('@') {
+            Some((d, f)) => {
+                let f = f.strip_suffix('x').ok_or_else(unknown)?;
+                let f = parse_distances(f).map_err(|_| unknown())?;
+                (d, Some(f[0]))
+            }
+            None => (item, None),
+        };
+        let dir = parse_direction(dir_name).ok_or_else(unknown)?;
+        let factors = factor.map_or_else(|| distances.to_vec(), |f| vec![f]);
+        views_of(vec![(dir_name.to_string(), dir)], &factors)
+            .into_iter()
+            .for_each(&mut push);
+    }
+    Ok(out)
+}
+
+/// See `--spacing`; `voxel` is the asset's level-0 voxel size.
+pub fn parse_spacing(s: &str, voxel: Option<f32>) -> Result<Spacing, CliError> {
+    let (mode, arg) = match s.split_once(':') {
+        Some((m, a)) => (m.trim(), Some(a.trim())),
+        None => (s.trim(), None),
+    };
+    let num = |a: Option<&str>| -> Result<f32, CliError> {
+        let Some(a) = a else { return Ok(1.0) };
+        let v: f32 = a
+            .parse()
+            .map_err(|e| bad("--spacing", format!("'{s}': {e}")))?;
+        if !(v.is_finite() && (0.01..=100.0).contains(&v)) {
+            return Err(bad(
+                "--spacing",
+                format!("'{s}': the factor must be between 0.01 and 100"),
+            ));
+        }
+        Ok(v)
+    };
+    match mode {
+        "adaptive" => Ok(Spacing::Adaptive { bias: num(arg)? }),
+        "uniform" => {
+            let v = num(arg)?;
+            Ok(Spacing::Uniform {
+                spacing: v * voxel.unwrap_or(1.0),
+            })
+        }
+        _ => Err(bad(
+            "--spacing",
+            format!("'{s}': expected adaptive, adaptive:BIAS, uniform or uniform:VOXELS"),
+        )),
+    }
+}
+
+fn spp_per_axis(spp: u32) -> Result<u32, CliError> {
+    let n = (1..=16).find(|n| n * n == spp);
+    n.ok_or_else(|| {
+        bad(
+            "--spp",
+            format!("{spp} is not a square number from 1 to 256 (e.g. 1, 4, 9, 16, 64)"),
+        )
+    })
+}
+
+fn eval_code(e: &EvalError) -> Code {
+    match e {
+        EvalError::Io { .. } | EvalError::Encode { .. } => Code::OutputIo,
+        EvalError::InvalidAsset(_) => Code::InvalidInput,
+        EvalError::TooManySlices { .. } | EvalError::InvalidParam(_) => Code::BadParameter,
+        _ => Code::Internal,
+    }
+}
+
+/// Reads a volume asset; any other kind is unsupported (exit 5).
+pub fn read_volume(path: &Path) -> Result<VolumeAsset, CliError> {
+    let shown = path.display();
+    let container = read_file(path).map_err(|e| CliError::new(format_code(&e), e))?;
+    if container.header.kind != AssetKind::Volume {
+        return Err(CliError::new(
+            Code::Unsupported,
+            format!(
+                "{shown}: a {:?} asset; billow eval compares volume assets only",
+                container.header.kind
+            ),
+        ));
+    }
+    VolumeAsset::from_container(container)
+        .map_err(|e| CliError::new(format_code(&e), format!("{shown}: {e}")))
+}
+
+pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
+    let start = Instant::now();
+    let (width, height) = parse_size(&args.size)?;
+    let per_axis = spp_per_axis(args.spp)?;
+    let distances = parse_distances(&args.distances)?;
+    let views = parse_views(&args.views, &distances)?;
+    // Reject a bad --spacing before the (slow) work.
+    parse_spacing(&args.spacing, None)?;
+    let source_shown = args.source.display().to_string();
+    let asset_shown = args.asset.display().to_string();
+
+    let scene = import(
+        &args.source,
+        &ImportOptions {
+            strict: args.strict,
+        },
+    )
+    .map_err(|e| CliError::new(import_code(&e), &e))?;
+    for w in &scene.warnings {
+        warn(ctx, &format!("{source_shown}: {}", w.message));
+    }
+    let import_s = start.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let asset = read_volume(&args.asset)?;
+    let prepared = PreparedAsset::new(&asset)
+        .map_err(|e| CliError::new(eval_code(&e), format!("{asset_shown}: {e}")))?;
+    let read_s = t.elapsed().as_secs_f64();
+    let spacing = parse_spacing(&args.spacing, prepared.voxel_size())?;
+
+    let options = EvalOptions {
+        width,
+        height,
+        fov_y: EVAL_FOV_Y,
+        reference_per_axis: per_axis,
+        slicer: SlicerParams {
+            spacing,
+            ..SlicerParams::default()
+        },
+        raster_1spp: true,
+    };
+    let evaluator = Evaluator::new(&scene, options)
+        .map_err(|e| CliError::new(Code::InvalidInput, format!("{source_shown}: {e}")))?;
+
+    if let Some(dir) = &args.out {
+        std::fs::create_dir_all(dir).map_err(|e| {
+            CliError::new(
+                Code::OutputIo,
+                format!("{}: cannot create folder: {e}", dir.display()),
+            )
+        })?;
+    }
+
+    let bar = progress(ctx, views.len() as u64, "eval");
+    let mut results = Vec::with_capacity(views.len());
+    let mut images = Vec::new();
+    for spec in &views {
+        bar.set_message(spec.name.clone());
+        let reference = evaluator
+            .reference(spec)
+            .map_err(|e| CliError::new(eval_code(&e), format!("{source_shown}: {e}")))?;
+        let (result, image) = evaluator
+            .asset(&prepared, &reference)
+            .map_err(|e| CliError::new(eval_code(&e), format!("{asset_shown}: {e}")))?;
+        if let Some(dir) = &args.out {
+            let path = dir.join(format!("{}.png", view_file_stem(&spec.name)));
+            let mut tests = vec![&image];
+            if let Some((r, _, _)) = &reference.raster_1spp {
+                tests.push(r);
+            }
+            write_comparisons_png(&reference.image, &tests, DIFF_GAIN, &path)
+                .map_err(|e| CliError::new(eval_code(&e), e))?;
+            images.push(path.display().to_string());
+        }
+        results.push(result);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+
+    let notes: Vec<String> = lighting_note(&asset).into_iter().collect();
+    let sum = |f: &dyn Fn(&ViewResult) -> f64| results.iter().map(f).sum::<f64>();
+    let summary = Summary {
+        source: source_shown,
+        asset: asset_shown,
+        asset_dims: prepared.dims0,
+        asset_params: asset.header.params.clone(),
+        size: [width, height],
+        fov_y_degrees: EVAL_FOV_Y.to_degrees(),
+        reference_spp: args.spp,
+        spacing: args.spacing.clone(),
+        lighting: Lighting {
+            asset: asset
+                .header
+                .params
+                .get("bake")
+                .cloned()
+                .unwrap_or_else(|| "none".into()),
+            reference: "unlit",
+        },
+        notes,
+        mean: Means {
+            asset: mean_errors(results.iter().map(|r| &r.asset)),
+            raster_1spp: mean_errors(results.iter().filter_map(|r| r.raster_1spp.as_ref())),
+        },
+        by_distance: means_by_distance(&results),
+        slices: results.iter().map(|r| r.slices).sum(),
+        fragments: results.iter().map(|r| r.fragments).sum(),
+        seconds: Seconds {
+            import: import_s,
+            read_asset: read_s,
+            reference: sum(&|r| r.seconds.reference),
+            asset: sum(&|r| r.seconds.asset),
+            raster_1spp: sum(&|r| r.seconds.raster_1spp),
+            total: start.elapsed().as_secs_f64(),
+        },
+        views: results,
+        images,
+    };
+    if let Some(dir) = &args.out {
+        let json = serde_json::to_vec_pretty(&summary)
+            .map_err(|e| CliError::new(Code::Internal, format!("cannot encode JSON: {e}")))?;
+        let path = dir.join("eval.json");
+        billow_format::write_atomic(&path, &json)
+            .map_err(|e| CliError::new(Code::OutputIo, format!("cannot write output: {e}")))?;
+    }
+    if args.json {
+        print_json(&summary)?;
+    } else {
+        print_table(&summary);
+    }
+    Ok(())
+}
+
+fn print_table(s: &Summary) {
+    let d = s.asset_dims;
+    println!(
+        "{} vs {} ({}x{}x{}), {}x{} px, {} spp reference, spacing {}",
+        s.asset, s.source, d[0], d[1], d[2], s.size[0], s.size[1], s.reference_spp, s.spacing
+    );
+    for n in &s.notes {
+        println!("note: {n}");
+    }
+    println!(
+        "{:<14} {:>7} {:>6} {:>6} {:>7} {:>6} | {:>7} {:>6} {:>6} | {:>7} {:>7} {:>6} {:>9}",
+        "view",
+        "RMSE",
+        "PSNR",
+        "|Δα|",
+        "cov%",
+        "SSIM",
+        "1spp",
+        "PSNR",
+        "SSIM",
+        "ref s",
+        "asset s",
+        "slices",
+        "fragments"
+    );
+    let row = |name: &str, a: &MeanErrors, r: &MeanErrors, tail: String| {
+        println!(
+            "{:<14} {:>7.4} {:>6.2} {:>6.4} {:>+7.2} {:>6.3} | {:>7.4} {:>6.2} {:>6.3} |{}",
+            name,
+            a.rmse,
+            a.psnr,
+            a.mean_abs_alpha,
+            100.0 * a.coverage_rel_diff,
+            a.ssim_luma,
+            r.rmse,
+            r.psnr,
+            r.ssim_luma,
+            tail
+        );
+    };
+    let tail =
+        |rs: f64, as_: f64, sl: usize, fr: u64| format!(" {rs:>7.2} {as_:>7.2} {sl:>6} {fr:>9}");
+    for v in &s.views {
+        let a = mean_errors([&v.asset]);
+        let r = v
+            .raster_1spp
+            .as_ref()
+            .map_or_else(MeanErrors::default, |e| mean_errors([e]));
+        let t = tail(v.seconds.reference, v.seconds.asset, v.slices, v.fragments);
+        row(&v.view, &a, &r, t);
+    }
+    for m in &s.by_distance {
+        let r = m.raster_1spp.unwrap_or_default();
+        row(
+            &format!("mean @{}x", m.distance_factor),
+            &m.asset,
+            &r,
+            String::new(),
+        );
+    }
+    let t = tail(s.seconds.reference, s.seconds.asset, s.slices, s.fragments);
+    row("mean", &s.mean.asset, &s.mean.raster_1spp, t);
+    println!(
+        "RMSE/PSNR on premultiplied linear RGBA; cov% = asset coverage vs reference; SSIM on luma. \
+         Total {:.2} s.",
+        s.seconds.total
+    );
+}

@@ -1,0 +1,120 @@
+//! `billow shell SURFACE VOLUME -o OUT`: cover a surface with a tileable volume (VB paper
+//! §4, Figures 11–12): one prism cell per surface triangle, extruded along its normals.
+
+use std::path::PathBuf;
+
+use billow::import::{import, ImportOptions};
+use billow::shell::{shell, shell_asset, ShellError};
+use billow_format::VolumeAsset;
+use glam::Vec2;
+use serde::Serialize;
+
+use crate::exit::{CliError, Code};
+use crate::info::format_code;
+use crate::inspect::import_code;
+use crate::output::{print_json, warn};
+use crate::Ctx;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The surface mesh (.gltf, .glb, .obj) whose triangles become prisms; needs UVs.
+    surface: PathBuf,
+    /// The tileable volume (.billow, baked with `voxelize --bounds 0,0,0,1,1,1`); Y is height.
+    volume: PathBuf,
+    /// Where to write the shell asset (.billow). Written atomically.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Shell thickness along the normals, in the surface's units.
+    #[arg(long, allow_negative_numbers = true)]
+    height: f32,
+    /// Volume tiles per unit of UV, `U,V` (e.g. `8,3`).
+    #[arg(long, default_value = "1,1")]
+    tiles: String,
+    /// Treat import warnings as errors.
+    #[arg(long)]
+    strict: bool,
+    /// Print a machine-readable summary on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize)]
+struct Summary {
+    output: String,
+    prisms: usize,
+    skipped_triangles: usize,
+    mirrored_uv_triangles: usize,
+    folded_prisms: usize,
+    bytes: u64,
+}
+
+fn shell_code(e: &ShellError) -> Code {
+    match e {
+        ShellError::InvalidHeight(_) | ShellError::InvalidUvScale(_) => Code::BadParameter,
+        _ => Code::InvalidInput,
+    }
+}
+
+pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
+    let tiles: Vec<f32> = args
+        .tiles
+        .split(',')
+        .map(|p| p.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| CliError::new(Code::BadParameter, format!("--tiles '{}': {e}", args.tiles)))?;
+    let [u, v] = tiles[..] else {
+        return Err(CliError::new(
+            Code::BadParameter,
+            format!("--tiles '{}': expected two numbers U,V", args.tiles),
+        ));
+    };
+    let surface = import(
+        &args.surface,
+        &ImportOptions {
+            strict: args.strict,
+        },
+    )
+    .map_err(|e| CliError::new(import_code(&e), &e))?;
+    for w in &surface.warnings {
+        warn(ctx, &format!("{}: {}", args.surface.display(), w.message));
+    }
+    let volume = VolumeAsset::read(&args.volume).map_err(|e| CliError::new(format_code(&e), &e))?;
+    let s = shell(&surface, args.height, Vec2::new(u, v))
+        .map_err(|e| CliError::new(shell_code(&e), format!("{}: {e}", args.surface.display())))?;
+    let (skipped, mirrored, folded) = (s.skipped, s.mirrored, s.folded);
+    if mirrored > 0 {
+        warn(
+            ctx,
+            &format!("{mirrored} triangles have mirrored UVs: the tile appears mirrored there"),
+        );
+    }
+    if folded > 0 {
+        warn(
+            ctx,
+            &format!("{folded} prisms fold over (height exceeds the local curvature radius)"),
+        );
+    }
+    let asset = shell_asset(&volume, s);
+    let bytes = asset
+        .to_bytes()
+        .map_err(|e| CliError::new(Code::Internal, e))?;
+    billow_format::write_atomic(&args.output, &bytes)
+        .map_err(|e| CliError::new(Code::OutputIo, format!("cannot write output: {e}")))?;
+    let summary = Summary {
+        output: args.output.display().to_string(),
+        prisms: asset.cells.len(),
+        skipped_triangles: skipped,
+        mirrored_uv_triangles: mirrored,
+        folded_prisms: folded,
+        bytes: bytes.len() as u64,
+    };
+    if args.json {
+        print_json(&summary)?;
+    } else if !ctx.quiet {
+        eprintln!(
+            "{}: {} prisms, {} bytes",
+            summary.output, summary.prisms, summary.bytes
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,325 @@
+//! `billow voxelize IN -o OUT.billow`: a volumetric billboard from a mesh (VB paper §3.2).
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use billow::export::{write_ktx2, write_slices, ExportError, SliceFormat};
+use billow::import::{import, ImportOptions};
+use billow::provenance::{source_info, tool_version};
+use billow::scene::Aabb;
+use billow::voxelize::{
+    bake_params, voxelize, Bake, CombineFn, Resolution, Stage, VoxelizeError, VoxelizeOptions,
+};
+use glam::Vec3;
+use serde::Serialize;
+
+use crate::exit::{CliError, Code};
+use crate::inspect::import_code;
+use crate::output::{peak_rss_bytes, print_json, progress, warn};
+use crate::Ctx;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The mesh to bake: .gltf, .glb or .obj (+ .mtl).
+    input: PathBuf,
+    /// Where to write the volume asset (.billow). Written atomically.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Voxels along the longest axis (others in proportion), or exactly XxYxZ (e.g. 256x128x128).
+    #[arg(long, default_value = "128")]
+    res: String,
+    /// K: K×K coverage samples per voxel column (1–8); gives thin parts fractional opacity.
+    #[arg(long, default_value_t = 4)]
+    supersample: u32,
+    /// How the six directional volumes merge: opaque (max opacity, averaged colour: keeps thin
+    /// leaves and closed surfaces solid), mean (the paper's neutral average), max, min, or
+    /// expr:<expression over px nx py ny pz nz> (see docs/voxelize.md).
+    #[arg(long, default_value = "opaque")]
+    combine: String,
+    /// Capture normals (Toksvig-filtered MIPs).
+    #[arg(long)]
+    normals: bool,
+    /// Number of MIP levels (default: the full chain down to 1×1×1).
+    #[arg(long)]
+    mips: Option<u32>,
+    /// Empty border around the mesh, in voxels.
+    #[arg(long, default_value_t = 0.5)]
+    margin: f32,
+    /// Bake exactly this box, `minx,miny,minz,maxx,maxy,maxz` (no margin), e.g. `0,0,0,1,1,1`
+    /// for a tileable volume texture used by `billow shell`.
+    #[arg(long)]
+    bounds: Option<String>,
+    /// Also write the volume as a KTX2 3D texture with its MIP chain (premultiplied, sRGB).
+    #[arg(long, value_name = "FILE")]
+    ktx2: Option<PathBuf>,
+    /// Also write every slice of one MIP level (see --slice-level) into this folder.
+    #[arg(long, value_name = "DIR")]
+    slices: Option<PathBuf>,
+    /// MIP level whose slices --slices writes.
+    #[arg(long, default_value_t = 0)]
+    slice_level: u32,
+    /// Slice image format: png (8-bit, straight alpha) or exr (float, premultiplied).
+    #[arg(long, default_value = "png")]
+    slice_format: String,
+    /// Baked lighting multiplied into the colour: none, or ao (ambient occlusion traced
+    /// against the source mesh; see docs/voxelize.md).
+    #[arg(long, default_value = "none")]
+    bake: String,
+    /// Rays per voxel for --bake ao (1–4096).
+    #[arg(long, default_value_t = billow::voxelize::DEFAULT_AO_RAYS)]
+    ao_rays: u32,
+    /// Occlusion distance for --bake ao, in scene units (default: 0.2 × the grid's diagonal).
+    #[arg(long)]
+    ao_distance: Option<f32>,
+    /// Treat import warnings (e.g. a missing texture) as errors.
+    #[arg(long)]
+    strict: bool,
+    /// Print a machine-readable summary on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize)]
+struct Seconds {
+    import: f64,
+    rasterize: f64,
+    bake: f64,
+    mip: f64,
+    combine: f64,
+    quantize: f64,
+    write: f64,
+    total: f64,
+}
+
+#[derive(Serialize)]
+struct Summary {
+    input: String,
+    output: String,
+    dims: [u32; 3],
+    mip_count: u32,
+    combine: String,
+    supersample: u32,
+    normals: bool,
+    triangles: usize,
+    non_empty_voxels: u64,
+    fragments: u64,
+    bytes: u64,
+    peak_memory_bytes: Option<u64>,
+    seconds: Seconds,
+    warnings: Vec<String>,
+}
+
+fn bad(flag: &str, e: impl std::fmt::Display) -> CliError {
+    CliError::new(Code::BadParameter, format!("{flag}: {e}"))
+}
+
+pub fn options(
+    res: &str,
+    supersample: u32,
+    combine: &str,
+    normals: bool,
+    margin: f32,
+) -> Result<VoxelizeOptions, CliError> {
+    let resolution: Resolution = res.parse().map_err(|e| bad("--res", e))?;
+    resolution.validate().map_err(|e| bad("--res", e))?;
+    let combine: CombineFn = combine.parse().map_err(|e| bad("--combine", e))?;
+    if !(margin.is_finite() && (0.0..=64.0).contains(&margin)) {
+        return Err(bad(
+            "--margin",
+            format!("must be between 0 and 64 voxels, got {margin}"),
+        ));
+    }
+    Ok(VoxelizeOptions {
+        resolution,
+        supersample,
+        combine,
+        normals,
+        margin,
+        ..VoxelizeOptions::default()
+    })
+}
+
+/// `minx,miny,minz,maxx,maxy,maxz` → a box with min < max on every axis.
+fn parse_bounds(s: &str) -> Result<Aabb, CliError> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| bad("--bounds", format!("'{s}': {e}")))?;
+    if v.len() != 6 || v.iter().any(|x| !x.is_finite()) {
+        return Err(bad(
+            "--bounds",
+            format!("'{s}': expected six finite numbers minx,miny,minz,maxx,maxy,maxz"),
+        ));
+    }
+    let (min, max) = (Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5]));
+    if !min.cmplt(max).all() {
+        return Err(bad(
+            "--bounds",
+            format!("'{s}': min must be below max on every axis"),
+        ));
+    }
+    Ok(Aabb { min, max })
+}
+
+pub fn export_code(e: &ExportError) -> Code {
+    match e {
+        ExportError::NoSuchLevel { .. } => Code::BadParameter,
+        ExportError::InvalidAsset { .. } => Code::Internal,
+        _ => Code::OutputIo,
+    }
+}
+
+/// `--bake`, `--ao-rays`, `--ao-distance` → [`Bake`].
+fn parse_bake(bake: &str, rays: u32, distance: Option<f32>) -> Result<Bake, CliError> {
+    match bake {
+        "none" => Ok(Bake::None),
+        "ao" => {
+            if !(1..=billow::voxelize::MAX_AO_RAYS).contains(&rays) {
+                return Err(bad(
+                    "--ao-rays",
+                    format!(
+                        "must be between 1 and {}, got {rays}",
+                        billow::voxelize::MAX_AO_RAYS
+                    ),
+                ));
+            }
+            if let Some(d) = distance {
+                if !(d.is_finite() && d > 0.0) {
+                    return Err(bad(
+                        "--ao-distance",
+                        format!("must be a positive number, got {d}"),
+                    ));
+                }
+            }
+            Ok(Bake::Ao { rays, distance })
+        }
+        other => Err(bad("--bake", format!("expected none or ao, got '{other}'"))),
+    }
+}
+
+pub fn voxelize_code(e: &VoxelizeError) -> Code {
+    match e {
+        VoxelizeError::EmptyScene | VoxelizeError::InvalidScene(_) => Code::InvalidInput,
+        _ => Code::BadParameter,
+    }
+}
+
+pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
+    let start = Instant::now();
+    let mut opts = options(
+        &args.res,
+        args.supersample,
+        &args.combine,
+        args.normals,
+        args.margin,
+    )?;
+    opts.mip_levels = args.mips;
+    opts.bake = parse_bake(&args.bake, args.ao_rays, args.ao_distance)?;
+    if let Some(b) = &args.bounds {
+        opts.bounds = Some(parse_bounds(b)?);
+    }
+    let slice_format = match args.slice_format.as_str() {
+        "png" => SliceFormat::Png8,
+        "exr" => SliceFormat::Exr,
+        other => {
+            return Err(bad(
+                "--slice-format",
+                format!("expected png or exr, got '{other}'"),
+            ))
+        }
+    };
+    let input = args.input.display().to_string();
+
+    let scene = import(
+        &args.input,
+        &ImportOptions {
+            strict: args.strict,
+        },
+    )
+    .map_err(|e| CliError::new(import_code(&e), &e))?;
+    for w in &scene.warnings {
+        warn(ctx, &format!("{input}: {}", w.message));
+    }
+    let source = source_info(&args.input)
+        .map_err(|e| CliError::new(Code::InputIo, format!("{input}: cannot read: {e}")))?;
+    let import_s = start.elapsed().as_secs_f64();
+
+    let bar = progress(ctx, 1000, "voxelize");
+    let report = |stage: Stage, f: f32| {
+        bar.set_message(format!("{stage:?}").to_lowercase());
+        // Rasterizing dominates; give it 70% of the bar.
+        let (lo, span) = match stage {
+            Stage::Rasterize => (0.0, 0.7),
+            Stage::Mip => (0.7, 0.1),
+            Stage::Combine => (0.8, 0.15),
+            Stage::Quantize => (0.95, 0.05),
+        };
+        bar.set_position(((lo + span * f.clamp(0.0, 1.0)) * 1000.0) as u64);
+    };
+    let volume = voxelize(&scene, &opts, &report)
+        .map_err(|e| CliError::new(voxelize_code(&e), format!("{input}: {e}")))?;
+    bar.finish_and_clear();
+
+    let stats = volume.stats;
+    let (dims, mip_count) = (volume.dims(), volume.mip_count());
+    let params = bake_params(&volume, &opts, &BTreeMap::new());
+    let asset = volume.into_asset(&tool_version(), Some(source), params);
+    let write_start = Instant::now();
+    let bytes = asset
+        .to_bytes()
+        .map_err(|e| CliError::new(Code::Internal, e))?;
+    billow_format::write_atomic(&args.output, &bytes)
+        .map_err(|e| CliError::new(Code::OutputIo, format!("cannot write output: {e}")))?;
+    if let Some(path) = &args.ktx2 {
+        write_ktx2(&asset, path).map_err(|e| CliError::new(export_code(&e), e))?;
+    }
+    if let Some(dir) = &args.slices {
+        write_slices(&asset, args.slice_level, dir, slice_format)
+            .map_err(|e| CliError::new(export_code(&e), e))?;
+    }
+    let write_s = write_start.elapsed().as_secs_f64();
+
+    let summary = Summary {
+        input,
+        output: args.output.display().to_string(),
+        dims,
+        mip_count,
+        combine: opts.combine.to_string(),
+        supersample: opts.supersample,
+        normals: opts.normals,
+        triangles: stats.triangles,
+        non_empty_voxels: stats.non_empty_voxels,
+        fragments: stats.fragments,
+        bytes: bytes.len() as u64,
+        peak_memory_bytes: peak_rss_bytes(),
+        seconds: Seconds {
+            import: import_s,
+            rasterize: stats.seconds.rasterize,
+            bake: stats.seconds.bake,
+            mip: stats.seconds.mip,
+            combine: stats.seconds.combine,
+            quantize: stats.seconds.quantize,
+            write: write_s,
+            total: start.elapsed().as_secs_f64(),
+        },
+        warnings: scene.warnings.iter().map(|w| w.message.clone()).collect(),
+    };
+    if args.json {
+        print_json(&summary)?;
+    } else if !ctx.quiet {
+        eprintln!(
+            "{}: {}x{}x{} voxels, {} MIP levels, {} non-empty, {:.1} MiB in {:.2} s",
+            summary.output,
+            dims[0],
+            dims[1],
+            dims[2],
+            mip_count,
+            stats.non_empty_voxels,
+            bytes.len() as f64 / (1 << 20) as f64,
+            summary.seconds.total
+        );
+    }
+    Ok(())
+}

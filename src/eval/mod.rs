@@ -1,0 +1,20 @@
+//! Accuracy evaluation: a reference ray tracer of the source scene, a CPU slicer for
+//! volume assets (VB paper §3.3), image metrics and image output.
+//!
+//! Every image here is **premultiplied linear RGBA, f32**, transparent background
+//! ([`image::ImageF32`]). The camera conventions are in [`crate::camera`].
+
+pub mod compositing;
+pub mod error;
+pub mod image;
+pub mod metrics;
+pub mod prism_plane;
+pub mod ray_triangle;
+pub mod reference;
+pub mod slicer;
+pub mod ssim;
+pub mod suite;
+pub mod volume_sampler;
+
+pub use error::EvalError;
+pub use image::ImageF32;

@@ -1,0 +1,274 @@
+//! Reference renderer: the source [`Scene`] ray-traced on the CPU (obvhs BVH2), the
+//! ground truth every asset is measured against.
+//!
+//! - Unlit: colour = `base_color_factor × texture(uv) × vertex colour` (all linear,
+//!   straight alpha; texture sampled bilinearly with [`Texture::sample_bilinear`]).
+//! - Alpha modes: `Opaque` stops the ray (alpha forced to 1); `Mask` stops it where
+//!   alpha ≥ cutoff and is invisible elsewhere (the ray continues); `Blend` is composited
+//!   front to back and the ray continues. Hits at the same `t` are ordered by triangle
+//!   index, so the result does not depend on BVH traversal order.
+//! - Single-sided triangles are visible only from their counter-clockwise side;
+//!   double-sided ones from both.
+//! - Rays start at the camera's near plane and end at its far plane (`t` = view depth,
+//!   see [`crate::camera`]), like a rasterizer's clipping.
+//! - Pixels average `n × n` stratified jittered samples (default 4 × 4 = 16 spp), the
+//!   jitter a fixed hash of (pixel, sample): deterministic. [`Sampling::Centre`] is one
+//!   sample at the pixel centre: what a renderer without anti-aliasing shows.
+//! - Output: premultiplied linear RGBA f32 over a transparent background. Rows are
+//!   rendered in parallel (rayon); results are identical for any thread count.
+
+// `!(a < b)` comparisons are deliberate: they also catch NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+use std::time::Duration;
+
+use glam::{Vec3, Vec3A, Vec4};
+use obvhs::bvh2::builder::build_bvh2_from_tris;
+use obvhs::bvh2::Bvh2;
+use obvhs::ray::{Ray, RayHit};
+use obvhs::BvhBuildParams;
+use rayon::prelude::*;
+
+use super::compositing::under;
+use super::ray_triangle::{TriangleHit, WatertightRay};
+use super::{EvalError, ImageF32};
+use crate::camera::Camera;
+use crate::scene::{AlphaMode, Scene};
+
+/// Pixel sampling pattern.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Sampling {
+    /// One sample at the pixel centre.
+    Centre,
+    /// `n × n` stratified samples, each jittered inside its stratum.
+    Stratified { per_axis: u32 },
+}
+
+impl Default for Sampling {
+    /// 4 × 4 = 16 samples per pixel.
+    fn default() -> Self {
+        Sampling::Stratified { per_axis: 4 }
+    }
+}
+
+/// A scene prepared for tracing (BVH built once, reusable for many views).
+pub struct ReferenceRenderer<'a> {
+    scene: &'a Scene,
+    bvh: Option<Bvh2>,
+    has_blend: bool,
+}
+
+/// Renders `scene` from `camera` with `sampling`. Convenience for
+/// [`ReferenceRenderer::new`] + [`ReferenceRenderer::render`].
+pub fn render_reference(
+    scene: &Scene,
+    camera: &Camera,
+    sampling: Sampling,
+) -> Result<ImageF32, EvalError> {
+    ReferenceRenderer::new(scene).render(camera, sampling)
+}
+
+/// The scene with exactly one sample per pixel, at the pixel centre.
+pub fn raster_1spp(scene: &Scene, camera: &Camera) -> Result<ImageF32, EvalError> {
+    render_reference(scene, camera, Sampling::Centre)
+}
+
+/// Deterministic hash → `[0,1)` (PCG-style output permutation of a mixed key).
+fn hash01(x: u32, y: u32, s: u32, dim: u32) -> f32 {
+    let mut h = x.wrapping_mul(0x9E37_79B1)
+        ^ y.wrapping_mul(0x85EB_CA77)
+        ^ s.wrapping_mul(0xC2B2_AE3D)
+        ^ dim.wrapping_mul(0x27D4_EB2F);
+    h ^= h >> 16;
+    h = h.wrapping_mul(0x7FEB_352D);
+    h ^= h >> 15;
+    h = h.wrapping_mul(0x846C_A68B);
+    h ^= h >> 16;
+    (h >> 8) as f32 * (1.0 / 16_777_216.0)
+}
+
+pub(crate) fn validate_camera(camera: &Camera) -> Result<(), EvalError> {
+    let ok = camera.width > 0
+        && camera.height > 0
+        && camera.fov_y > 0.0
+        && camera.fov_y < std::f32::consts::PI
+        && camera.near > 0.0
+        && camera.far > camera.near
+        && camera.eye.is_finite()
+        && camera.target.is_finite()
+        && camera.eye != camera.target
+        && camera.far.is_finite();
+    if ok {
+        Ok(())
+    } else {
+        Err(EvalError::InvalidCamera(format!("{camera:?}")))
+    }
+}
+
+impl<'a> ReferenceRenderer<'a> {
+    /// Builds the BVH over all triangles of `scene`.
+    pub fn new(scene: &'a Scene) -> Self {
+        let tris: Vec<obvhs::triangle::Triangle> = scene
+            .triangles
+            .iter()
+            .map(|t| obvhs::triangle::Triangle {
+                v0: t.v[0].position.into(),
+                v1: t.v[1].position.into(),
+                v2: t.v[2].position.into(),
+            })
+            .collect();
+        let bvh = (!tris.is_empty()).then(|| {
+            build_bvh2_from_tris(
+                &tris,
+                BvhBuildParams::medium_build(),
+                &mut Duration::default(),
+            )
+        });
+        let has_blend = scene
+            .materials
+            .iter()
+            .any(|m| m.alpha_mode == AlphaMode::Blend);
+        ReferenceRenderer {
+            scene,
+            bvh,
+            has_blend,
+        }
+    }
+
+    /// Renders one view.
+    pub fn render(&self, camera: &Camera, sampling: Sampling) -> Result<ImageF32, EvalError> {
+        validate_camera(camera)?;
+        let n = match sampling {
+            Sampling::Centre => 1,
+            Sampling::Stratified { per_axis } if (1..=64).contains(&per_axis) => per_axis,
+            Sampling::Stratified { per_axis } => {
+                return Err(EvalError::InvalidParam(format!(
+                    "samples per axis {per_axis} not in 1..=64"
+                )))
+            }
+        };
+        let mut img = ImageF32::new(camera.width, camera.height);
+        let w = camera.width as usize;
+        let inv = 1.0 / (n * n) as f32;
+        img.data.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+            let y = y as u32;
+            for (x, px) in row.iter_mut().enumerate() {
+                let x = x as u32;
+                let mut acc = Vec4::ZERO;
+                for sy in 0..n {
+                    for sx in 0..n {
+                        let (jx, jy) = match sampling {
+                            Sampling::Centre => (0.5, 0.5),
+                            Sampling::Stratified { .. } => {
+                                let s = sy * n + sx;
+                                (
+                                    (sx as f32 + hash01(x, y, s, 0)) / n as f32,
+                                    (sy as f32 + hash01(x, y, s, 1)) / n as f32,
+                                )
+                            }
+                        };
+                        let r = camera.ray(x as f32 + jx, y as f32 + jy);
+                        acc += self.trace(r.origin, r.dir, r.t_min, r.t_max);
+                    }
+                }
+                *px = acc * inv;
+            }
+        });
+        Ok(img)
+    }
+
+    /// Straight linear RGBA of triangle `tri` at barycentrics `bary`.
+    pub fn shade(&self, tri: usize, bary: [f32; 3]) -> Vec4 {
+        let t = &self.scene.triangles[tri];
+        let m = self.scene.material(t);
+        let uv = t.v[0].uv * bary[0] + t.v[1].uv * bary[1] + t.v[2].uv * bary[2];
+        let vc = t.v[0].color * bary[0] + t.v[1].color * bary[1] + t.v[2].color * bary[2];
+        let tex = m
+            .base_color_texture
+            .and_then(|i| self.scene.textures.get(i as usize))
+            .filter(|t| t.width > 0 && t.height > 0 && !t.texels.is_empty())
+            .map_or(Vec4::ONE, |t| t.sample_bilinear(uv));
+        m.base_color_factor * tex * vc
+    }
+
+    fn hit(&self, wr: &WatertightRay, tri: usize, t_min: f32, t_max: f32) -> Option<TriangleHit> {
+        let t = &self.scene.triangles[tri];
+        let h = wr.intersect(
+            t.v[0].position,
+            t.v[1].position,
+            t.v[2].position,
+            t_min,
+            t_max,
+        )?;
+        (h.front || self.scene.material(t).double_sided).then_some(h)
+    }
+
+    /// Premultiplied linear RGBA seen along one ray (`t` in `[t_min, t_max]`).
+    pub fn trace(&self, origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> Vec4 {
+        let Some(bvh) = &self.bvh else {
+            return Vec4::ZERO;
+        };
+        let wr = WatertightRay::new(origin, dir);
+        let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), t_min, t_max);
+        // Pass 1: the closest hit that stops the ray (opaque, or mask ≥ cutoff).
+        let mut best: Option<(f32, usize, [f32; 3])> = None;
+        let mut hit = RayHit::none();
+        bvh.ray_traverse(ray, &mut hit, |r, id| {
+            let tri = bvh.primitive_indices[id] as usize;
+            let Some(h) = self.hit(&wr, tri, r.tmin, r.tmax) else {
+                return f32::INFINITY;
+            };
+            let stops = match self.scene.material(&self.scene.triangles[tri]).alpha_mode {
+                AlphaMode::Opaque => true,
+                AlphaMode::Mask { cutoff } => self.shade(tri, h.bary).w >= cutoff,
+                AlphaMode::Blend => false,
+            };
+            if !stops {
+                return f32::INFINITY;
+            }
+            // Equal t: lower triangle index wins, independent of traversal order.
+            let better = match best {
+                None => true,
+                Some((bt, bi, _)) => h.t < bt || (h.t == bt && tri < bi),
+            };
+            if better {
+                best = Some((h.t, tri, h.bary));
+            }
+            h.t
+        });
+        let t_stop = best.map_or(t_max, |b| b.0);
+        let mut acc = Vec4::ZERO;
+        // Pass 2: blended surfaces in front of the stopping hit, front to back.
+        if self.has_blend {
+            let mut layers: Vec<(f32, usize, [f32; 3])> = Vec::new();
+            let ray2 = Ray::new(ray.origin, ray.direction, t_min, t_stop);
+            bvh.ray_traverse_anyhit(ray2, |_, id| {
+                let tri = bvh.primitive_indices[id] as usize;
+                let t = &self.scene.triangles[tri];
+                if self.scene.material(t).alpha_mode != AlphaMode::Blend {
+                    return;
+                }
+                if let Some(h) = self.hit(&wr, tri, t_min, t_stop) {
+                    if best.is_none() || h.t < t_stop {
+                        layers.push((h.t, tri, h.bary));
+                    }
+                }
+            });
+            layers.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            layers.dedup_by_key(|l| l.1);
+            for (_, tri, bary) in layers {
+                let c = self.shade(tri, bary);
+                let a = c.w.clamp(0.0, 1.0);
+                acc = under(acc, (c.truncate() * a).extend(a));
+                if acc.w >= 1.0 {
+                    return acc;
+                }
+            }
+        }
+        if let Some((_, tri, bary)) = best {
+            let c = self.shade(tri, bary);
+            acc = under(acc, c.truncate().extend(1.0));
+        }
+        acc
+    }
+}

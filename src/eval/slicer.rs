@@ -1,0 +1,385 @@
+//! CPU slicer for volume assets: the rendering algorithm of Volumetric Billboards §3.3,
+//! the reference the GPU viewer is compared with.
+//!
+//! - Cells are transformed to camera space; slicing planes `z = −depth` parallel to the
+//!   screen span the depth range of all cells (clipped to near/far) and are drawn
+//!   **back to front**; within a slice, cells in their fixed ID order (no popping).
+//! - Spacing ([`Spacing::Adaptive`], the paper's adaptive slicing): at depth `z`,
+//!   `d(z) = bias · max(z·tan(fov/2)/(h/2), v₀)` where `v₀` is the world size of a
+//!   level-0 voxel ([`voxel_size`]): one pixel's footprint, never finer than the
+//!   magnified voxel. `bias = 1` is the paper. [`Spacing::Uniform`]: constant `d`.
+//!   Slices are placed front to back from the nearest cell depth: `z₀ = z_min + d(z_min)/2`,
+//!   `z_{i+1} = z_i + d(z_i)`, then drawn in reverse.
+//! - MIP level from the spacing: `lod = log2(d / v₀)` clamped to the stored levels,
+//!   sampled trilinearly within a level and (default [`MipFilter::Linear`]) linearly
+//!   between the two nearest levels.
+//! - Opacity correction: `α' = 1 − (1 − α)^(d/d₀)` with `d₀ = v₀ · 2^lod` the voxel size
+//!   of the sampled (clamped, fractional for linear filtering) level; premultiplied colour
+//!   scaled by `α'/α` ([`super::compositing`]).
+//! - Each cell ∩ slice polygon comes from [`intersect_prism_plane`]. All its vertices lie
+//!   at the same depth, so the perspective projection is an *affine* map on it and uvw
+//!   interpolates linearly in screen space — no perspective correction needed. The convex
+//!   polygon is scan-converted at pixel centres with half-open spans (`x_l ≤ x < x_r`,
+//!   rows `y_min ≤ y < y_max`), computed from canonically ordered edge end points, so
+//!   pixels on an edge shared by two cells are drawn exactly once.
+//! - Texels are decoded to linear premultiplied before filtering ([`DecodedVolume`]);
+//!   the result is composited with "over" into premultiplied linear RGBA f32.
+//! - Rows are processed in parallel; every pixel sees the same sequence of fragments,
+//!   so the result is deterministic.
+
+// `!(a < b)` comparisons are deliberate: they also catch NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+use std::time::Instant;
+
+use billow_format::{Prism, VolumeAsset};
+use glam::{Mat3, Vec3, Vec4};
+use rayon::prelude::*;
+
+use super::compositing::{correct_premultiplied, over};
+use super::prism_plane::intersect_prism_plane;
+use super::reference::validate_camera;
+use super::volume_sampler::{DecodedVolume, MipFilter};
+use super::{EvalError, ImageF32};
+use crate::camera::{to_view, Camera};
+
+/// Slice spacing mode.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Spacing {
+    /// The paper's adaptive spacing scaled by `bias` (1 = paper; > 1 fewer slices).
+    Adaptive { bias: f32 },
+    /// Constant world-space spacing.
+    Uniform { spacing: f32 },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SlicerParams {
+    pub spacing: Spacing,
+    pub mip_filter: MipFilter,
+    /// Refuse to render more slices than this (guards hostile assets / tiny spacings).
+    pub max_slices: usize,
+}
+
+impl Default for SlicerParams {
+    fn default() -> Self {
+        SlicerParams {
+            spacing: Spacing::Adaptive { bias: 1.0 },
+            mip_filter: MipFilter::Linear,
+            max_slices: 100_000,
+        }
+    }
+}
+
+/// What a render did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct SliceStats {
+    pub slices: usize,
+    /// Non-empty cell ∩ slice polygons.
+    pub polygons: usize,
+    /// Pixels shaded (polygon × covered pixel centre).
+    pub fragments: u64,
+    pub seconds: f64,
+    /// World size of a level-0 voxel, `v₀`.
+    pub voxel_size: f32,
+    pub min_spacing: f32,
+    pub max_spacing: f32,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct SliceRender {
+    pub image: ImageF32,
+    pub stats: SliceStats,
+}
+
+/// World size of a level-0 voxel: per cell, the affine map uvw → world (from vertices
+/// 0, 1, 2, 3) scaled by the level-0 dims, `cbrt(|det J| / (w·h·d))` (the geometric
+/// mean of the three voxel edge lengths); the minimum over the cells (the finest).
+/// `None` when no cell has a non-degenerate uvw mapping.
+pub fn voxel_size(cells: &[Prism], dims: [u32; 3]) -> Option<f32> {
+    let n = f64::from(dims[0]) * f64::from(dims[1]) * f64::from(dims[2]);
+    let mut best: Option<f32> = None;
+    for c in cells {
+        let p = |i: usize| Vec3::from(c.pos[i]) - Vec3::from(c.pos[0]);
+        let t = |i: usize| Vec3::from(c.uvw[i]) - Vec3::from(c.uvw[0]);
+        let pm = Mat3::from_cols(p(1), p(2), p(3));
+        let tm = Mat3::from_cols(t(1), t(2), t(3));
+        let dt = f64::from(tm.determinant());
+        if dt.abs() < 1e-12 {
+            continue;
+        }
+        let v = (f64::from(pm.determinant()) / dt).abs() / n;
+        let s = v.cbrt() as f32;
+        if s > 0.0 && s.is_finite() {
+            best = Some(best.map_or(s, |b| b.min(s)));
+        }
+    }
+    best
+}
+
+/// One polygon in screen space, ready to scan-convert.
+struct ScreenPoly {
+    n: usize,
+    xy: [[f32; 2]; 5],
+    y_min: f32,
+    y_max: f32,
+    /// uvw = base + gx·(x − ox) + gy·(y − oy).
+    origin: [f32; 2],
+    base: Vec3,
+    gx: Vec3,
+    gy: Vec3,
+    lod: f32,
+    ratio: f32,
+}
+
+/// Slice depths and spacings, front to back.
+fn slice_depths(
+    camera: &Camera,
+    spacing: Spacing,
+    v0: f32,
+    z_min: f32,
+    z_max: f32,
+    limit: usize,
+) -> Result<Vec<(f32, f32)>, EvalError> {
+    let d_at = |z: f32| match spacing {
+        Spacing::Adaptive { bias } => bias * camera.pixel_size_at(z).max(v0),
+        Spacing::Uniform { spacing } => spacing,
+    };
+    let mut out = Vec::new();
+    let mut z = z_min + 0.5 * d_at(z_min);
+    while z < z_max {
+        if out.len() >= limit {
+            // Count how many would be needed (bounded estimate) for the message.
+            let needed = ((z_max - z_min) / d_at(z_min).max(f32::MIN_POSITIVE)) as usize;
+            return Err(EvalError::TooManySlices {
+                needed: needed.max(limit + 1),
+                limit,
+            });
+        }
+        let d = d_at(z);
+        out.push((z, d));
+        let next = z + d;
+        if !(next > z) {
+            break; // spacing below f32 resolution at this depth
+        }
+        z = next;
+    }
+    Ok(out)
+}
+
+/// Renders a volume asset from `camera`.
+pub fn render_volume(
+    asset: &VolumeAsset,
+    camera: &Camera,
+    params: &SlicerParams,
+) -> Result<SliceRender, EvalError> {
+    let vol = DecodedVolume::decode(asset)?;
+    let dims = asset.level_dims(0);
+    render_decoded(&vol, dims, &asset.cells, camera, params)
+}
+
+/// Renders already-decoded levels (reuse across views) with the given cells.
+pub fn render_decoded(
+    vol: &DecodedVolume,
+    dims0: [u32; 3],
+    cells: &[Prism],
+    camera: &Camera,
+    params: &SlicerParams,
+) -> Result<SliceRender, EvalError> {
+    let start = Instant::now();
+    validate_camera(camera)?;
+    match params.spacing {
+        Spacing::Adaptive { bias } if !(bias > 0.0 && bias.is_finite()) => {
+            return Err(EvalError::InvalidParam(format!(
+                "spacing bias {bias} must be > 0"
+            )));
+        }
+        Spacing::Uniform { spacing } if !(spacing > 0.0 && spacing.is_finite()) => {
+            return Err(EvalError::InvalidParam(format!(
+                "spacing {spacing} must be > 0"
+            )));
+        }
+        _ => {}
+    }
+    let mut image = ImageF32::new(camera.width, camera.height);
+    let mut stats = SliceStats::default();
+    if vol.level_count() == 0 {
+        return Err(EvalError::InvalidAsset("no MIP levels".into()));
+    }
+    let Some(v0) = voxel_size(cells, dims0) else {
+        stats.seconds = start.elapsed().as_secs_f64();
+        return Ok(SliceRender { image, stats });
+    };
+    stats.voxel_size = v0;
+    let view = camera.view();
+    let cam_cells: Vec<[[f32; 3]; 6]> = cells
+        .iter()
+        .map(|c| c.pos.map(|p| to_view(&view, Vec3::from(p)).to_array()))
+        .collect();
+    let (mut z_min, mut z_max) = (f32::INFINITY, f32::NEG_INFINITY);
+    for c in &cam_cells {
+        for p in c {
+            z_min = z_min.min(-p[2]);
+            z_max = z_max.max(-p[2]);
+        }
+    }
+    let z_min = z_min.max(camera.near);
+    let z_max = z_max.min(camera.far);
+    if !(z_min < z_max) {
+        stats.seconds = start.elapsed().as_secs_f64();
+        return Ok(SliceRender { image, stats });
+    }
+    let mut slices = slice_depths(camera, params.spacing, v0, z_min, z_max, params.max_slices)?;
+    slices.reverse(); // back to front
+    stats.slices = slices.len();
+    stats.min_spacing = slices.iter().map(|s| s.1).fold(f32::INFINITY, f32::min);
+    stats.max_spacing = slices.iter().map(|s| s.1).fold(0.0, f32::max);
+    let max_lod = (vol.level_count() - 1) as f32;
+    let w = camera.width as usize;
+    const BATCH: usize = 1 << 16;
+    let mut polys: Vec<ScreenPoly> = Vec::new();
+    let flush = |polys: &mut Vec<ScreenPoly>, image: &mut ImageF32| -> u64 {
+        let frags = image
+            .data
+            .par_chunks_mut(w)
+            .enumerate()
+            .map(|(y, row)| raster_row(row, y, polys, vol, params.mip_filter))
+            .sum();
+        polys.clear();
+        frags
+    };
+    for &(depth, d) in &slices {
+        let lod = (d / v0).log2().clamp(0.0, max_lod);
+        let d0 = match params.mip_filter {
+            MipFilter::Nearest => v0 * lod.round().exp2(),
+            MipFilter::Linear => v0 * lod.exp2(),
+        };
+        let ratio = d / d0;
+        let z = -depth;
+        for (ci, c) in cam_cells.iter().enumerate() {
+            let poly = intersect_prism_plane(c, &cells[ci].uvw, z);
+            if poly.is_empty() {
+                continue;
+            }
+            if let Some(sp) = to_screen(camera, &poly.pos, &poly.uvw, poly.count, lod, ratio) {
+                polys.push(sp);
+                stats.polygons += 1;
+            }
+        }
+        if polys.len() >= BATCH {
+            stats.fragments += flush(&mut polys, &mut image);
+        }
+    }
+    stats.fragments += flush(&mut polys, &mut image);
+    stats.seconds = start.elapsed().as_secs_f64();
+    Ok(SliceRender { image, stats })
+}
+
+fn to_screen(
+    camera: &Camera,
+    pos: &[[f32; 3]; 5],
+    uvw: &[[f32; 3]; 5],
+    n: usize,
+    lod: f32,
+    ratio: f32,
+) -> Option<ScreenPoly> {
+    let mut xy = [[0.0f32; 2]; 5];
+    for i in 0..n {
+        let (x, y) = camera.view_to_pixel(Vec3::from(pos[i]))?;
+        xy[i] = [x, y];
+    }
+    let (mut y_min, mut y_max) = (f32::INFINITY, f32::NEG_INFINITY);
+    for p in &xy[..n] {
+        y_min = y_min.min(p[1]);
+        y_max = y_max.max(p[1]);
+    }
+    // Affine uvw gradient from the fan triangle with the largest area.
+    let (mut best, mut best_area) = (1, 0.0f32);
+    for i in 1..n - 1 {
+        let a = cross2(sub2(xy[i], xy[0]), sub2(xy[i + 1], xy[0]));
+        if a.abs() > best_area.abs() {
+            best = i;
+            best_area = a;
+        }
+    }
+    if best_area == 0.0 || !best_area.is_finite() {
+        return None; // zero-area in screen: covers no pixel centre
+    }
+    let (e1, e2) = (sub2(xy[best], xy[0]), sub2(xy[best + 1], xy[0]));
+    let t0 = Vec3::from(uvw[0]);
+    let (d1, d2) = (Vec3::from(uvw[best]) - t0, Vec3::from(uvw[best + 1]) - t0);
+    // Solve [e1 e2]^T-weighted: uvw(p) = t0 + a·d1 + b·d2 with p − p0 = a·e1 + b·e2.
+    let inv = 1.0 / best_area;
+    // a = cross(p, e2)/area, b = cross(e1, p)/area
+    let gx = (d1 * e2[1] - d2 * e1[1]) * inv;
+    let gy = (d2 * e1[0] - d1 * e2[0]) * inv;
+    Some(ScreenPoly {
+        n,
+        xy,
+        y_min,
+        y_max,
+        origin: xy[0],
+        base: t0,
+        gx,
+        gy,
+        lod,
+        ratio,
+    })
+}
+
+fn sub2(a: [f32; 2], b: [f32; 2]) -> [f32; 2] {
+    [a[0] - b[0], a[1] - b[1]]
+}
+
+fn cross2(a: [f32; 2], b: [f32; 2]) -> f32 {
+    a[0] * b[1] - a[1] * b[0]
+}
+
+/// Composites every polygon covering row `y` into `row`, in order; returns fragments.
+fn raster_row(
+    row: &mut [Vec4],
+    y: usize,
+    polys: &[ScreenPoly],
+    vol: &DecodedVolume,
+    filter: MipFilter,
+) -> u64 {
+    let yc = y as f32 + 0.5;
+    let w = row.len() as i64;
+    let mut frags = 0;
+    for p in polys {
+        if !(p.y_min <= yc && yc < p.y_max) {
+            continue;
+        }
+        let (mut xl, mut xr) = (f32::INFINITY, f32::NEG_INFINITY);
+        for i in 0..p.n {
+            let (a, b) = (p.xy[i], p.xy[(i + 1) % p.n]);
+            if (a[1] <= yc) == (b[1] <= yc) {
+                continue;
+            }
+            // Canonical end-point order: the same edge gives the same x in every polygon.
+            let (a, b) = if (a[1], a[0]) <= (b[1], b[0]) {
+                (a, b)
+            } else {
+                (b, a)
+            };
+            let x = a[0] + (yc - a[1]) * (b[0] - a[0]) / (b[1] - a[1]);
+            xl = xl.min(x);
+            xr = xr.max(x);
+        }
+        if !(xl < xr) {
+            continue;
+        }
+        let x0 = ((xl - 0.5).ceil() as i64).max(0);
+        let x1 = ((xr - 0.5).ceil() as i64).min(w);
+        let dy = yc - p.origin[1];
+        for x in x0..x1 {
+            let xc = x as f32 + 0.5;
+            let uvw = p.base + p.gx * (xc - p.origin[0]) + p.gy * dy;
+            let s = vol.sample(p.lod, uvw, filter);
+            let s = correct_premultiplied(s, p.ratio);
+            let px = &mut row[x as usize];
+            *px = over(s, *px);
+            frags += 1;
+        }
+    }
+    frags
+}

@@ -1,0 +1,426 @@
+//! The evaluation harness behind `billow eval`: a source mesh and a volume asset rendered
+//! from the same views and compared (docs/eval.md).
+//!
+//! - Every view is framed on the **source mesh's** bounds ([`crate::camera::Camera::framed`]),
+//!   so the reference images do not depend on the asset (its margin, resolution) and can be
+//!   reused for many assets of the same mesh ([`Evaluator::reference`]).
+//! - Reference: [`ReferenceRenderer`] with `n × n` stratified samples per pixel (unlit).
+//!   Also rendered per view: the mesh with **one sample per pixel** at the pixel centre —
+//!   what a rasterizer without anti-aliasing shows — and compared with the same reference,
+//!   so the asset's error can be read against the aliasing error of drawing the mesh.
+//! - Asset: the CPU slicer ([`render_decoded`]) with the given [`SlicerParams`].
+//! - Metrics: [`compare`] (RMSE/PSNR on premultiplied linear RGBA, alpha coverage, SSIM).
+//!   Means over views: RMSE, |Δα|, coverage difference and SSIM are plain means;
+//!   the mean PSNR is the PSNR of the mean MSE (finite unless every view is exact).
+
+use std::time::Instant;
+
+use billow_format::{Prism, VolumeAsset};
+use glam::Vec3;
+use serde::Serialize;
+
+use super::metrics::{compare, ImageError};
+use super::reference::{ReferenceRenderer, Sampling};
+use super::slicer::{render_decoded, SlicerParams};
+use super::volume_sampler::DecodedVolume;
+use super::{EvalError, ImageF32};
+use crate::camera::{Camera, ViewSpec};
+use crate::scene::{Aabb, Scene};
+
+/// Vertical field of view of every evaluation view: 45°.
+pub const EVAL_FOV_Y: f32 = std::f32::consts::FRAC_PI_4;
+
+/// How the views are rendered.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EvalOptions {
+    pub width: u32,
+    pub height: u32,
+    pub fov_y: f32,
+    /// Reference samples per pixel per axis (`n × n` per pixel).
+    pub reference_per_axis: u32,
+    pub slicer: SlicerParams,
+    /// Also render the mesh with one sample per pixel (the aliasing baseline).
+    pub raster_1spp: bool,
+}
+
+impl Default for EvalOptions {
+    /// 128 × 128, 45°, 4 × 4 = 16 reference samples per pixel, the paper's slicing, 1-spp on.
+    fn default() -> Self {
+        EvalOptions {
+            width: 128,
+            height: 128,
+            fov_y: EVAL_FOV_Y,
+            reference_per_axis: 4,
+            slicer: SlicerParams::default(),
+            raster_1spp: true,
+        }
+    }
+}
+
+/// The reference side of one view (reusable for any asset of the same mesh).
+#[derive(Clone, Debug)]
+pub struct ReferenceView {
+    pub spec: ViewSpec,
+    pub camera: Camera,
+    pub image: ImageF32,
+    pub seconds: f64,
+    /// The 1-spp render, its error against `image`, and its time.
+    pub raster_1spp: Option<(ImageF32, ImageError, f64)>,
+}
+
+/// Seconds spent on one view.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct ViewSeconds {
+    /// The reference (n × n spp ray tracing).
+    pub reference: f64,
+    /// The asset (CPU slicer, including its decode-free setup).
+    pub asset: f64,
+    /// The 1-spp mesh render (0 when not rendered).
+    pub raster_1spp: f64,
+}
+
+/// Everything measured for one view.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ViewResult {
+    pub view: String,
+    pub dir: [f32; 3],
+    pub distance_factor: f32,
+    /// The asset against the reference.
+    pub asset: ImageError,
+    /// The mesh at 1 sample per pixel against the reference.
+    pub raster_1spp: Option<ImageError>,
+    pub seconds: ViewSeconds,
+    pub slices: usize,
+    /// Non-empty cell ∩ slice polygons.
+    pub polygons: usize,
+    /// Shaded pixels (volume samples) of the asset render.
+    pub fragments: u64,
+    /// World size of one pixel at the target's depth, in level-0 voxels (< 1: magnified).
+    pub pixel_in_voxels: f32,
+}
+
+/// Means over a set of views (see the module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct MeanErrors {
+    pub views: usize,
+    pub rmse: f64,
+    /// PSNR of the mean MSE.
+    pub psnr: f64,
+    pub mean_abs_alpha: f64,
+    /// Mean of the signed relative coverage differences (negative = too transparent).
+    pub coverage_rel_diff: f64,
+    pub ssim_luma: f64,
+    pub ssim_alpha: f64,
+}
+
+/// Means of `errors` (all zeros for an empty set).
+pub fn mean_errors<'a>(errors: impl IntoIterator<Item = &'a ImageError>) -> MeanErrors {
+    let mut m = MeanErrors::default();
+    let mut mse = 0.0;
+    for e in errors {
+        m.views += 1;
+        m.rmse += e.rmse;
+        mse += e.rmse * e.rmse;
+        m.mean_abs_alpha += e.mean_abs_alpha;
+        m.coverage_rel_diff += if e.coverage_rel_diff.is_finite() {
+            e.coverage_rel_diff
+        } else {
+            1.0
+        };
+        m.ssim_luma += e.ssim_luma;
+        m.ssim_alpha += e.ssim_alpha;
+    }
+    if m.views == 0 {
+        return m;
+    }
+    let n = m.views as f64;
+    m.rmse /= n;
+    mse /= n;
+    m.psnr = if mse > 0.0 {
+        -10.0 * mse.log10()
+    } else {
+        f64::INFINITY
+    };
+    m.mean_abs_alpha /= n;
+    m.coverage_rel_diff /= n;
+    m.ssim_luma /= n;
+    m.ssim_alpha /= n;
+    m
+}
+
+/// Means of the asset and of the 1-spp raster over views at one distance factor.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct DistanceMeans {
+    pub distance_factor: f32,
+    pub asset: MeanErrors,
+    pub raster_1spp: Option<MeanErrors>,
+}
+
+/// Per distance factor, in order of first appearance.
+pub fn means_by_distance(results: &[ViewResult]) -> Vec<DistanceMeans> {
+    let mut factors: Vec<f32> = Vec::new();
+    for r in results {
+        if !factors.contains(&r.distance_factor) {
+            factors.push(r.distance_factor);
+        }
+    }
+    factors
+        .into_iter()
+        .map(|f| {
+            let at: Vec<&ViewResult> = results.iter().filter(|r| r.distance_factor == f).collect();
+            let raster: Vec<&ImageError> =
+                at.iter().filter_map(|r| r.raster_1spp.as_ref()).collect();
+            DistanceMeans {
+                distance_factor: f,
+                asset: mean_errors(at.iter().map(|r| &r.asset)),
+                raster_1spp: (!raster.is_empty()).then(|| mean_errors(raster)),
+            }
+        })
+        .collect()
+}
+
+/// A note when the asset has baked lighting (header param `bake`, e.g. `bake=ao`) that the
+/// unlit reference does not reproduce; `None` for unlit assets.
+pub fn lighting_note(asset: &VolumeAsset) -> Option<String> {
+    let bake = asset.header.params.get("bake")?.trim();
+    if bake.is_empty() || bake == "none" {
+        return None;
+    }
+    Some(format!(
+        "the asset has baked lighting (bake={bake}) but the reference is unlit: the errors include \
+         the lighting difference (a lit reference is not implemented yet)"
+    ))
+}
+
+/// The bounds every view is framed on: the source mesh's.
+pub fn frame_bounds(scene: &Scene) -> Result<Aabb, EvalError> {
+    let mut b = Aabb::EMPTY;
+    for t in &scene.triangles {
+        for v in &t.v {
+            if v.position.is_finite() {
+                b.grow(v.position);
+            }
+        }
+    }
+    if b.is_empty() {
+        return Err(EvalError::InvalidParam(
+            "the source mesh has no triangles".into(),
+        ));
+    }
+    Ok(b)
+}
+
+/// A source mesh prepared for evaluation (BVH built once).
+pub struct Evaluator<'a> {
+    renderer: ReferenceRenderer<'a>,
+    bounds: Aabb,
+    pub options: EvalOptions,
+}
+
+/// A decoded asset ready to render from many views.
+pub struct PreparedAsset {
+    pub volume: DecodedVolume,
+    pub dims0: [u32; 3],
+    pub cells: Vec<Prism>,
+}
+
+impl PreparedAsset {
+    pub fn new(asset: &VolumeAsset) -> Result<Self, EvalError> {
+        Ok(PreparedAsset {
+            volume: DecodedVolume::decode(asset)?,
+            dims0: asset.level_dims(0),
+            cells: asset.cells.clone(),
+        })
+    }
+
+    /// World size of a level-0 voxel (see [`super::slicer::voxel_size`]).
+    pub fn voxel_size(&self) -> Option<f32> {
+        super::slicer::voxel_size(&self.cells, self.dims0)
+    }
+}
+
+impl<'a> Evaluator<'a> {
+    pub fn new(scene: &'a Scene, options: EvalOptions) -> Result<Self, EvalError> {
+        if !(1..=16).contains(&options.reference_per_axis) {
+            return Err(EvalError::InvalidParam(format!(
+                "reference samples per axis {} not in 1..=16",
+                options.reference_per_axis
+            )));
+        }
+        let bounds = frame_bounds(scene)?;
+        Ok(Evaluator {
+            renderer: ReferenceRenderer::new(scene),
+            bounds,
+            options,
+        })
+    }
+
+    pub fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    pub fn camera(&self, spec: &ViewSpec) -> Camera {
+        let o = &self.options;
+        spec.camera(&self.bounds, o.fov_y, o.width, o.height)
+    }
+
+    /// Renders the reference (and the 1-spp raster when enabled) of one view.
+    pub fn reference(&self, spec: &ViewSpec) -> Result<ReferenceView, EvalError> {
+        let camera = self.camera(spec);
+        let t = Instant::now();
+        let n = self.options.reference_per_axis;
+        let image = self
+            .renderer
+            .render(&camera, Sampling::Stratified { per_axis: n })?;
+        let seconds = t.elapsed().as_secs_f64();
+        let raster_1spp = if self.options.raster_1spp {
+            let t = Instant::now();
+            let img = self.renderer.render(&camera, Sampling::Centre)?;
+            let s = t.elapsed().as_secs_f64();
+            let err = compare(&image, &img)?;
+            Some((img, err, s))
+        } else {
+            None
+        };
+        Ok(ReferenceView {
+            spec: spec.clone(),
+            camera,
+            image,
+            seconds,
+            raster_1spp,
+        })
+    }
+
+    /// Renders `asset` from `reference`'s view and compares; returns the result and the image.
+    pub fn asset(
+        &self,
+        asset: &PreparedAsset,
+        reference: &ReferenceView,
+    ) -> Result<(ViewResult, ImageF32), EvalError> {
+        let r = render_decoded(
+            &asset.volume,
+            asset.dims0,
+            &asset.cells,
+            &reference.camera,
+            &self.options.slicer,
+        )?;
+        let err = compare(&reference.image, &r.image)?;
+        let cam = &reference.camera;
+        let depth = (cam.target - cam.eye).length();
+        let pixel_in_voxels = asset
+            .voxel_size()
+            .map_or(0.0, |v0| cam.pixel_size_at(depth) / v0);
+        let spec = &reference.spec;
+        let result = ViewResult {
+            view: spec.name.clone(),
+            dir: spec.dir.to_array(),
+            distance_factor: spec.distance_factor,
+            asset: err,
+            raster_1spp: reference.raster_1spp.as_ref().map(|x| x.1),
+            seconds: ViewSeconds {
+                reference: reference.seconds,
+                asset: r.stats.seconds,
+                raster_1spp: reference.raster_1spp.as_ref().map_or(0.0, |x| x.2),
+            },
+            slices: r.stats.slices,
+            polygons: r.stats.polygons,
+            fragments: r.stats.fragments,
+            pixel_in_voxels,
+        };
+        Ok((result, r.image))
+    }
+}
+
+/// A file-name-safe form of a view name: `+` → `p`, `-` → `n`, `@` → `_`
+/// (`"+x-y+z@4x"` → `"pxnypz_4x"`).
+pub fn view_file_stem(name: &str) -> String {
+    name.chars()
+        .map(|c| match c {
+            '+' => 'p',
+            '-' => 'n',
+            '@' => '_',
+            c if c.is_ascii_alphanumeric() || c == '.' => c,
+            _ => '_',
+        })
+        .collect()
+}
+
+/// Direction helper for callers that build their own [`ViewSpec`]s.
+pub fn spec(name: &str, dir: Vec3, distance_factor: f32) -> ViewSpec {
+    ViewSpec {
+        name: format!("{name}@{distance_factor}x"),
+        dir: dir.normalize(),
+        distance_factor,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn err(rmse: f64, cov: f64) -> ImageError {
+        ImageError {
+            rmse_rgba: [rmse; 4],
+            rmse,
+            psnr_rgba: [0.0; 4],
+            psnr: 0.0,
+            mean_abs_alpha: rmse,
+            coverage_reference: 0.5,
+            coverage_test: 0.5,
+            coverage_rel_diff: cov,
+            ssim_luma: 1.0,
+            ssim_alpha: 0.5,
+        }
+    }
+
+    #[test]
+    fn means_use_the_mean_mse_for_psnr() {
+        let m = mean_errors(&[err(0.1, -0.2), err(0.3, 0.0)]);
+        assert_eq!(m.views, 2);
+        assert!((m.rmse - 0.2).abs() < 1e-12);
+        let mse = (0.01 + 0.09) / 2.0;
+        assert!((m.psnr - (-10.0 * f64::log10(mse))).abs() < 1e-9);
+        assert!((m.coverage_rel_diff + 0.1).abs() < 1e-12);
+        assert_eq!(mean_errors(&[]).views, 0);
+    }
+
+    #[test]
+    fn baked_lighting_is_noted() {
+        use billow_format::{AssetKind, Bounds, ColourSpace, Header, TexelFormat, VolumeHeader};
+        let mut asset = VolumeAsset {
+            header: Header {
+                kind: AssetKind::Volume,
+                tool: "test".into(),
+                source: None,
+                bounds: Bounds {
+                    min: [0.0; 3],
+                    max: [1.0; 3],
+                },
+                colour_space: ColourSpace::SrgbPremultiplied,
+                seed: None,
+                params: Default::default(),
+                volume: Some(VolumeHeader {
+                    dims: [1, 1, 1],
+                    mip_count: 1,
+                    texel: TexelFormat::Rgba8Unorm,
+                    normals: None,
+                }),
+            },
+            levels: vec![vec![0; 4]],
+            normals: None,
+            cells: vec![],
+        };
+        assert_eq!(lighting_note(&asset), None);
+        asset.header.params.insert("bake".into(), "none".into());
+        assert_eq!(lighting_note(&asset), None);
+        asset.header.params.insert("bake".into(), "ao".into());
+        let note = lighting_note(&asset).unwrap();
+        assert!(note.contains("bake=ao") && note.contains("unlit"), "{note}");
+    }
+
+    #[test]
+    fn file_stems_are_plain() {
+        assert_eq!(view_file_stem("+x-y+z@4x"), "pxnypz_4x");
+        assert_eq!(view_file_stem("-z@2.5x"), "nz_2.5x");
+    }
+}

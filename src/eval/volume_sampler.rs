@@ -1,0 +1,247 @@
+//! Decoding and filtering the colour MIP levels of a [`VolumeAsset`].
+//!
+//! Texels are decoded once to linear premultiplied RGBA f32 (`SrgbPremultiplied`: the
+//! sRGB EOTF on rgb, alpha / 255 — what an `*_SRGB` GPU format does), *then* filtered, so
+//! filtering happens in linear premultiplied space. Sampling is trilinear within a level
+//! with texel centres at `(i + 0.5)/n`; between levels either nearest level or linear
+//! (i.e. quadrilinear, GPU `LINEAR_MIPMAP_LINEAR`).
+//!
+//! Addressing (formats/SPEC.md §8.5): clamp-to-edge on every axis, except for **shell**
+//! assets (header `params` has the key `shell`), which repeat with period 1 in x and z
+//! (the surface's tiled UV) and clamp in y (the height) — GPU `REPEAT`/`CLAMP_TO_EDGE`.
+//! Wrapping happens per texel index, so a bilinear footprint straddling the tile edge
+//! blends the last and the first texel, as a GPU does.
+
+use billow_format::{ColourSpace, VolumeAsset};
+use glam::{Vec3, Vec4};
+
+use super::EvalError;
+use crate::texture::srgb_to_linear_lut;
+
+/// How the MIP level is filtered.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MipFilter {
+    /// Level `round(lod)`.
+    Nearest,
+    /// Blend levels `floor(lod)` and `floor(lod) + 1` (default).
+    Linear,
+}
+
+/// One decoded level.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Level {
+    pub dims: [u32; 3],
+    pub texels: Vec<Vec4>,
+}
+
+/// All colour levels, linear premultiplied.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DecodedVolume {
+    pub levels: Vec<Level>,
+    /// Per axis (x, y, z): repeat addressing (`true`) or clamp-to-edge.
+    pub repeat: [bool; 3],
+}
+
+/// The addressing a reader must use for `asset` (SPEC §8.5): repeat in x and z for a
+/// shell asset (its `params` contain the key `shell`), clamp everywhere otherwise.
+pub fn repeat_axes(asset: &VolumeAsset) -> [bool; 3] {
+    let shell = asset.header.params.contains_key("shell");
+    [shell, false, shell]
+}
+
+impl DecodedVolume {
+    /// Decodes every colour level of `asset` (which must be valid).
+    pub fn decode(asset: &VolumeAsset) -> Result<Self, EvalError> {
+        asset
+            .validate()
+            .map_err(|e| EvalError::InvalidAsset(e.to_string()))?;
+        let srgb = asset.header.colour_space == ColourSpace::SrgbPremultiplied;
+        let lut = srgb_to_linear_lut();
+        let levels = asset
+            .levels
+            .iter()
+            .enumerate()
+            .map(|(i, bytes)| {
+                let texels = bytes
+                    .chunks_exact(4)
+                    .map(|t| {
+                        let c = |v: u8| {
+                            if srgb {
+                                lut[v as usize]
+                            } else {
+                                f32::from(v) / 255.0
+                            }
+                        };
+                        Vec4::new(c(t[0]), c(t[1]), c(t[2]), f32::from(t[3]) / 255.0)
+                    })
+                    .collect();
+                Level {
+                    dims: asset.level_dims(i as u32),
+                    texels,
+                }
+            })
+            .collect();
+        Ok(DecodedVolume {
+            levels,
+            repeat: repeat_axes(asset),
+        })
+    }
+
+    pub fn level_count(&self) -> usize {
+        self.levels.len()
+    }
+
+    /// Trilinear sample of level `level` (clamped to the last level) at `uvw`.
+    pub fn sample_level(&self, level: usize, uvw: Vec3) -> Vec4 {
+        let l = &self.levels[level.min(self.levels.len() - 1)];
+        let [w, h, d] = l.dims.map(|v| v as i64);
+        let f = |u: f32, n: i64, repeat: bool| {
+            let u = if u.is_finite() { u } else { 0.0 };
+            // Repeat: only the fractional part matters (keeps the index small for any u).
+            let u = if repeat { u - u.floor() } else { u };
+            let x = u * n as f32 - 0.5;
+            let x0 = x.floor();
+            let t = x - x0;
+            let (i0, i1) = if repeat {
+                ((x0 as i64).rem_euclid(n), (x0 as i64 + 1).rem_euclid(n))
+            } else {
+                ((x0 as i64).clamp(0, n - 1), (x0 as i64 + 1).clamp(0, n - 1))
+            };
+            (i0 as usize, i1 as usize, t)
+        };
+        let (x0, x1, tx) = f(uvw.x, w, self.repeat[0]);
+        let (y0, y1, ty) = f(uvw.y, h, self.repeat[1]);
+        let (z0, z1, tz) = f(uvw.z, d, self.repeat[2]);
+        let (w, h) = (w as usize, h as usize);
+        let at = |x: usize, y: usize, z: usize| l.texels[x + w * (y + h * z)];
+        let lerp = |a: Vec4, b: Vec4, t: f32| a + (b - a) * t;
+        let c00 = lerp(at(x0, y0, z0), at(x1, y0, z0), tx);
+        let c10 = lerp(at(x0, y1, z0), at(x1, y1, z0), tx);
+        let c01 = lerp(at(x0, y0, z1), at(x1, y0, z1), tx);
+        let c11 = lerp(at(x0, y1, z1), at(x1, y1, z1), tx);
+        lerp(lerp(c00, c10, ty), lerp(c01, c11, ty), tz)
+    }
+
+    /// Sample at fractional level `lod` (clamped to the stored levels).
+    pub fn sample(&self, lod: f32, uvw: Vec3, filter: MipFilter) -> Vec4 {
+        let max = (self.levels.len() - 1) as f32;
+        let lod = if lod.is_finite() {
+            lod.clamp(0.0, max)
+        } else {
+            0.0
+        };
+        match filter {
+            MipFilter::Nearest => self.sample_level(lod.round() as usize, uvw),
+            MipFilter::Linear => {
+                let l0 = lod.floor();
+                let t = lod - l0;
+                let a = self.sample_level(l0 as usize, uvw);
+                if t <= 0.0 {
+                    return a;
+                }
+                let b = self.sample_level(l0 as usize + 1, uvw);
+                a + (b - a) * t
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 4×2×4 level whose texel alpha encodes its x index (and z index in blue).
+    fn ramp(repeat: [bool; 3]) -> DecodedVolume {
+        let dims = [4u32, 2, 4];
+        let mut texels = Vec::new();
+        for z in 0..4 {
+            for y in 0..2 {
+                for x in 0..4 {
+                    texels.push(Vec4::new(
+                        0.0,
+                        y as f32 * 0.1,
+                        z as f32 * 0.1,
+                        x as f32 * 0.1,
+                    ));
+                }
+            }
+        }
+        DecodedVolume {
+            levels: vec![Level { dims, texels }],
+            repeat,
+        }
+    }
+
+    #[test]
+    fn shells_repeat_in_x_and_z_and_clamp_in_y() {
+        let v = ramp([true, false, true]);
+        // Texel centres: u = (i + 0.5)/4. One period further gives the same value.
+        for (u, w) in [(0.125f32, 0.375f32), (0.625, 0.875)] {
+            let a = v.sample_level(0, Vec3::new(u, 0.25, w));
+            for k in [-3.0f32, -1.0, 1.0, 2.0, 17.0] {
+                let b = v.sample_level(0, Vec3::new(u + k, 0.25, w + k));
+                assert!(
+                    (a - b).abs().max_element() < 1e-5,
+                    "u={u} k={k}: {a} vs {b}"
+                );
+            }
+        }
+        // At u = 0 the footprint straddles the tile edge: half the last texel (x = 3),
+        // half the first (x = 0) — not clamped to the first.
+        let e = v.sample_level(0, Vec3::new(0.0, 0.25, 0.125));
+        assert!((e.w - 0.15).abs() < 1e-6, "{e}");
+        let e = v.sample_level(0, Vec3::new(1.0, 0.25, 0.125));
+        assert!((e.w - 0.15).abs() < 1e-6, "{e}");
+        // Same in z.
+        let e = v.sample_level(0, Vec3::new(0.125, 0.25, 0.0));
+        assert!((e.z - 0.15).abs() < 1e-6, "{e}");
+        // y clamps: far above the top equals the top row.
+        let top = v.sample_level(0, Vec3::new(0.125, 0.75, 0.125));
+        let above = v.sample_level(0, Vec3::new(0.125, 1.7, 0.125));
+        assert_eq!(top, above);
+        assert!((above.y - 0.1).abs() < 1e-6);
+    }
+
+    #[test]
+    fn other_assets_clamp_everywhere() {
+        let v = ramp([false; 3]);
+        let e = v.sample_level(0, Vec3::new(0.0, 0.25, 0.125));
+        assert!((e.w - 0.0).abs() < 1e-6, "{e}");
+        let e = v.sample_level(0, Vec3::new(1.6, 0.25, 0.125));
+        assert!((e.w - 0.3).abs() < 1e-6, "{e}");
+    }
+
+    #[test]
+    fn the_shell_param_selects_repeat() {
+        use billow_format::{AssetKind, Bounds, Header, TexelFormat, VolumeHeader};
+        let mut asset = VolumeAsset {
+            header: Header {
+                kind: AssetKind::Volume,
+                tool: "test".into(),
+                source: None,
+                bounds: Bounds {
+                    min: [0.0; 3],
+                    max: [1.0; 3],
+                },
+                colour_space: ColourSpace::SrgbPremultiplied,
+                seed: None,
+                params: Default::default(),
+                volume: Some(VolumeHeader {
+                    dims: [1, 1, 1],
+                    mip_count: 1,
+                    texel: TexelFormat::Rgba8Unorm,
+                    normals: None,
+                }),
+            },
+            levels: vec![vec![0, 0, 0, 0]],
+            normals: None,
+            cells: vec![],
+        };
+        assert_eq!(repeat_axes(&asset), [false; 3]);
+        asset
+            .header
+            .params
+            .insert("shell".into(), "height=0.1".into());
+        assert_eq!(repeat_axes(&asset), [true, false, true]);
+    }
+}

@@ -1,0 +1,262 @@
+//! Voxel resolution (`--res N | XxYxZ`) and fitting the voxel grid to the bounds.
+//!
+//! # Grid conventions
+//! - The grid is an axis-aligned box `[min, min + dims × voxel]`, voxel `(i, j, k)` covering
+//!   `[min + (i, j, k) × voxel, min + (i + 1, j + 1, k + 1) × voxel)`. Data are stored
+//!   x fastest, then y, then z.
+//! - **Margin.** When the grid is fitted to the scene's bounds, it gets `margin` voxels
+//!   (default ½) of empty space on every side, so that geometry lying on a face of the
+//!   bounding box (a ground quad, the tip of a branch) falls inside a voxel instead of on
+//!   the grid's boundary, and so a trilinear reconstruction at the edge of the volume
+//!   is not clipped. An axis with a single voxel gets no margin (the voxel is the bounds).
+//!   Bounds given explicitly ([`VoxelizeOptions::bounds`](super::VoxelizeOptions)) are
+//!   used as they are (no margin).
+//! - [`Resolution::Longest`]`(n)`: cubic voxels, `n` along the longest axis; every other
+//!   axis gets as many voxels as its extent needs (plus margin), at least 1, and its box
+//!   is centred on the bounds.
+//! - [`Resolution::Exact`]`([x, y, z])`: the box is divided into exactly that many voxels
+//!   per axis (voxels may be non-cubic). An axis of zero extent (a flat scene) gets the
+//!   largest voxel size of the other axes.
+
+use std::fmt;
+use std::str::FromStr;
+
+use glam::Vec3;
+
+use crate::scene::Aabb;
+
+/// Largest number of voxels along one axis.
+pub const MAX_AXIS: u32 = 2048;
+
+/// How many voxels the volume has.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Resolution {
+    /// `n` voxels along the longest axis of the bounds, cubic voxels.
+    Longest(u32),
+    /// Exactly `[x, y, z]` voxels.
+    Exact([u32; 3]),
+}
+
+impl Default for Resolution {
+    fn default() -> Self {
+        Resolution::Longest(128)
+    }
+}
+
+impl fmt::Display for Resolution {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Resolution::Longest(n) => write!(f, "{n}"),
+            Resolution::Exact([x, y, z]) => write!(f, "{x}x{y}x{z}"),
+        }
+    }
+}
+
+/// Why a resolution string or value was refused.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum ResolutionError {
+    #[error("empty resolution: expected N or XxYxZ (e.g. 128 or 256x128x128)")]
+    Empty,
+    #[error("resolution '{text}': '{part}' is not a whole number (expected N or XxYxZ, e.g. 128 or 256x128x128)")]
+    NotANumber { text: String, part: String },
+    #[error("resolution '{text}': expected N or XxYxZ (three sizes), got {parts} parts")]
+    WrongArity { text: String, parts: usize },
+    #[error("resolution: {axis} size is 0; every axis needs at least 1 voxel")]
+    Zero { axis: char },
+    #[error("resolution: {axis} size {value} is larger than the maximum of {max} voxels per axis")]
+    TooLarge { axis: char, value: u64, max: u32 },
+}
+
+const AXES: [char; 3] = ['x', 'y', 'z'];
+
+fn check_axis(axis: char, value: u64) -> Result<u32, ResolutionError> {
+    if value == 0 {
+        Err(ResolutionError::Zero { axis })
+    } else if value > MAX_AXIS as u64 {
+        Err(ResolutionError::TooLarge {
+            axis,
+            value,
+            max: MAX_AXIS,
+        })
+    } else {
+        Ok(value as u32)
+    }
+}
+
+impl Resolution {
+    /// Checks every axis is within `1..=MAX_AXIS` (for values built in code).
+    pub fn validate(&self) -> Result<(), ResolutionError> {
+        match *self {
+            Resolution::Longest(n) => check_axis('n', n as u64).map(|_| ()),
+            Resolution::Exact(d) => {
+                for (a, v) in AXES.iter().zip(d) {
+                    check_axis(*a, v as u64)?;
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+impl FromStr for Resolution {
+    type Err = ResolutionError;
+
+    /// `"N"` → [`Resolution::Longest`], `"XxYxZ"` → [`Resolution::Exact`] (`x` or `X`).
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let text = s.trim();
+        if text.is_empty() {
+            return Err(ResolutionError::Empty);
+        }
+        let parts: Vec<&str> = text.split(['x', 'X']).collect();
+        let num = |p: &str| -> Result<u64, ResolutionError> {
+            let p = p.trim();
+            if p.is_empty() || !p.bytes().all(|b| b.is_ascii_digit()) {
+                return Err(ResolutionError::NotANumber {
+                    text: text.into(),
+                    part: p.into(),
+                });
+            }
+            // Saturate absurdly long digit strings: they are "too large", not "not a number".
+            Ok(p.parse::<u64>().unwrap_or(u64::MAX))
+        };
+        match parts.len() {
+            1 => Ok(Resolution::Longest(check_axis('n', num(parts[0])?)?)),
+            3 => {
+                let mut d = [0u32; 3];
+                for i in 0..3 {
+                    d[i] = check_axis(AXES[i], num(parts[i])?)?;
+                }
+                Ok(Resolution::Exact(d))
+            }
+            n => {
+                // "abc" splits into 1 part and is caught above; report non-numbers first.
+                for p in &parts {
+                    num(p)?;
+                }
+                Err(ResolutionError::WrongArity {
+                    text: text.into(),
+                    parts: n,
+                })
+            }
+        }
+    }
+}
+
+/// The voxel grid: where the volume lies and how it is divided.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GridSpec {
+    /// Voxels per axis at MIP level 0.
+    pub dims: [u32; 3],
+    /// Corner of voxel (0, 0, 0).
+    pub min: Vec3,
+    /// Size of one level-0 voxel per axis.
+    pub voxel: Vec3,
+}
+
+impl GridSpec {
+    pub fn max(&self) -> Vec3 {
+        self.min
+            + self.voxel
+                * Vec3::new(
+                    self.dims[0] as f32,
+                    self.dims[1] as f32,
+                    self.dims[2] as f32,
+                )
+    }
+    pub fn bounds(&self) -> Aabb {
+        Aabb {
+            min: self.min,
+            max: self.max(),
+        }
+    }
+    pub fn voxel_count(&self) -> u64 {
+        self.dims.iter().map(|&d| d as u64).product()
+    }
+    /// Dimensions of MIP level `level`: `max(1, d >> level)` per axis.
+    pub fn level_dims(&self, level: u32) -> [u32; 3] {
+        level_dims(self.dims, level)
+    }
+    /// Number of levels of the full MIP chain (down to 1×1×1).
+    pub fn full_mip_count(&self) -> u32 {
+        full_mip_count(self.dims)
+    }
+}
+
+/// `max(1, d >> level)` per axis (the GPU convention for 3D textures).
+pub fn level_dims(dims: [u32; 3], level: u32) -> [u32; 3] {
+    dims.map(|d| d.checked_shr(level).unwrap_or(0).max(1))
+}
+
+/// `floor(log2(max dim)) + 1`.
+pub fn full_mip_count(dims: [u32; 3]) -> u32 {
+    let m = dims.iter().copied().max().unwrap_or(1).max(1);
+    32 - m.leading_zeros()
+}
+
+/// Why a grid could not be fitted.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum GridError {
+    #[error("bounds are empty or not finite ({min:?} .. {max:?})")]
+    BadBounds { min: [f32; 3], max: [f32; 3] },
+    #[error("margin must be finite and in [0, 16] voxels, got {0}")]
+    BadMargin(f32),
+    #[error(transparent)]
+    Resolution(#[from] ResolutionError),
+}
+
+/// Fits a grid of resolution `res` around `bounds` with `margin` voxels of empty space on
+/// every side (see the module docs).
+pub fn fit_grid(bounds: &Aabb, res: Resolution, margin: f32) -> Result<GridSpec, GridError> {
+    let bad = || GridError::BadBounds {
+        min: bounds.min.to_array(),
+        max: bounds.max.to_array(),
+    };
+    if bounds.is_empty() || !bounds.min.is_finite() || !bounds.max.is_finite() {
+        return Err(bad());
+    }
+    if !(margin.is_finite() && (0.0..=16.0).contains(&margin)) {
+        return Err(GridError::BadMargin(margin));
+    }
+    res.validate()?;
+    let ext = bounds.size().to_array().map(|e| e as f64);
+    let longest = ext.iter().copied().fold(0.0, f64::max);
+    if !longest.is_finite() || longest <= 0.0 {
+        return Err(bad());
+    }
+    // Extents below this count as flat.
+    let tiny = longest * 1e-6;
+    let m = margin as f64;
+    let (dims, voxel) = match res {
+        Resolution::Longest(n) => {
+            let s = longest / (n as f64 - 2.0 * m).max(1.0);
+            let mut dims = [1u32; 3];
+            for a in 0..3 {
+                let need = (ext[a] / s + 2.0 * m - 1e-4).ceil();
+                dims[a] = (need as u32).clamp(1, n);
+            }
+            (dims, [s; 3])
+        }
+        Resolution::Exact(d) => {
+            let mut voxel = [0.0f64; 3];
+            for a in 0..3 {
+                if ext[a] > tiny {
+                    voxel[a] = ext[a] / (d[a] as f64 - 2.0 * m).max(1.0);
+                }
+            }
+            let fallback = voxel.iter().copied().fold(0.0, f64::max);
+            for v in &mut voxel {
+                if *v == 0.0 {
+                    *v = fallback;
+                }
+            }
+            (d, voxel)
+        }
+    };
+    let centre = bounds.center().to_array().map(|c| c as f64);
+    let min = [0, 1, 2].map(|a| (centre[a] - 0.5 * dims[a] as f64 * voxel[a]) as f32);
+    Ok(GridSpec {
+        dims,
+        min: Vec3::from_array(min),
+        voxel: Vec3::from_array(voxel.map(|v| v as f32)),
+    })
+}

@@ -1,0 +1,119 @@
+//! Normal MIP filtering after Toksvig, *Mipmapping normal maps* (JGT 10(3), 2005).
+//!
+//! Toksvig's observation: averaging unit normals gives a vector whose length `|N̄| ≤ 1`
+//! measures how much they disagree; keep the **shortened** average instead of
+//! renormalising it, and derive the roughness from its length at shading time:
+//! `ft = |N̄| / (|N̄| + s (1 − |N̄|))` scales a Blinn–Phong exponent `s`
+//! ([`toksvig_factor`]), equivalently a variance `σ² = (1 − |N̄|) / |N̄|` ([`toksvig_variance`]).
+//!
+//! billow carries the **alpha-weighted normal sum** `Nw = Σ weight · n` next to the
+//! premultiplied colour; the weight of a fragment is its visible opacity, so `Nw` filters
+//! exactly like a premultiplied colour channel: composited along the view axis (what is
+//! hidden does not count), averaged across it. At every level, for every direction,
+//! `|Nw| ≤ α`. The six directions are combined as `N̄ = Σ_d Nw_d / Σ_d α_d` (the
+//! alpha-weighted mean of everything the six cameras saw, independent of the colour
+//! combine function), which is Toksvig's average of all the unit normals that fell in the
+//! voxel. Opposite normals cancel to a zero vector, never NaN; an empty voxel has `N̄ = 0`.
+//!
+//! Storage: the per-direction `Nw` and the running sums `(Σ Nw, Σ α)` are f16 (the result
+//! is quantized to snorm8, whose step 1/127 is far above f16's 2⁻¹¹ relative error), which
+//! keeps `--normals` at 512³ within the memory budget.
+
+use glam::Vec3;
+use half::f16;
+use rayon::prelude::*;
+
+use super::mip::{downsample_with, Grid3, Texel};
+use super::Dir;
+
+/// One MIP step of a direction's weighted normals `nrm`, occluded by the colour volume `rgba`
+/// of the same level (same footprints and compositing as the colour, see [`super::mip`]).
+pub(crate) fn downsample_normals<T: Texel>(
+    nrm: &Grid3<[f16; 4]>,
+    rgba: &Grid3<T>,
+    view: Dir,
+) -> Grid3<[f16; 4]> {
+    downsample_with(nrm, rgba, view)
+}
+
+/// Toksvig's average normal `Σ Nw / Σ α` (length ≤ 1; zero when `Σ α` is 0).
+pub fn average_normal(weighted_sum: Vec3, alpha_sum: f32) -> Vec3 {
+    if alpha_sum.is_nan() || alpha_sum <= 1e-6 || !weighted_sum.is_finite() {
+        return Vec3::ZERO;
+    }
+    let n = weighted_sum / alpha_sum;
+    let len = n.length();
+    if len > 1.0 {
+        n / len
+    } else {
+        n
+    }
+}
+
+/// Toksvig factor `ft = |N̄| / (|N̄| + s (1 − |N̄|))` for a Blinn–Phong exponent `s`;
+/// the filtered exponent is `ft · s`. 0 for a zero-length normal.
+pub fn toksvig_factor(len: f32, s: f32) -> f32 {
+    let len = len.clamp(0.0, 1.0);
+    let d = len + s * (1.0 - len);
+    if d > 0.0 {
+        len / d
+    } else {
+        0.0
+    }
+}
+
+/// Variance of the normal distribution implied by a shortened normal: `(1 − |N̄|) / |N̄|`
+/// (infinite for a zero-length normal).
+pub fn toksvig_variance(len: f32) -> f32 {
+    let len = len.clamp(0.0, 1.0);
+    (1.0 - len) / len
+}
+
+/// Running sums `(Σ Nw, Σ α)` of one MIP level over the six directions.
+pub(crate) struct NormalAccum {
+    pub levels: Vec<Vec<[f16; 4]>>,
+}
+
+impl NormalAccum {
+    pub fn new(level_sizes: &[usize]) -> Self {
+        NormalAccum {
+            levels: level_sizes
+                .iter()
+                .map(|&n| vec![[f16::ZERO; 4]; n])
+                .collect(),
+        }
+    }
+
+    /// Adds one direction's level.
+    pub fn fold<T: Texel>(&mut self, level: usize, nrm: &Grid3<[f16; 4]>, rgba: &Grid3<T>) {
+        self.levels[level]
+            .par_chunks_mut(4096)
+            .zip(nrm.data.par_chunks(4096).zip(rgba.data.par_chunks(4096)))
+            .for_each(|(acc, (n, c))| {
+                for ((a, n), c) in acc.iter_mut().zip(n).zip(c) {
+                    let (n, c) = (n.load(), c.load());
+                    if c[3] == 0.0 && n == [0.0; 4] {
+                        continue;
+                    }
+                    let s = a.load();
+                    *a = <[f16; 4]>::store([s[0] + n[0], s[1] + n[1], s[2] + n[2], s[3] + c[3]]);
+                }
+            });
+    }
+
+    /// Encoded snorm8 normals of one level (see [`super::quantize::encode_normal`]).
+    pub fn finish_level(&mut self, level: usize) -> Vec<u8> {
+        let acc = std::mem::take(&mut self.levels[level]);
+        let mut out = vec![0u8; acc.len() * 4];
+        out.par_chunks_mut(4 * 4096)
+            .zip(acc.par_chunks(4096))
+            .for_each(|(o, a)| {
+                for (o, a) in o.chunks_exact_mut(4).zip(a) {
+                    let s = a.load();
+                    let n = average_normal(Vec3::new(s[0], s[1], s[2]), s[3]);
+                    o.copy_from_slice(&super::quantize::encode_normal(n));
+                }
+            });
+        out
+    }
+}

@@ -1,0 +1,354 @@
+//! Stability suite for the prism/plane intersection (VB Appendix A).
+//!
+//! Every result is checked against an f64 reference computed from the same f32 inputs:
+//! - `count` ∈ {0, 3, 4, 5}; vertices pairwise distinct; z exactly `z_slice`;
+//! - each vertex lies on a prism edge that the plane crosses, at the f64 parameter
+//!   `s = (z − z_a)/(z_b − z_a)`, and its uvw is the same interpolation, both within
+//!   `TOL_REL` × the coordinate scale (so inside the prism's hull);
+//! - convex and counter-clockwise seen from +z (turns ≥ −`TOL_REL`·scale²);
+//! - its area equals the area of the convex hull of *all* f64 crossing points (no point
+//!   lost), within `TOL_REL`·scale².
+
+use billow::eval::prism_plane::{intersect_prism_plane, SlicePolygon};
+use proptest::prelude::*;
+
+/// Relative tolerance (f32 has 6e-8; a lerp costs a few ulps).
+const TOL_REL: f64 = 2e-6;
+
+type P6 = [[f32; 3]; 6];
+
+fn edges() -> [(usize, usize); 9] {
+    [
+        (0, 3),
+        (1, 4),
+        (2, 5),
+        (0, 1),
+        (1, 2),
+        (2, 0),
+        (3, 4),
+        (4, 5),
+        (5, 3),
+    ]
+}
+
+fn scale_of(pos: &P6) -> f64 {
+    pos.iter()
+        .flatten()
+        .map(|v| f64::from(v.abs()))
+        .fold(1e-30, f64::max)
+}
+
+/// f64 crossing points (x, y) of all crossing edges, with the same exact classification.
+fn crossings(pos: &P6, z: f32) -> Vec<(f64, f64, [f64; 3], usize)> {
+    let mut out = Vec::new();
+    for (ei, (a, b)) in edges().into_iter().enumerate() {
+        let (ua, ub) = (pos[a][2] >= z, pos[b][2] >= z);
+        if ua == ub {
+            continue;
+        }
+        let (lo, hi) = if ua { (b, a) } else { (a, b) };
+        let (za, zb) = (f64::from(pos[lo][2]), f64::from(pos[hi][2]));
+        let s = (f64::from(z) - za) / (zb - za);
+        let l = |p: f32, q: f32| f64::from(p) * (1.0 - s) + f64::from(q) * s;
+        out.push((
+            l(pos[lo][0], pos[hi][0]),
+            l(pos[lo][1], pos[hi][1]),
+            [s, lo as f64, hi as f64],
+            ei,
+        ));
+    }
+    out
+}
+
+fn hull_area(mut pts: Vec<(f64, f64)>) -> f64 {
+    pts.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    pts.dedup();
+    if pts.len() < 3 {
+        return 0.0;
+    }
+    let cross = |o: (f64, f64), a: (f64, f64), b: (f64, f64)| {
+        (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0)
+    };
+    let mut h: Vec<(f64, f64)> = Vec::new();
+    for pass in 0..2 {
+        let start = h.len();
+        let it: Box<dyn Iterator<Item = &(f64, f64)>> = if pass == 0 {
+            Box::new(pts.iter())
+        } else {
+            Box::new(pts.iter().rev())
+        };
+        for &p in it {
+            while h.len() >= start + 2 && cross(h[h.len() - 2], h[h.len() - 1], p) <= 0.0 {
+                h.pop();
+            }
+            h.push(p);
+        }
+        h.pop();
+    }
+    poly_area(&h)
+}
+
+fn poly_area(p: &[(f64, f64)]) -> f64 {
+    let n = p.len();
+    (0..n)
+        .map(|i| p[i].0 * p[(i + 1) % n].1 - p[(i + 1) % n].0 * p[i].1)
+        .sum::<f64>()
+        * 0.5
+}
+
+fn uvw_of(pos: &P6) -> P6 {
+    // A distinct, non-degenerate uvw per vertex (the fixture's box mapping, skewed).
+    let mut t = [[0.0; 3]; 6];
+    for (k, v) in t.iter_mut().enumerate() {
+        *v = [
+            (k % 3) as f32 * 0.4 + 0.1,
+            ((k * 7) % 5) as f32 * 0.2,
+            if k >= 3 { 1.0 } else { 0.0 },
+        ];
+    }
+    let _ = pos;
+    t
+}
+
+/// Checks every invariant; returns the polygon.
+fn check(pos: &P6, z: f32) -> SlicePolygon {
+    let uvw = uvw_of(pos);
+    let poly = intersect_prism_plane(pos, &uvw, z);
+    let n = poly.count;
+    assert!(n == 0 || (3..=5).contains(&n), "count {n}");
+    let scale = scale_of(pos);
+    let tol = TOL_REL * scale;
+    let cr = crossings(pos, z);
+    for i in 0..n {
+        let p = poly.pos[i];
+        assert!(p.iter().all(|c| c.is_finite()) && poly.uvw[i].iter().all(|c| c.is_finite()));
+        assert_eq!(p[2], z, "vertex {i} off the plane");
+        for j in 0..i {
+            assert_ne!(poly.pos[j], p, "duplicate vertex");
+        }
+        // On some crossing edge, with consistent uvw.
+        let found = cr.iter().any(|&(x, y, [s, lo, hi], _)| {
+            let (lo, hi) = (lo as usize, hi as usize);
+            let uv_ok = (0..3).all(|c| {
+                let e = f64::from(uvw[lo][c]) * (1.0 - s) + f64::from(uvw[hi][c]) * s;
+                (e - f64::from(poly.uvw[i][c])).abs() <= 1e-5
+            });
+            (x - f64::from(p[0])).abs() <= tol && (y - f64::from(p[1])).abs() <= tol && uv_ok
+        });
+        assert!(
+            found,
+            "vertex {i} {p:?} not on a crossing edge (uvw {:?}); crossings {cr:?}",
+            poly.uvw[i]
+        );
+    }
+    let pts: Vec<(f64, f64)> = (0..n)
+        .map(|i| (f64::from(poly.pos[i][0]), f64::from(poly.pos[i][1])))
+        .collect();
+    if n >= 3 {
+        let area = poly_area(&pts);
+        assert!(area >= -tol * scale, "clockwise: area {area}");
+        for i in 0..n {
+            let (a, b, c) = (pts[i], pts[(i + 1) % n], pts[(i + 2) % n]);
+            let turn = (b.0 - a.0) * (c.1 - b.1) - (b.1 - a.1) * (c.0 - b.0);
+            assert!(turn >= -4.0 * tol * scale, "not convex at {i}: {turn}");
+        }
+    }
+    let ref_area = hull_area(cr.iter().map(|c| (c.0, c.1)).collect());
+    let area = if n >= 3 { poly_area(&pts) } else { 0.0 };
+    assert!(
+        (area - ref_area).abs() <= 8.0 * tol * scale,
+        "area {area} vs hull {ref_area}"
+    );
+    poly
+}
+
+fn boxed(min: [f32; 3], max: [f32; 3]) -> [P6; 2] {
+    // The fixture's box: prisms along z (bottom z = min, top z = max).
+    let c = |x: f32, y: f32, z: f32| [x, y, z];
+    let (a, b) = (min, max);
+    [
+        [
+            c(a[0], a[1], a[2]),
+            c(b[0], a[1], a[2]),
+            c(b[0], b[1], a[2]),
+            c(a[0], a[1], b[2]),
+            c(b[0], a[1], b[2]),
+            c(b[0], b[1], b[2]),
+        ],
+        [
+            c(a[0], a[1], a[2]),
+            c(b[0], b[1], a[2]),
+            c(a[0], b[1], a[2]),
+            c(a[0], a[1], b[2]),
+            c(b[0], b[1], b[2]),
+            c(a[0], b[1], b[2]),
+        ],
+    ]
+}
+
+/// Re-orders coordinates so the prism's vertical edges point along `axis` (0 = x, ...).
+fn permute(p: &P6, perm: [usize; 3]) -> P6 {
+    p.map(|v| [v[perm[0]], v[perm[1]], v[perm[2]]])
+}
+
+#[test]
+fn box_along_view_axis() {
+    let [p0, p1] = boxed([0.0, 0.0, 0.0], [1.5, 1.0, 0.5]);
+    // Plane exactly on the bottom face: every vertex is "above": empty (half-open).
+    assert_eq!(check(&p0, 0.0).count, 0);
+    // On the top face: the top triangle, drawn once.
+    let top = check(&p0, 0.5);
+    assert_eq!(top.count, 3);
+    assert!(top.uvw[..3].iter().all(|t| t[2] == 1.0));
+    // In between: triangles; the two halves tile the rectangle.
+    let (a, b) = (check(&p0, 0.25), check(&p1, 0.25));
+    assert_eq!((a.count, b.count), (3, 3));
+    // Shared diagonal: bit-identical end points in both prisms.
+    for q in &a.pos[..3] {
+        if q[0] != 0.0 || q[1] != 0.0 {
+            continue;
+        }
+        assert!(b.pos[..3].contains(q));
+    }
+    assert_eq!(check(&p0, -1.0).count, 0);
+    assert_eq!(check(&p0, 1.0).count, 0);
+}
+
+#[test]
+fn vertical_edges_parallel_to_plane() {
+    // Vertical edges along y: z_{k+3} == z_k on every line (the paper's division by zero).
+    for prism in boxed([0.0, 0.0, 0.0], [1.0, 1.0, 1.0]) {
+        let p = permute(&prism, [0, 2, 1]);
+        for z in [0.0, 0.25, 0.5, 0.999, 1.0] {
+            check(&p, z);
+        }
+        let q = check(&p, 0.5);
+        assert!(q.count == 4 || q.count == 0, "{}", q.count);
+    }
+    // Through the edge lying in the plane (z = 0 contains 0-3 and, for prism 0, 1-4).
+    let p = permute(&boxed([0.0, 0.0, 0.0], [1.0, 1.0, 1.0])[0], [0, 2, 1]);
+    check(&p, 0.0);
+    check(&p, 1.0);
+}
+
+#[test]
+fn plane_through_vertices_and_diagonals() {
+    // Tilted cube: the plane passes exactly through vertices with various combinations.
+    let prisms = boxed([0.0, 0.0, 0.0], [1.0, 1.0, 1.0]);
+    let tilt = |p: &P6| p.map(|v| [v[0], v[1], v[0] + v[1] + v[2]]);
+    for prism in &prisms {
+        let t = tilt(prism);
+        for z in [0.0, 1.0, 2.0, 3.0, 0.5, 1.5, 2.5] {
+            check(&t, z);
+        }
+    }
+    // z = x + y: plane x + y = 1 contains the diagonal face 0-2-5-3 of both prisms.
+    for prism in &prisms {
+        let t = prism.map(|v| [v[0], v[2], v[0] + v[1]]);
+        for z in [0.0, 1.0, 2.0] {
+            check(&t, z);
+        }
+    }
+}
+
+#[test]
+fn degenerate_prisms() {
+    let tri = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.3], [0.0, 1.0, 0.7]];
+    // Zero height: top == bottom.
+    let flat: P6 = [tri[0], tri[1], tri[2], tri[0], tri[1], tri[2]];
+    for z in [0.0, 0.1, 0.3, 0.5, 0.7] {
+        check(&flat, z);
+    }
+    // Collinear bottom and top (zero-area caps).
+    let line: P6 = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.5],
+        [2.0, 0.0, 1.0],
+        [0.0, 1.0, 0.0],
+        [1.0, 1.0, 0.5],
+        [2.0, 1.0, 1.0],
+    ];
+    for z in [0.0, 0.25, 0.5, 1.0] {
+        check(&line, z);
+    }
+    // Everything at one point.
+    let point: P6 = [[0.5, 0.5, 0.5]; 6];
+    for z in [0.0, 0.5, 1.0] {
+        assert_eq!(check(&point, z).count, 0);
+    }
+    // Inverted (top below bottom): still counter-clockwise.
+    let [p0, _] = boxed([0.0, 0.0, 0.0], [1.0, 1.0, 1.0]);
+    let inv: P6 = [p0[3], p0[4], p0[5], p0[0], p0[1], p0[2]];
+    assert_eq!(check(&inv, 0.5).count, 3);
+}
+
+#[test]
+fn huge_and_tiny_coordinates() {
+    for s in [1e-6f32, 1e6] {
+        for prism in boxed([0.0, 0.0, 0.0], [1.0, 1.0, 1.0]) {
+            let p = prism.map(|v| [v[0] * s, v[1] * s, (v[0] * 0.3 + v[1] * 0.6 + v[2]) * s]);
+            for z in [0.0, 0.2, 0.5, 0.9, 1.0, 1.3, 1.9] {
+                check(&p, z * s);
+            }
+        }
+    }
+}
+
+fn arb_prism() -> impl Strategy<Value = (P6, f64)> {
+    let v3 = || prop::array::uniform3(-1.0f32..1.0);
+    (
+        prop::array::uniform3(v3()),
+        v3(),
+        0.2f32..2.5,
+        prop::sample::select(vec![1e-6f32, 1e-3, 1.0, 1e3, 1e6]),
+        prop::array::uniform3(prop::sample::select(vec![0usize, 1, 2])),
+    )
+        .prop_map(|(mut bot, mut t, mut lambda, s, snap)| {
+            // Snaps keep the side faces planar: equal z on the bottom triangle (planes
+            // through two vertices at once), or a pure translation parallel to the plane
+            // (every vertical edge has z_{k+3} == z_k: the paper's division by zero).
+            if snap[1] == 1 {
+                bot[1][2] = bot[0][2];
+            }
+            if snap[0] == 1 {
+                t[2] = 0.0;
+                lambda = 1.0;
+            }
+            // Top = homothety of the bottom (+ translation): planar side faces.
+            let c = [0, 1, 2].map(|i| (bot[0][i] + bot[1][i] + bot[2][i]) / 3.0);
+            let mut p = [[0.0f32; 3]; 6];
+            for k in 0..3 {
+                p[k] = bot[k];
+                p[k + 3] = if lambda == 1.0 {
+                    [0, 1, 2].map(|i| bot[k][i] + t[i])
+                } else {
+                    [0, 1, 2].map(|i| c[i] + lambda * (bot[k][i] - c[i]) + t[i])
+                };
+            }
+            (p.map(|v| v.map(|x| x * s)), f64::from(s))
+        })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 2000, ..ProptestConfig::default() })]
+
+    #[test]
+    fn random_prisms_random_planes((p, _s) in arb_prism(), f in 0.0f64..1.0, pick in 0usize..8) {
+        let zs: Vec<f32> = p.iter().map(|v| v[2]).collect();
+        let (lo, hi) = zs.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |a, &z| (a.0.min(z), a.1.max(z)));
+        let z = if pick < 6 { zs[pick] } else { (f64::from(lo) + f * (f64::from(hi) - f64::from(lo))) as f32 };
+        check(&p, z);
+    }
+
+    #[test]
+    fn neighbouring_planes_sweep((p, _s) in arb_prism()) {
+        // Sweep the plane across every vertex z and its f32 neighbours.
+        for v in p {
+            for z in [v[2], f32::from_bits(v[2].to_bits().wrapping_add(1)), f32::from_bits(v[2].to_bits().wrapping_sub(1))] {
+                if z.is_finite() {
+                    check(&p, z);
+                }
+            }
+        }
+    }
+}
