@@ -1,4 +1,5 @@
 //! billow: bakes meshes into image-based level-of-detail assets.
+pub mod bbcloud;
 pub mod bvh;
 pub mod camera;
 pub mod eval;

@@ -1,6 +1,7 @@
 //! The `billow` command line: argument parsing, progress, messages and exit codes.
 //! All the work happens in the `billow` library; this binary only talks to the user.
 
+mod bbcloud;
 mod eval;
 mod exit;
 mod info;
@@ -36,6 +37,8 @@ enum Command {
     Voxelize(voxelize::Args),
     /// Cover a surface mesh with a tileable volume: one prism cell per triangle (volumetric textures).
     Shell(shell::Args),
+    /// Bake a mesh's foliage into a stochastic billboard cloud (+ LODs); the rest stays a mesh.
+    Bbcloud(bbcloud::Args),
     /// Compare a volume asset with its source mesh: reference vs asset renders, errors and timings per view.
     Eval(eval::Args),
 }
@@ -53,6 +56,7 @@ fn main() -> ExitCode {
         Command::Info(a) => info::run(a, &ctx),
         Command::Voxelize(a) => voxelize::run(a, &ctx),
         Command::Shell(a) => shell::run(a, &ctx),
+        Command::Bbcloud(a) => bbcloud::run(a, &ctx),
         Command::Eval(a) => eval::run(a, &ctx),
     };
     match result {

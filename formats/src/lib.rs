@@ -12,12 +12,17 @@
 
 #![forbid(unsafe_code)]
 
+mod cloud;
 mod container;
 mod error;
 mod header;
 mod inspect;
 mod volume;
 
+pub use cloud::{
+    Atlas, AtlasRect, Billboard, CloudAsset, CloudError, CloudLevel, Mesh, MeshMaterial,
+    MeshTexture, MeshVertex, MAX_TEXTURE_SIDE, NO_INDEX,
+};
 pub use container::{
     from_bytes, read_file, to_bytes, valid_tag, write_atomic, Chunk, Container, ElemType,
     CHUNK_HEADER_LEN, TAG_END, TAG_HEAD,

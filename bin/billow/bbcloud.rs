@@ -1,0 +1,206 @@
+//! `billow bbcloud IN -o OUT.billow`: a stochastic billboard cloud (Lacewell et al. 2006)
+//! of a mesh's foliage, plus its other triangles kept as a mesh.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use billow::bbcloud::{bake, BbcloudError, BbcloudOptions, BbcloudStats, Shading, Stage};
+use billow::import::{import, ImportOptions};
+use billow::provenance::{source_info, tool_version};
+use glam::Vec3;
+use serde::Serialize;
+
+use crate::exit::{CliError, Code};
+use crate::inspect::import_code;
+use crate::output::{print_json, progress, warn};
+use crate::Ctx;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The mesh to bake: .gltf, .glb or .obj (+ .mtl).
+    input: PathBuf,
+    /// Where to write the cloud asset (.billow). Written atomically.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Slab half-width ε of the plane search, in foliage bounding-sphere radii (doubled per LOD).
+    #[arg(long, default_value_t = 0.04)]
+    epsilon: f32,
+    /// Candidate planes tried per billboard (N).
+    #[arg(long, default_value_t = 500)]
+    samples: u32,
+    /// Random seed (PCG32); the same seed gives the same bytes.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Number of LOD levels; with 2 or more the last is two crossed vertical billboards.
+    #[arg(long, default_value_t = 1)]
+    lods: u32,
+    /// Largest atlas side in texels (a power of two).
+    #[arg(long, default_value_t = 2048)]
+    atlas_size: u32,
+    /// Texels per world unit at LOD 0 (default: the most that fits one atlas per level).
+    #[arg(long)]
+    texel_density: Option<f32>,
+    /// Direction towards the light, x,y,z.
+    #[arg(long, default_value = "0.3,1,0.2", conflicts_with = "unlit")]
+    light: String,
+    /// Bake albedo only, no lighting.
+    #[arg(long)]
+    unlit: bool,
+    /// Ambient light fraction (the rest is diffuse).
+    #[arg(long, default_value_t = 0.35)]
+    ambient: f32,
+    /// K: K×K coverage samples per texel (1–8).
+    #[arg(long, default_value_t = 3)]
+    supersample: u32,
+    /// Materials that make up the foliage (default: every alpha MASK/BLEND material).
+    #[arg(long, num_args = 1..)]
+    foliage: Vec<String>,
+    /// Treat import warnings (e.g. a missing texture) as errors.
+    #[arg(long)]
+    strict: bool,
+    /// Print a machine-readable summary on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize)]
+struct Summary<'a> {
+    input: String,
+    output: String,
+    seed: u64,
+    billboards_per_lod: Vec<usize>,
+    atlas_fill_per_lod: Vec<f64>,
+    texels: u64,
+    bytes: u64,
+    stats: &'a BbcloudStats,
+    seconds_import: f64,
+    seconds_write: f64,
+    seconds_total: f64,
+    warnings: Vec<String>,
+}
+
+fn bad(flag: &str, e: impl std::fmt::Display) -> CliError {
+    CliError::new(Code::BadParameter, format!("{flag}: {e}"))
+}
+
+fn parse_light(s: &str) -> Result<Vec3, CliError> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| bad("--light", format!("'{s}': {e}")))?;
+    let l = match v[..] {
+        [x, y, z] => Vec3::new(x, y, z),
+        _ => return Err(bad("--light", format!("'{s}': expected x,y,z"))),
+    };
+    if !l.is_finite() || l.length() == 0.0 {
+        return Err(bad(
+            "--light",
+            format!("'{s}': must be finite and non-zero"),
+        ));
+    }
+    Ok(l.normalize())
+}
+
+pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
+    let start = Instant::now();
+    if !(0.0..=1.0).contains(&args.ambient) {
+        return Err(bad(
+            "--ambient",
+            format!("must be in [0, 1], got {}", args.ambient),
+        ));
+    }
+    let light = if args.unlit {
+        None
+    } else {
+        Some(parse_light(&args.light)?)
+    };
+    let opts = BbcloudOptions {
+        epsilon: args.epsilon,
+        samples: args.samples,
+        seed: args.seed,
+        lods: args.lods,
+        atlas_size: args.atlas_size,
+        texel_density: args.texel_density,
+        shading: Shading {
+            light,
+            ambient: args.ambient,
+        },
+        supersample: args.supersample,
+        foliage: args.foliage.clone(),
+        ..BbcloudOptions::default()
+    };
+    let input = args.input.display().to_string();
+    let scene = import(
+        &args.input,
+        &ImportOptions {
+            strict: args.strict,
+        },
+    )
+    .map_err(|e| CliError::new(import_code(&e), &e))?;
+    for w in &scene.warnings {
+        warn(ctx, &format!("{input}: {}", w.message));
+    }
+    let source = source_info(&args.input)
+        .map_err(|e| CliError::new(Code::InputIo, format!("{input}: cannot read: {e}")))?;
+    let seconds_import = start.elapsed().as_secs_f64();
+
+    let bar = progress(ctx, 1000, "bbcloud");
+    let report = |stage: Stage, f: f32| {
+        let (lo, span, msg) = match stage {
+            Stage::Search { level } => (0.0, 0.5, format!("plane search, LOD {level}")),
+            Stage::Render => (0.5, 0.4, "billboard textures".to_string()),
+            Stage::Pack => (0.9, 0.1, "atlases".to_string()),
+        };
+        bar.set_message(msg);
+        bar.set_position(((lo + span * f.clamp(0.0, 1.0)) * 1000.0) as u64);
+    };
+    let (asset, stats) =
+        bake(&scene, &opts, &tool_version(), Some(source), &report).map_err(|e| {
+            let code = match e {
+                BbcloudError::NoFoliage => Code::InvalidInput,
+                BbcloudError::Asset(_) => Code::Internal,
+                _ => Code::BadParameter,
+            };
+            CliError::new(code, format!("{input}: {e}"))
+        })?;
+    bar.finish_and_clear();
+
+    let write_start = Instant::now();
+    let bytes = asset
+        .to_bytes()
+        .map_err(|e| CliError::new(Code::Internal, e))?;
+    billow_format::write_atomic(&args.output, &bytes)
+        .map_err(|e| CliError::new(Code::OutputIo, format!("cannot write output: {e}")))?;
+    let seconds_write = write_start.elapsed().as_secs_f64();
+
+    let summary = Summary {
+        input,
+        output: args.output.display().to_string(),
+        seed: args.seed,
+        billboards_per_lod: stats.levels.iter().map(|l| l.billboards).collect(),
+        atlas_fill_per_lod: stats.levels.iter().map(|l| l.fill).collect(),
+        texels: stats.levels.iter().map(|l| l.texels).sum(),
+        bytes: bytes.len() as u64,
+        stats: &stats,
+        seconds_import,
+        seconds_write,
+        seconds_total: start.elapsed().as_secs_f64(),
+        warnings: scene.warnings.iter().map(|w| w.message.clone()).collect(),
+    };
+    if args.json {
+        print_json(&summary)?;
+    } else if !ctx.quiet {
+        eprintln!(
+            "{}: {} foliage triangles -> billboards per LOD {:?}, atlas fill {:?}, {} kept triangles, {:.1} MiB in {:.2} s",
+            summary.output,
+            stats.foliage_triangles,
+            summary.billboards_per_lod,
+            summary.atlas_fill_per_lod.iter().map(|f| format!("{:.1}%", 100.0 * f)).collect::<Vec<_>>(),
+            stats.kept_triangles,
+            bytes.len() as f64 / (1 << 20) as f64,
+            summary.seconds_total
+        );
+    }
+    Ok(())
+}

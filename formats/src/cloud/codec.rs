@@ -1,0 +1,363 @@
+//! Encoding and decoding of the Cloud chunks (SPEC.md §9). Counts come from chunk lengths,
+//! which the container has already checked against the file size.
+
+use std::path::Path;
+
+use super::{
+    bad, Atlas, AtlasRect, Billboard, CloudAsset, CloudError, CloudLevel, Mesh, MeshMaterial,
+    MeshTexture, MeshVertex, NO_INDEX,
+};
+use crate::container::{encode, ChunkRef};
+use crate::{from_bytes, write_atomic, AssetKind, Container, ElemType, FormatError};
+
+fn put_f32(out: &mut Vec<u8>, v: &[f32]) {
+    v.iter()
+        .for_each(|x| out.extend_from_slice(&x.to_le_bytes()));
+}
+fn put_u32(out: &mut Vec<u8>, v: &[u32]) {
+    v.iter()
+        .for_each(|x| out.extend_from_slice(&x.to_le_bytes()));
+}
+fn f32s(b: &[u8]) -> Vec<f32> {
+    b.chunks_exact(4)
+        .map(|c| f32::from_le_bytes(c.try_into().expect("4 bytes")))
+        .collect()
+}
+fn u32s(b: &[u8]) -> Vec<u32> {
+    b.chunks_exact(4)
+        .map(|c| u32::from_le_bytes(c.try_into().expect("4 bytes")))
+        .collect()
+}
+fn v3(s: &[f32]) -> [f32; 3] {
+    [s[0], s[1], s[2]]
+}
+fn opt(i: u32) -> Option<u32> {
+    (i != NO_INDEX).then_some(i)
+}
+
+/// Every chunk tag of the Cloud kind with its element type and record size in elements.
+const LAYOUT: [(&[u8; 4], ElemType, usize); 13] = [
+    (b"CLVL", ElemType::U32, 4),
+    (b"CLVF", ElemType::F32, 2),
+    (b"BBRD", ElemType::F32, 36),
+    (b"BBIX", ElemType::U32, 4),
+    (b"ATLS", ElemType::U32, 4),
+    (b"MMAT", ElemType::F32, 8),
+    (b"MMAI", ElemType::U32, 4),
+    (b"MTXI", ElemType::U32, 4),
+    (b"TVTX", ElemType::F32, 8),
+    (b"TIDX", ElemType::U32, 4),
+    (b"FVTX", ElemType::F32, 11),
+    (b"FIDX", ElemType::U32, 5),
+    (b"ATEX", ElemType::U8, 1),
+];
+
+impl CloudAsset {
+    fn payloads(&self) -> Vec<([u8; 4], ElemType, Vec<u8>)> {
+        let mut c: Vec<([u8; 4], ElemType, Vec<u8>)> = Vec::new();
+        let mut push = |tag: &[u8; 4], elem, data| c.push((*tag, elem, data));
+        let (mut lv, mut lf) = (Vec::new(), Vec::new());
+        for l in &self.levels {
+            put_u32(
+                &mut lv,
+                &[
+                    l.first_billboard,
+                    l.billboard_count,
+                    l.first_atlas,
+                    l.atlas_count,
+                ],
+            );
+            put_f32(&mut lf, &[l.epsilon, l.texel_density]);
+        }
+        push(b"CLVL", ElemType::U32, lv);
+        push(b"CLVF", ElemType::F32, lf);
+        let (mut bf, mut bi) = (Vec::new(), Vec::new());
+        for b in &self.billboards {
+            put_f32(&mut bf, &b.plane);
+            b.corners
+                .iter()
+                .chain(&b.parent_corners)
+                .for_each(|p| put_f32(&mut bf, p));
+            put_f32(&mut bf, &b.front.uv);
+            put_f32(&mut bf, &b.back.uv);
+            put_u32(
+                &mut bi,
+                &[
+                    b.front.atlas,
+                    b.back.atlas,
+                    b.parent.unwrap_or(NO_INDEX),
+                    b.elements,
+                ],
+            );
+        }
+        push(b"BBRD", ElemType::F32, bf);
+        push(b"BBIX", ElemType::U32, bi);
+        let mut al = Vec::new();
+        for a in &self.atlases {
+            put_u32(&mut al, &[a.width, a.height, a.mips.len() as u32, 0]);
+        }
+        push(b"ATLS", ElemType::U32, al);
+        for m in self.atlases.iter().flat_map(|a| &a.mips) {
+            push(b"ATEX", ElemType::U8, m.clone());
+        }
+        let (mut mf, mut mi) = (Vec::new(), Vec::new());
+        for m in &self.materials {
+            put_f32(&mut mf, &m.base_color_factor);
+            put_f32(&mut mf, &[m.alpha_cutoff, 0.0, 0.0, 0.0]);
+            let t = m.texture.unwrap_or(NO_INDEX);
+            put_u32(&mut mi, &[t, m.alpha_mode, u32::from(m.double_sided), 0]);
+        }
+        push(b"MMAT", ElemType::F32, mf);
+        push(b"MMAI", ElemType::U32, mi);
+        let mut ti = Vec::new();
+        for t in &self.textures {
+            put_u32(&mut ti, &[t.width, t.height, t.wrap[0], t.wrap[1]]);
+        }
+        push(b"MTXI", ElemType::U32, ti);
+        for t in &self.textures {
+            push(b"MTEX", ElemType::U8, t.texels.clone());
+        }
+        for (m, vt, it) in [
+            (&self.trunk, b"TVTX", b"TIDX"),
+            (&self.foliage, b"FVTX", b"FIDX"),
+        ] {
+            let (mut v, mut i) = (Vec::new(), Vec::new());
+            for (k, x) in m.vertices.iter().enumerate() {
+                put_f32(&mut v, &x.position);
+                put_f32(&mut v, &x.normal);
+                put_f32(&mut v, &x.uv);
+                if let Some(p) = m.morph.get(k) {
+                    put_f32(&mut v, p);
+                }
+            }
+            for (k, t) in m.triangles.iter().enumerate() {
+                put_u32(&mut i, t);
+                put_u32(&mut i, &[m.materials[k]]);
+                if let Some(&b) = m.billboard.get(k) {
+                    put_u32(&mut i, &[b]);
+                }
+            }
+            push(vt, ElemType::F32, v);
+            push(it, ElemType::U32, i);
+        }
+        c
+    }
+
+    /// The container for this asset (validates first).
+    pub fn to_container(&self) -> Result<Container, CloudError> {
+        self.validate()?;
+        let chunks = self.payloads().into_iter();
+        let chunks = chunks.map(|(tag, elem, data)| crate::Chunk { tag, elem, data });
+        Ok(Container {
+            header: self.header.clone(),
+            chunks: chunks.collect(),
+        })
+    }
+
+    /// Encode to file bytes (validates first). Deterministic.
+    pub fn to_bytes(&self) -> Result<Vec<u8>, CloudError> {
+        self.validate()?;
+        let p = self.payloads();
+        let refs: Vec<ChunkRef<'_>> = p
+            .iter()
+            .map(|(tag, elem, data)| ChunkRef {
+                tag: *tag,
+                elem: *elem,
+                data,
+            })
+            .collect();
+        Ok(encode(&self.header, &refs)?)
+    }
+
+    /// Decode and validate from a container; unknown chunk tags are skipped.
+    pub fn from_container(c: Container) -> Result<Self, CloudError> {
+        let Container { header, chunks } = c;
+        if header.kind != AssetKind::Cloud {
+            return bad(format!("asset kind is {:?}, not Cloud", header.kind));
+        }
+        let mut single: [Option<Vec<u8>>; 12] = Default::default();
+        let (mut atex, mut mtex) = (Vec::new(), Vec::new());
+        for ch in chunks {
+            let Some(k) = LAYOUT.iter().position(|(t, _, _)| **t == ch.tag) else {
+                if &ch.tag == b"MTEX" {
+                    if ch.elem != ElemType::U8 {
+                        return bad("MTEX chunk must have element type U8");
+                    }
+                    mtex.push(ch.data);
+                }
+                continue; // unknown chunk of a newer minor version
+            };
+            let (tag, elem, rec) = LAYOUT[k];
+            let tag = crate::tag_str(tag);
+            if ch.elem != elem {
+                return bad(format!(
+                    "{tag} chunk has element type {:?}, expected {elem:?}",
+                    ch.elem
+                ));
+            }
+            if k == 12 {
+                atex.push(ch.data);
+                continue;
+            }
+            if ch.data.len() % (rec * 4) != 0 {
+                return bad(format!(
+                    "{tag} length {} is not a multiple of {}",
+                    ch.data.len(),
+                    rec * 4
+                ));
+            }
+            if single[k].replace(ch.data).is_some() {
+                return bad(format!("more than one {tag} chunk"));
+            }
+        }
+        let mut take = |k: usize| {
+            single[k].take().ok_or_else(|| {
+                CloudError::Invalid(format!("missing {} chunk", crate::tag_str(LAYOUT[k].0)))
+            })
+        };
+        let (lv, lf) = (u32s(&take(0)?), f32s(&take(1)?));
+        if lv.len() / 4 != lf.len() / 2 {
+            return bad("CLVL and CLVF disagree on the number of levels");
+        }
+        let levels = lv
+            .chunks_exact(4)
+            .zip(lf.chunks_exact(2))
+            .map(|(a, f)| CloudLevel {
+                first_billboard: a[0],
+                billboard_count: a[1],
+                first_atlas: a[2],
+                atlas_count: a[3],
+                epsilon: f[0],
+                texel_density: f[1],
+            });
+        let (bf, bi) = (f32s(&take(2)?), u32s(&take(3)?));
+        if bf.len() / 36 != bi.len() / 4 {
+            return bad("BBRD and BBIX disagree on the number of billboards");
+        }
+        let billboards = bf
+            .chunks_exact(36)
+            .zip(bi.chunks_exact(4))
+            .map(|(f, i)| Billboard {
+                plane: [f[0], f[1], f[2], f[3]],
+                corners: std::array::from_fn(|k| v3(&f[4 + 3 * k..])),
+                parent_corners: std::array::from_fn(|k| v3(&f[16 + 3 * k..])),
+                front: AtlasRect {
+                    atlas: i[0],
+                    uv: [f[28], f[29], f[30], f[31]],
+                },
+                back: AtlasRect {
+                    atlas: i[1],
+                    uv: [f[32], f[33], f[34], f[35]],
+                },
+                parent: opt(i[2]),
+                elements: i[3],
+            });
+        let al = u32s(&take(4)?);
+        let mut atex = atex.into_iter();
+        let mut atlases = Vec::with_capacity(al.len() / 4);
+        for (i, a) in al.chunks_exact(4).enumerate() {
+            if a[2] == 0 || a[2] > 32 {
+                return bad(format!("atlas {i}: MIP count {} out of range", a[2]));
+            }
+            let mips: Vec<Vec<u8>> = atex.by_ref().take(a[2] as usize).collect();
+            if mips.len() != a[2] as usize {
+                return bad(format!("atlas {i}: fewer ATEX chunks than its MIP count"));
+            }
+            atlases.push(Atlas {
+                width: a[0],
+                height: a[1],
+                mips,
+            });
+        }
+        if atex.next().is_some() {
+            return bad("more ATEX chunks than the atlases' MIP counts");
+        }
+        let (mf, mi) = (f32s(&take(5)?), u32s(&take(6)?));
+        if mf.len() / 8 != mi.len() / 4 {
+            return bad("MMAT and MMAI disagree on the number of materials");
+        }
+        let materials = mf
+            .chunks_exact(8)
+            .zip(mi.chunks_exact(4))
+            .map(|(f, i)| MeshMaterial {
+                base_color_factor: [f[0], f[1], f[2], f[3]],
+                alpha_cutoff: f[4],
+                texture: opt(i[0]),
+                alpha_mode: i[1],
+                double_sided: i[2] != 0,
+            });
+        let ti = u32s(&take(7)?);
+        if ti.len() / 4 != mtex.len() {
+            return bad(format!(
+                "MTXI lists {} textures but there are {} MTEX chunks",
+                ti.len() / 4,
+                mtex.len()
+            ));
+        }
+        let textures = ti.chunks_exact(4).zip(mtex).map(|(t, texels)| MeshTexture {
+            width: t[0],
+            height: t[1],
+            wrap: [t[2], t[3]],
+            texels,
+        });
+        let trunk = read_mesh(&f32s(&take(8)?), &u32s(&take(9)?), false);
+        let foliage = read_mesh(&f32s(&take(10)?), &u32s(&take(11)?), true);
+        let asset = CloudAsset {
+            header,
+            levels: levels.collect(),
+            billboards: billboards.collect(),
+            atlases,
+            materials: materials.collect(),
+            textures: textures.collect(),
+            trunk,
+            foliage,
+        };
+        asset.validate()?;
+        Ok(asset)
+    }
+
+    /// Decode and validate from file bytes.
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, CloudError> {
+        Self::from_container(from_bytes(bytes)?)
+    }
+
+    /// Read a cloud asset file.
+    pub fn read(path: &Path) -> Result<Self, CloudError> {
+        let bytes = std::fs::read(path).map_err(|source| FormatError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::from_bytes(&bytes).map_err(|e| match e {
+            CloudError::Format(f) => CloudError::Format(f.in_file(path)),
+            CloudError::Invalid(m) => CloudError::Invalid(format!("{}: {m}", path.display())),
+        })
+    }
+
+    /// Encode and write atomically (see [`write_atomic`]).
+    pub fn write(&self, path: &Path) -> Result<(), CloudError> {
+        Ok(write_atomic(path, &self.to_bytes()?)?)
+    }
+}
+
+fn read_mesh(v: &[f32], i: &[u32], foliage: bool) -> Mesh {
+    let (vs, is) = if foliage { (11, 5) } else { (8, 4) };
+    let mut m = Mesh::default();
+    for c in v.chunks_exact(vs) {
+        m.vertices.push(MeshVertex {
+            position: v3(c),
+            normal: v3(&c[3..]),
+            uv: [c[6], c[7]],
+        });
+        if foliage {
+            m.morph.push(v3(&c[8..]));
+        }
+    }
+    for c in i.chunks_exact(is) {
+        m.triangles.push([c[0], c[1], c[2]]);
+        m.materials.push(c[3]);
+        if foliage {
+            m.billboard.push(c[4]);
+        }
+    }
+    m
+}

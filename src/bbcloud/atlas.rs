@@ -1,0 +1,288 @@
+//! Atlas packing, gutters and MIP chains.
+//!
+//! Each billboard side becomes one allocation: its texels plus a gutter of `gutter` texels
+//! on every side, rounded up to a multiple of `align = 2^k`. Packing is done in units of
+//! `align` texels by the `crunch` packer (a maximal-rectangles variant; deterministic:
+//! stable sort, no hashing), so every allocation starts and ends on a multiple of 2^k and
+//! MIP levels 0..=k never mix two billboards in one texel. The gutter is filled by
+//! extruding the billboard's edge texels (clamp-to-edge), so bilinear taps just outside the
+//! billboard's UV rect read its own colour, not a neighbour's.
+//!
+//! Atlases are powers of two (the last one of a level shrunk to the smallest power-of-two
+//! rectangle that holds what is left), so every MIP level halves exactly. MIPs are box
+//! filtered on **premultiplied linear** colour: transparent texels contribute neither colour
+//! nor coverage, so edges never darken (no dark fringes); the result is then sRGB-encoded
+//! (`SrgbPremultiplied`, SPEC.md §8.3).
+
+use glam::Vec4;
+use rayon::prelude::*;
+
+use super::bake::Image;
+
+/// Where one image landed: atlas index and the top-left texel of its content.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Place {
+    pub atlas: u32,
+    pub x: u32,
+    pub y: u32,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Packing {
+    pub sizes: Vec<(u32, u32)>,
+    pub places: Vec<Place>,
+    /// Texels of all allocations (content + gutter + alignment).
+    pub allocated: u64,
+    /// Texels of content only.
+    pub content: u64,
+}
+
+impl Packing {
+    pub fn atlas_texels(&self) -> u64 {
+        self.sizes
+            .iter()
+            .map(|&(w, h)| u64::from(w) * u64::from(h))
+            .sum()
+    }
+    /// Allocated texels / atlas texels.
+    pub fn fill(&self) -> f64 {
+        self.allocated as f64 / self.atlas_texels().max(1) as f64
+    }
+    pub fn content_fill(&self) -> f64 {
+        self.content as f64 / self.atlas_texels().max(1) as f64
+    }
+}
+
+/// Layout parameters.
+#[derive(Clone, Copy, Debug)]
+pub struct Layout {
+    pub max_size: u32,
+    pub gutter: u32,
+    pub align: u32,
+}
+
+impl Layout {
+    /// Allocation size of an image in `align` blocks.
+    fn blocks(&self, (w, h): (u32, u32)) -> (usize, usize) {
+        let b = |x: u32| (x + 2 * self.gutter).div_ceil(self.align) as usize;
+        (b(w), b(h))
+    }
+}
+
+type Packed = Vec<crunch::PackedItem<usize>>;
+
+fn try_pack(items: &[crunch::Item<usize>], w: usize, h: usize) -> Result<Packed, Packed> {
+    crunch::pack(crunch::Rect::of_size(w, h), items.iter().cloned())
+}
+
+/// Whether all images fit into one `size × size` atlas.
+pub fn fits_one(sizes: &[(u32, u32)], layout: &Layout) -> bool {
+    let n = (layout.max_size / layout.align) as usize;
+    let items: Vec<_> = sizes
+        .iter()
+        .enumerate()
+        .map(|(i, &s)| {
+            let (w, h) = layout.blocks(s);
+            crunch::Item::new(i, w, h, crunch::Rotation::None)
+        })
+        .collect();
+    if items.iter().any(|it| it.w > n || it.h > n) {
+        return false;
+    }
+    let area: usize = items.iter().map(|it| it.w * it.h).sum();
+    area <= n * n && try_pack(&items, n, n).is_ok()
+}
+
+/// Pack every image (none larger than an atlas, checked by the caller) into as many atlases
+/// as needed; the last one shrunk to the smallest power-of-two rectangle that holds the rest.
+pub fn pack(sizes: &[(u32, u32)], layout: &Layout) -> Option<Packing> {
+    let n = (layout.max_size / layout.align) as usize;
+    let mut rest: Vec<crunch::Item<usize>> = sizes
+        .iter()
+        .enumerate()
+        .map(|(i, &s)| {
+            let (w, h) = layout.blocks(s);
+            crunch::Item::new(i, w, h, crunch::Rotation::None)
+        })
+        .collect();
+    if rest.iter().any(|it| it.w > n || it.h > n) {
+        return None;
+    }
+    let mut out = Packing {
+        sizes: Vec::new(),
+        places: vec![
+            Place {
+                atlas: 0,
+                x: 0,
+                y: 0
+            };
+            sizes.len()
+        ],
+        allocated: 0,
+        content: 0,
+    };
+    let a = layout.align as usize;
+    while !rest.is_empty() {
+        let (dims, packed) = match try_pack(&rest, n, n) {
+            Ok(all) => shrink(&rest, n).unwrap_or(((n, n), all)),
+            Err(part) if part.is_empty() => return None,
+            Err(part) => ((n, n), fill_up(&rest, part, n)),
+        };
+        let atlas = out.sizes.len() as u32;
+        out.sizes.push(((dims.0 * a) as u32, (dims.1 * a) as u32));
+        let mut placed = vec![false; sizes.len()];
+        for p in packed {
+            let i = p.data;
+            placed[i] = true;
+            let g = layout.gutter;
+            out.places[i] = Place {
+                atlas,
+                x: (p.rect.x * a) as u32 + g,
+                y: (p.rect.y * a) as u32 + g,
+            };
+            out.allocated += (p.rect.w * p.rect.h * a * a) as u64;
+            out.content += u64::from(sizes[i].0) * u64::from(sizes[i].1);
+        }
+        rest.retain(|it| !placed[it.data]);
+    }
+    Some(out)
+}
+
+/// crunch stops at the first item that does not fit; try the remaining (smaller) ones too,
+/// one at a time in its order, keeping each that still lets everything pack.
+fn fill_up(items: &[crunch::Item<usize>], mut packed: Packed, n: usize) -> Packed {
+    let mut chosen: Vec<crunch::Item<usize>> = items
+        .iter()
+        .filter(|it| packed.iter().any(|p| p.data == it.data))
+        .cloned()
+        .collect();
+    let free = n * n - chosen.iter().map(|it| it.w * it.h).sum::<usize>();
+    let mut free = free;
+    for it in items {
+        if it.w * it.h > free || chosen.iter().any(|c| c.data == it.data) {
+            continue;
+        }
+        chosen.push(it.clone());
+        match try_pack(&chosen, n, n) {
+            Ok(p) => {
+                packed = p;
+                free -= it.w * it.h;
+            }
+            Err(_) => {
+                chosen.pop();
+            }
+        }
+    }
+    packed
+}
+
+/// The smallest power-of-two (in blocks) rectangle, sides ≤ n, that holds all items.
+fn shrink(items: &[crunch::Item<usize>], n: usize) -> Option<((usize, usize), Packed)> {
+    let area: usize = items.iter().map(|it| it.w * it.h).sum();
+    let mut dims = Vec::new();
+    let mut w = 1;
+    while w <= n {
+        let mut h = 1;
+        while h <= n {
+            if w * h >= area {
+                dims.push((w, h));
+            }
+            h *= 2;
+        }
+        w *= 2;
+    }
+    dims.sort_by_key(|&(w, h)| (w * h, w.max(h), std::cmp::Reverse(w)));
+    dims.into_iter()
+        .find_map(|(w, h)| try_pack(items, w, h).ok().map(|p| ((w, h), p)))
+}
+
+/// Compose the atlases (premultiplied linear) from the images and their places, gutters
+/// extruded from the edges.
+pub fn compose(images: &[&Image], packing: &Packing, layout: &Layout) -> Vec<Image> {
+    let mut atlases: Vec<Image> = packing
+        .sizes
+        .iter()
+        .map(|&(w, h)| Image {
+            width: w,
+            height: h,
+            texels: vec![Vec4::ZERO; (w * h) as usize],
+        })
+        .collect();
+    let (g, a) = (layout.gutter, layout.align);
+    for (img, p) in images.iter().zip(&packing.places) {
+        let at = &mut atlases[p.atlas as usize];
+        let aw = (img.width + 2 * g).div_ceil(a) * a;
+        let ah = (img.height + 2 * g).div_ceil(a) * a;
+        let (x0, y0) = (p.x - g, p.y - g);
+        for y in 0..ah {
+            let sy = (y as i64 - g as i64).clamp(0, img.height as i64 - 1) as u32;
+            for x in 0..aw {
+                let sx = (x as i64 - g as i64).clamp(0, img.width as i64 - 1) as u32;
+                at.texels[((y0 + y) * at.width + x0 + x) as usize] =
+                    img.texels[(sy * img.width + sx) as usize];
+            }
+        }
+    }
+    atlases
+}
+
+/// Next MIP level: 2×2 box filter of premultiplied colour (floor halving, clamped at 1).
+pub fn downsample(img: &Image) -> Image {
+    let (w, h) = ((img.width / 2).max(1), (img.height / 2).max(1));
+    let get = |x: u32, y: u32| {
+        img.texels[(y.min(img.height - 1) * img.width + x.min(img.width - 1)) as usize]
+    };
+    let texels = (0..w * h)
+        .into_par_iter()
+        .map(|i| {
+            let (x, y) = (2 * (i % w), 2 * (i / w));
+            0.25 * (get(x, y) + get(x + 1, y) + get(x, y + 1) + get(x + 1, y + 1))
+        })
+        .collect();
+    Image {
+        width: w,
+        height: h,
+        texels,
+    }
+}
+
+/// Linear → sRGB byte thresholds: byte b is the count of thresholds ≤ value, i.e.
+/// `round(255 · oetf(c))`, computed exactly and without `powf` per texel.
+fn srgb_thresholds() -> &'static [f32; 255] {
+    static T: std::sync::OnceLock<[f32; 255]> = std::sync::OnceLock::new();
+    T.get_or_init(|| {
+        std::array::from_fn(|b| {
+            let c = (b as f64 + 0.5) / 255.0;
+            (if c <= 0.04045 {
+                c / 12.92
+            } else {
+                ((c + 0.055) / 1.055).powf(2.4)
+            }) as f32
+        })
+    })
+}
+
+/// Encode premultiplied linear RGBA to `SrgbPremultiplied` bytes.
+pub fn encode_srgb_premultiplied(img: &Image) -> Vec<u8> {
+    let t = srgb_thresholds();
+    let enc = |c: f32| t.partition_point(|&x| x <= c) as u8;
+    img.texels
+        .par_iter()
+        .flat_map_iter(|p| {
+            let a = p.w.clamp(0.0, 1.0);
+            let c = |v: f32| enc(v.clamp(0.0, a));
+            [c(p.x), c(p.y), c(p.z), (a * 255.0).round() as u8]
+        })
+        .collect()
+}
+
+/// The full MIP chain of an atlas, encoded.
+pub fn mip_chain(atlas: Image) -> Vec<Vec<u8>> {
+    let mut levels = vec![encode_srgb_premultiplied(&atlas)];
+    let mut cur = atlas;
+    while cur.width > 1 || cur.height > 1 {
+        cur = downsample(&cur);
+        levels.push(encode_srgb_premultiplied(&cur));
+    }
+    levels
+}

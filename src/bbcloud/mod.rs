@@ -1,0 +1,374 @@
+//! Stochastic billboard clouds (Lacewell, Edwards, Shirley & Thompson 2006).
+//!
+//! Pipeline: [`foliage`] split → [`lod`] chain of [`plane_search`] (Algorithm 1) levels →
+//! [`rect`] trimming → texel density → [`bake`] front/back textures → [`atlas`] packing and
+//! MIPs → a [`CloudAsset`]. A pure function of (scene, options): the seed drives one PCG32
+//! stream per level and every parallel step reduces in a fixed order, so the same inputs give
+//! the same bytes for any thread count.
+//!
+//! Texel density: with `texel_density: None` it is derived from the atlas budget — level ℓ
+//! gets one `(atlas_size >> ℓ)²` atlas (textures halved per level) and the largest density
+//! whose allocations fit it is found by bisection. With an explicit density D, level ℓ uses
+//! D / 2^ℓ and as many `atlas_size²` atlases as needed (the last shrunk to a power of two).
+
+pub mod assemble;
+pub mod atlas;
+pub mod bake;
+pub mod foliage;
+pub mod lod;
+pub mod plane_search;
+pub mod rect;
+
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+use billow_format::{AssetKind, Bounds, CloudAsset, CloudError, ColourSpace, Header, SourceInfo};
+use glam::Vec3;
+use rayon::prelude::*;
+
+pub use bake::Shading;
+pub use plane_search::{Element, Found, Plane, SearchParams, SearchStats};
+
+use crate::scene::Scene;
+use atlas::Layout;
+use lod::{build_chain, ChainParams, Level};
+
+/// Options of a bake. Defaults follow the paper (ε = 0.04 R, N = 500).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BbcloudOptions {
+    /// Slab half-width in units of the foliage's bounding-sphere radius.
+    pub epsilon: f32,
+    /// Candidate planes per billboard (N).
+    pub samples: u32,
+    pub seed: u64,
+    /// Number of levels; with 2 or more the last is the two-billboard cross.
+    pub lods: u32,
+    /// Largest atlas side in texels (a power of two).
+    pub atlas_size: u32,
+    /// Texels per world unit at level 0; `None`: derived from the atlas budget.
+    pub texel_density: Option<f32>,
+    pub shading: Shading,
+    /// K: K×K coverage samples per texel.
+    pub supersample: u32,
+    /// Foliage material names; empty: every MASK/BLEND material.
+    pub foliage: Vec<String>,
+    /// Gutter texels around each billboard side in the atlas.
+    pub gutter: u32,
+    /// Allocations are aligned to 2^k texels so MIP levels 0..=k stay separate.
+    pub mip_align_log2: u32,
+}
+
+impl Default for BbcloudOptions {
+    fn default() -> Self {
+        BbcloudOptions {
+            epsilon: 0.04,
+            samples: 500,
+            seed: 0,
+            lods: 1,
+            atlas_size: 2048,
+            texel_density: None,
+            shading: Shading {
+                light: Some(Vec3::new(0.3, 1.0, 0.2).normalize()),
+                ambient: 0.35,
+            },
+            supersample: 3,
+            foliage: Vec::new(),
+            gutter: 2,
+            mip_align_log2: 2,
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum BbcloudError {
+    #[error("no foliage triangles (no MASK/BLEND material and no --foliage names)")]
+    NoFoliage,
+    #[error("no material named {0:?} (materials: {1})")]
+    UnknownMaterial(String, String),
+    #[error("{0}")]
+    BadParameter(String),
+    #[error(transparent)]
+    Asset(#[from] CloudError),
+}
+
+/// What a progress callback is told.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    Search { level: u32 },
+    Render,
+    Pack,
+}
+
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Seconds {
+    pub split: f64,
+    pub search: f64,
+    pub trim_and_density: f64,
+    pub render: f64,
+    pub pack: f64,
+    pub mips: f64,
+}
+
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct LevelStats {
+    pub billboards: usize,
+    pub epsilon: f32,
+    pub texel_density: f32,
+    pub atlases: Vec<(u32, u32)>,
+    pub fill: f64,
+    pub content_fill: f64,
+    pub texels: u64,
+    pub search: SearchStats,
+}
+
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct BbcloudStats {
+    pub foliage_triangles: usize,
+    pub kept_triangles: usize,
+    pub radius: f32,
+    pub levels: Vec<LevelStats>,
+    pub seconds: Seconds,
+}
+
+fn check(opts: &BbcloudOptions) -> Result<(), BbcloudError> {
+    let bad = |m: String| Err(BbcloudError::BadParameter(m));
+    if !(opts.epsilon.is_finite() && opts.epsilon > 0.0 && opts.epsilon <= 2.0) {
+        return bad(format!(
+            "epsilon must be in (0, 2] bounding-sphere radii, got {}",
+            opts.epsilon
+        ));
+    }
+    if opts.samples == 0 || opts.samples > 1_000_000 {
+        return bad(format!(
+            "samples must be in 1..=1000000, got {}",
+            opts.samples
+        ));
+    }
+    if !(1..=8).contains(&opts.lods) {
+        return bad(format!("lods must be in 1..=8, got {}", opts.lods));
+    }
+    if !opts.atlas_size.is_power_of_two() || !(64..=16384).contains(&opts.atlas_size) {
+        return bad(format!(
+            "atlas size must be a power of two in 64..=16384, got {}",
+            opts.atlas_size
+        ));
+    }
+    if opts
+        .texel_density
+        .is_some_and(|d| !(d.is_finite() && d > 0.0))
+    {
+        return bad("texel density must be finite and > 0".into());
+    }
+    if !(1..=8).contains(&opts.supersample) || opts.gutter > 16 || opts.mip_align_log2 > 6 {
+        return bad("supersample must be in 1..=8, gutter ≤ 16, MIP alignment ≤ 2^6".into());
+    }
+    if let Some(l) = opts.shading.light {
+        if !(l.is_finite() && l.length() > 0.0) {
+            return bad("light direction must be finite and non-zero".into());
+        }
+    }
+    Ok(())
+}
+
+/// Texture size of a rectangle at `density`.
+fn tex_size(r: &rect::PlaneRect, d: f32) -> (u32, u32) {
+    let s = |x: f32| ((x * d).ceil() as u32).max(1);
+    (s(r.width), s(r.height))
+}
+
+/// The largest density whose two sides per board fit one atlas (bisection on the packer).
+fn budget_density(level: &Level, layout: &Layout) -> f32 {
+    let sizes = |d: f32| -> Vec<(u32, u32)> {
+        level
+            .boards
+            .iter()
+            .flat_map(|b| [tex_size(&b.rect, d); 2])
+            .collect()
+    };
+    let area: f64 = level
+        .boards
+        .iter()
+        .map(|b| 2.0 * f64::from(b.rect.width.max(1e-6) * b.rect.height.max(1e-6)))
+        .sum();
+    let side = level
+        .boards
+        .iter()
+        .map(|b| b.rect.width.max(b.rect.height))
+        .fold(1e-6f32, f32::max);
+    let m = layout.max_size as f32;
+    let mut hi = ((m - 2.0 * layout.gutter as f32) / side)
+        .min((f64::from(m) * f64::from(m) / area).sqrt() as f32);
+    let mut lo = hi / 2.0;
+    while !atlas::fits_one(&sizes(lo), layout) && lo > 1e-6 {
+        (hi, lo) = (lo, lo / 2.0);
+    }
+    if atlas::fits_one(&sizes(hi), layout) {
+        return hi;
+    }
+    for _ in 0..14 {
+        let mid = 0.5 * (lo + hi);
+        if atlas::fits_one(&sizes(mid), layout) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    lo
+}
+
+/// Bake a billboard cloud. `progress(stage, fraction)` is called from worker threads.
+pub fn bake(
+    scene: &Scene,
+    opts: &BbcloudOptions,
+    tool: &str,
+    source: Option<SourceInfo>,
+    progress: &(dyn Fn(Stage, f32) + Sync),
+) -> Result<(CloudAsset, BbcloudStats), BbcloudError> {
+    check(opts)?;
+    let mut secs = Seconds::default();
+    let t = Instant::now();
+    let is_leaf = foliage::classify(scene, &opts.foliage)?;
+    let leaves: Vec<u32> = (0..scene.triangles.len() as u32)
+        .filter(|&i| is_leaf[i as usize])
+        .collect();
+    if leaves.is_empty() {
+        return Err(BbcloudError::NoFoliage);
+    }
+    let (centre, radius) = lod::bounding_sphere(scene, &leaves);
+    let trunk = foliage::trunk_mesh(scene, &is_leaf);
+    secs.split = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let chain = ChainParams {
+        epsilon: opts.epsilon * radius.max(1e-12),
+        samples: opts.samples,
+        seed: opts.seed,
+        levels: opts.lods,
+    };
+    let levels = build_chain(scene, &leaves, centre, &chain, &|l, a, n| {
+        progress(Stage::Search { level: l }, a as f32 / n.max(1) as f32)
+    });
+    secs.search = t.elapsed().as_secs_f64();
+
+    // Texel density and snapped rectangles per level.
+    let t = Instant::now();
+    let mut per_level = Vec::new(); // (density, layout, snapped rects, sizes)
+    for (l, level) in levels.iter().enumerate() {
+        let mut layout = Layout {
+            max_size: opts.atlas_size,
+            gutter: opts.gutter,
+            align: 1 << opts.mip_align_log2,
+        };
+        let d = match opts.texel_density {
+            None => {
+                layout.max_size = (opts.atlas_size >> l).max(64);
+                budget_density(level, &layout)
+            }
+            Some(d0) => {
+                let side = level
+                    .boards
+                    .iter()
+                    .map(|b| b.rect.width.max(b.rect.height))
+                    .fold(1e-6f32, f32::max);
+                let cap = (opts.atlas_size - 2 * opts.gutter - layout.align) as f32 / side;
+                (d0 / (1u32 << l) as f32).min(cap)
+            }
+        };
+        let mut rects = Vec::new();
+        for b in &level.boards {
+            let (w, h) = tex_size(&b.rect, d);
+            let mut r = b.rect;
+            (r.width, r.height) = (w as f32 / d, h as f32 / d);
+            rects.push((r, w, h));
+        }
+        per_level.push((d, layout, rects));
+    }
+    secs.trim_and_density = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let jobs: Vec<(usize, usize)> = levels
+        .iter()
+        .enumerate()
+        .flat_map(|(l, lv)| (0..lv.boards.len()).map(move |b| (l, b)))
+        .collect();
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let images: Vec<(bake::Image, bake::Image)> = jobs
+        .par_iter()
+        .map(|&(l, b)| {
+            let (r, w, h) = per_level[l].2[b];
+            let board = &levels[l].boards[b];
+            let job = bake::Job {
+                rect: r,
+                normal: board.plane.normal,
+                density: per_level[l].0,
+                width: w,
+                height: h,
+                triangles: &board.sources,
+            };
+            let out = bake::render(scene, &job, opts.supersample, &opts.shading);
+            let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            progress(Stage::Render, n as f32 / jobs.len() as f32);
+            out
+        })
+        .collect();
+    secs.render = t.elapsed().as_secs_f64();
+
+    let header = Header {
+        kind: AssetKind::Cloud,
+        tool: tool.to_string(),
+        source,
+        bounds: Bounds {
+            min: scene.bounds.min.to_array(),
+            max: scene.bounds.max.to_array(),
+        },
+        colour_space: ColourSpace::SrgbPremultiplied,
+        seed: Some(opts.seed),
+        params: params(opts),
+        volume: None,
+    };
+    let (asset, stats_levels) = assemble::assemble(
+        scene, &levels, &per_level, &images, &leaves, trunk, header, &mut secs, progress,
+    )?;
+
+    let stats = BbcloudStats {
+        foliage_triangles: leaves.len(),
+        kept_triangles: scene.triangles.len() - leaves.len(),
+        radius,
+        levels: stats_levels,
+        seconds: secs,
+    };
+    Ok((asset, stats))
+}
+
+/// The bake parameters recorded in the header.
+pub fn params(o: &BbcloudOptions) -> BTreeMap<String, String> {
+    let mut p = BTreeMap::new();
+    let mut put = |k: &str, v: String| p.insert(k.to_string(), v);
+    put("epsilon", o.epsilon.to_string());
+    put("samples", o.samples.to_string());
+    put("lods", o.lods.to_string());
+    put("atlas_size", o.atlas_size.to_string());
+    put(
+        "texel_density",
+        o.texel_density.map_or("budget".into(), |d| d.to_string()),
+    );
+    put(
+        "light",
+        o.shading
+            .light
+            .map_or("unlit".into(), |l| format!("{},{},{}", l.x, l.y, l.z)),
+    );
+    put("ambient", o.shading.ambient.to_string());
+    put("supersample", o.supersample.to_string());
+    put(
+        "foliage",
+        if o.foliage.is_empty() {
+            "alpha-mode".into()
+        } else {
+            o.foliage.join(",")
+        },
+    );
+    put("gutter", o.gutter.to_string());
+    put("mip_align", (1u32 << o.mip_align_log2).to_string());
+    p
+}
