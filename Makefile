@@ -14,7 +14,7 @@ OUT_DIR ?= $(OUT)/batch
 MESHES  := $(shell find $(IN_DIR) -type f \( -name '*.gltf' -o -name '*.glb' -o -name '*.obj' \) 2>/dev/null | grep -v ' ')
 REPORTS := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.inspect.json,$(MESHES))
 
-.PHONY: all build demo test lint fmt batch clean fixtures
+.PHONY: all build demo test lint fmt batch clean fixtures accuracy bench
 
 all: build
 
@@ -53,5 +53,24 @@ $(OUT_DIR)/%.inspect.json: $(IN_DIR)/% | build
 fixtures:
 	$(CARGO) run --release --example gen_fixtures -- $(OUT)/procedural
 
+## Accuracy against cost: regenerates docs/accuracy.md and docs/accuracy/*.svg (a few
+## minutes in release; Spot and the Bunny need ../shared/assets, skipped with a note otherwise).
+accuracy:
+	$(CARGO) run --release --locked --example accuracy -- docs/accuracy.md
+
 clean:
 	rm -rf $(OUT)
+
+## Benchmark: `billow voxelize` vs. the raster floor on the 200k-triangle tree, side by side,
+## medians of BENCH_RUNS runs at each of BENCH_RES; writes docs/benchmarks.md. Needs python3 and cc.
+BENCH_SRC  ?= /work/shared/bench
+BENCH_DIR  ?= $(OUT)/bench
+BENCH_RES  ?= 128 256 512
+BENCH_RUNS ?= 3
+bench: build
+	@mkdir -p $(BENCH_DIR)
+	python3 $(BENCH_SRC)/gen_tree.py $(BENCH_DIR)/tree
+	cc -O3 -march=native -o $(BENCH_DIR)/raster_floor $(BENCH_SRC)/raster_floor.c
+	python3 benches/voxelize_bench.py --billow $(BILLOW) --floor $(BENCH_DIR)/raster_floor \
+		--mesh $(BENCH_DIR)/tree.obj --res "$(BENCH_RES)" --runs $(BENCH_RUNS) \
+		--notes benches/voxelize_bench_notes.md --out docs/benchmarks.md

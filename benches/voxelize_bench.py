@@ -1,0 +1,130 @@
+#!/usr/bin/env python3
+"""`billow voxelize` against the six-direction raster floor, side by side (see `make bench`).
+
+For every resolution, runs `raster_floor MESH R` and `billow voxelize MESH --res R --json`
+alternately (so both see the same machine load), RUNS times each, and writes the medians
+(whole-process wall seconds, billow's per-stage seconds and peak memory) to a Markdown file.
+Only the Python standard library is used.
+"""
+
+import argparse
+import json
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import time
+
+
+def run_rusage(cmd):
+    """Like `run`, with the child's own peak RSS from wait4."""
+    t0 = time.perf_counter()
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    out = p.stdout.read()
+    err = p.stderr.read()
+    _, status, ru = os.wait4(p.pid, 0)
+    wall = time.perf_counter() - t0
+    p.returncode = os.waitstatus_to_exitcode(status)
+    if p.returncode != 0:
+        sys.exit(f"{' '.join(cmd)} failed ({p.returncode}):\n{err.decode(errors='replace')}")
+    return wall, ru.ru_maxrss * 1024, ru.ru_utime + ru.ru_stime, out.decode()
+
+
+def med(xs):
+    return statistics.median(xs) if xs else float("nan")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--billow", required=True)
+    ap.add_argument("--floor", required=True, help="the compiled raster_floor")
+    ap.add_argument("--mesh", required=True)
+    ap.add_argument("--res", default="128 256 512")
+    ap.add_argument("--runs", type=int, default=3)
+    ap.add_argument("--extra", default="", help="extra billow arguments (e.g. '--supersample 1')")
+    ap.add_argument("--work", default=None, help="folder for the temporary assets (default: next to the mesh)")
+    ap.add_argument("--out", required=True, help="Markdown file to write")
+    ap.add_argument("--command", default="make bench", help="the command that regenerates the file")
+    ap.add_argument("--notes", default=None, help="Markdown appended after the tables")
+    a = ap.parse_args()
+    work = a.work or os.path.dirname(os.path.abspath(a.mesh))
+    asset = os.path.join(work, "bench_tmp.billow")
+    extra = a.extra.split()
+    stages = ["import", "rasterize", "bake", "mip", "combine", "quantize", "write", "total"]
+    load_before = os.getloadavg()
+    rows = []
+    for r in [int(x) for x in a.res.split()]:
+        floor_s, floor_cpu, floor_rss, b_s, b_cpu, b_rss, b_peak, b_stage = [], [], [], [], [], [], [], {}
+        info = None
+        for i in range(a.runs):
+            w, rss, cpu, _ = run_rusage([a.floor, a.mesh, str(r)])
+            floor_s.append(w), floor_cpu.append(cpu), floor_rss.append(rss)
+            cmd = [a.billow, "voxelize", a.mesh, "-o", asset, "--res", str(r), "--json", *extra]
+            w, rss, cpu, out = run_rusage(cmd)
+            j = json.loads(out)
+            info = j
+            b_s.append(w), b_cpu.append(cpu), b_rss.append(rss)
+            if j.get("peak_memory_bytes") is not None:
+                b_peak.append(j["peak_memory_bytes"])
+            for k in stages:
+                if k in j["seconds"]:
+                    b_stage.setdefault(k, []).append(j["seconds"][k])
+            os.remove(asset)
+            print(f"res {r} run {i + 1}/{a.runs}: floor {floor_s[-1]:.2f} s, billow {b_s[-1]:.2f} s "
+                  f"(load {os.getloadavg()[0]:.2f})", file=sys.stderr)
+        rows.append(dict(res=r, dims=info["dims"], floor=med(floor_s), floor_cpu=med(floor_cpu),
+                         floor_rss=med(floor_rss), billow=med(b_s), billow_cpu=med(b_cpu),
+                         billow_rss=max(b_rss), peak=max(b_peak) if b_peak else None,
+                         stages={k: med(v) for k, v in b_stage.items()},
+                         fragments=info["fragments"], voxels=info["non_empty_voxels"]))
+    load_after = os.getloadavg()
+
+    gib = lambda b: f"{b / 2**30:.2f} GiB" if b is not None else "—"
+    lines = [
+        "# Benchmarks: `billow voxelize` vs. the raster floor",
+        "",
+        f"Regenerate with `{a.command}` (writes this file). Input: the 200,000-triangle synthetic tree",
+        "from `/work/shared/bench/gen_tree.py`; `raster_floor` is `/work/shared/bench/raster_floor.c`",
+        "built with `cc -O3 -march=native` (one core, one sample per voxel column, nearest texel,",
+        "no compositing/MIP/combine/write). `billow voxelize MESH -o OUT --res R --json"
+        + (f" {a.extra}" if a.extra else "") + "` (release build,",
+        f"defaults otherwise: supersample {info['supersample']}, combine `{info['combine']}`, full MIP chain).",
+        "Both programs run alternately, "
+        f"{a.runs} times each per resolution; the table shows **medians** of whole-process wall time.",
+        "",
+        f"- Machine: {platform.machine()}, {os.cpu_count()} logical CPUs, {platform.system()} {platform.release()};"
+        f" measured {time.strftime('%Y-%m-%d %H:%M %Z')}.",
+        f"- Load average (1/5/15 min) before: {load_before[0]:.2f}/{load_before[1]:.2f}/{load_before[2]:.2f},"
+        f" after: {load_after[0]:.2f}/{load_after[1]:.2f}/{load_after[2]:.2f}"
+        " (the machine is shared: other jobs compete for the cores, so absolute times are noisy;"
+        " the ratio is the figure to compare).",
+        "",
+        "| res | dims | raster_floor s | billow s | ratio (target ≤ 2) | billow CPU s | floor CPU s "
+        "| billow peak memory | floor peak RSS |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for x in rows:
+        d = "×".join(str(v) for v in x["dims"])
+        lines.append(f"| {x['res']} | {d} | {x['floor']:.2f} | {x['billow']:.2f} | **{x['billow'] / x['floor']:.1f}×** "
+                     f"| {x['billow_cpu']:.2f} | {x['floor_cpu']:.2f} | {gib(x['peak'] or x['billow_rss'])} "
+                     f"| {gib(x['floor_rss'])} |")
+    lines += ["", "Per-stage seconds of `billow voxelize` (medians, from `--json`; `total` is the",
+              "process's own measure, without process start and exit):", "",
+              "| res | " + " | ".join(k for k in stages if k in rows[0]["stages"]) + " | fragments | non-empty voxels |",
+              "|---|" + "---|" * (len([k for k in stages if k in rows[0]["stages"]]) + 2)]
+    for x in rows:
+        lines.append(f"| {x['res']} | " + " | ".join(f"{x['stages'][k]:.2f}" for k in stages if k in x["stages"])
+                     + f" | {x['fragments']:,} | {x['voxels']:,} |")
+    lines.append("")
+    if a.notes:
+        with open(a.notes) as f:
+            lines.append(f.read().rstrip())
+    text = "\n".join(lines) + "\n"
+    with open(a.out, "w") as f:
+        f.write(text)
+    print(text)
+
+
+if __name__ == "__main__":
+    main()
