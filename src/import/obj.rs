@@ -30,51 +30,58 @@ use crate::scene::{AlphaMode, Material, Texture, TextureReport, Triangle, Vertex
 pub(super) fn load(path: &Path, ctx: &mut Ctx) -> Result<SceneBuilder, ImportError> {
     let bytes = fs::read(path).map_err(|e| ctx.io(path, e))?;
     let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
-    check_face_indices(&String::from_utf8_lossy(&bytes), ctx)?;
-
-    // Load MTL files ourselves to learn their folders and report missing ones.
-    let mtl_dirs: RefCell<HashMap<String, PathBuf>> = RefCell::new(HashMap::new());
-    let mtl_failures: RefCell<Vec<(PathBuf, tobj::LoadError)>> = RefCell::new(Vec::new());
-    let opts = tobj::LoadOptions {
-        triangulate: true,
-        single_index: true,
-        ignore_points: true,
-        ignore_lines: true,
-    };
-    let (models, _materials_result) =
-        tobj::load_obj_buf(&mut Cursor::new(&bytes), &opts, |mtl: &Path| {
-            let p = resolve_relative(&dir, &mtl.to_string_lossy());
-            let r = tobj::load_mtl(&p);
-            match &r {
-                Ok((mats, _)) => {
-                    let d = p.parent().unwrap_or(Path::new(".")).to_path_buf();
-                    for m in mats {
-                        mtl_dirs
-                            .borrow_mut()
-                            .entry(m.name.clone())
-                            .or_insert_with(|| d.clone());
+    // The index check and tobj's parse both read the whole file: run them side by side
+    // (the check's error, when there is one, is the one reported, as before).
+    let shared: &Ctx = ctx;
+    let (checked, parsed) = rayon::join(
+        || check_face_indices(&String::from_utf8_lossy(&bytes), shared),
+        || {
+            // Load MTL files ourselves to learn their folders and report missing ones.
+            let mtl_dirs: RefCell<HashMap<String, PathBuf>> = RefCell::new(HashMap::new());
+            let mtl_failures: RefCell<Vec<(PathBuf, tobj::LoadError)>> = RefCell::new(Vec::new());
+            let opts = tobj::LoadOptions {
+                triangulate: true,
+                single_index: true,
+                ignore_points: true,
+                ignore_lines: true,
+            };
+            let r = tobj::load_obj_buf(&mut Cursor::new(&bytes), &opts, |mtl: &Path| {
+                let p = resolve_relative(&dir, &mtl.to_string_lossy());
+                let r = tobj::load_mtl(&p);
+                match &r {
+                    Ok((mats, _)) => {
+                        let d = p.parent().unwrap_or(Path::new(".")).to_path_buf();
+                        for m in mats {
+                            mtl_dirs
+                                .borrow_mut()
+                                .entry(m.name.clone())
+                                .or_insert_with(|| d.clone());
+                        }
                     }
+                    Err(e) => mtl_failures.borrow_mut().push((p, *e)),
                 }
-                Err(e) => mtl_failures.borrow_mut().push((p, *e)),
-            }
-            r
-        })
-        .map_err(|e| match e {
-            tobj::LoadError::FaceVertexOutOfBounds
-            | tobj::LoadError::FaceTexCoordOutOfBounds
-            | tobj::LoadError::FaceNormalOutOfBounds
-            | tobj::LoadError::FaceColorOutOfBounds
-            | tobj::LoadError::InvalidPolygon => ctx.invalid(e),
-            _ => ctx.parse(e),
-        })?;
-    for (p, e) in mtl_failures.into_inner() {
+                r
+            });
+            (r, mtl_dirs.into_inner(), mtl_failures.into_inner())
+        },
+    );
+    checked?;
+    let (parsed, mtl_dirs, mtl_failures) = parsed;
+    let (models, _materials_result) = parsed.map_err(|e| match e {
+        tobj::LoadError::FaceVertexOutOfBounds
+        | tobj::LoadError::FaceTexCoordOutOfBounds
+        | tobj::LoadError::FaceNormalOutOfBounds
+        | tobj::LoadError::FaceColorOutOfBounds
+        | tobj::LoadError::InvalidPolygon => ctx.invalid(e),
+        _ => ctx.parse(e),
+    })?;
+    for (p, e) in mtl_failures {
         ctx.warn(format!(
             "material library {} not loaded ({e}); using default materials",
             p.display()
         ))?;
     }
     // Re-read the materials that did load (tobj merges them and drops the folder).
-    let mtl_dirs = mtl_dirs.into_inner();
     let mut b = SceneBuilder::new();
     let mut tex_cache: HashMap<(Option<PathBuf>, Option<PathBuf>), Option<u32>> = HashMap::new();
     let mut mat_map: HashMap<usize, u32> = HashMap::new();

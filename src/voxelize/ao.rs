@@ -35,8 +35,8 @@ use obvhs::ray::Ray;
 use rayon::prelude::*;
 
 use super::grid::GridSpec;
-use super::mip::{Grid3, Texel};
 use super::shade::Shader;
+use super::slices::DirSlices;
 use crate::bvh::scene_bvh;
 use crate::eval::ray_triangle::WatertightRay;
 use crate::rng::Pcg32;
@@ -227,15 +227,15 @@ impl<'a> AoBaker<'a> {
         self.cache[index] as f32 / SCALE
     }
 
-    /// Traces the voxels non-empty in `volume` not traced yet, then multiplies the colour
-    /// of every non-empty voxel by its AO.
-    pub fn apply<T: Texel>(&mut self, volume: &mut Grid3<T>) {
-        let pending: Vec<usize> = volume
-            .data
+    /// Traces the voxels non-empty in a direction's sparse level 0 not traced yet, then
+    /// multiplies the colour of every non-empty voxel by its AO.
+    pub(crate) fn apply_sparse(&mut self, s: &mut DirSlices) {
+        let idx = s.indices();
+        let pending: Vec<usize> = idx
             .par_iter()
-            .enumerate()
-            .filter(|(i, v)| v.load()[3] != 0.0 && self.cache[*i] == NOT_YET)
-            .map(|(i, _)| i)
+            .zip(&s.vox)
+            .filter(|(i, v)| v.rgba[3] != 0.0 && self.cache[**i] == NOT_YET)
+            .map(|(i, _)| *i)
             .collect();
         let values: Vec<u16> = pending
             .par_iter()
@@ -246,11 +246,12 @@ impl<'a> AoBaker<'a> {
             self.cache[i] = v;
         }
         let this = &*self;
-        volume.data.par_iter_mut().enumerate().for_each(|(i, v)| {
-            let c = v.load();
-            if c[3] != 0.0 {
+        s.vox.par_iter_mut().zip(&idx).for_each(|(v, &i)| {
+            if v.rgba[3] != 0.0 {
                 let ao = this.cached(i);
-                *v = T::store([c[0] * ao, c[1] * ao, c[2] * ao, c[3]]);
+                for c in 0..3 {
+                    v.rgba[c] *= ao;
+                }
             }
         });
     }

@@ -17,10 +17,12 @@
 //! Every result is clamped to a valid premultiplied value by [`clamp_premultiplied`].
 //!
 //! Memory: the presets are **streamed** — one direction's pyramid at a time is folded into
-//! an f32 accumulator per level (4 floats per voxel, 5 for `opaque`), in the fixed order
-//! above, so results do not depend on scheduling. Expressions and custom functions need
-//! all six values at once, so the six pyramids are kept, in f16 (8 bytes per voxel per
-//! direction).
+//! an f32 accumulator per level above 0 (4 floats per voxel; 5 for `opaque` and `min`), in
+//! the fixed order above, so results do not depend on scheduling; level 0 is combined at
+//! the end from the six directions' sparse level 0, one z plane at a time
+//! ([`combine_level0`], same order, same arithmetic), so it never needs a full-size
+//! accumulator. Expressions and custom functions need all six values at once, so the six
+//! pyramids are kept, in f16 (8 bytes per voxel per direction).
 
 use std::fmt;
 use std::str::FromStr;
@@ -31,7 +33,9 @@ use rayon::prelude::*;
 
 use super::expr::{Expr, ExprError};
 use super::mip::{Grid3, Texel};
-use super::quantize::encode_rgba8;
+use super::quantize::encode_normal;
+use super::slices::DirSlices;
+use super::toksvig::average_normal;
 
 /// A voxel combination function. `s` is premultiplied RGBA in the order
 /// `+X, −X, +Y, −Y, +Z, −Z`. The result is clamped by [`clamp_premultiplied`].
@@ -169,54 +173,79 @@ impl FromStr for CombineFn {
     }
 }
 
+/// Voxels per chunk of an accumulator level (the unit of parallel work and of skipping
+/// empty space).
+const CH: usize = 4096;
+
 /// Streaming accumulator of a preset: one f32 buffer per MIP level, folded one direction at
-/// a time in direction order.
+/// a time in direction order. Only non-empty voxels are folded (a chunk of voxels nothing
+/// was folded into is never read again, and its memory is never touched).
 pub(crate) struct Accum {
     preset: Preset,
-    /// Per level, `width` floats per voxel: 4 (`mean`, `max`, `min`) or 5 (`opaque`:
-    /// Σ rgb, Σ a, max a).
+    /// Per level, `width` floats per voxel: 4 (`mean`, `max`: Σ or max rgba) or 5
+    /// (`opaque`: Σ rgba, max a; `min`: min rgba, directions that saw the voxel).
     levels: Vec<Vec<f32>>,
+    /// Per level, per chunk of [`CH`] voxels: whether anything was folded into it.
+    touched: Vec<Vec<bool>>,
     width: usize,
-    folded: Vec<u32>,
 }
 
 impl Accum {
     pub fn new(preset: Preset, level_sizes: &[usize]) -> Self {
-        let width = if preset == Preset::Opaque { 5 } else { 4 };
+        let width = if matches!(preset, Preset::Opaque | Preset::Min) {
+            5
+        } else {
+            4
+        };
         Accum {
             preset,
             levels: level_sizes.iter().map(|&n| vec![0.0; n * width]).collect(),
+            touched: level_sizes
+                .iter()
+                .map(|&n| vec![false; n.div_ceil(CH)])
+                .collect(),
             width,
-            folded: vec![0; level_sizes.len()],
+        }
+    }
+
+    /// Folds one non-empty voxel value `v` into `a`.
+    #[inline]
+    pub(crate) fn fold_one(preset: Preset, a: &mut [f32], v: [f32; 4]) {
+        match preset {
+            Preset::Mean => (0..4).for_each(|c| a[c] += v[c]),
+            // Every value is ≥ 0, so a maximum starting from 0 is the maximum.
+            Preset::Max => (0..4).for_each(|c| a[c] = a[c].max(v[c])),
+            Preset::Min => {
+                if a[4] == 0.0 {
+                    a[..4].copy_from_slice(&v);
+                } else {
+                    (0..4).for_each(|c| a[c] = a[c].min(v[c]));
+                }
+                a[4] += 1.0;
+            }
+            Preset::Opaque => {
+                (0..4).for_each(|c| a[c] += v[c]);
+                a[4] = a[4].max(v[3]);
+            }
         }
     }
 
     /// Folds one direction's volume of MIP level `level`.
     pub fn fold<T: Texel>(&mut self, level: usize, grid: &Grid3<T>) {
         let (w, preset) = (self.width, self.preset);
-        let first = self.folded[level] == 0;
-        self.folded[level] += 1;
-        const CH: usize = 4096;
         self.levels[level]
             .par_chunks_mut(CH * w)
             .zip(grid.data.par_chunks(CH))
-            .for_each(|(acc, src)| {
+            .zip(self.touched[level].par_iter_mut())
+            .for_each(|((acc, src), touched)| {
                 for (a, v) in acc.chunks_exact_mut(w).zip(src) {
                     let v = v.load();
-                    // Empty voxels change nothing but a running minimum.
-                    if v == [0.0; 4] && preset != Preset::Min {
+                    // Empty voxels change nothing (for `min`, they are counted as missing).
+                    if v == [0.0; 4] {
                         continue;
                     }
-                    match preset {
-                        Preset::Mean => (0..4).for_each(|c| a[c] += v[c]),
-                        Preset::Max | Preset::Min if first => a.copy_from_slice(&v),
-                        Preset::Max => (0..4).for_each(|c| a[c] = a[c].max(v[c])),
-                        Preset::Min => (0..4).for_each(|c| a[c] = a[c].min(v[c])),
-                        Preset::Opaque => {
-                            (0..4).for_each(|c| a[c] += v[c]);
-                            a[4] = a[4].max(v[3]);
-                        }
-                    }
+                    *touched = true;
+                    Self::fold_one(preset, a, v);
                 }
             });
     }
@@ -226,18 +255,28 @@ impl Accum {
     pub fn finish_level(&mut self, level: usize) -> Vec<u8> {
         let (w, preset) = (self.width, self.preset);
         let acc = std::mem::take(&mut self.levels[level]);
+        let touched = std::mem::take(&mut self.touched[level]);
         let mut out = vec![0u8; acc.len() / w * 4];
-        const CH: usize = 4096;
+        let enc = super::quantize::Encoder::get();
         out.par_chunks_mut(4 * CH)
             .zip(acc.par_chunks(w * CH))
-            .for_each(|(o, a)| {
+            .zip(touched.par_iter())
+            .for_each(|((o, a), touched)| {
+                if !touched {
+                    return;
+                }
                 for (o, a) in o.chunks_exact_mut(4).zip(a.chunks_exact(w)) {
+                    if a[..4] == [0.0; 4] {
+                        continue;
+                    }
                     let v = match preset {
                         Preset::Mean => Vec4::from_slice(a) / 6.0,
-                        Preset::Max | Preset::Min => Vec4::from_slice(a),
+                        Preset::Max => Vec4::from_slice(a),
+                        Preset::Min if a[4] < 6.0 => continue,
+                        Preset::Min => Vec4::from_slice(a),
                         Preset::Opaque => opaque_colour(Vec3::from_slice(a), a[3], a[4]),
                     };
-                    o.copy_from_slice(&encode_rgba8(clamp_premultiplied(v)));
+                    o.copy_from_slice(&enc.rgba8(clamp_premultiplied(v)));
                 }
             });
         out
@@ -248,13 +287,142 @@ impl Accum {
 pub(crate) fn combine_level<T: Texel>(f: &(dyn Combine + Sync), dirs: [&Grid3<T>; 6]) -> Vec<u8> {
     let n = dirs[0].data.len();
     let mut out = vec![0u8; n * 4];
-    const CH: usize = 4096;
+    let enc = super::quantize::Encoder::get();
     out.par_chunks_mut(4 * CH).enumerate().for_each(|(ci, o)| {
         for (j, o) in o.chunks_exact_mut(4).enumerate() {
             let i = ci * CH + j;
             let s = dirs.map(|g| Vec4::from_array(g.data[i].load()));
-            o.copy_from_slice(&encode_rgba8(clamp_premultiplied(f.combine(&s))));
+            o.copy_from_slice(&enc.rgba8(clamp_premultiplied(f.combine(&s))));
         }
     });
     out
+}
+
+/// Level 0 of a preset combination, straight from the six directions' sparse level 0
+/// (in [`super::Dir::ALL`] order), one z plane at a time: each plane's voxels of the six
+/// directions are folded into a small plane-sized accumulator (in direction order, as
+/// [`Accum`] does) and encoded RGBA8 at once, so level 0 never has a full-size
+/// accumulator. With `normals`, also the plane's Toksvig normals (`Σ Nw / Σ α`, snorm8).
+pub(crate) fn combine_level0(
+    preset: Preset,
+    dirs: &[DirSlices],
+    normals: bool,
+) -> (Vec<u8>, Option<Vec<u8>>) {
+    let dims = dirs[0].dims;
+    let plane = dims[0] * dims[1];
+    let w = if matches!(preset, Preset::Opaque | Preset::Min) {
+        5
+    } else {
+        4
+    };
+    // Per direction, per z plane: (index in the plane, index in `vox`) of its voxels.
+    // Directions whose image rows are z planes need no table (their row z is the plane).
+    // (start of each plane's run, (index in the plane, index in `vox`)).
+    type Table = (Vec<usize>, Vec<(u32, u32)>);
+    let by_plane: Vec<Option<Table>> = dirs
+        .iter()
+        .map(|s| {
+            if s.dir.image_axes()[1] == 2 {
+                return None;
+            }
+            // The view axis is z: bucket the voxels by slice (a counting sort).
+            let mut start = vec![0usize; dims[2] + 1];
+            for v in &s.vox {
+                start[v.s as usize + 1] += 1;
+            }
+            for z in 0..dims[2] {
+                start[z + 1] += start[z];
+            }
+            let mut fill = start.clone();
+            let mut list = vec![(0u32, 0u32); s.vox.len()];
+            for j in 0..s.row_count() {
+                let (row, first) = s.row(j);
+                for (k, v) in row.iter().enumerate() {
+                    let z = v.s as usize;
+                    let i = s.index(j, v) - z * plane;
+                    list[fill[z]] = (i as u32, (first + k) as u32);
+                    fill[z] += 1;
+                }
+            }
+            Some((start, list))
+        })
+        .collect();
+    let enc = super::quantize::Encoder::get();
+    let mut out = vec![0u8; plane * dims[2] * 4];
+    let mut out_n = normals.then(|| vec![0u8; plane * dims[2] * 4]);
+    // Per thread, the plane accumulators (left zeroed after each plane).
+    type Bufs = (Vec<f32>, Vec<[f32; 4]>);
+    let init = || -> Bufs {
+        (
+            vec![0.0f32; plane * w],
+            vec![[0.0f32; 4]; plane * normals as usize],
+        )
+    };
+    let work = |(acc, nacc): &mut Bufs, z: usize, o: &mut [u8], on: Option<&mut [u8]>| {
+        let mut any = false;
+        for (s, table) in dirs.iter().zip(&by_plane) {
+            let mut fold = |i: usize, k: usize| {
+                let v = &s.vox[k];
+                Accum::fold_one(preset, &mut acc[i * w..i * w + w], v.rgba);
+                if let Some(n) = s.nrm.as_ref() {
+                    let (n, a) = (n[k], &mut nacc[i]);
+                    *a = [a[0] + n[0], a[1] + n[1], a[2] + n[2], a[3] + v.rgba[3]];
+                }
+                any = true;
+            };
+            match table {
+                None => {
+                    let (row, first) = s.row(z);
+                    for (k, v) in row.iter().enumerate() {
+                        fold(s.index(z, v) - z * plane, first + k);
+                    }
+                }
+                Some((start, list)) => {
+                    for &(i, k) in &list[start[z]..start[z + 1]] {
+                        fold(i as usize, k as usize);
+                    }
+                }
+            }
+        }
+        if !any {
+            return;
+        }
+        for (o, a) in o.chunks_exact_mut(4).zip(acc.chunks_exact_mut(w)) {
+            if a[..4] == [0.0; 4] {
+                a.fill(0.0);
+                continue;
+            }
+            let v = match preset {
+                Preset::Mean => Vec4::from_slice(a) / 6.0,
+                Preset::Max => Vec4::from_slice(a),
+                Preset::Min if a[4] < 6.0 => Vec4::ZERO,
+                Preset::Min => Vec4::from_slice(a),
+                Preset::Opaque => opaque_colour(Vec3::from_slice(a), a[3], a[4]),
+            };
+            a.fill(0.0);
+            o.copy_from_slice(&enc.rgba8(clamp_premultiplied(v)));
+        }
+        if let Some(on) = on {
+            for (o, a) in on.chunks_exact_mut(4).zip(nacc.iter_mut()) {
+                if *a == [0.0; 4] {
+                    continue;
+                }
+                let n = average_normal(Vec3::new(a[0], a[1], a[2]), a[3]);
+                *a = [0.0; 4];
+                o.copy_from_slice(&encode_normal(n));
+            }
+        }
+    };
+    match out_n.as_mut() {
+        Some(on) => out
+            .par_chunks_mut(plane * 4)
+            .zip(on.par_chunks_mut(plane * 4))
+            .enumerate()
+            .for_each_init(init, |b, (z, (o, on))| work(b, z, o, Some(on))),
+        None => out
+            .par_chunks_mut(plane * 4)
+            .enumerate()
+            .for_each_init(init, |b, (z, o)| work(b, z, o, None)),
+    }
+    (out, out_n)
 }

@@ -27,6 +27,7 @@ use glam::Vec4;
 use half::f16;
 use rayon::prelude::*;
 
+use super::slices::DirSlices;
 use super::Dir;
 
 /// Premultiplied `front over back`.
@@ -201,4 +202,175 @@ pub(crate) fn downsample_with<T: Texel, A: Texel>(
 /// One MIP step of a premultiplied RGBA direction volume (see the module docs).
 pub fn downsample<T: Texel>(src: &Grid3<T>, view: Dir) -> Grid3<T> {
     downsample_with(src, src, view)
+}
+
+/// For each of `d` children, the parents that cover it and the fraction inside each
+/// (the inverse of [`taps`]).
+fn inverse_taps(t: &Taps, d: usize) -> Vec<Vec<(usize, f32)>> {
+    let mut inv = vec![Vec::new(); d];
+    for (p, list) in t.iter().enumerate() {
+        for &(c, f) in list {
+            inv[c].push((p, f));
+        }
+    }
+    inv
+}
+
+/// Level 1 of a direction straight from its sparse level 0 (the same filter as
+/// [`downsample_with`]: composite the children along the view axis front to back, average
+/// across), colour and — when present — weighted normals (occluded by the colour's
+/// alpha). Only the non-empty level-0 voxels are read; the level-0 grid is never dense.
+pub(crate) fn downsample_sparse<T: Texel>(s: &DirSlices) -> (Grid3<T>, Option<Grid3<[f16; 4]>>) {
+    let dims = s.dims;
+    let view = s.dir;
+    let (a, [ua, va]) = (view.axis(), view.image_axes());
+    let nd = dims.map(|d| (d >> 1).max(1));
+    let inv_u = inverse_taps(&taps(dims[ua]), dims[ua]);
+    let tj = taps(dims[va]);
+    let inv_s = inverse_taps(&taps(dims[a]), dims[a]);
+    let ratio = |ax: usize| dims[ax] as f64 / nd[ax] as f64;
+    let norm = (1.0 / (ratio(ua) * ratio(va))) as f32;
+    let (wu, ws) = (nd[ua], nd[a]);
+    let normals = s.nrm.as_ref();
+    let mut out = Grid3::<T>::new(nd);
+    let mut out_n = normals.map(|_| Grid3::<[f16; 4]>::new(nd));
+    let (out_w, out_nw) = (
+        Disjoint::new(&mut out.data),
+        out_n.as_mut().map(|g| Disjoint::new(&mut g.data)),
+    );
+    // Per thread: one parent row's plane `[u' · ws + s']` (colour, normals) and one child
+    // column composited per parent slice; every buffer is left zeroed after use.
+    struct Bufs {
+        plane: Vec<[f32; 4]>,
+        plane_n: Vec<[f32; 4]>,
+        col: Vec<[f32; 4]>,
+        col_n: Vec<[f32; 3]>,
+        transmit: Vec<f32>,
+        touched: Vec<usize>,
+    }
+    let init = || Bufs {
+        plane: vec![[0.0; 4]; wu * ws],
+        plane_n: vec![[0.0; 4]; if normals.is_some() { wu * ws } else { 0 }],
+        col: vec![[0.0; 4]; ws],
+        col_n: vec![[0.0; 3]; ws],
+        transmit: vec![1.0; ws],
+        touched: Vec::new(),
+    };
+    (0..nd[va]).into_par_iter().for_each_init(init, |b, jp| {
+        let Bufs {
+            plane,
+            plane_n,
+            col,
+            col_n,
+            transmit,
+            touched,
+        } = b;
+        let mut any = false;
+        for &(cj, wj) in &tj[jp] {
+            let (row, first) = s.row(cj);
+            let mut g = 0;
+            while g < row.len() {
+                any = true;
+                let u = row[g].u;
+                let mut end = g + 1;
+                while end < row.len() && row[end].u == u {
+                    end += 1;
+                }
+                // Front to back: the camera on the + side sees high slices first.
+                let mut visit = |i: usize| {
+                    let v = &row[i];
+                    let alpha = v.rgba[3];
+                    for &(sp, f) in &inv_s[v.s as usize] {
+                        if transmit[sp] == 1.0 && !touched.contains(&sp) {
+                            touched.push(sp);
+                        }
+                        let sc = partial_scale(alpha as f64, f as f64) as f32;
+                        let w = transmit[sp] * sc;
+                        for (o, x) in col[sp].iter_mut().zip(v.rgba) {
+                            *o += w * x;
+                        }
+                        if let Some(n) = normals {
+                            for (o, x) in col_n[sp].iter_mut().zip(n[first + i]) {
+                                *o += w * x;
+                            }
+                        }
+                        transmit[sp] *= 1.0 - sc * alpha;
+                    }
+                };
+                if view.positive() {
+                    (g..end).rev().for_each(&mut visit);
+                } else {
+                    (g..end).for_each(&mut visit);
+                }
+                for &sp in touched.iter() {
+                    for &(up, fu) in &inv_u[u as usize] {
+                        let w = wj * fu;
+                        for (o, x) in plane[up * ws + sp].iter_mut().zip(col[sp]) {
+                            *o += w * x;
+                        }
+                        if normals.is_some() {
+                            for (o, x) in plane_n[up * ws + sp].iter_mut().zip(col_n[sp]) {
+                                *o += w * x;
+                            }
+                        }
+                    }
+                    col[sp] = [0.0; 4];
+                    col_n[sp] = [0.0; 3];
+                    transmit[sp] = 1.0;
+                }
+                touched.clear();
+                g = end;
+            }
+        }
+        if !any {
+            return;
+        }
+        for up in 0..wu {
+            for sp in 0..ws {
+                let v = std::mem::take(&mut plane[up * ws + sp]);
+                let n = plane_n.get_mut(up * ws + sp).map(std::mem::take);
+                if v == [0.0; 4] && n.is_none_or(|n| n == [0.0; 4]) {
+                    continue;
+                }
+                let mut p = [0usize; 3];
+                p[a] = sp;
+                p[ua] = up;
+                p[va] = jp;
+                let i = p[0] + nd[0] * (p[1] + nd[1] * p[2]);
+                // SAFETY: parent row `jp` writes only the voxels with `p[va] == jp`.
+                unsafe { out_w.write(i, T::store(v.map(|x| x * norm))) };
+                if let (Some(g), Some(n)) = (&out_nw, n) {
+                    unsafe { g.write(i, <[f16; 4]>::store(n.map(|x| x * norm))) };
+                }
+            }
+        }
+    });
+    (out, out_n)
+}
+
+/// A slice that parallel tasks write at indices no two tasks share.
+pub(crate) struct Disjoint<T> {
+    ptr: *mut T,
+    len: usize,
+}
+
+// SAFETY: writers promise disjoint indices (see `write`).
+unsafe impl<T: Send> Sync for Disjoint<T> {}
+unsafe impl<T: Send> Send for Disjoint<T> {}
+
+impl<T> Disjoint<T> {
+    pub(crate) fn new(data: &mut [T]) -> Self {
+        Disjoint {
+            ptr: data.as_mut_ptr(),
+            len: data.len(),
+        }
+    }
+    /// # Safety
+    /// No other task may write or read index `i` at the same time, and the slice given
+    /// to [`Disjoint::new`] must outlive every write.
+    #[inline]
+    pub(crate) unsafe fn write(&self, i: usize, v: T) {
+        assert!(i < self.len);
+        unsafe { self.ptr.add(i).write(v) };
+    }
 }

@@ -2,29 +2,33 @@
 //! §3.1–3.2, Figure 3).
 //!
 //! Pipeline, one direction at a time (`+X, −X, +Y, −Y, +Z, −Z`):
-//! 1. [`slices`]: rasterize the scene into that direction's stack of slices (level 0);
-//!    with [`Bake::Ao`], multiply its colour by the voxels' ambient occlusion (`ao`);
+//! 1. [`slices`]: rasterize the scene into that direction's stack of slices (level 0),
+//!    kept **sparse** (the non-empty voxels of every image row); with [`Bake::Ao`],
+//!    multiply its colour by the voxels' ambient occlusion (`ao`);
 //! 2. [`mip`]: build that direction's MIP pyramid (composite along the view axis, average
-//!    across);
-//! 3. [`combine`]: fold every level into the combined volume (streamed for the presets;
-//!    expressions and custom functions keep the six pyramids in f16 and combine at the end);
-//!    normals, when asked for, are filtered with [`toksvig`] and summed the same way;
+//!    across), level 1 straight from the sparse level 0;
+//! 3. [`combine`]: fold every coarser level into the combined volume as it is built
+//!    (streamed for the presets; expressions and custom functions keep the six pyramids in
+//!    f16 and combine at the end); with a preset, level 0 is combined at the end from the
+//!    six sparse stacks, one z plane at a time; normals, when asked for, are filtered with
+//!    [`toksvig`] and summed the same way;
 //! 4. [`quantize`]: RGBA8 `SrgbPremultiplied`, normals snorm8.
 //!
 //! Everything is deterministic: parallel loops write disjoint outputs, every reduction has a
 //! fixed order, so the bytes do not depend on the number of threads.
 //!
-//! Memory (level 0 has `N` voxels; a full pyramid is at most `8/7 N`): one direction at a
-//! time in f32 (16 N bytes + its next level), plus the streamed accumulator (16 or 20 bytes
-//! per voxel of every level), plus f16 normals (9 N per direction + 8 per voxel of every
-//! level); the RGBA8 output replaces the accumulator level by level at the end. Estimated
-//! peaks at 512³: `mean` 4.6 GiB (6.9 with normals), `opaque` 5.2 GiB (7.4 with normals).
+//! Memory (level 0 has `N` voxels, `S ≤ N` of them non-empty from one direction; a full
+//! pyramid is at most `8/7 N`): the six sparse level-0 stacks (20 bytes per non-empty voxel,
+//! 32 with normals), one direction's f32 levels 1 and 2 while its pyramid is built, the
+//! streamed accumulators of the levels above 0 (16 or 20 bytes per voxel, plus 8 for
+//! normals), and the RGBA8 (+ snorm8) output. No level-0 grid is ever dense with a preset.
 //! Expressions and custom functions keep six f16 pyramids (48 bytes per voxel of every
 //! level): 7.5 GiB at 512³, 9.3 GiB with normals (over an 8 GiB budget: use a preset for
 //! normals at 512³, or raise the limit).
 //! AO adds 2 bytes per level-0 voxel and its BVH.
-//! [`estimate_peak_bytes`] computes this and [`voxelize`] refuses grids above
-//! [`VoxelizeOptions::memory_limit`] before allocating anything.
+//! [`estimate_peak_bytes_sparse`] computes this (bounding `S` by the triangles' bounding
+//! boxes) and [`voxelize`] refuses grids above [`VoxelizeOptions::memory_limit`] before
+//! allocating anything.
 
 mod ao;
 pub mod asset;
@@ -42,6 +46,7 @@ use std::time::Instant;
 
 use glam::{Vec3, Vec4};
 use half::f16;
+use rayon::prelude::*;
 
 pub use ao::{Bake, AO_SEED, DEFAULT_AO_RAYS, DEFAULT_DISTANCE_FRACTION, MAX_AO_RAYS};
 pub use asset::bake_params;
@@ -237,10 +242,9 @@ fn level_sizes(grid: &GridSpec, mip_count: u32) -> Vec<usize> {
         .collect()
 }
 
-/// Estimated peak memory of [`voxelize`] for a grid (see the module docs), in bytes: the
-/// larger of the two phases — while the directions are processed (one direction's level 0
-/// and next level, the accumulators or stored pyramids, the normal sums) and while the
-/// levels are finished (accumulators turning into the RGBA8/snorm8 output level by level).
+/// Estimated peak memory of [`voxelize`] for a grid (see the module docs), in bytes, in the
+/// worst case where every level-0 voxel is non-empty from every direction (the estimate
+/// `voxelize` checks bounds that by the scene's triangles, see [`estimate_peak_bytes_sparse`]).
 pub fn estimate_peak_bytes(
     dims: [u32; 3],
     mip_count: u32,
@@ -248,6 +252,23 @@ pub fn estimate_peak_bytes(
     normals: bool,
 ) -> u64 {
     let n: u64 = dims.iter().map(|&d| d as u64).product();
+    estimate_peak_bytes_sparse(dims, mip_count, combine, normals, n)
+}
+
+/// [`estimate_peak_bytes`] when at most `sparse` level-0 voxels of each direction are
+/// non-empty: the larger of the two phases — while the directions are processed (the
+/// sparse level 0 of the directions done so far, one direction's level 1 and 2, the
+/// accumulators of the coarser levels or the stored f16 pyramids) and while the levels are
+/// finished (accumulators or pyramids turning into the RGBA8/snorm8 output).
+pub fn estimate_peak_bytes_sparse(
+    dims: [u32; 3],
+    mip_count: u32,
+    combine: &CombineFn,
+    normals: bool,
+    sparse: u64,
+) -> u64 {
+    let n: u64 = dims.iter().map(|&d| d as u64).product();
+    let sparse = sparse.min(n);
     let all: u64 = (0..mip_count)
         .map(|l| {
             grid::level_dims(dims, l)
@@ -256,33 +277,75 @@ pub fn estimate_peak_bytes(
                 .product::<u64>()
         })
         .sum();
+    let coarse = all - n;
     let output = 4 * all * (1 + normals as u64);
-    // Per direction: weighted normals in f16 (level 0 + next); sums (Σ Nw, Σ α) in f16.
-    let (nrm_dir, nrm_acc) = if normals {
-        (8 * n + n, 8 * all)
-    } else {
-        (0, 0)
+    // One direction's sparse level 0 (voxel + weighted normal) and its levels 1 and 2.
+    let vox = sparse * (20 + 12 * normals as u64);
+    let level1 = n.div_ceil(8);
+    let (building, finishing) = match combine {
+        CombineFn::Preset(p) => {
+            let w = if matches!(p, Preset::Opaque | Preset::Min) {
+                20
+            } else {
+                16
+            };
+            let acc = w * coarse + 8 * coarse * normals as u64;
+            let pyr = (16 + 8 * normals as u64) * (level1 + level1.div_ceil(8));
+            // All six sparse stacks are kept for level 0, plus its per-plane tables.
+            let kept = 6 * vox + 2 * 8 * sparse;
+            (kept + acc + pyr, kept + acc + output)
+        }
+        // Six f16 pyramids (level 0 dense) + the sparse level 0 being converted.
+        _ => {
+            let nacc = 8 * all * normals as u64;
+            (48 * all + vox + nacc, 48 * all + nacc + output)
+        }
     };
-    let (dir, acc) = match combine {
-        CombineFn::Preset(p) => (
-            16 * n + 2 * n,
-            if *p == Preset::Opaque { 20 } else { 16 } * all,
-        ),
-        // Six f16 pyramids (the direction being built is one of them) + its next level.
-        _ => (n, 48 * all),
-    };
-    let building = dir + acc + nrm_dir + nrm_acc;
-    let finishing = acc + nrm_acc + output;
     building.max(finishing) + (64 << 20)
 }
 
-/// [`estimate_peak_bytes`] plus what the bake needs (AO: its cache and the BVH).
-fn estimate_bytes(scene: &Scene, opts: &VoxelizeOptions, dims: [u32; 3], mips: u32) -> u64 {
+/// An upper bound on the non-empty level-0 voxels of one direction: a fragment lies in a
+/// voxel its triangle intersects, and a triangle intersects at most
+/// `3 (A + 2 (w_u + w_v) + 4)` voxels (in voxel units: seen along its dominant normal axis it touches at most
+/// `A + 2 (w_u + w_v) + 4` voxel columns — the area of its projection grown by a voxel on
+/// every side, `A` at most its area, `w` its extents — and spans at most 3 voxels in each,
+/// its depth changing by at most 2 across a column).
+fn sparse_bound(scene: &Scene, grid: &GridSpec) -> u64 {
+    let n = grid.voxel_count();
+    let sum: f64 = scene
+        .triangles
+        .par_iter()
+        .map(|t| {
+            let p =
+                t.v.map(|v| ((v.position - grid.min) / grid.voxel).as_dvec3());
+            if !p.iter().all(|q| q.is_finite()) {
+                return 0.0;
+            }
+            let nrm = (p[1] - p[0]).cross(p[2] - p[0]);
+            let area = 0.5 * nrm.length();
+            let a = nrm.abs().max_position();
+            let (lo, hi) = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
+            let w = hi - lo;
+            let across = w[0] + w[1] + w[2] - w[a];
+            3.0 * (area + 2.0 * across + 4.0)
+        })
+        .sum();
+    if sum.is_finite() {
+        (sum.ceil() as u64).min(n)
+    } else {
+        n
+    }
+}
+
+/// [`estimate_peak_bytes_sparse`] for this scene, plus what the bake needs (AO: its cache
+/// and the BVH).
+fn estimate_bytes(scene: &Scene, opts: &VoxelizeOptions, grid: &GridSpec, mips: u32) -> u64 {
     let bake = match opts.bake {
         Bake::None => 0,
-        Bake::Ao { .. } => ao::AoBaker::estimate_bytes(dims, scene.triangles.len()),
+        Bake::Ao { .. } => ao::AoBaker::estimate_bytes(grid.dims, scene.triangles.len()),
     };
-    estimate_peak_bytes(dims, mips, &opts.combine, opts.normals) + bake
+    let sparse = sparse_bound(scene, grid);
+    estimate_peak_bytes_sparse(grid.dims, mips, &opts.combine, opts.normals, sparse) + bake
 }
 
 /// The grid `voxelize` would use for this scene and these options.
@@ -327,7 +390,7 @@ fn check(scene: &Scene, opts: &VoxelizeOptions) -> Result<(GridSpec, u32), Voxel
         }
     };
     opts.bake.validate().map_err(VoxelizeError::InvalidOption)?;
-    let need = estimate_bytes(scene, opts, grid.dims, mips);
+    let need = estimate_bytes(scene, opts, &grid, mips);
     if need > opts.memory_limit {
         let gib = |b: u64| b as f64 / (1u64 << 30) as f64;
         return Err(VoxelizeError::TooMuchMemory {
@@ -359,7 +422,7 @@ pub fn slice_stack(
 ) -> Result<SliceStack, VoxelizeError> {
     let (grid, _) = check(scene, opts)?;
     let shader = shade::Shader::new(scene);
-    let mut s = slices::rasterize::<[f32; 4]>(
+    let mut s = slices::rasterize(
         scene,
         &shader,
         &grid,
@@ -369,13 +432,15 @@ pub fn slice_stack(
         &mut |_| {},
     );
     if let Some(mut ao) = ao_baker(scene, &shader, &grid, opts) {
-        ao.apply(&mut s.rgba);
+        ao.apply_sparse(&mut s);
     }
+    let rgba = s.to_dense::<[f32; 4]>();
+    let normals = s.dense_normals();
     Ok(SliceStack {
         grid,
         dir,
-        rgba: s.rgba.data.into_iter().map(Vec4::from_array).collect(),
-        normals: s.nrm.map(|g| {
+        rgba: rgba.data.into_iter().map(Vec4::from_array).collect(),
+        normals: normals.map(|g| {
             g.data
                 .into_iter()
                 .map(|n| Vec3::from_slice(&n.load()[..3]))
@@ -399,19 +464,34 @@ fn ao_baker<'a>(
     }
 }
 
-/// Builds the pyramid of one direction from its level 0, handing each level to `sink`
-/// (colour, weighted normals) as soon as the next one is built.
+/// One level of a direction's pyramid, as [`pyramid`] hands it on.
+enum Level<'a, T> {
+    /// Level 0, sparse.
+    Zero(&'a slices::DirSlices),
+    /// A coarser level: colour and weighted normals.
+    Dense(Grid3<T>, Option<Grid3<[f16; 4]>>),
+}
+
+/// Builds the pyramid of one direction from its sparse level 0: level 1 is filtered
+/// straight from it ([`mip::downsample_sparse`]) and every further level from the one
+/// before; each level goes to `sink` as soon as the next one is built.
 fn pyramid<T: Texel>(
-    dir: Dir,
+    s: &slices::DirSlices,
     mips: u32,
-    mut rgba: Grid3<T>,
-    mut nrm: Option<Grid3<[f16; 4]>>,
     mip_secs: &mut f64,
-    mut sink: impl FnMut(usize, Grid3<T>, Option<Grid3<[f16; 4]>>),
+    mut sink: impl FnMut(usize, Level<T>),
 ) {
-    for level in 0..mips as usize {
+    let dir = s.dir;
+    let t = Instant::now();
+    let first = (mips > 1).then(|| mip::downsample_sparse::<T>(s));
+    *mip_secs += t.elapsed().as_secs_f64();
+    sink(0, Level::Zero(s));
+    let Some((mut rgba, mut nrm)) = first else {
+        return;
+    };
+    for level in 1..mips as usize {
         if level + 1 == mips as usize {
-            sink(level, rgba, nrm);
+            sink(level, Level::Dense(rgba, nrm));
             return;
         }
         let t = Instant::now();
@@ -420,7 +500,7 @@ fn pyramid<T: Texel>(
             .map(|n| toksvig::downsample_normals(n, &rgba, dir));
         let next = mip::downsample(&rgba, dir);
         *mip_secs += t.elapsed().as_secs_f64();
-        sink(level, rgba, nrm);
+        sink(level, Level::Dense(rgba, nrm));
         rgba = next;
         nrm = next_n;
     }
@@ -439,28 +519,32 @@ pub fn voxelize(
     let sizes = level_sizes(&grid, mips);
     let mut times = StageTimes::default();
     let mut fragments = 0u64;
-    let mut nacc = opts.normals.then(|| toksvig::NormalAccum::new(&sizes));
+    // With a preset, level 0's normals are combined with its colour (see below).
+    let mut nacc = match opts.combine {
+        CombineFn::Preset(_) => None,
+        _ => opts.normals.then(|| toksvig::NormalAccum::new(&sizes)),
+    };
     let t = Instant::now();
     let mut baker = ao_baker(scene, &shader, &grid, opts);
     times.bake += t.elapsed().as_secs_f64();
     let k = opts.supersample;
-    fn raster<T: Texel>(
+    fn raster(
         ctx: (&Scene, &shade::Shader, &GridSpec, u32, bool),
         dir: Dir,
         times: &mut StageTimes,
         baker: Option<&mut ao::AoBaker>,
         progress: &dyn Fn(Stage, f32),
-    ) -> slices::DirSlices<T> {
+    ) -> slices::DirSlices {
         let (scene, shader, grid, k, normals) = ctx;
         let t = Instant::now();
         let d = dir.index() as f32;
-        let mut s = slices::rasterize::<T>(scene, shader, grid, dir, k, normals, &mut |x| {
+        let mut s = slices::rasterize(scene, shader, grid, dir, k, normals, &mut |x| {
             progress(Stage::Rasterize, (d + x) / 6.0)
         });
         times.rasterize += t.elapsed().as_secs_f64();
         if let Some(b) = baker {
             let t = Instant::now();
-            b.apply(&mut s.rgba);
+            b.apply_sparse(&mut s);
             times.bake += t.elapsed().as_secs_f64();
         }
         s
@@ -468,39 +552,62 @@ pub fn voxelize(
     let ctx = (scene, &shader, &grid, k, opts.normals);
     let levels: Vec<Vec<u8>> = match &opts.combine {
         CombineFn::Preset(p) => {
-            let mut acc = combine::Accum::new(*p, &sizes);
+            // Level 0 is combined at the end from the six sparse stacks, plane by plane;
+            // the coarser levels are folded as each direction's pyramid is built.
+            let mut coarse = sizes.clone();
+            coarse[0] = 0;
+            let mut acc = combine::Accum::new(*p, &coarse);
+            nacc = opts.normals.then(|| toksvig::NormalAccum::new(&coarse));
+            let mut zero = Vec::with_capacity(6);
             for dir in Dir::ALL {
-                let s = raster::<[f32; 4]>(ctx, dir, &mut times, baker.as_mut(), progress);
+                let s = raster(ctx, dir, &mut times, baker.as_mut(), progress);
                 fragments += s.fragments;
                 let mut fold_secs = 0.0;
-                pyramid(dir, mips, s.rgba, s.nrm, &mut times.mip, |level, c, n| {
-                    let t = Instant::now();
-                    acc.fold(level, &c);
-                    if let (Some(na), Some(n)) = (nacc.as_mut(), n.as_ref()) {
-                        na.fold(level, n, &c);
+                pyramid::<[f32; 4]>(&s, mips, &mut times.mip, |level, data| {
+                    if let Level::Dense(c, n) = data {
+                        let t = Instant::now();
+                        acc.fold(level, &c);
+                        if let (Some(na), Some(n)) = (nacc.as_mut(), n.as_ref()) {
+                            na.fold(level, n, &c);
+                        }
+                        fold_secs += t.elapsed().as_secs_f64();
                     }
-                    fold_secs += t.elapsed().as_secs_f64();
                 });
+                zero.push(s);
                 times.combine += fold_secs;
                 progress(Stage::Combine, (dir.index() + 1) as f32 / 6.0);
             }
             let t = Instant::now();
-            let out = (0..mips as usize).map(|l| acc.finish_level(l)).collect();
-            times.quantize += t.elapsed().as_secs_f64();
+            let (level0, normals0) = combine::combine_level0(*p, &zero, opts.normals);
+            drop(zero);
+            let mut out = vec![level0];
+            out.extend((1..mips as usize).map(|l| acc.finish_level(l)));
+            if let (Some(na), Some(n0)) = (nacc.as_mut(), normals0) {
+                na.set_level0(n0);
+            }
+            times.combine += t.elapsed().as_secs_f64();
             out
         }
         f => {
             let mut pyrs: Vec<Vec<Option<Grid3<[f16; 4]>>>> = Vec::with_capacity(6);
             for dir in Dir::ALL {
-                // Stored in f16 from the start (the arithmetic stays f32/f64).
-                let s = raster::<[f16; 4]>(ctx, dir, &mut times, baker.as_mut(), progress);
+                // Stored in f16 (the arithmetic stays f32/f64).
+                let s = raster(ctx, dir, &mut times, baker.as_mut(), progress);
                 fragments += s.fragments;
                 let mut levels = Vec::with_capacity(mips as usize);
-                pyramid(dir, mips, s.rgba, s.nrm, &mut times.mip, |level, c, n| {
-                    if let (Some(na), Some(n)) = (nacc.as_mut(), n.as_ref()) {
-                        na.fold(level, n, &c);
+                pyramid::<[f16; 4]>(&s, mips, &mut times.mip, |level, data| match data {
+                    Level::Zero(s) => {
+                        if let Some(na) = nacc.as_mut() {
+                            na.fold_sparse(s);
+                        }
+                        levels.push(Some(s.to_dense::<[f16; 4]>()));
                     }
-                    levels.push(Some(c));
+                    Level::Dense(c, n) => {
+                        if let (Some(na), Some(n)) = (nacc.as_mut(), n.as_ref()) {
+                            na.fold(level, n, &c);
+                        }
+                        levels.push(Some(c));
+                    }
                 });
                 pyrs.push(levels);
                 progress(Stage::Mip, (dir.index() + 1) as f32 / 6.0);
@@ -536,7 +643,7 @@ pub fn voxelize(
             non_empty_voxels,
             fragments,
             triangles: scene.triangles.len(),
-            estimated_peak_bytes: estimate_bytes(scene, opts, grid.dims, mips),
+            estimated_peak_bytes: estimate_bytes(scene, opts, &grid, mips),
             seconds: times,
         },
     })

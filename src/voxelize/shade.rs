@@ -2,7 +2,8 @@
 //!
 //! `colour = base_color_factor × texture(uv) × vertex colour` (linear, straight alpha), then
 //! - `Opaque`: alpha = 1;
-//! - `Mask { cutoff }`: alpha ≥ cutoff → alpha = 1, otherwise the fragment is discarded;
+//! - `Mask { cutoff }`: alpha ≥ cutoff → alpha = 1, otherwise discarded (tested per
+//!   coverage sample by the rasterizer, [`Shader::mask_pass`]);
 //! - `Blend`: alpha as computed;
 //!
 //! and the result is premultiplied. Textures are sampled bilinearly with
@@ -67,43 +68,44 @@ impl<'a> Shader<'a> {
         &self.materials[i as usize]
     }
 
-    /// Premultiplied linear RGBA of a fragment, or `None` when it is discarded or invisible.
+    /// Premultiplied linear RGBA of a fragment whose `Mask` alpha test the caller has
+    /// already passed ([`Shader::mask_pass`]; `Mask` gives alpha 1 without testing), or
+    /// `None` when it is invisible (`Blend` alpha 0, non-finite colour).
     ///
-    /// Same result, bit for bit, as `c = factor × vertex_color × texture.sample_bilinear(uv)`
-    /// followed by the alpha mode, but faster: the four texels are fetched once (two wraps
-    /// per axis instead of eight), and for `Mask` the alpha is computed and tested before
-    /// any colour work.
+    /// `c = factor × vertex_color × texture.sample_bilinear(uv)` (bit for bit), but
+    /// faster: the four texels are fetched once (two wraps per axis instead of eight).
     #[inline]
-    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x >= cutoff)` also discards NaN.
-    pub(crate) fn shade(&self, m: &Material, uv: Vec2, vertex_color: Vec4) -> Option<Vec4> {
+    pub(crate) fn shade_tested(&self, m: &Material, uv: Vec2, vertex_color: Vec4) -> Option<Vec4> {
         let mut c = m.base_color_factor * vertex_color;
         if let Some(t) = m.base_color_texture {
             let taps = Taps::new(&self.textures[t as usize], uv);
-            let alpha = taps.alpha();
-            if let AlphaMode::Mask { cutoff } = m.alpha_mode {
-                // `c.w` exactly as `(c * tex).w` below would compute it.
-                if !(c.w * alpha.clamp(0.0, 1.0) >= cutoff) {
-                    return None;
-                }
-            }
-            c *= taps.colour(alpha);
+            c *= taps.colour(taps.alpha());
         }
         let rgb = c.truncate().clamp(Vec3::ZERO, Vec3::ONE);
         let a = match m.alpha_mode {
-            AlphaMode::Opaque => 1.0,
-            AlphaMode::Mask { cutoff } => {
-                if c.w >= cutoff {
-                    1.0
-                } else {
-                    return None;
-                }
-            }
+            AlphaMode::Opaque | AlphaMode::Mask { .. } => 1.0,
             AlphaMode::Blend => c.w.clamp(0.0, 1.0),
         };
         if a.is_nan() || a <= 0.0 || !rgb.is_finite() {
             return None;
         }
         Some((rgb * a).extend(a))
+    }
+
+    /// The `Mask` alpha test alone (only the texture's alpha channel is read): whether a
+    /// point with this `uv` and vertex alpha has `factor.a × vertex alpha × texture alpha
+    /// ≥ cutoff` (NaN fails).
+    #[inline]
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x >= cutoff)` also discards NaN.
+    pub(crate) fn mask_pass(&self, m: &Material, cutoff: f32, uv: Vec2, vertex_alpha: f32) -> bool {
+        let cw = m.base_color_factor.w * vertex_alpha;
+        match m.base_color_texture {
+            Some(t) => {
+                let alpha = Taps::alpha_only(&self.textures[t as usize], uv);
+                cw * alpha.clamp(0.0, 1.0) >= cutoff
+            }
+            None => cw >= cutoff,
+        }
     }
 
     /// Straight alpha of a surface point (`factor × vertex colour × texture`, before the
@@ -199,6 +201,32 @@ impl Taps {
                 fx * fy,
             ],
         }
+    }
+
+    /// [`Taps::new`] followed by [`Taps::alpha`] (same value), reading only the alpha bytes.
+    #[inline]
+    fn alpha_only(t: &Texture, uv: Vec2) -> f32 {
+        let x = finite_or_zero(uv.x) as f64 * t.width as f64 - 0.5;
+        let y = finite_or_zero(uv.y) as f64 * t.height as f64 - 0.5;
+        let (x0, y0) = (floor(x), floor(y));
+        let (fx, fy) = ((x - x0) as f32, (y - y0) as f32);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let (xa, xb) = (
+            wrap(x0, t.width, t.wrap_u),
+            wrap(x0.saturating_add(1), t.width, t.wrap_u),
+        );
+        let (ya, yb) = (
+            wrap(y0, t.height, t.wrap_v),
+            wrap(y0.saturating_add(1), t.height, t.wrap_v),
+        );
+        let w = t.width as usize;
+        let at = |x: usize, y: usize| t.texels[y * w + x][3] as f32 / 255.0;
+        let mut alpha = 0.0f32;
+        alpha += at(xa, ya) * ((1.0 - fx) * (1.0 - fy));
+        alpha += at(xb, ya) * (fx * (1.0 - fy));
+        alpha += at(xa, yb) * ((1.0 - fx) * fy);
+        alpha += at(xb, yb) * (fx * fy);
+        alpha
     }
 
     /// Σ alpha·weight (unclamped), in tap order.

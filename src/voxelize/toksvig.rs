@@ -24,6 +24,7 @@ use half::f16;
 use rayon::prelude::*;
 
 use super::mip::{downsample_with, Grid3, Texel};
+use super::slices::DirSlices;
 use super::Dir;
 
 /// One MIP step of a direction's weighted normals `nrm`, occluded by the colour volume `rgba`
@@ -72,6 +73,8 @@ pub fn toksvig_variance(len: f32) -> f32 {
 /// Running sums `(Σ Nw, Σ α)` of one MIP level over the six directions.
 pub(crate) struct NormalAccum {
     pub levels: Vec<Vec<[f16; 4]>>,
+    /// Level 0 already encoded elsewhere ([`super::combine::combine_level0`]).
+    level0: Option<Vec<u8>>,
 }
 
 impl NormalAccum {
@@ -81,7 +84,14 @@ impl NormalAccum {
                 .iter()
                 .map(|&n| vec![[f16::ZERO; 4]; n])
                 .collect(),
+            level0: None,
         }
+    }
+
+    /// Hands over level 0's encoded normals (then [`NormalAccum::finish_level`]`(0)`
+    /// returns them).
+    pub fn set_level0(&mut self, encoded: Vec<u8>) {
+        self.level0 = Some(encoded);
     }
 
     /// Adds one direction's level.
@@ -101,8 +111,31 @@ impl NormalAccum {
             });
     }
 
+    /// Adds one direction's sparse level 0 (its weighted normals and colour alpha).
+    pub fn fold_sparse(&mut self, s: &DirSlices) {
+        let Some(nrm) = s.nrm.as_ref() else {
+            return;
+        };
+        let acc = &mut self.levels[0];
+        for j in 0..s.row_count() {
+            let (row, first) = s.row(j);
+            for (k, v) in row.iter().enumerate() {
+                let i = s.index(j, v);
+                let n = nrm[first + k];
+                let a = acc[i].load();
+                acc[i] =
+                    <[f16; 4]>::store([a[0] + n[0], a[1] + n[1], a[2] + n[2], a[3] + v.rgba[3]]);
+            }
+        }
+    }
+
     /// Encoded snorm8 normals of one level (see [`super::quantize::encode_normal`]).
     pub fn finish_level(&mut self, level: usize) -> Vec<u8> {
+        if level == 0 {
+            if let Some(done) = self.level0.take() {
+                return done;
+            }
+        }
         let acc = std::mem::take(&mut self.levels[level]);
         let mut out = vec![0u8; acc.len() * 4];
         out.par_chunks_mut(4 * 4096)
