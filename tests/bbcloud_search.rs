@@ -13,6 +13,7 @@ fn params(eps: f32, samples: u32, seed: u64) -> SearchParams {
         samples,
         seed,
         stream: 0,
+        max_extent: None,
     }
 }
 
@@ -302,4 +303,118 @@ fn same_seed_same_bytes_for_1_and_2_threads_and_other_seed_differs() {
             assert_eq!(n, asset.billboards[i].elements);
         }
     }
+}
+
+/// Three groups as in the first test: `n` coplanar triangles each, two parallel 2.5 ε apart
+/// and one perpendicular, far away.
+fn three_groups(seed: u64, n: usize, eps: f32) -> Vec<Element> {
+    let mut rng = Pcg32::seeded(100 + seed, 0);
+    let mut elems = group(&mut rng, n, Vec3::ZERO, Vec3::X, Vec3::Z, 0.6, 0.2 * eps);
+    elems.extend(group(
+        &mut rng,
+        n,
+        Vec3::Y * 2.5 * eps,
+        Vec3::X,
+        Vec3::Z,
+        0.6,
+        0.2 * eps,
+    ));
+    elems.extend(group(
+        &mut rng,
+        n,
+        Vec3::new(3.0, 0.0, 0.0),
+        Vec3::Y,
+        Vec3::Z,
+        0.6,
+        0.2 * eps,
+    ));
+    elems
+}
+
+/// Which elements share a billboard, as sorted sets of `ids[member]`.
+fn partition(found: &[billow::bbcloud::Found], ids: &[usize]) -> Vec<Vec<usize>> {
+    let mut p: Vec<Vec<usize>> = found
+        .iter()
+        .map(|f| {
+            let mut s: Vec<usize> = f.members.iter().map(|&m| ids[m as usize]).collect();
+            s.sort_unstable();
+            s
+        })
+        .collect();
+    p.sort();
+    p
+}
+
+/// "Removing one triangle's leaves changes nothing else for the same seed." The search is
+/// global and random (one PCG32 stream drawing among the remaining elements), so removing
+/// a leaf triangle shifts every later draw and the planes are not bit-identical; what
+/// must not change is the cloud's structure elsewhere: which triangles share a billboard.
+/// Removing any one triangle of a group leaves every billboard of the other groups with
+/// exactly the same members, and its own group on one billboard minus that triangle.
+#[test]
+fn removing_one_leaf_changes_nothing_else() {
+    let eps = 0.02;
+    for seed in 0..3u64 {
+        let elems = three_groups(seed, 30, eps);
+        let all: Vec<usize> = (0..elems.len()).collect();
+        let (found, _) = search(&elems, &params(eps, 300, seed), &|_, _| {});
+        let before = partition(&found, &all);
+        for removed in [0usize, 31, 89] {
+            let ids: Vec<usize> = all.iter().copied().filter(|&i| i != removed).collect();
+            let fewer: Vec<Element> = ids.iter().map(|&i| elems[i]).collect();
+            let (f2, _) = search(&fewer, &params(eps, 300, seed), &|_, _| {});
+            check_partition(fewer.len(), &f2);
+            check_slab(&fewer, &f2, eps);
+            let expect: Vec<Vec<usize>> = {
+                let mut e: Vec<Vec<usize>> = before
+                    .iter()
+                    .map(|s| s.iter().copied().filter(|&i| i != removed).collect())
+                    .filter(|s: &Vec<usize>| !s.is_empty())
+                    .collect();
+                e.sort();
+                e
+            };
+            assert_eq!(
+                partition(&f2, &ids),
+                expect,
+                "seed {seed}, removed {removed}"
+            );
+        }
+    }
+}
+
+/// §5's extent limit: every billboard's members lie within `r` of one seed centroid, so
+/// any two of their vertices are at most 2r apart; the cloud is still a partition within
+/// the slab, and a limit smaller than a group splits it.
+#[test]
+fn extent_limit_bounds_billboards() {
+    let eps = 0.02;
+    let elems = three_groups(1, 40, eps);
+    let (free, _) = search(&elems, &params(eps, 300, 1), &|_, _| {});
+    let r = 0.8;
+    let p = SearchParams {
+        max_extent: Some(r),
+        ..params(eps, 300, 1)
+    };
+    let (lim, stats) = search(&elems, &p, &|_, _| {});
+    check_partition(elems.len(), &lim);
+    check_slab(&elems, &lim, eps);
+    for f in &lim {
+        let pts: Vec<Vec3> = f
+            .members
+            .iter()
+            .flat_map(|&m| elems[m as usize].verts[..3].to_vec())
+            .collect();
+        for a in &pts {
+            for b in &pts {
+                assert!(a.distance(*b) <= 2.0 * r + 1e-5, "billboard wider than 2r");
+            }
+        }
+    }
+    assert!(
+        lim.len() > free.len(),
+        "groups of extent ~1.3 must split under r = {r}: {} vs {} ({stats:?})",
+        lim.len(),
+        free.len()
+    );
 }

@@ -4,7 +4,8 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use billow::bbcloud::{bake, BbcloudError, BbcloudOptions, BbcloudStats, Shading, Stage};
+use billow::bbcloud::{bake, straight, BbcloudError, BbcloudOptions, BbcloudStats, Shading, Stage};
+use billow::export::{cloud_glb_bytes, GltfAlpha, GltfOptions};
 use billow::import::{import, ImportOptions};
 use billow::provenance::{source_info, tool_version};
 use glam::Vec3;
@@ -52,15 +53,36 @@ pub struct Args {
     /// K: K×K coverage samples per texel (1–8).
     #[arg(long, default_value_t = 3)]
     supersample: u32,
+    /// Limit each billboard to triangles within this distance of its seed, in foliage
+    /// bounding-sphere radii (Lacewell §5; doubled per LOD). Default: no limit.
+    #[arg(long)]
+    max_extent: Option<f32>,
     /// Materials that make up the foliage (default: every alpha MASK/BLEND material).
     #[arg(long, num_args = 1..)]
     foliage: Vec<String>,
+    /// Also write the cloud (every LOD) and the kept mesh as glTF 2.0 binary (.glb).
+    /// Written atomically.
+    #[arg(long, value_name = "FILE.glb")]
+    gltf: Option<PathBuf>,
+    /// Alpha mode of the billboards in the .glb: mask (alpha test at 0.5) or blend.
+    #[arg(long, value_enum, default_value_t = GltfAlphaArg::Mask)]
+    gltf_alpha: GltfAlphaArg,
+    /// Also dump every atlas (MIP level 0) as an 8-bit straight-alpha PNG into DIR
+    /// (created if missing): lod{L}_atlas{I}.png.
+    #[arg(long, value_name = "DIR")]
+    atlas: Option<PathBuf>,
     /// Treat import warnings (e.g. a missing texture) as errors.
     #[arg(long)]
     strict: bool,
     /// Print a machine-readable summary on stdout.
     #[arg(long)]
     json: bool,
+}
+
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+enum GltfAlphaArg {
+    Mask,
+    Blend,
 }
 
 #[derive(Serialize)]
@@ -75,6 +97,9 @@ struct Summary<'a> {
     stats: &'a BbcloudStats,
     seconds_import: f64,
     seconds_write: f64,
+    seconds_export: f64,
+    gltf: Option<String>,
+    atlas_files: Vec<String>,
     seconds_total: f64,
     warnings: Vec<String>,
 }
@@ -128,6 +153,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         },
         supersample: args.supersample,
         foliage: args.foliage.clone(),
+        max_extent: args.max_extent,
         ..BbcloudOptions::default()
     };
     let input = args.input.display().to_string();
@@ -166,12 +192,58 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         })?;
     bar.finish_and_clear();
 
+    // Everything is encoded before anything is written, so a failure leaves no output.
+    let export_start = Instant::now();
+    let glb = match &args.gltf {
+        None => None,
+        Some(path) => {
+            let opts = GltfOptions {
+                alpha: match args.gltf_alpha {
+                    GltfAlphaArg::Mask => GltfAlpha::Mask { cutoff: 0.5 },
+                    GltfAlphaArg::Blend => GltfAlpha::Blend,
+                },
+            };
+            let bytes = cloud_glb_bytes(&asset, &opts)
+                .map_err(|e| CliError::new(Code::Internal, format!("{}: {e}", path.display())))?;
+            Some((path, bytes))
+        }
+    };
+    let pngs = match &args.atlas {
+        None => Vec::new(),
+        Some(dir) => straight::atlas_pngs(&asset).map_err(|e| {
+            CliError::new(
+                Code::Internal,
+                format!("{}: cannot encode PNG: {e}", dir.display()),
+            )
+        })?,
+    };
+    let seconds_export = export_start.elapsed().as_secs_f64();
+
     let write_start = Instant::now();
     let bytes = asset
         .to_bytes()
         .map_err(|e| CliError::new(Code::Internal, e))?;
-    billow_format::write_atomic(&args.output, &bytes)
-        .map_err(|e| CliError::new(Code::OutputIo, format!("cannot write output: {e}")))?;
+    let out_err = |e: billow_format::FormatError| {
+        CliError::new(Code::OutputIo, format!("cannot write output: {e}"))
+    };
+    let mut atlas_files = Vec::new();
+    if let Some(dir) = &args.atlas {
+        std::fs::create_dir_all(dir).map_err(|e| {
+            CliError::new(
+                Code::OutputIo,
+                format!("{}: cannot create directory: {e}", dir.display()),
+            )
+        })?;
+        for (name, png) in &pngs {
+            let p = dir.join(name);
+            billow_format::write_atomic(&p, png).map_err(out_err)?;
+            atlas_files.push(p.display().to_string());
+        }
+    }
+    if let Some((path, glb)) = &glb {
+        billow_format::write_atomic(path, glb).map_err(out_err)?;
+    }
+    billow_format::write_atomic(&args.output, &bytes).map_err(out_err)?;
     let seconds_write = write_start.elapsed().as_secs_f64();
 
     let summary = Summary {
@@ -185,6 +257,9 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         stats: &stats,
         seconds_import,
         seconds_write,
+        seconds_export,
+        gltf: args.gltf.as_ref().map(|p| p.display().to_string()),
+        atlas_files,
         seconds_total: start.elapsed().as_secs_f64(),
         warnings: scene.warnings.iter().map(|w| w.message.clone()).collect(),
     };

@@ -57,6 +57,10 @@ pub fn assemble(
             ))
         })?;
         let composed = atlas::compose(&imgs, &packing, layout);
+        let alpha_sum: f64 = imgs
+            .iter()
+            .map(|i| i.texels.iter().map(|t| f64::from(t.w)).sum::<f64>())
+            .sum();
         secs.pack += t.elapsed().as_secs_f64();
         let t = Instant::now();
         let first_atlas = atlases.len() as u32;
@@ -122,6 +126,7 @@ pub fn assemble(
             fill: packing.fill(),
             content_fill: packing.content_fill(),
             texels: packing.content,
+            alpha_coverage: alpha_sum / packing.atlas_texels().max(1) as f64,
             search: level.search,
         });
     }

@@ -76,6 +76,8 @@ pub struct ChainParams {
     pub samples: u32,
     pub seed: u64,
     pub levels: u32,
+    /// Extent limit of level 0, world units (doubled per level like ε); `None`: no limit.
+    pub max_extent: Option<f32>,
 }
 
 /// Build every level's billboards (planes, trimmed rectangles, sources, parents).
@@ -145,6 +147,7 @@ pub fn build_chain(
             samples: p.samples,
             seed: p.seed,
             stream: u64::from(l),
+            max_extent: p.max_extent.map(|r| r * (1u32 << l.min(30)) as f32),
         };
         let (found, stats) = search(&elems, &params, &|a, t| progress(l, a, t));
         let mut boards = Vec::with_capacity(found.len());

@@ -8,7 +8,8 @@
 //!
 //! Texel density: with `texel_density: None` it is derived from the atlas budget — level ℓ
 //! gets one `(atlas_size >> ℓ)²` atlas (textures halved per level) and the largest density
-//! whose allocations fit it is found by bisection. With an explicit density D, level ℓ uses
+//! whose allocations fit it is found by bisection; the final cross is capped at half the
+//! previous level's density. With an explicit density D, level ℓ uses
 //! D / 2^ℓ and as many `atlas_size²` atlases as needed (the last shrunk to a power of two).
 
 pub mod assemble;
@@ -18,6 +19,7 @@ pub mod foliage;
 pub mod lod;
 pub mod plane_search;
 pub mod rect;
+pub mod straight;
 
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -56,6 +58,10 @@ pub struct BbcloudOptions {
     pub gutter: u32,
     /// Allocations are aligned to 2^k texels so MIP levels 0..=k stay separate.
     pub mip_align_log2: u32,
+    /// Lacewell §5's extent limit in bounding-sphere radii (doubled per LOD): a billboard
+    /// only takes triangles within this distance of its seed. `None`: unlimited (the paper's
+    /// default).
+    pub max_extent: Option<f32>,
 }
 
 impl Default for BbcloudOptions {
@@ -75,6 +81,7 @@ impl Default for BbcloudOptions {
             foliage: Vec::new(),
             gutter: 2,
             mip_align_log2: 2,
+            max_extent: None,
         }
     }
 }
@@ -118,6 +125,8 @@ pub struct LevelStats {
     pub fill: f64,
     pub content_fill: f64,
     pub texels: u64,
+    /// Mean alpha over the level's atlases (MIP 0): how much of the atlas shows leaves.
+    pub alpha_coverage: f64,
     pub search: SearchStats,
 }
 
@@ -158,6 +167,15 @@ fn check(opts: &BbcloudOptions) -> Result<(), BbcloudError> {
         .is_some_and(|d| !(d.is_finite() && d > 0.0))
     {
         return bad("texel density must be finite and > 0".into());
+    }
+    if opts
+        .max_extent
+        .is_some_and(|r| !(r.is_finite() && r > 0.0 && r <= 4.0))
+    {
+        return bad(format!(
+            "max extent must be in (0, 4] bounding-sphere radii, got {}",
+            opts.max_extent.unwrap_or(0.0)
+        ));
     }
     if !(1..=8).contains(&opts.supersample) || opts.gutter > 16 || opts.mip_align_log2 > 6 {
         return bad("supersample must be in 1..=8, gutter ≤ 16, MIP alignment ≤ 2^6".into());
@@ -244,6 +262,7 @@ pub fn bake(
         samples: opts.samples,
         seed: opts.seed,
         levels: opts.lods,
+        max_extent: opts.max_extent.map(|r| r * radius.max(1e-12)),
     };
     let levels = build_chain(scene, &leaves, centre, &chain, &|l, a, n| {
         progress(Stage::Search { level: l }, a as f32 / n.max(1) as f32)
@@ -262,7 +281,19 @@ pub fn bake(
         let d = match opts.texel_density {
             None => {
                 layout.max_size = (opts.atlas_size >> l).max(64);
-                budget_density(level, &layout)
+                // The cross (last level of a chain) is never denser than half the previous
+                // level: filling its atlas would give it a density above level 0's, and it
+                // would cost more to render than all of level 0.
+                let prev = per_level
+                    .last()
+                    .map_or(f32::INFINITY, |p: &(f32, _, _)| p.0);
+                let cross = l > 0 && l + 1 == levels.len();
+                let d = budget_density(level, &layout);
+                if cross {
+                    d.min(0.5 * prev)
+                } else {
+                    d
+                }
             }
             Some(d0) => {
                 let side = level
@@ -369,6 +400,9 @@ pub fn params(o: &BbcloudOptions) -> BTreeMap<String, String> {
         },
     );
     put("gutter", o.gutter.to_string());
+    if let Some(r) = o.max_extent {
+        put("max_extent", r.to_string());
+    }
     put("mip_align", (1u32 << o.mip_align_log2).to_string());
     p
 }

@@ -21,6 +21,10 @@
 //! The result is the same for any thread count. There is no acceleration structure: the
 //! plain scan over the remaining elements (structure-of-arrays, branch-free) is fast enough.
 //!
+//! Extent limit (§5, optional): with `max_extent = Some(r)` a candidate only counts (and
+//! only takes) elements whose vertices all lie within `r` of its seed element's centroid,
+//! which bounds a billboard's size (and so its texture) around its seed.
+//!
 //! Degenerate seeds: an element whose seed triangle is (near) collinear — `|e1 x e2|` below
 //! `1e-6 |longest edge|^2` — defines no normal, so a draw that lands on one is redrawn
 //! (counted); after [`MAX_REDRAWS`] failures the candidate is skipped (counted). If a whole
@@ -116,6 +120,9 @@ pub struct SearchParams {
     pub seed: u64,
     /// PCG32 stream, so that each LOD level draws independent numbers from one seed.
     pub stream: u64,
+    /// Lacewell §5's optional extent limit, world units: a candidate only takes elements
+    /// whose vertices all lie within this distance of its seed's centroid.
+    pub max_extent: Option<f32>,
 }
 
 /// The remaining elements, structure-of-arrays, in input order.
@@ -180,14 +187,23 @@ impl Soa {
         self.id.retain(|_| (keep[i], i += 1).0);
     }
 
-    /// Projected area of element `j` if all its vertices are within `eps` of the plane, else 0.
+    /// Projected area of element `j` if all its vertices are within `eps` of the plane (and,
+    /// with `LIMIT`, within `lim.1` of the point `lim.0`), else 0.
     #[inline(always)]
-    fn contrib(&self, j: usize, p: &Plane, eps: f32) -> f32 {
+    fn contrib<const LIMIT: bool>(&self, j: usize, p: &Plane, eps: f32, lim: (Vec3, f32)) -> f32 {
         let (nx, ny, nz, r) = (p.normal.x, p.normal.y, p.normal.z, p.offset);
         let mut inside = true;
         for k in 0..4 {
             let d = (nx * self.x[k][j] + ny * self.y[k][j] + nz * self.z[k][j]) - r;
             inside &= d.abs() < eps;
+            if LIMIT {
+                let (dx, dy, dz) = (
+                    self.x[k][j] - lim.0.x,
+                    self.y[k][j] - lim.0.y,
+                    self.z[k][j] - lim.0.z,
+                );
+                inside &= dx * dx + dy * dy + dz * dz <= lim.1 * lim.1;
+            }
         }
         let w = self.area[j] * (nx * self.n[0][j] + ny * self.n[1][j] + nz * self.n[2][j]).abs();
         if inside {
@@ -198,27 +214,30 @@ impl Soa {
     }
 
     /// Summed projected area: element j goes to lane j % 8, lanes are added in a fixed order.
-    fn score(&self, p: &Plane, eps: f32) -> f32 {
+    fn score<const LIMIT: bool>(&self, p: &Plane, eps: f32, lim: (Vec3, f32)) -> f32 {
         let n = self.len();
         let mut acc = [0.0f32; 8];
         let full = n / 8 * 8;
         for base in (0..full).step_by(8) {
             for (l, a) in acc.iter_mut().enumerate() {
-                *a += self.contrib(base + l, p, eps);
+                *a += self.contrib::<LIMIT>(base + l, p, eps, lim);
             }
         }
         for j in full..n {
-            acc[j % 8] += self.contrib(j, p, eps);
+            acc[j % 8] += self.contrib::<LIMIT>(j, p, eps, lim);
         }
         ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7]))
     }
 
-    fn inside(&self, j: usize, p: &Plane, eps: f32) -> bool {
+    fn inside(&self, j: usize, p: &Plane, eps: f32, lim: Option<(Vec3, f32)>) -> bool {
         (0..4).all(|k| {
-            let d =
-                (p.normal.x * self.x[k][j] + p.normal.y * self.y[k][j] + p.normal.z * self.z[k][j])
-                    - p.offset;
-            d.abs() < eps
+            let v = Vec3::new(self.x[k][j], self.y[k][j], self.z[k][j]);
+            let d = p.normal.dot(v) - p.offset;
+            let near = lim.is_none_or(|(c, r)| {
+                let q = v - c;
+                q.x * q.x + q.y * q.y + q.z * q.z <= r * r
+            });
+            d.abs() < eps && near
         })
     }
 }
@@ -228,6 +247,8 @@ impl Soa {
 struct Candidate {
     plane: Plane,
     seed: usize,
+    /// Centroid of the seed element (centre of the extent limit).
+    centre: Vec3,
 }
 
 fn draw(
@@ -253,9 +274,11 @@ fn draw(
             stats.degenerate_redraws += 1;
             continue;
         }
+        let centre = e.verts[..e.count].iter().copied().sum::<Vec3>() / e.count as f32;
         return Some(Candidate {
             plane: Plane { normal: nb, offset },
             seed: s,
+            centre,
         });
     }
     stats.skipped_candidates += 1;
@@ -317,12 +340,20 @@ pub fn search(
         }
         let best = if cands.is_empty() {
             stats.fallback_planes += 1;
+            let e = &elems[soa.id[0] as usize];
             Candidate {
-                plane: fallback_plane(&elems[soa.id[0] as usize]),
+                plane: fallback_plane(e),
                 seed: 0,
+                centre: e.verts[..e.count].iter().copied().sum::<Vec3>() / e.count as f32,
             }
         } else {
-            let scores: Vec<f32> = cands.par_iter().map(|c| soa.score(&c.plane, eps)).collect();
+            let scores: Vec<f32> = cands
+                .par_iter()
+                .map(|c| match params.max_extent {
+                    None => soa.score::<false>(&c.plane, eps, (c.centre, 0.0)),
+                    Some(r) => soa.score::<true>(&c.plane, eps, (c.centre, r)),
+                })
+                .collect();
             let mut bi = 0;
             for (i, &s) in scores.iter().enumerate() {
                 if s > scores[bi] {
@@ -337,10 +368,11 @@ pub fn search(
         for (j, k) in keep.iter_mut().enumerate() {
             // The seed is inside by construction (|d_j| < eps); including it explicitly only
             // guards against rounding, so every round removes at least one element.
-            if j == best.seed || soa.inside(j, &best.plane, eps) {
+            let lim = params.max_extent.map(|r| (best.centre, r));
+            if j == best.seed || soa.inside(j, &best.plane, eps, lim) {
                 *k = false;
                 members.push(soa.id[j]);
-                area += soa.contrib(j, &best.plane, f32::INFINITY);
+                area += soa.contrib::<false>(j, &best.plane, f32::INFINITY, (Vec3::ZERO, 0.0));
             }
         }
         soa.retain(&keep);

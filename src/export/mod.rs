@@ -10,6 +10,7 @@
 //! sees a partial file and a failed write leaves an existing file untouched. Nothing is
 //! printed; every problem comes back as an [`ExportError`] naming the file.
 
+pub mod gltf;
 pub mod ktx2;
 pub mod slices;
 
@@ -17,6 +18,7 @@ use std::path::PathBuf;
 
 use billow_format::{ColourSpace, FormatError, VolumeAsset};
 
+pub use self::gltf::{cloud_glb_bytes, write_cloud_glb, GltfAlpha, GltfError, GltfOptions};
 pub use self::ktx2::{ktx2_bytes, write_ktx2};
 pub use self::slices::{slice_file_name, write_slices, SliceFormat};
 
