@@ -185,6 +185,21 @@ pub fn render_decoded(
     camera: &Camera,
     params: &SlicerParams,
 ) -> Result<SliceRender, EvalError> {
+    render_decoded_in_depth_range(vol, dims0, cells, camera, params, None)
+}
+
+/// [`render_decoded`] with the slices placed over `depth_range` (view-space distances
+/// `(near, far)`) instead of the cells' own depth range, so two assets covering the same
+/// object with different cells (e.g. before and after `billow emptyspace`) are sliced at
+/// the same depths. `None`: the cells' range, as [`render_decoded`].
+pub fn render_decoded_in_depth_range(
+    vol: &DecodedVolume,
+    dims0: [u32; 3],
+    cells: &[Prism],
+    camera: &Camera,
+    params: &SlicerParams,
+    depth_range: Option<(f32, f32)>,
+) -> Result<SliceRender, EvalError> {
     let start = Instant::now();
     validate_camera(camera)?;
     match params.spacing {
@@ -222,6 +237,7 @@ pub fn render_decoded(
             z_max = z_max.max(-p[2]);
         }
     }
+    let (z_min, z_max) = depth_range.unwrap_or((z_min, z_max));
     let z_min = z_min.max(camera.near);
     let z_max = z_max.min(camera.far);
     if !(z_min < z_max) {

@@ -1,0 +1,153 @@
+//! `billow emptyspace IN.billow -o OUT.billow`: kd-tree empty-space removal with packed,
+//! seam-free bricks (VB paper §4, Figure 14; docs/emptyspace.md, formats/SPEC.md §8.6).
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use billow::emptyspace::{
+    prune, EmptySpaceError, EmptySpaceOptions, EmptySpaceStats, DEFAULT_CELL_COST,
+    DEFAULT_EXACT_LEVELS,
+};
+use billow_format::{read_file, AssetKind, VolumeAsset};
+use serde::Serialize;
+
+use crate::exit::{CliError, Code};
+use crate::info::format_code;
+use crate::output::{print_json, warn};
+use crate::Ctx;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The volume asset to prune (.billow, from `billow voxelize`).
+    input: PathBuf,
+    /// Where to write the pruned volume asset (.billow). Written atomically.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// A texel is empty when its alpha byte (0–255) is ≤ this; 0 (default): only exactly
+    /// transparent, colourless texels, so nothing visible is lost.
+    #[arg(long, default_value_t = 0)]
+    threshold: u8,
+    /// Smallest box edge a kd-tree split may leave, in voxels (rounded up to the brick
+    /// alignment 2^(exact-levels − 1)).
+    #[arg(long, default_value_t = 0)]
+    min_box: u32,
+    /// Deepest kd-tree level (the root is 0).
+    #[arg(long, default_value_t = 24)]
+    max_depth: u32,
+    /// Smallest relative cost reduction worth a split (0–1).
+    #[arg(long, default_value_t = 0.01)]
+    min_gain: f64,
+    /// MIP levels that render exactly as the input (1 = level 0 only); bricks align to
+    /// 2^(N − 1) voxels and carry an apron that wide.
+    #[arg(long, default_value_t = DEFAULT_EXACT_LEVELS)]
+    exact_levels: u32,
+    /// Cost of one more box in the kd-tree's split cost, in voxels.
+    #[arg(long, default_value_t = DEFAULT_CELL_COST)]
+    cell_cost: f64,
+    /// Print a machine-readable summary on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize)]
+struct Summary {
+    input: String,
+    output: String,
+    #[serde(flatten)]
+    stats: EmptySpaceStats,
+    file_bytes_before: u64,
+    file_bytes_after: u64,
+    seconds_total: f64,
+}
+
+fn code(e: &EmptySpaceError) -> Code {
+    match e {
+        EmptySpaceError::InvalidParam(_) => Code::BadParameter,
+        EmptySpaceError::Shell | EmptySpaceError::NotABox(_) => Code::Unsupported,
+        EmptySpaceError::AtlasTooLarge => Code::Unsupported,
+        EmptySpaceError::InvalidAsset(_) | EmptySpaceError::AlreadyPruned(_) => Code::InvalidInput,
+    }
+}
+
+pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
+    let start = Instant::now();
+    let shown = args.input.display().to_string();
+    let container = read_file(&args.input).map_err(|e| CliError::new(format_code(&e), e))?;
+    if container.header.kind != AssetKind::Volume {
+        return Err(CliError::new(
+            Code::Unsupported,
+            format!(
+                "{shown}: a {:?} asset; billow emptyspace prunes volume assets only",
+                container.header.kind
+            ),
+        ));
+    }
+    let asset = VolumeAsset::from_container(container)
+        .map_err(|e| CliError::new(format_code(&e), format!("{shown}: {e}")))?;
+    let file_bytes_before = std::fs::metadata(&args.input).map_or(0, |m| m.len());
+    let options = EmptySpaceOptions {
+        threshold: args.threshold,
+        min_box: args.min_box,
+        max_depth: args.max_depth,
+        min_gain: args.min_gain,
+        exact_levels: args.exact_levels,
+        cell_cost: args.cell_cost,
+        apron: true,
+    };
+    let pruned =
+        prune(&asset, &options).map_err(|e| CliError::new(code(&e), format!("{shown}: {e}")))?;
+    let s = &pruned.stats;
+    if !s.aligned && !s.kept_whole && s.exact_levels > 1 {
+        warn(
+            ctx,
+            &format!(
+                "{shown}: sides {}x{}x{} are not multiples of the brick alignment {}: MIP levels 1 and up are resampled at brick borders, not copied exactly",
+                s.source_dims[0], s.source_dims[1], s.source_dims[2], s.block
+            ),
+        );
+    }
+    let bytes = pruned
+        .asset
+        .to_bytes()
+        .map_err(|e| CliError::new(Code::Internal, e))?;
+    billow_format::write_atomic(&args.output, &bytes).map_err(|e| {
+        CliError::new(
+            Code::OutputIo,
+            format!("{}: cannot write output: {e}", args.output.display()),
+        )
+    })?;
+    let summary = Summary {
+        input: shown,
+        output: args.output.display().to_string(),
+        stats: pruned.stats,
+        file_bytes_before,
+        file_bytes_after: bytes.len() as u64,
+        seconds_total: start.elapsed().as_secs_f64(),
+    };
+    if args.json {
+        print_json(&summary)?;
+    } else if !ctx.quiet {
+        let s = &summary.stats;
+        eprintln!(
+            "{}: {} boxes ({} cells), atlas {}x{}x{} from {}x{}x{}, texels {} -> {} bytes ({:.1}% saved){}",
+            summary.output,
+            s.boxes,
+            s.cells,
+            s.atlas_dims[0],
+            s.atlas_dims[1],
+            s.atlas_dims[2],
+            s.source_dims[0],
+            s.source_dims[1],
+            s.source_dims[2],
+            s.texel_bytes_before,
+            s.texel_bytes_after,
+            100.0 * s.saving,
+            if s.kept_whole {
+                "; kept whole (an atlas would not be smaller)"
+            } else {
+                ""
+            }
+        );
+    }
+    Ok(())
+}

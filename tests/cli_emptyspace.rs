@@ -1,0 +1,154 @@
+//! `billow emptyspace` driven as the real binary in a temp dir: JSON summary, determinism
+//! across thread counts, atomic output, refusals (cloud, already pruned, bad parameters).
+
+mod common;
+
+use std::path::Path;
+use std::time::Duration;
+
+use billow::emptyspace::synthetic::volume_from_fn;
+use billow_format::VolumeAsset;
+use common::*;
+
+/// A sparse 48×32×40 volume: two blobs and a bar, with normals.
+fn write_sparse(dir: &Path, name: &str) {
+    let a = volume_from_fn([48, 32, 40], true, |x, y, z| {
+        let blob = (x.abs_diff(8) <= 2 && y.abs_diff(6) <= 2 && z.abs_diff(9) <= 3)
+            || (x.abs_diff(40) <= 3 && y.abs_diff(25) <= 2 && z.abs_diff(30) <= 2)
+            || ((20..30).contains(&x) && y == 16 && z == 20);
+        if blob {
+            [(x * 5) as u8, (y * 7) as u8, (z * 3) as u8, 200]
+        } else {
+            [0; 4]
+        }
+    });
+    std::fs::write(dir.join(name), a.to_bytes().unwrap()).unwrap();
+}
+
+fn emptyspace(dir: &Path, args: &[&str], threads: &str) -> Run {
+    let mut all = vec!["emptyspace"];
+    all.extend_from_slice(args);
+    run_with(
+        &all,
+        dir,
+        Duration::from_secs(120),
+        8 << 20,
+        &[("RAYON_NUM_THREADS", threads)],
+    )
+}
+
+#[test]
+fn prunes_with_a_json_summary_deterministically() {
+    let dir = tempfile::tempdir().unwrap();
+    write_sparse(dir.path(), "in.billow");
+    let r = emptyspace(
+        dir.path(),
+        &[
+            "in.billow",
+            "-o",
+            "out1.billow",
+            "--exact-levels",
+            "2",
+            "--json",
+        ],
+        "1",
+    );
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let v: serde_json::Value = serde_json::from_str(&r.stdout).expect("one JSON document");
+    for key in [
+        "cells",
+        "atlas_dims",
+        "texel_bytes_before",
+        "texel_bytes_after",
+        "saving",
+        "voxels_kept",
+        "seconds",
+        "file_bytes_before",
+        "file_bytes_after",
+    ] {
+        assert!(v.get(key).is_some(), "missing {key} in {}", r.stdout);
+    }
+    assert!(v["cells"].as_u64().unwrap() >= 2);
+    assert!(v["saving"].as_f64().unwrap() > 0.5, "{}", r.stdout);
+    assert!(v["file_bytes_after"].as_u64() < v["file_bytes_before"].as_u64());
+    let out = VolumeAsset::read(&dir.path().join("out1.billow")).unwrap();
+    assert_eq!(out.cells.len() as u64, v["cells"].as_u64().unwrap());
+    assert!(out.normals.is_some());
+    let r2 = emptyspace(
+        dir.path(),
+        &["in.billow", "-o", "out2.billow", "--exact-levels", "2"],
+        "2",
+    );
+    assert_eq!(r2.code, Some(0), "{}", r2.stderr);
+    assert!(r2.stdout.is_empty());
+    assert_eq!(
+        sha256(&dir.path().join("out1.billow")),
+        sha256(&dir.path().join("out2.billow"))
+    );
+}
+
+#[test]
+fn refuses_clouds_pruned_volumes_and_bad_parameters() {
+    let dir = tempfile::tempdir().unwrap();
+    let cloud = repo().join("fixtures/format/v1_cloud_tiny.billow");
+    let r = emptyspace(
+        dir.path(),
+        &[cloud.to_str().unwrap(), "-o", "x.billow"],
+        "2",
+    );
+    assert_eq!(r.code, Some(5), "{}", r.stderr);
+    let line = r.error_line().unwrap();
+    assert!(
+        line.contains("v1_cloud_tiny.billow") && line.contains("Cloud"),
+        "{line}"
+    );
+    assert!(!dir.path().join("x.billow").exists());
+
+    write_sparse(dir.path(), "in.billow");
+    let r = emptyspace(dir.path(), &["in.billow", "-o", "p.billow"], "2");
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let r = emptyspace(dir.path(), &["p.billow", "-o", "pp.billow"], "2");
+    assert_eq!(r.code, Some(4), "{}", r.stderr);
+    assert!(
+        r.error_line().unwrap().contains("already pruned"),
+        "{}",
+        r.stderr
+    );
+    assert!(!dir.path().join("pp.billow").exists());
+
+    let r = emptyspace(
+        dir.path(),
+        &["in.billow", "-o", "q.billow", "--exact-levels", "0"],
+        "2",
+    );
+    assert_eq!(r.code, Some(8), "{}", r.stderr);
+    assert!(!dir.path().join("q.billow").exists());
+}
+
+#[test]
+fn output_is_atomic_and_inputs_are_untouched() {
+    let dir = tempfile::tempdir().unwrap();
+    write_sparse(dir.path(), "in.billow");
+    let before = sha256(&dir.path().join("in.billow"));
+    // A corrupt input leaves an existing output as it was.
+    std::fs::write(dir.path().join("out.billow"), b"keep me").unwrap();
+    let good = std::fs::read(dir.path().join("in.billow")).unwrap();
+    std::fs::write(dir.path().join("bad.billow"), &good[..good.len() / 2]).unwrap();
+    let r = emptyspace(dir.path(), &["bad.billow", "-o", "out.billow"], "2");
+    assert_eq!(r.code, Some(4), "{}", r.stderr);
+    assert!(r.error_line().unwrap().contains("bad.billow"));
+    assert_eq!(
+        std::fs::read(dir.path().join("out.billow")).unwrap(),
+        b"keep me"
+    );
+    // An unwritable destination: exit 7, nothing left behind.
+    let r = emptyspace(
+        dir.path(),
+        &["in.billow", "-o", "no/such/dir/out.billow"],
+        "2",
+    );
+    assert_eq!(r.code, Some(7), "{}", r.stderr);
+    assert_eq!(sha256(&dir.path().join("in.billow")), before);
+    let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+    assert_eq!(names.len(), 3, "only in, bad and out: {names:?}");
+}
