@@ -2,7 +2,7 @@
 # the whole test suite (what CI runs). Both work on a fresh machine with only Rust installed.
 
 CARGO   ?= cargo
-BILLOW  := target/release/billow
+BILLOW  := $(or $(CARGO_TARGET_DIR),target)/release/billow
 SAMPLE  := fixtures/oak/eztree_oak_medium.gltf
 OUT     ?= out
 
@@ -13,6 +13,8 @@ IN_DIR  ?= fixtures
 OUT_DIR ?= $(OUT)/batch
 MESHES  := $(shell find $(IN_DIR) -type f \( -name '*.gltf' -o -name '*.glb' -o -name '*.obj' \) 2>/dev/null | grep -v ' ')
 REPORTS := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.inspect.json,$(MESHES))
+VOLUMES := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.volume.billow,$(MESHES))
+BATCH_RES ?= 128
 
 .PHONY: all build demo test lint fmt batch clean fixtures accuracy bench
 
@@ -23,11 +25,15 @@ build:
 
 $(BILLOW): build
 
-## The main job on the bundled oak: inspect it, then a round trip through the asset format.
+## The main job on the bundled oak: inspect it, bake it into a volumetric billboard (plus a
+## KTX2 copy), describe the asset, and render it next to a ray-traced reference (CPU renders
+## in out/oak_eval/*.png, errors printed).
 demo: build
 	@mkdir -p $(OUT)
 	$(BILLOW) inspect $(SAMPLE)
-	$(BILLOW) info fixtures/format/v1_volume_3x2x1.billow
+	$(BILLOW) voxelize $(SAMPLE) -o $(OUT)/oak.billow --res 128 --ktx2 $(OUT)/oak.ktx2
+	$(BILLOW) info $(OUT)/oak.billow
+	$(BILLOW) eval $(SAMPLE) $(OUT)/oak.billow --views=+x+y+z,+x --distances 1,4 --size 256x256 --out $(OUT)/oak_eval
 
 ## The whole test suite: format, lint, unit + integration tests (also what .ci/run runs).
 test:
@@ -42,12 +48,17 @@ lint:
 fmt:
 	$(CARGO) fmt --all
 
-## Batch rule: `make -j2 batch IN_DIR=some/folder` maps every mesh in the folder to an output.
-batch: $(REPORTS)
+## Batch rule: `make -j2 batch IN_DIR=some/folder` maps every mesh in the folder to an
+## import report (X.inspect.json) and a volume (X.volume.billow, --res BATCH_RES).
+batch: $(REPORTS) $(VOLUMES)
 
 $(OUT_DIR)/%.inspect.json: $(IN_DIR)/% | build
 	@mkdir -p $(dir $@)
 	$(BILLOW) inspect --json $< > $@.tmp && mv $@.tmp $@
+
+$(OUT_DIR)/%.volume.billow: $(IN_DIR)/% | build
+	@mkdir -p $(dir $@)
+	$(BILLOW) voxelize -q --res $(BATCH_RES) $< -o $@
 
 ## Regenerate the procedural hard-case shapes (truss, furry torus, fur tile) as OBJ files.
 fixtures:

@@ -2,12 +2,14 @@
 //! All the work happens in the `billow` library; this binary only talks to the user.
 
 mod bbcloud;
+mod emptyspace;
 mod eval;
 mod exit;
 mod info;
 mod inspect;
 mod output;
 mod shell;
+mod view;
 mod voxelize;
 
 use std::process::ExitCode;
@@ -41,6 +43,10 @@ enum Command {
     Bbcloud(bbcloud::Args),
     /// Compare a volume asset with its source mesh: reference vs asset renders, errors and timings per view.
     Eval(eval::Args),
+    /// View a scene (.ron), volume asset or mesh with the GPU viewer; --headless --screenshot renders a PNG.
+    View(view::Args),
+    /// Remove a volume's empty space: kd-tree boxes packed with aprons into a smaller atlas.
+    Emptyspace(emptyspace::Args),
 }
 
 /// Things every command may need from the global flags.
@@ -58,6 +64,8 @@ fn main() -> ExitCode {
         Command::Shell(a) => shell::run(a, &ctx),
         Command::Bbcloud(a) => bbcloud::run(a, &ctx),
         Command::Eval(a) => eval::run(a, &ctx),
+        Command::View(a) => view::run(a, &ctx),
+        Command::Emptyspace(a) => emptyspace::run(a, &ctx),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

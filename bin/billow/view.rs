@@ -1,0 +1,428 @@
+//! `billow view TARGET`: the wgpu viewer (docs/viewer.md). TARGET is a scene file (.ron),
+//! a volume asset (.billow) or a mesh (.gltf/.glb/.obj). All rendering is in the
+//! `billow-view` crate; this module loads the inputs, builds the camera and writes the PNG.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use billow::camera::{parse_direction, Camera};
+use billow::eval::ImageF32;
+use billow::import::{import, ImportOptions};
+use billow::scene::Aabb;
+use billow_format::VolumeAsset;
+use billow_view::mesh_pass::{MeshData, MeshVertex};
+use billow_view::scene::{SceneFile, VolumeDesc};
+use billow_view::{FrameStats, Gpu, Renderer, SliceParams, Spacing, ViewCamera, ViewError};
+use glam::{Mat4, Vec3, Vec4};
+use serde::Serialize;
+
+use crate::eval::parse_size;
+use crate::exit::{CliError, Code};
+use crate::info::format_code;
+use crate::inspect::import_code;
+use crate::output::{print_json, warn};
+use crate::Ctx;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// A scene file (.ron), a volume asset (.billow) or a mesh (.gltf, .glb, .obj).
+    target: PathBuf,
+    /// Render without a window (no display needed); needs --screenshot.
+    #[arg(long)]
+    headless: bool,
+    /// Write the frame here as an sRGB PNG (straight alpha), atomically.
+    #[arg(long, value_name = "OUT.png")]
+    screenshot: Option<PathBuf>,
+    /// Image size WxH in pixels.
+    #[arg(long, default_value = "512x512")]
+    size: String,
+    /// Camera position X,Y,Z (overrides the scene's camera); looks at --look-at.
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    eye: Option<String>,
+    /// Point the camera looks at (default: the centre of the content).
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    look_at: Option<String>,
+    /// Without --eye: the direction the camera looks along, named like eval's views
+    /// (`-z`, `+x-y-z`); the content's bounding sphere just fills the image at distance 1.
+    #[arg(long, default_value = "+x-y-z", allow_hyphen_values = true)]
+    view: String,
+    /// Without --eye: multiple of the framed distance.
+    #[arg(long, default_value_t = 1.0)]
+    distance: f32,
+    /// Vertical field of view in degrees (overrides the scene's).
+    #[arg(long)]
+    fov: Option<f32>,
+    /// Slice spacing: adaptive (the paper: one pixel's footprint, never finer than a
+    /// voxel), adaptive:BIAS, or uniform:WORLD (a constant world-space spacing).
+    #[arg(long, default_value = "adaptive")]
+    spacing: String,
+    /// Print the passes a frame runs (one per line) and exit; needs no GPU.
+    #[arg(long)]
+    print_passes: bool,
+    /// Render this many frames (timing: mean and minimum frame time are reported).
+    #[arg(long, default_value_t = 1)]
+    frames: u32,
+    /// Print a JSON summary on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize)]
+struct Summary {
+    target: String,
+    screenshot: Option<String>,
+    adapter: String,
+    width: u32,
+    height: u32,
+    passes: Vec<&'static str>,
+    frames: u32,
+    /// Mean and minimum wall time per frame (encode, submit, wait for the GPU), ms.
+    frame_ms_mean: f64,
+    frame_ms_min: f64,
+    stats: FrameStats,
+}
+
+fn bad(flag: &str, e: impl std::fmt::Display) -> CliError {
+    CliError::new(Code::BadParameter, format!("{flag}: {e}"))
+}
+
+fn parse_vec3(flag: &str, s: &str) -> Result<Vec3, CliError> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| bad(flag, format!("'{s}': {e}")))?;
+    match v.as_slice() {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(Vec3::new(*x, *y, *z)),
+        _ => Err(bad(
+            flag,
+            format!("'{s}': expected three finite numbers X,Y,Z"),
+        )),
+    }
+}
+
+fn parse_spacing(s: &str) -> Result<Spacing, CliError> {
+    let (mode, arg) = match s.split_once(':') {
+        Some((m, a)) => (m.trim(), Some(a.trim())),
+        None => (s.trim(), None),
+    };
+    let num = |a: &str| -> Result<f32, CliError> {
+        let v: f32 = a
+            .parse()
+            .map_err(|e| bad("--spacing", format!("'{s}': {e}")))?;
+        if !(v.is_finite() && v > 0.0) {
+            return Err(bad("--spacing", format!("'{s}': must be > 0")));
+        }
+        Ok(v)
+    };
+    match (mode, arg) {
+        ("adaptive", None) => Ok(Spacing::Adaptive { bias: 1.0 }),
+        ("adaptive", Some(a)) => Ok(Spacing::Adaptive { bias: num(a)? }),
+        ("uniform", Some(a)) => Ok(Spacing::Uniform { spacing: num(a)? }),
+        _ => Err(bad(
+            "--spacing",
+            format!("'{s}': expected adaptive, adaptive:BIAS or uniform:WORLD"),
+        )),
+    }
+}
+
+fn view_code(e: &ViewError) -> Code {
+    match e {
+        ViewError::NoAdapter(_) => Code::Unsupported,
+        ViewError::Gpu(_) => Code::Internal,
+        ViewError::InvalidAsset(_) | ViewError::Scene { .. } => Code::InvalidInput,
+        ViewError::InvalidParam(_) | ViewError::TooManySlices { .. } => Code::BadParameter,
+    }
+}
+
+fn view_err(e: ViewError) -> CliError {
+    CliError::new(view_code(&e), e)
+}
+
+fn is_scene(p: &Path) -> bool {
+    p.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("ron"))
+}
+
+fn is_asset(p: &Path) -> bool {
+    p.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("billow"))
+}
+
+/// TARGET as a scene (a lone asset or mesh becomes a one-item scene).
+fn load_scene(target: &Path) -> Result<SceneFile, CliError> {
+    if is_scene(target) {
+        return SceneFile::load(target).map_err(|e| {
+            let code = match &e {
+                ViewError::Scene { problem, .. } if problem.starts_with("cannot read") => {
+                    Code::InputIo
+                }
+                _ => Code::InvalidInput,
+            };
+            CliError::new(code, e)
+        });
+    }
+    if !target.is_file() {
+        return Err(CliError::new(
+            Code::InputIo,
+            format!("{}: no such file", target.display()),
+        ));
+    }
+    let mut s = SceneFile::default();
+    if is_asset(target) {
+        s.volumes.push(VolumeDesc {
+            asset: target.to_path_buf(),
+            instances: vec![Default::default()],
+        });
+    } else {
+        s.meshes.push(billow_view::scene::MeshDesc {
+            path: target.to_path_buf(),
+            transform: Default::default(),
+        });
+    }
+    Ok(s)
+}
+
+/// Linear RGBA of the texel of `t` under `uv` (nearest, repeat); white for an empty texture.
+fn texel_at(t: &billow::scene::Texture, uv: glam::Vec2) -> Vec4 {
+    if t.width == 0 || t.height == 0 || t.texels.is_empty() || !uv.is_finite() {
+        return Vec4::ONE;
+    }
+    let x = ((uv.x - uv.x.floor()) * t.width as f32) as usize % t.width as usize;
+    let y = ((uv.y - uv.y.floor()) * t.height as f32) as usize % t.height as usize;
+    let p = t.texels[(y * t.width as usize + x).min(t.texels.len() - 1)];
+    let c = |v: u8| billow::eval::image::srgb_to_linear(f32::from(v) / 255.0);
+    Vec4::new(c(p[0]), c(p[1]), c(p[2]), f32::from(p[3]) / 255.0)
+}
+
+fn grow_box(b: &mut Aabb, min: Vec3, max: Vec3, m: &Mat4) {
+    for i in 0..8 {
+        let c = Vec3::new(
+            if i & 1 == 0 { min.x } else { max.x },
+            if i & 2 == 0 { min.y } else { max.y },
+            if i & 4 == 0 { min.z } else { max.z },
+        );
+        b.grow(m.transform_point3(c));
+    }
+}
+
+pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
+    let scene = load_scene(&args.target)?;
+    let passes = scene.passes();
+    if args.print_passes {
+        for p in &passes {
+            println!("{p}");
+        }
+        return Ok(());
+    }
+    for u in scene.unsupported() {
+        warn(ctx, &format!("{}: {u}", args.target.display()));
+    }
+    let (width, height) = parse_size(&args.size)?;
+    let spacing = parse_spacing(&args.spacing)?;
+    if !(args.distance.is_finite() && args.distance > 0.0) {
+        return Err(bad("--distance", "must be > 0"));
+    }
+    if let Some(f) = args.fov {
+        if !(f > 0.0 && f < 180.0) {
+            return Err(bad("--fov", format!("{f}: must be in (0, 180) degrees")));
+        }
+    }
+    if args.frames == 0 {
+        return Err(bad("--frames", "must be at least 1"));
+    }
+    if !args.headless {
+        return Err(bad(
+            "--headless",
+            "window mode is not implemented yet; use --headless --screenshot OUT.png",
+        ));
+    }
+    let Some(out) = &args.screenshot else {
+        return Err(bad("--screenshot", "--headless needs --screenshot OUT.png"));
+    };
+    let eye = args
+        .eye
+        .as_deref()
+        .map(|s| parse_vec3("--eye", s))
+        .transpose()?;
+    let look_at = args
+        .look_at
+        .as_deref()
+        .map(|s| parse_vec3("--look-at", s))
+        .transpose()?;
+    let view_dir = parse_direction(&args.view).ok_or_else(|| {
+        bad(
+            "--view",
+            format!("'{}': expected a direction like -z or +x-y-z", args.view),
+        )
+    })?;
+
+    // Mesa's device-select Vulkan layer probes a display server and prints
+    // "XDG_RUNTIME_DIR is invalid" on stderr without one; headless needs no display, so
+    // skip the layer unless the user chose otherwise (single-threaded here: safe).
+    if std::env::var_os("NODEVICE_SELECT").is_none()
+        && std::env::var_os("XDG_RUNTIME_DIR").is_none()
+    {
+        std::env::set_var("NODEVICE_SELECT", "1");
+    }
+    // Content: volumes, meshes, ground; and their bounds for framing.
+    let gpu = Gpu::headless().map_err(view_err)?;
+    let adapter = gpu.describe();
+    let mut r = Renderer::new(gpu);
+    r.params = SliceParams {
+        spacing,
+        ..Default::default()
+    };
+    r.light_dir = Vec3::from(scene.light.direction);
+    r.ambient = scene.light.ambient;
+    let mut bounds = Aabb::EMPTY;
+    for v in &scene.volumes {
+        let asset = VolumeAsset::read(&v.asset).map_err(|e| CliError::new(format_code(&e), e))?;
+        let mats: Vec<Mat4> = v.instances.iter().map(|t| t.matrix()).collect();
+        let b = asset.header.bounds;
+        for m in &mats {
+            grow_box(&mut bounds, Vec3::from(b.min), Vec3::from(b.max), m);
+        }
+        r.add_volume(&asset, mats)
+            .map_err(|e| CliError::new(view_code(&e), format!("{}: {e}", v.asset.display())))?;
+    }
+    for m in &scene.meshes {
+        let s = import(&m.path, &ImportOptions::default())
+            .map_err(|e| CliError::new(import_code(&e), &e))?;
+        let mat = m.transform.matrix();
+        let nmat = Mat4::from_quat(glam::Quat::from_rotation_y(
+            m.transform.rotate_y_deg.to_radians(),
+        ));
+        let mut data = MeshData::default();
+        for t in &s.triangles {
+            let material = s.material(t);
+            let base = material.base_color_factor;
+            let texture = material
+                .base_color_texture
+                .and_then(|i| s.textures.get(i as usize));
+            for v in &t.v {
+                // Textures are not bound on the GPU yet: the texel under each vertex's
+                // uv (nearest, wrapped) tints the vertex colour.
+                let tex = texture.map_or(Vec4::ONE, |tx| texel_at(tx, v.uv));
+                let p = mat.transform_point3(v.position);
+                bounds.grow(p);
+                let c: Vec4 = base * v.color * tex;
+                data.vertices.push(MeshVertex {
+                    pos: p.to_array(),
+                    normal: nmat.transform_vector3(v.normal).to_array(),
+                    color: c.to_array(),
+                });
+            }
+        }
+        r.add_mesh(&data)
+            .map_err(|e| CliError::new(view_code(&e), format!("{}: {e}", m.path.display())))?;
+    }
+    if let Some(g) = &scene.ground {
+        let h = 0.5 * g.size;
+        let corner = Vec3::new(g.centre[0] - h, g.height, g.centre[1] - h);
+        let quad = MeshData::quad(
+            corner,
+            Vec3::new(0.0, 0.0, g.size),
+            Vec3::new(g.size, 0.0, 0.0),
+            [g.color[0], g.color[1], g.color[2], 1.0],
+        );
+        bounds.grow(corner);
+        bounds.grow(corner + Vec3::new(g.size, 0.0, g.size));
+        r.add_mesh(&quad).map_err(view_err)?;
+    }
+
+    // Camera: --eye, else the scene's, else framed like the eval's views.
+    let fov_deg = args
+        .fov
+        .or(scene.camera.as_ref().map(|c| c.fov_deg))
+        .unwrap_or(45.0);
+    let fov = fov_deg.to_radians();
+    let framed = Camera::framed(&bounds, view_dir, fov, width, height, args.distance);
+    let radius = if bounds.is_empty() {
+        1.0
+    } else {
+        (0.5 * bounds.size().length()).max(1e-6)
+    };
+    let centre = if bounds.is_empty() {
+        Vec3::ZERO
+    } else {
+        bounds.center()
+    };
+    let look = |eye: Vec3, target: Vec3, up: Vec3, near: Option<f32>, far: Option<f32>| {
+        let dist = (eye - centre).length();
+        let near = near.unwrap_or(((dist - radius) * 0.5).max(radius * 1e-3));
+        let far = far.unwrap_or((dist + radius) * 2.0);
+        ViewCamera::look_at(eye, target, up, fov, width, height, near, far)
+    };
+    let camera = match (eye, &scene.camera) {
+        (Some(e), _) => look(e, look_at.unwrap_or(centre), Vec3::Y, None, None),
+        (None, Some(c)) => look(
+            Vec3::from(c.eye),
+            look_at.unwrap_or(Vec3::from(c.target)),
+            Vec3::from(c.up),
+            c.near,
+            c.far,
+        ),
+        (None, None) => {
+            let mut c = framed;
+            if let Some(t) = look_at {
+                c.target = t;
+            }
+            ViewCamera::from_parts(c.view(), c.fov_y, c.width, c.height, c.near, c.far)
+        }
+    };
+
+    let target = billow_view::target::Target::new(&r.gpu, width, height);
+    let mut stats = FrameStats::default();
+    let (mut total, mut min) = (0.0f64, f64::INFINITY);
+    for _ in 0..args.frames {
+        let t = Instant::now();
+        stats = r.render(&target, &camera).map_err(view_err)?;
+        r.gpu.wait().map_err(view_err)?;
+        let s = t.elapsed().as_secs_f64();
+        total += s;
+        min = min.min(s);
+    }
+    let img = target.read(&r.gpu).map_err(view_err)?;
+    let image = ImageF32 {
+        width: img.width,
+        height: img.height,
+        data: img.data.iter().map(|p| Vec4::from_array(*p)).collect(),
+    };
+    image
+        .write_png(out)
+        .map_err(|e| CliError::new(Code::OutputIo, format!("{}: {e}", out.display())))?;
+    let summary = Summary {
+        target: args.target.display().to_string(),
+        screenshot: Some(out.display().to_string()),
+        adapter,
+        width,
+        height,
+        passes,
+        frames: args.frames,
+        frame_ms_mean: 1e3 * total / f64::from(args.frames),
+        frame_ms_min: 1e3 * min,
+        stats,
+    };
+    if args.json {
+        print_json(&summary)?;
+    } else if !ctx.quiet {
+        eprintln!(
+            "{}: {}x{} on {}, {} slices, {} cells, {} draws, {:.1} ms/frame (min {:.1}, {} frames) -> {}",
+            summary.target,
+            width,
+            height,
+            summary.adapter,
+            stats.slices,
+            stats.cells,
+            stats.draw_calls,
+            summary.frame_ms_mean,
+            summary.frame_ms_min,
+            args.frames,
+            out.display()
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,150 @@
+//! `billow view` through the real binary: the passes a scene needs (`--print-passes`,
+//! no GPU needed), one-line errors for bad scene files, and a headless screenshot.
+//!
+//! The screenshot test needs a GPU adapter (lavapipe is enough): without one it prints
+//! a plain "skipping" line, except under CI (env `CI` set) where it fails —
+//! `.ci/ensure-vulkan` installs lavapipe.
+
+mod common;
+
+use std::path::Path;
+
+use common::{repo, run};
+
+fn scenes() -> std::path::PathBuf {
+    repo().join("fixtures/scenes")
+}
+
+fn passes(target: &Path) -> Vec<String> {
+    let dir = tempfile::tempdir().unwrap();
+    let r = run(
+        &["view", target.to_str().unwrap(), "--print-passes"],
+        dir.path(),
+    );
+    assert_eq!(r.code, Some(0), "{}: {}", target.display(), r.stderr);
+    r.stdout.lines().map(str::to_string).collect()
+}
+
+#[test]
+fn print_passes_lists_only_what_the_content_needs() {
+    // Only opaque meshes: no volume pass.
+    assert_eq!(
+        passes(&scenes().join("meshes_only.ron")),
+        ["mesh", "resolve"]
+    );
+    // Meshes and volumes, shadows off: no shadow pass.
+    assert_eq!(
+        passes(&scenes().join("oak_wall.ron")),
+        ["mesh", "volume", "resolve"]
+    );
+    // A lone asset: only the volume pass.
+    assert_eq!(
+        passes(&scenes().join("oak32.billow")),
+        ["volume", "resolve"]
+    );
+    // A scene with only a ground plane and shadows on: still no volume pass, and no
+    // shadow pass (none is implemented yet; the viewer warns instead of listing it).
+    let dir = tempfile::tempdir().unwrap();
+    let s = dir.path().join("ground.ron");
+    std::fs::write(&s, "(ground: Some((size: 4.0)), shadows: true)").unwrap();
+    assert_eq!(passes(&s), ["mesh", "resolve"]);
+}
+
+/// Writes `text` as a scene next to a copy of the oak asset; returns the one error line.
+fn scene_error(text: &str) -> (String, Option<i32>) {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(scenes().join("oak32.billow"), dir.path().join("oak.billow")).unwrap();
+    let s = dir.path().join("bad.ron");
+    std::fs::write(&s, text).unwrap();
+    let r = run(
+        &["view", "bad.ron", "--headless", "--screenshot", "x.png"],
+        dir.path(),
+    );
+    assert!(!dir.path().join("x.png").exists(), "no output on error");
+    let line = r.error_line().unwrap_or_else(|e| panic!("{e}")).to_string();
+    (line, r.code)
+}
+
+#[test]
+fn bad_scene_files_give_one_line_naming_file_and_field() {
+    let cases = [
+        // unknown field
+        ("(volumes: [(asset: \"oak.billow\", colour: 3)])", "colour"),
+        ("(shadow: true)", "shadow"),
+        // missing asset
+        (
+            "(volumes: [(asset: \"missing.billow\")])",
+            "volumes[0].asset",
+        ),
+        ("(meshes: [(path: \"nope.obj\")])", "meshes[0].path"),
+        // negative sizes
+        (
+            "(volumes: [(asset: \"oak.billow\", instances: [(scale: -2.0)])])",
+            "volumes[0].instances[0].scale",
+        ),
+        ("(ground: Some((size: -1.0)))", "ground.size"),
+        (
+            "(camera: Some((eye: (1.0, 2.0, 3.0), target: (0.0, 0.0, 0.0), fov_deg: -5.0)))",
+            "camera.fov_deg",
+        ),
+        ("(light: (direction: (0.0, 0.0, 0.0)))", "light.direction"),
+    ];
+    for (text, field) in cases {
+        let (line, code) = scene_error(text);
+        assert!(line.contains("bad.ron"), "{text}: {line}");
+        assert!(line.contains(field), "{text}: expected '{field}' in {line}");
+        assert_eq!(code, Some(4), "{text}: {line}");
+    }
+    // A syntax error gives the position.
+    let (line, code) = scene_error("(volumes: [(asset: \"oak.billow\"]");
+    assert!(line.contains("bad.ron: 1:"), "{line}");
+    assert_eq!(code, Some(4));
+}
+
+#[test]
+fn headless_screenshot_of_a_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scenes().join("oak_wall.ron");
+    let r = run(
+        &[
+            "view",
+            scene.to_str().unwrap(),
+            "--headless",
+            "--screenshot",
+            "shot.png",
+            "--size",
+            "96x64",
+            "--json",
+        ],
+        dir.path(),
+    );
+    if r.code != Some(0) && r.stderr.contains("no GPU adapter") {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI is set but no GPU adapter is available: {}",
+            r.stderr
+        );
+        println!(
+            "skipping headless_screenshot_of_a_scene: {}",
+            r.stderr.trim()
+        );
+        return;
+    }
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let img = image::open(dir.path().join("shot.png")).unwrap().to_rgba8();
+    assert_eq!(img.dimensions(), (96, 64));
+    let v: serde_json::Value = serde_json::from_str(&r.stdout).unwrap();
+    assert_eq!(
+        v["passes"],
+        serde_json::json!(["mesh", "volume", "resolve"])
+    );
+    assert!(v["stats"]["slices"].as_u64().unwrap() > 10, "{}", r.stdout);
+    // Something opaque (wall, ground) and something green (leaves) are in the picture.
+    let opaque = img.pixels().filter(|p| p[3] == 255).count();
+    let green = img
+        .pixels()
+        .filter(|p| p[3] > 0 && p[1] > p[0] && p[1] > p[2])
+        .count();
+    assert!(opaque > 96 * 64 / 4, "opaque pixels: {opaque}");
+    assert!(green > 50, "green pixels: {green}");
+}

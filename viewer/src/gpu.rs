@@ -1,0 +1,75 @@
+//! The wgpu instance, adapter, device and queue.
+
+use crate::ViewError;
+
+/// A device and its queue, with what adapter they came from.
+pub struct Gpu {
+    pub instance: wgpu::Instance,
+    pub adapter: wgpu::Adapter,
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub info: wgpu::AdapterInfo,
+}
+
+impl Gpu {
+    /// A device without a window (headless rendering, tests). Backends: the primary ones
+    /// (Vulkan, Metal, DX12) unless `WGPU_BACKEND` says otherwise — the GL fallback is not
+    /// used by default (through llvmpipe it is ~100× slower than lavapipe and noisy); on
+    /// Linux without a GPU, Mesa's lavapipe is the Vulkan adapter.
+    pub fn headless() -> Result<Gpu, ViewError> {
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+        desc.backends = wgpu::Backends::PRIMARY;
+        let instance = wgpu::Instance::new(desc.with_env());
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            ..Default::default()
+        }))
+        .map_err(|e| ViewError::NoAdapter(e.to_string()))?;
+        Self::from_adapter(instance, adapter)
+    }
+
+    /// A device on `adapter`.
+    pub fn from_adapter(
+        instance: wgpu::Instance,
+        adapter: wgpu::Adapter,
+    ) -> Result<Gpu, ViewError> {
+        let info = adapter.get_info();
+        let limits = adapter.limits();
+        if limits.max_storage_buffers_per_shader_stage < 2 || limits.max_texture_dimension_3d < 16 {
+            return Err(ViewError::NoAdapter(format!(
+                "adapter {} lacks storage buffers in vertex shaders or 3D textures",
+                info.name
+            )));
+        }
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("billow-view"),
+            required_features: wgpu::Features::empty(),
+            required_limits: limits,
+            ..Default::default()
+        }))
+        .map_err(|e| ViewError::Gpu(format!("cannot create a device on {}: {e}", info.name)))?;
+        Ok(Gpu {
+            instance,
+            adapter,
+            device,
+            queue,
+            info,
+        })
+    }
+
+    /// "name (backend, device type)".
+    pub fn describe(&self) -> String {
+        format!(
+            "{} ({:?}, {:?})",
+            self.info.name, self.info.backend, self.info.device_type
+        )
+    }
+
+    /// Blocks until the queue is idle.
+    pub fn wait(&self) -> Result<(), ViewError> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| ViewError::Gpu(e.to_string()))
+    }
+}

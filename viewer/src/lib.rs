@@ -1,0 +1,30 @@
+//! `billow-view`: the viewer's renderer (wgpu). Volume assets are drawn with the GPU
+//! slicing of Volumetric Billboards (Decaudin & Neyret 2009, §3.3): all cells of all
+//! instances at once, slices parallel to the screen back to front, adaptive spacing and
+//! opacity correction exactly as the CPU slicer of `billow::eval::slicer` (the
+//! reference the tests compare with), prism/plane intersection in WGSL.
+//!
+//! Conventions are those of `billow::camera` (view space looks down −Z, wgpu clip
+//! space, row 0 at the top). This crate does not depend on the `billow` library (the
+//! `billow` binary depends on this crate, and a package cannot depend on itself): the
+//! binary converts its camera with [`ViewCamera::from_parts`] and imports meshes itself.
+//!
+//! Images are premultiplied linear RGBA f32, like `billow::eval::ImageF32`.
+
+pub mod camera;
+pub mod error;
+pub mod gpu;
+pub mod mesh_pass;
+pub mod prism_plane_gpu;
+pub mod render;
+pub mod scene;
+pub mod slice_plan;
+pub mod target;
+pub mod volume_pass;
+
+pub use camera::ViewCamera;
+pub use error::ViewError;
+pub use gpu::Gpu;
+pub use render::{FrameStats, Renderer};
+pub use slice_plan::{SliceParams, Spacing};
+pub use target::RgbaImage;

@@ -1,0 +1,295 @@
+//! Scene files (RON, docs/viewer.md): camera, light, volume assets with instances,
+//! meshes, an optional ground plane, `shadows`. Unknown fields are errors; every
+//! problem is reported as `FILE: field: problem` ([`ViewError::Scene`]). Paths are
+//! relative to the scene file.
+
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+use std::path::{Path, PathBuf};
+
+use glam::{Mat4, Quat, Vec3};
+use serde::Deserialize;
+
+use crate::ViewError;
+
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    /// Absent: framed on the content like the eval's views.
+    #[serde(default)]
+    pub camera: Option<CameraDesc>,
+    #[serde(default)]
+    pub light: LightDesc,
+    #[serde(default)]
+    pub volumes: Vec<VolumeDesc>,
+    #[serde(default)]
+    pub meshes: Vec<MeshDesc>,
+    #[serde(default)]
+    pub ground: Option<GroundDesc>,
+    /// Directional shadow map (meshes, volumes cast). Not implemented yet: a scene
+    /// asking for it is rendered without shadows and the shadow pass is listed as missing.
+    #[serde(default)]
+    pub shadows: bool,
+}
+
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CameraDesc {
+    pub eye: [f32; 3],
+    pub target: [f32; 3],
+    #[serde(default = "up_y")]
+    pub up: [f32; 3],
+    /// Vertical field of view, degrees.
+    #[serde(default = "fov45")]
+    pub fov_deg: f32,
+    /// Clip distances; absent: from the content's bounding sphere.
+    #[serde(default)]
+    pub near: Option<f32>,
+    #[serde(default)]
+    pub far: Option<f32>,
+}
+
+fn up_y() -> [f32; 3] {
+    [0.0, 1.0, 0.0]
+}
+fn fov45() -> f32 {
+    45.0
+}
+
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct LightDesc {
+    /// Direction *towards* the light.
+    pub direction: [f32; 3],
+    #[serde(default = "ambient03")]
+    pub ambient: f32,
+}
+
+fn ambient03() -> f32 {
+    0.3
+}
+
+impl Default for LightDesc {
+    fn default() -> Self {
+        LightDesc {
+            direction: [0.3, 1.0, 0.5],
+            ambient: 0.3,
+        }
+    }
+}
+
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct VolumeDesc {
+    /// A `.billow` volume asset.
+    pub asset: PathBuf,
+    /// Default: one instance at the origin.
+    #[serde(default = "one_instance")]
+    pub instances: Vec<Transform>,
+}
+
+fn one_instance() -> Vec<Transform> {
+    vec![Transform::default()]
+}
+
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MeshDesc {
+    /// glTF / GLB / OBJ, imported with billow's importer.
+    pub path: PathBuf,
+    #[serde(default)]
+    pub transform: Transform,
+}
+
+/// `translate · rotate_y · scale` (uniform scale > 0).
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Transform {
+    #[serde(default)]
+    pub translate: [f32; 3],
+    /// Rotation about +Y, degrees.
+    #[serde(default)]
+    pub rotate_y_deg: f32,
+    #[serde(default = "one")]
+    pub scale: f32,
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+impl Default for Transform {
+    fn default() -> Self {
+        Transform {
+            translate: [0.0; 3],
+            rotate_y_deg: 0.0,
+            scale: 1.0,
+        }
+    }
+}
+
+impl Transform {
+    pub fn matrix(&self) -> Mat4 {
+        Mat4::from_scale_rotation_translation(
+            Vec3::splat(self.scale),
+            Quat::from_rotation_y(self.rotate_y_deg.to_radians()),
+            Vec3::from(self.translate),
+        )
+    }
+}
+
+/// A square ground plane `y = height`, centred on `centre` (x, z), side `size`.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct GroundDesc {
+    pub size: f32,
+    #[serde(default)]
+    pub height: f32,
+    #[serde(default)]
+    pub centre: [f32; 2],
+    /// Linear RGB.
+    #[serde(default = "grey")]
+    pub color: [f32; 3],
+}
+
+fn grey() -> [f32; 3] {
+    [0.35, 0.35, 0.3]
+}
+
+impl SceneFile {
+    /// Reads, parses and validates `path`; asset and mesh paths are made relative to
+    /// the scene file's folder and must exist.
+    pub fn load(path: &Path) -> Result<SceneFile, ViewError> {
+        let file = path.display().to_string();
+        let err = |problem: String| ViewError::Scene {
+            file: file.clone(),
+            problem,
+        };
+        let text = std::fs::read_to_string(path).map_err(|e| err(format!("cannot read: {e}")))?;
+        let mut scene = Self::parse(&text).map_err(&err)?;
+        let dir = path.parent().unwrap_or(Path::new("."));
+        for (i, v) in scene.volumes.iter_mut().enumerate() {
+            v.asset = dir.join(&v.asset);
+            if !v.asset.is_file() {
+                return Err(err(format!(
+                    "volumes[{i}].asset: {} does not exist",
+                    v.asset.display()
+                )));
+            }
+        }
+        for (i, m) in scene.meshes.iter_mut().enumerate() {
+            m.path = dir.join(&m.path);
+            if !m.path.is_file() {
+                return Err(err(format!(
+                    "meshes[{i}].path: {} does not exist",
+                    m.path.display()
+                )));
+            }
+        }
+        Ok(scene)
+    }
+
+    /// Parses and validates RON text; the error names the field (and line:column for
+    /// syntax errors and unknown fields).
+    pub fn parse(text: &str) -> Result<SceneFile, String> {
+        let scene: SceneFile = ron::Options::default()
+            .from_str(text)
+            .map_err(|e| format!("{}:{}: {}", e.span.start.line, e.span.start.col, e.code))?;
+        scene.validate()?;
+        Ok(scene)
+    }
+
+    fn validate(&self) -> Result<(), String> {
+        let finite3 = |v: &[f32; 3]| v.iter().all(|c| c.is_finite());
+        if let Some(c) = &self.camera {
+            if !finite3(&c.eye) || !finite3(&c.target) || !finite3(&c.up) {
+                return Err("camera: eye, target and up must be finite".into());
+            }
+            if Vec3::from(c.eye) == Vec3::from(c.target) {
+                return Err("camera.target: must differ from camera.eye".into());
+            }
+            if !(c.fov_deg > 0.0 && c.fov_deg < 180.0) {
+                return Err(format!("camera.fov_deg: {} must be in (0, 180)", c.fov_deg));
+            }
+            if let Some(n) = c.near {
+                if !(n > 0.0 && n.is_finite()) {
+                    return Err(format!("camera.near: {n} must be > 0"));
+                }
+            }
+            if let Some(f) = c.far {
+                if !(f > c.near.unwrap_or(0.0) && f.is_finite()) {
+                    return Err(format!("camera.far: {f} must be > near"));
+                }
+            }
+        }
+        if !finite3(&self.light.direction) || Vec3::from(self.light.direction).length() == 0.0 {
+            return Err("light.direction: must be a finite non-zero vector".into());
+        }
+        if !(0.0..=1.0).contains(&self.light.ambient) {
+            return Err(format!(
+                "light.ambient: {} must be in [0, 1]",
+                self.light.ambient
+            ));
+        }
+        let check_t = |t: &Transform, at: String| -> Result<(), String> {
+            if !(t.scale > 0.0 && t.scale.is_finite()) {
+                return Err(format!("{at}.scale: {} must be > 0", t.scale));
+            }
+            if !finite3(&t.translate) || !t.rotate_y_deg.is_finite() {
+                return Err(format!("{at}: translate and rotate_y_deg must be finite"));
+            }
+            Ok(())
+        };
+        for (i, v) in self.volumes.iter().enumerate() {
+            if v.instances.is_empty() {
+                return Err(format!(
+                    "volumes[{i}].instances: at least one instance is needed"
+                ));
+            }
+            for (k, t) in v.instances.iter().enumerate() {
+                check_t(t, format!("volumes[{i}].instances[{k}]"))?;
+            }
+        }
+        for (i, m) in self.meshes.iter().enumerate() {
+            check_t(&m.transform, format!("meshes[{i}].transform"))?;
+        }
+        if let Some(g) = &self.ground {
+            if !(g.size > 0.0 && g.size.is_finite()) {
+                return Err(format!("ground.size: {} must be > 0", g.size));
+            }
+            if !g.height.is_finite() || !g.centre.iter().all(|c| c.is_finite()) {
+                return Err("ground: height and centre must be finite".into());
+            }
+            if !g.color.iter().all(|c| (0.0..=1.0).contains(c)) {
+                return Err("ground.color: components must be in [0, 1]".into());
+            }
+        }
+        Ok(())
+    }
+
+    /// The passes a frame of this scene runs, in order (`--print-passes`): `mesh` only
+    /// with meshes or a ground, `volume` only with volumes, then `resolve`. There is no
+    /// shadow pass yet: `shadows: true` is accepted and reported as unsupported
+    /// ([`SceneFile::unsupported`]), never listed as a pass that does not run.
+    pub fn passes(&self) -> Vec<&'static str> {
+        let opaque = !self.meshes.is_empty() || self.ground.is_some();
+        let mut p = Vec::new();
+        if opaque {
+            p.push("mesh");
+        }
+        if !self.volumes.is_empty() {
+            p.push("volume");
+        }
+        p.push("resolve");
+        p
+    }
+
+    /// What the scene asks for that this viewer does not do yet (for a warning).
+    pub fn unsupported(&self) -> Vec<&'static str> {
+        let mut u = Vec::new();
+        if self.shadows {
+            u.push("shadows (no shadow pass yet; rendered unshadowed)");
+        }
+        u
+    }
+}

@@ -1,0 +1,156 @@
+//! Shared test helpers: a GPU adapter or a documented skip, a small synthetic volume.
+#![allow(dead_code)]
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use billow_format::{
+    full_mip_count, mip_dims, AssetKind, Bounds, ColourSpace, Header, Prism, TexelFormat,
+    VolumeAsset, VolumeHeader,
+};
+use billow_view::Gpu;
+
+/// The headless device, or `None` with a plain "skipping" line when no adapter exists.
+/// Under CI (env `CI` set) a missing adapter fails the test instead: rendering must be
+/// possible there (`.ci/ensure-vulkan` installs lavapipe).
+pub fn gpu_or_skip(test: &str) -> Option<Gpu> {
+    match Gpu::headless() {
+        Ok(g) => Some(g),
+        Err(e) => {
+            if std::env::var_os("CI").is_some() {
+                panic!("{test}: CI is set but no GPU adapter is available: {e}");
+            }
+            println!("skipping {test}: {e}");
+            None
+        }
+    }
+}
+
+/// Where failing tests write their diff images.
+pub fn out_dir() -> PathBuf {
+    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("view-tests");
+    std::fs::create_dir_all(&d).expect("create the test output folder");
+    d
+}
+
+/// Two prisms (vertical edges along z) tiling the box `[a, b]`, uvw = position mapped
+/// through `uvw_of`.
+pub fn box_prisms(a: [f32; 3], b: [f32; 3], uvw_of: impl Fn([f32; 3]) -> [f32; 3]) -> Vec<Prism> {
+    let c = |x: f32, y: f32, z: f32| [x, y, z];
+    let tris = [
+        [c(a[0], a[1], 0.0), c(b[0], a[1], 0.0), c(b[0], b[1], 0.0)],
+        [c(a[0], a[1], 0.0), c(b[0], b[1], 0.0), c(a[0], b[1], 0.0)],
+    ];
+    tris.iter()
+        .map(|t| {
+            let pos: [[f32; 3]; 6] = std::array::from_fn(|i| {
+                let v = t[i % 3];
+                [v[0], v[1], if i < 3 { a[2] } else { b[2] }]
+            });
+            Prism {
+                pos,
+                uvw: pos.map(&uvw_of),
+            }
+        })
+        .collect()
+}
+
+/// A 16³ fuzzy, coloured ball in `[0,1]³` (sRGB premultiplied, full MIP chain built by
+/// 2×2×2 averaging), cut into 2 × 2 boxes of 2 prisms each (8 cells, shared edges).
+pub fn ball_asset(shell: bool) -> VolumeAsset {
+    let n = 16u32;
+    let dims = [n; 3];
+    let mut level0 = Vec::new();
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let p = [x, y, z].map(|i| (i as f32 + 0.5) / n as f32);
+                let r = ((p[0] - 0.5).powi(2) + (p[1] - 0.5).powi(2) + (p[2] - 0.5).powi(2)).sqrt();
+                let a = (1.0 - r / 0.45).clamp(0.0, 1.0).powf(0.7) * 0.6;
+                let lin = [p[0], 0.3 + 0.5 * p[1], 1.0 - p[2]];
+                let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+                let srgb = |v: f32| {
+                    if v <= 0.003_130_8 {
+                        12.92 * v
+                    } else {
+                        1.055 * v.powf(1.0 / 2.4) - 0.055
+                    }
+                };
+                level0.extend_from_slice(&[
+                    q(srgb(lin[0] * a)),
+                    q(srgb(lin[1] * a)),
+                    q(srgb(lin[2] * a)),
+                    q(a),
+                ]);
+            }
+        }
+    }
+    let mips = full_mip_count(dims);
+    let mut levels = vec![level0];
+    for l in 1..mips {
+        let (pd, d) = (mip_dims(dims, l - 1), mip_dims(dims, l));
+        let prev = &levels[l as usize - 1];
+        let mut out = Vec::new();
+        for z in 0..d[2] {
+            for y in 0..d[1] {
+                for x in 0..d[0] {
+                    for ch in 0..4 {
+                        let mut s = 0u32;
+                        for k in 0..8u32 {
+                            let (xx, yy, zz) = (
+                                (2 * x + (k & 1)).min(pd[0] - 1),
+                                (2 * y + ((k >> 1) & 1)).min(pd[1] - 1),
+                                (2 * z + (k >> 2)).min(pd[2] - 1),
+                            );
+                            s += u32::from(
+                                prev[(4 * (xx + pd[0] * (yy + pd[1] * zz)) + ch) as usize],
+                            );
+                        }
+                        out.push(((s + 4) / 8) as u8);
+                    }
+                }
+            }
+        }
+        levels.push(out);
+    }
+    let mut cells = Vec::new();
+    for (x0, x1) in [(0.0, 0.5), (0.5, 1.0)] {
+        for (y0, y1) in [(0.0, 0.5), (0.5, 1.0)] {
+            cells.extend(box_prisms([x0, y0, 0.0], [x1, y1, 1.0], |p| {
+                if shell {
+                    // Two periods in x and z: exercises repeat addressing.
+                    [2.0 * p[0] - 0.25, p[1], 2.0 * p[2] + 0.1]
+                } else {
+                    p
+                }
+            }));
+        }
+    }
+    let mut params = BTreeMap::new();
+    if shell {
+        params.insert("shell".to_string(), "test".to_string());
+    }
+    VolumeAsset {
+        header: Header {
+            kind: AssetKind::Volume,
+            tool: "test".into(),
+            source: None,
+            bounds: Bounds {
+                min: [0.0; 3],
+                max: [1.0; 3],
+            },
+            colour_space: ColourSpace::SrgbPremultiplied,
+            seed: None,
+            params,
+            volume: Some(VolumeHeader {
+                dims,
+                mip_count: mips,
+                texel: TexelFormat::Rgba8Unorm,
+                normals: None,
+            }),
+        },
+        levels,
+        normals: None,
+        cells,
+    }
+}
