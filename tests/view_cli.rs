@@ -42,12 +42,15 @@ fn print_passes_lists_only_what_the_content_needs() {
         passes(&scenes().join("oak32.billow")),
         ["volume", "resolve"]
     );
-    // A scene with only a ground plane and shadows on: still no volume pass, and no
-    // shadow pass (none is implemented yet; the viewer warns instead of listing it).
+    // A scene with only a ground plane and shadows on: a shadow pass and the mesh pass,
+    // still no volume or cloud pass.
     let dir = tempfile::tempdir().unwrap();
     let s = dir.path().join("ground.ron");
     std::fs::write(&s, "(ground: Some((size: 4.0)), shadows: true)").unwrap();
-    assert_eq!(passes(&s), ["mesh", "resolve"]);
+    assert_eq!(passes(&s), ["shadow", "mesh", "resolve"]);
+    // Shadows on but nothing to draw: no shadow pass either.
+    std::fs::write(&s, "(shadows: true)").unwrap();
+    assert_eq!(passes(&s), ["resolve"]);
 }
 
 /// Writes `text` as a scene next to a copy of the oak asset; returns the one error line.

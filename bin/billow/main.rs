@@ -10,6 +10,7 @@ mod inspect;
 mod output;
 mod shell;
 mod view;
+mod view_load;
 mod voxelize;
 
 use std::process::ExitCode;

@@ -2,25 +2,20 @@
 //! a volume asset (.billow) or a mesh (.gltf/.glb/.obj). All rendering is in the
 //! `billow-view` crate; this module loads the inputs, builds the camera and writes the PNG.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 use billow::camera::{parse_direction, Camera};
 use billow::eval::ImageF32;
-use billow::import::{import, ImportOptions};
 use billow::scene::Aabb;
-use billow_format::VolumeAsset;
-use billow_view::mesh_pass::{MeshData, MeshVertex};
-use billow_view::scene::{SceneFile, VolumeDesc};
-use billow_view::{FrameStats, Gpu, Renderer, SliceParams, Spacing, ViewCamera, ViewError};
-use glam::{Mat4, Vec3, Vec4};
+use billow_view::{FrameStats, Gpu, SliceParams, Spacing, ViewCamera, ViewError};
+use glam::{Vec3, Vec4};
 use serde::Serialize;
 
 use crate::eval::parse_size;
 use crate::exit::{CliError, Code};
-use crate::info::format_code;
-use crate::inspect::import_code;
-use crate::output::{print_json, warn};
+use crate::output::print_json;
+use crate::view_load::{load_content, load_scene};
 use crate::Ctx;
 
 #[derive(clap::Args, Debug)]
@@ -56,6 +51,18 @@ pub struct Args {
     /// voxel), adaptive:BIAS, or uniform:WORLD (a constant world-space spacing).
     #[arg(long, default_value = "adaptive")]
     spacing: String,
+    /// Turn slab partitioning off (every cell meets every slice: the paper's plain slicing).
+    #[arg(long)]
+    no_partition: bool,
+    /// Fewest slices per slab when partitioning.
+    #[arg(long, default_value_t = 16)]
+    slab_min_slices: u32,
+    /// Shadows on or off, overriding the scene's `shadows`.
+    #[arg(long, value_name = "on|off")]
+    shadows: Option<String>,
+    /// Choose cloud LODs as if every instance were this far from the eye (inspection).
+    #[arg(long, value_name = "DISTANCE")]
+    lod_distance: Option<f32>,
     /// Print the passes a frame runs (one per line) and exit; needs no GPU.
     #[arg(long)]
     print_passes: bool,
@@ -139,86 +146,21 @@ fn view_err(e: ViewError) -> CliError {
     CliError::new(view_code(&e), e)
 }
 
-fn is_scene(p: &Path) -> bool {
-    p.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("ron"))
-}
-
-fn is_asset(p: &Path) -> bool {
-    p.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("billow"))
-}
-
-/// TARGET as a scene (a lone asset or mesh becomes a one-item scene).
-fn load_scene(target: &Path) -> Result<SceneFile, CliError> {
-    if is_scene(target) {
-        return SceneFile::load(target).map_err(|e| {
-            let code = match &e {
-                ViewError::Scene { problem, .. } if problem.starts_with("cannot read") => {
-                    Code::InputIo
-                }
-                _ => Code::InvalidInput,
-            };
-            CliError::new(code, e)
-        });
-    }
-    if !target.is_file() {
-        return Err(CliError::new(
-            Code::InputIo,
-            format!("{}: no such file", target.display()),
-        ));
-    }
-    let mut s = SceneFile::default();
-    if is_asset(target) {
-        s.volumes.push(VolumeDesc {
-            asset: target.to_path_buf(),
-            instances: vec![Default::default()],
-        });
-    } else {
-        s.meshes.push(billow_view::scene::MeshDesc {
-            path: target.to_path_buf(),
-            transform: Default::default(),
-        });
-    }
-    Ok(s)
-}
-
-/// Linear RGBA of the texel of `t` under `uv` (nearest, repeat); white for an empty texture.
-fn texel_at(t: &billow::scene::Texture, uv: glam::Vec2) -> Vec4 {
-    if t.width == 0 || t.height == 0 || t.texels.is_empty() || !uv.is_finite() {
-        return Vec4::ONE;
-    }
-    let x = ((uv.x - uv.x.floor()) * t.width as f32) as usize % t.width as usize;
-    let y = ((uv.y - uv.y.floor()) * t.height as f32) as usize % t.height as usize;
-    let p = t.texels[(y * t.width as usize + x).min(t.texels.len() - 1)];
-    let c = |v: u8| billow::eval::image::srgb_to_linear(f32::from(v) / 255.0);
-    Vec4::new(c(p[0]), c(p[1]), c(p[2]), f32::from(p[3]) / 255.0)
-}
-
-fn grow_box(b: &mut Aabb, min: Vec3, max: Vec3, m: &Mat4) {
-    for i in 0..8 {
-        let c = Vec3::new(
-            if i & 1 == 0 { min.x } else { max.x },
-            if i & 2 == 0 { min.y } else { max.y },
-            if i & 4 == 0 { min.z } else { max.z },
-        );
-        b.grow(m.transform_point3(c));
-    }
-}
-
 pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
-    let scene = load_scene(&args.target)?;
-    let passes = scene.passes();
+    let mut scene = load_scene(&args.target)?;
+    match args.shadows.as_deref() {
+        None => {}
+        Some("on") => scene.shadows = true,
+        Some("off") => scene.shadows = false,
+        Some(o) => return Err(bad("--shadows", format!("'{o}': expected on or off"))),
+    }
+    let content = load_content(&scene)?;
+    let passes = content.passes();
     if args.print_passes {
         for p in &passes {
             println!("{p}");
         }
         return Ok(());
-    }
-    for u in scene.unsupported() {
-        warn(ctx, &format!("{}: {u}", args.target.display()));
     }
     let (width, height) = parse_size(&args.size)?;
     let spacing = parse_spacing(&args.spacing)?;
@@ -230,8 +172,16 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             return Err(bad("--fov", format!("{f}: must be in (0, 180) degrees")));
         }
     }
+    if let Some(d) = args.lod_distance {
+        if !(d > 0.0 && d.is_finite()) {
+            return Err(bad("--lod-distance", format!("{d}: must be > 0")));
+        }
+    }
     if args.frames == 0 {
         return Err(bad("--frames", "must be at least 1"));
+    }
+    if args.slab_min_slices == 0 {
+        return Err(bad("--slab-min-slices", "must be at least 1"));
     }
     if !args.headless {
         return Err(bad(
@@ -258,80 +208,16 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             format!("'{}': expected a direction like -z or +x-y-z", args.view),
         )
     })?;
-
-    // Mesa's device-select Vulkan layer probes a display server and prints
-    // "XDG_RUNTIME_DIR is invalid" on stderr without one; headless needs no display, so
-    // skip the layer unless the user chose otherwise (single-threaded here: safe).
-    if std::env::var_os("NODEVICE_SELECT").is_none()
-        && std::env::var_os("XDG_RUNTIME_DIR").is_none()
-    {
-        std::env::set_var("NODEVICE_SELECT", "1");
-    }
-    // Content: volumes, meshes, ground; and their bounds for framing.
-    let gpu = Gpu::headless().map_err(view_err)?;
-    let adapter = gpu.describe();
-    let mut r = Renderer::new(gpu);
-    r.params = SliceParams {
+    let params = SliceParams {
         spacing,
+        partition: !args.no_partition,
+        slab_min_slices: args.slab_min_slices,
         ..Default::default()
     };
-    r.light_dir = Vec3::from(scene.light.direction);
-    r.ambient = scene.light.ambient;
-    let mut bounds = Aabb::EMPTY;
-    for v in &scene.volumes {
-        let asset = VolumeAsset::read(&v.asset).map_err(|e| CliError::new(format_code(&e), e))?;
-        let mats: Vec<Mat4> = v.instances.iter().map(|t| t.matrix()).collect();
-        let b = asset.header.bounds;
-        for m in &mats {
-            grow_box(&mut bounds, Vec3::from(b.min), Vec3::from(b.max), m);
-        }
-        r.add_volume(&asset, mats)
-            .map_err(|e| CliError::new(view_code(&e), format!("{}: {e}", v.asset.display())))?;
-    }
-    for m in &scene.meshes {
-        let s = import(&m.path, &ImportOptions::default())
-            .map_err(|e| CliError::new(import_code(&e), &e))?;
-        let mat = m.transform.matrix();
-        let nmat = Mat4::from_quat(glam::Quat::from_rotation_y(
-            m.transform.rotate_y_deg.to_radians(),
-        ));
-        let mut data = MeshData::default();
-        for t in &s.triangles {
-            let material = s.material(t);
-            let base = material.base_color_factor;
-            let texture = material
-                .base_color_texture
-                .and_then(|i| s.textures.get(i as usize));
-            for v in &t.v {
-                // Textures are not bound on the GPU yet: the texel under each vertex's
-                // uv (nearest, wrapped) tints the vertex colour.
-                let tex = texture.map_or(Vec4::ONE, |tx| texel_at(tx, v.uv));
-                let p = mat.transform_point3(v.position);
-                bounds.grow(p);
-                let c: Vec4 = base * v.color * tex;
-                data.vertices.push(MeshVertex {
-                    pos: p.to_array(),
-                    normal: nmat.transform_vector3(v.normal).to_array(),
-                    color: c.to_array(),
-                });
-            }
-        }
-        r.add_mesh(&data)
-            .map_err(|e| CliError::new(view_code(&e), format!("{}: {e}", m.path.display())))?;
-    }
-    if let Some(g) = &scene.ground {
-        let h = 0.5 * g.size;
-        let corner = Vec3::new(g.centre[0] - h, g.height, g.centre[1] - h);
-        let quad = MeshData::quad(
-            corner,
-            Vec3::new(0.0, 0.0, g.size),
-            Vec3::new(g.size, 0.0, 0.0),
-            [g.color[0], g.color[1], g.color[2], 1.0],
-        );
-        bounds.grow(corner);
-        bounds.grow(corner + Vec3::new(g.size, 0.0, g.size));
-        r.add_mesh(&quad).map_err(view_err)?;
-    }
+    let bounds = match content.bounds() {
+        Some((min, max)) => Aabb { min, max },
+        None => Aabb::EMPTY,
+    };
 
     // Camera: --eye, else the scene's, else framed like the eval's views.
     let fov_deg = args
@@ -374,6 +260,18 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         }
     };
 
+    // Mesa's device-select Vulkan layer probes a display server and prints
+    // "XDG_RUNTIME_DIR is invalid" on stderr without one; headless needs no display, so
+    // skip the layer unless the user chose otherwise (single-threaded here: safe).
+    if std::env::var_os("NODEVICE_SELECT").is_none()
+        && std::env::var_os("XDG_RUNTIME_DIR").is_none()
+    {
+        std::env::set_var("NODEVICE_SELECT", "1");
+    }
+    let gpu = Gpu::headless().map_err(view_err)?;
+    let adapter = gpu.describe();
+    let mut r = content.build(gpu, params, fov).map_err(view_err)?;
+    r.lod_distance_override = args.lod_distance;
     let target = billow_view::target::Target::new(&r.gpu, width, height);
     let mut stats = FrameStats::default();
     let (mut total, mut min) = (0.0f64, f64::INFINITY);
@@ -409,15 +307,17 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     if args.json {
         print_json(&summary)?;
     } else if !ctx.quiet {
+        let s = &summary.stats;
         eprintln!(
-            "{}: {}x{} on {}, {} slices, {} cells, {} draws, {:.1} ms/frame (min {:.1}, {} frames) -> {}",
+            "{}: {}x{} on {}, {} slices in {} slabs, {} cells, {} draws, {:.1} ms/frame (min {:.1}, {} frames) -> {}",
             summary.target,
             width,
             height,
             summary.adapter,
-            stats.slices,
-            stats.cells,
-            stats.draw_calls,
+            s.slices,
+            s.slabs,
+            s.cells,
+            s.draw_calls,
             summary.frame_ms_mean,
             summary.frame_ms_min,
             args.frames,

@@ -13,6 +13,9 @@ pub struct ViewCamera {
     pub height: u32,
     pub near: f32,
     pub far: f32,
+    /// `Some(h)`: an orthographic camera showing `2h` world units vertically (`fov_y` is
+    /// then unused) — the light's camera of the shadow map.
+    pub ortho_half_height: Option<f32>,
 }
 
 impl ViewCamera {
@@ -32,7 +35,26 @@ impl ViewCamera {
             height,
             near,
             far,
+            ortho_half_height: None,
         }
+    }
+
+    /// An orthographic camera at `eye` looking along `dir`, `2·half_height` world units
+    /// tall, depth range `[near, far]` from the eye.
+    #[allow(clippy::too_many_arguments)]
+    pub fn orthographic(
+        eye: Vec3,
+        dir: Vec3,
+        up: Vec3,
+        half_height: f32,
+        width: u32,
+        height: u32,
+        near: f32,
+        far: f32,
+    ) -> Self {
+        let mut c = Self::look_at(eye, eye + dir, up, 1.0, width, height, near, far);
+        c.ortho_half_height = Some(half_height);
+        c
     }
 
     /// A look-at camera; the view matrix is built exactly like `billow::camera::Camera::view`.
@@ -72,6 +94,15 @@ impl ViewCamera {
 
     /// View → clip (wgpu depth 0..1), the formula of `billow::camera::Camera::projection`.
     pub fn projection(&self) -> Mat4 {
+        if let Some(hh) = self.ortho_half_height {
+            let range = self.far - self.near;
+            return Mat4::from_cols(
+                Vec4::new(1.0 / (hh * self.aspect()), 0.0, 0.0, 0.0),
+                Vec4::new(0.0, 1.0 / hh, 0.0, 0.0),
+                Vec4::new(0.0, 0.0, -1.0 / range, 0.0),
+                Vec4::new(0.0, 0.0, -self.near / range, 1.0),
+            );
+        }
         let h = 1.0 / (0.5 * self.fov_y).tan();
         let w = h / self.aspect();
         let r = self.far / (self.near - self.far);
@@ -85,7 +116,15 @@ impl ViewCamera {
 
     /// World size of one pixel at view depth `depth` (the paper's `z·tan(fov/2)/(h/2)`).
     pub fn pixel_size_at(&self, depth: f32) -> f32 {
+        if let Some(hh) = self.ortho_half_height {
+            return 2.0 * hh / self.height as f32;
+        }
         depth * (0.5 * self.fov_y).tan() / (0.5 * self.height as f32)
+    }
+
+    /// The camera position in world space.
+    pub fn eye(&self) -> Vec3 {
+        self.view.inverse().w_axis.truncate()
     }
 
     /// World point → view space.
@@ -102,7 +141,11 @@ impl ViewCamera {
                 self.width, self.height
             ));
         }
-        if !(self.fov_y > 0.0 && self.fov_y < std::f32::consts::PI) {
+        if let Some(hh) = self.ortho_half_height {
+            if !(hh > 0.0 && hh.is_finite()) {
+                return bad(format!("orthographic half height {hh} must be > 0"));
+            }
+        } else if !(self.fov_y > 0.0 && self.fov_y < std::f32::consts::PI) {
             return bad(format!(
                 "field of view {} rad must be in (0, π)",
                 self.fov_y

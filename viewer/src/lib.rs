@@ -1,8 +1,10 @@
 //! `billow-view`: the viewer's renderer (wgpu). Volume assets are drawn with the GPU
 //! slicing of Volumetric Billboards (Decaudin & Neyret 2009, §3.3): all cells of all
-//! instances at once, slices parallel to the screen back to front, adaptive spacing and
-//! opacity correction exactly as the CPU slicer of `billow::eval::slicer` (the
-//! reference the tests compare with), prism/plane intersection in WGSL.
+//! instances at once, slices parallel to the screen back to front, adaptive spacing,
+//! opacity correction and slab partitioning, exactly as the CPU slicer of
+//! `billow::eval::slicer` (the reference the tests compare with), prism/plane
+//! intersection in WGSL. Billboard clouds (Lacewell et al. 2006) morph between their
+//! LODs; opaque meshes share the z-buffer; a directional shadow map when asked for.
 //!
 //! Conventions are those of `billow::camera` (view space looks down −Z, wgpu clip
 //! space, row 0 at the top). This crate does not depend on the `billow` library (the
@@ -12,15 +14,21 @@
 //! Images are premultiplied linear RGBA f32, like `billow::eval::ImageF32`.
 
 pub mod camera;
+pub mod cloud_pass;
+pub mod content;
 pub mod error;
 pub mod gpu;
 pub mod mesh_pass;
 pub mod prism_plane_gpu;
 pub mod render;
 pub mod scene;
+pub mod shadow;
+pub mod slab;
 pub mod slice_plan;
 pub mod target;
+pub mod texture;
 pub mod volume_pass;
+pub mod volume_plan;
 
 pub use camera::ViewCamera;
 pub use error::ViewError;

@@ -1,26 +1,46 @@
 //! The opaque mesh pass: drawn first, writes depth, so the volume slices that follow
-//! are cut by it (the paper's z-buffer compliance).
+//! are cut by it (the paper's z-buffer compliance). Materials: base colour × vertex
+//! colour × base-colour texture (sRGB, MIP-mapped, repeat), alpha-masked materials
+//! discard below their cut-off. Blended materials are drawn as masked at 0.5 (the
+//! viewer sorts no mesh triangles). One directional light (two-sided Lambert) plus
+//! ambient, shadowed when the scene has a shadow map.
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use wgpu::util::DeviceExt;
 
 use crate::target::{COLOR_FORMAT, DEPTH_FORMAT};
-use crate::{Gpu, ViewCamera, ViewError};
+use crate::texture::{upload_rgba8_mips, TextureData};
+use crate::{Gpu, ViewError};
 
-/// A vertex: world position, normal (any length; zero = unlit), linear RGBA colour.
+/// A vertex: world position, normal (any length; zero = unlit), uv, linear RGBA colour.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct MeshVertex {
     pub pos: [f32; 3],
     pub normal: [f32; 3],
+    pub uv: [f32; 2],
     pub color: [f32; 4],
 }
 
-/// A triangle list (3 vertices a triangle), world space.
+/// How a material is drawn.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MeshMaterial {
+    /// Index into [`MeshData::textures`].
+    pub texture: Option<u32>,
+    /// Discard fragments whose alpha is below this (`None`: opaque).
+    pub alpha_cutoff: Option<f32>,
+}
+
+/// A triangle list (3 vertices a triangle), world space, one material per triangle.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct MeshData {
     pub vertices: Vec<MeshVertex>,
+    /// Per triangle, an index into `materials`; empty: every triangle uses material 0.
+    pub triangle_materials: Vec<u32>,
+    /// Empty: one untextured opaque material.
+    pub materials: Vec<MeshMaterial>,
+    pub textures: Vec<TextureData>,
 }
 
 impl MeshData {
@@ -30,6 +50,7 @@ impl MeshData {
         let p = |s: f32, t: f32| MeshVertex {
             pos: (corner + u * s + v * t).to_array(),
             normal: n,
+            uv: [s, t],
             color,
         };
         MeshData {
@@ -41,115 +62,231 @@ impl MeshData {
                 p(1., 1.),
                 p(0., 1.),
             ],
+            ..Default::default()
         }
     }
 }
 
+/// A mesh on the GPU: its vertices sorted by material, one draw range per material.
 pub struct GpuMesh {
     pub buffer: wgpu::Buffer,
     pub vertices: u32,
     pub triangles: u32,
+    /// (vertex range, material bind group).
+    pub ranges: Vec<(std::ops::Range<u32>, wgpu::BindGroup)>,
+    /// World-space bounds (min, max).
+    pub bounds: (Vec3, Vec3),
+}
+
+/// Per-frame uniform of the mesh pipelines.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct MeshFrame {
+    pub view_proj: [[f32; 4]; 4],
+    pub world_to_shadow: [[f32; 4]; 4],
+    /// xyz: direction towards the light (unit), w: ambient.
+    pub light: [f32; 4],
+    /// x: 1 = receive shadows, z: shadow depth bias.
+    pub flags: [f32; 4],
 }
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-struct MeshFrame {
-    view_proj: [[f32; 4]; 4],
-    light: [f32; 4],
+struct MaterialUniform {
+    /// x: alpha cut-off (0 = opaque), y: 1 = textured.
+    params: [f32; 4],
 }
 
 pub struct MeshPass {
     pipeline: wgpu::RenderPipeline,
-    layout: wgpu::BindGroupLayout,
+    shadow_pipeline: wgpu::RenderPipeline,
+    frame_layout: wgpu::BindGroupLayout,
+    material_layout: wgpu::BindGroupLayout,
+    sampler: wgpu::Sampler,
+    white: wgpu::TextureView,
 }
 
 impl MeshPass {
-    pub fn new(gpu: &Gpu) -> MeshPass {
+    pub fn new(gpu: &Gpu, shadow_layout: &wgpu::BindGroupLayout) -> MeshPass {
         let device = &gpu.device;
+        let src = format!(
+            "{}\n{}",
+            include_str!("shaders/shadow_lookup.wgsl"),
+            include_str!("shaders/mesh.wgsl")
+        );
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("mesh.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("shaders/mesh.wgsl").into()),
+            source: wgpu::ShaderSource::Wgsl(src.into()),
         });
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        let entry = |binding, visibility, ty| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility,
+            ty,
+            count: None,
+        };
+        let uniform = wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        };
+        let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
+        let fs = wgpu::ShaderStages::FRAGMENT;
+        let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("mesh frame"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            }],
+            entries: &[entry(0, vf, uniform)],
+        });
+        let material_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("mesh material"),
+            entries: &[
+                entry(0, fs, uniform),
+                entry(
+                    1,
+                    fs,
+                    wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                ),
+                entry(
+                    2,
+                    fs,
+                    wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                ),
+            ],
         });
         let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("mesh"),
-            bind_group_layouts: &[Some(&layout)],
+            bind_group_layouts: &[
+                Some(&frame_layout),
+                Some(&material_layout),
+                Some(shadow_layout),
+            ],
             immediate_size: 0,
         });
-        let attrs = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x4];
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("mesh"),
-            layout: Some(&pl),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: std::mem::size_of::<MeshVertex>() as u64,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &attrs,
-                })],
-            },
-            primitive: wgpu::PrimitiveState {
-                topology: wgpu::PrimitiveTopology::TriangleList,
-                cull_mode: None,
-                ..Default::default()
-            },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: COLOR_FORMAT,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
+        let attrs = wgpu::vertex_attr_array![
+            0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4
+        ];
+        let make = |label, fs_entry, color: bool| {
+            let targets = [Some(wgpu::ColorTargetState {
+                format: COLOR_FORMAT,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            })];
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(&pl),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(wgpu::VertexBufferLayout {
+                        array_stride: std::mem::size_of::<MeshVertex>() as u64,
+                        step_mode: wgpu::VertexStepMode::Vertex,
+                        attributes: &attrs,
+                    })],
+                },
+                primitive: wgpu::PrimitiveState {
+                    topology: wgpu::PrimitiveTopology::TriangleList,
+                    cull_mode: None,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some(fs_entry),
+                    compilation_options: Default::default(),
+                    targets: if color { &targets } else { &[] },
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let pipeline = make("mesh", "fs_main", true);
+        let shadow_pipeline = make("mesh shadow", "fs_shadow", false);
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("mesh texture"),
+            address_mode_u: wgpu::AddressMode::Repeat,
+            address_mode_v: wgpu::AddressMode::Repeat,
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            mipmap_filter: wgpu::MipmapFilterMode::Linear,
+            ..Default::default()
         });
-        MeshPass { pipeline, layout }
+        let white =
+            upload_rgba8_mips(gpu, &TextureData::white(), "white").create_view(&Default::default());
+        MeshPass {
+            pipeline,
+            shadow_pipeline,
+            frame_layout,
+            material_layout,
+            sampler,
+            white,
+        }
     }
 
     pub fn upload(&self, gpu: &Gpu, mesh: &MeshData) -> Result<GpuMesh, ViewError> {
+        let bad = |m: String| Err(ViewError::InvalidParam(m));
         if !mesh.vertices.len().is_multiple_of(3) {
-            return Err(ViewError::InvalidParam(format!(
+            return bad(format!(
                 "mesh has {} vertices, not a multiple of 3",
                 mesh.vertices.len()
-            )));
+            ));
+        }
+        let tris = mesh.vertices.len() / 3;
+        if !mesh.triangle_materials.is_empty() && mesh.triangle_materials.len() != tris {
+            return bad("mesh: one material index per triangle is needed".into());
         }
         if mesh
             .vertices
             .iter()
             .any(|v| !v.pos.iter().all(|c| c.is_finite()))
         {
-            return Err(ViewError::InvalidParam(
-                "mesh has a non-finite vertex".into(),
-            ));
+            return bad("mesh has a non-finite vertex".into());
         }
-        let n = mesh.vertices.len().max(3);
-        let mut data = mesh.vertices.clone();
-        data.resize(n, MeshVertex::default());
+        let materials = if mesh.materials.is_empty() {
+            vec![MeshMaterial::default()]
+        } else {
+            mesh.materials.clone()
+        };
+        let mat_of = |t: usize| mesh.triangle_materials.get(t).copied().unwrap_or(0);
+        if (0..tris).any(|t| mat_of(t) as usize >= materials.len())
+            || materials
+                .iter()
+                .any(|m| m.texture.is_some_and(|i| i as usize >= mesh.textures.len()))
+        {
+            return bad("mesh: material or texture index out of range".into());
+        }
+        let views: Vec<wgpu::TextureView> = mesh
+            .textures
+            .iter()
+            .map(|t| upload_rgba8_mips(gpu, t, "mesh texture").create_view(&Default::default()))
+            .collect();
+        // Vertices sorted by material (stable: triangle order within a material).
+        let mut order: Vec<usize> = (0..tris).collect();
+        order.sort_by_key(|&t| mat_of(t));
+        let mut data = Vec::with_capacity(mesh.vertices.len().max(3));
+        let mut ranges = Vec::new();
+        let mut start = 0u32;
+        for (i, &t) in order.iter().enumerate() {
+            data.extend_from_slice(&mesh.vertices[3 * t..3 * t + 3]);
+            let last = i + 1 == order.len() || mat_of(order[i + 1]) != mat_of(t);
+            if last {
+                let end = data.len() as u32;
+                let m = &materials[mat_of(t) as usize];
+                ranges.push((start..end, self.material_bind(gpu, m, &views)));
+                start = end;
+            }
+        }
+        let n = data.len();
+        data.resize(n.max(3), MeshVertex::default());
         let buffer = gpu
             .device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -157,35 +294,74 @@ impl MeshPass {
                 contents: bytemuck::cast_slice(&data),
                 usage: wgpu::BufferUsages::VERTEX,
             });
+        let mut bounds = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for v in &mesh.vertices {
+            bounds.0 = bounds.0.min(Vec3::from(v.pos));
+            bounds.1 = bounds.1.max(Vec3::from(v.pos));
+        }
         Ok(GpuMesh {
+            bounds,
             buffer,
-            vertices: mesh.vertices.len() as u32,
-            triangles: (mesh.vertices.len() / 3) as u32,
+            vertices: n as u32,
+            triangles: tris as u32,
+            ranges,
         })
     }
 
-    pub fn frame_bind_group(
+    fn material_bind(
         &self,
         gpu: &Gpu,
-        camera: &ViewCamera,
-        light: Vec3,
-        ambient: f32,
+        m: &MeshMaterial,
+        views: &[wgpu::TextureView],
     ) -> wgpu::BindGroup {
-        let l = light.normalize_or(Vec3::Y);
-        let u = MeshFrame {
-            view_proj: (camera.projection() * camera.view).to_cols_array_2d(),
-            light: [l.x, l.y, l.z, ambient.clamp(0.0, 1.0)],
+        let u = MaterialUniform {
+            params: [
+                m.alpha_cutoff.unwrap_or(0.0),
+                f32::from(u8::from(m.texture.is_some())),
+                0.0,
+                0.0,
+            ],
         };
         let buf = gpu
             .device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("mesh frame"),
+                label: Some("mesh material"),
                 contents: bytemuck::bytes_of(&u),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+        let view = m.texture.map_or(&self.white, |i| &views[i as usize]);
+        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("mesh material"),
+            layout: &self.material_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: buf.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::Sampler(&self.sampler),
+                },
+            ],
+        })
+    }
+
+    /// The frame bind group of `frame` (the camera's, or the light's for the shadow map).
+    pub fn frame_bind_group_from(&self, gpu: &Gpu, frame: &MeshFrame) -> wgpu::BindGroup {
+        let buf = gpu
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("mesh frame"),
+                contents: bytemuck::bytes_of(frame),
                 usage: wgpu::BufferUsages::UNIFORM,
             });
         gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("mesh frame"),
-            layout: &self.layout,
+            layout: &self.frame_layout,
             entries: &[wgpu::BindGroupEntry {
                 binding: 0,
                 resource: buf.as_entire_binding(),
@@ -193,20 +369,30 @@ impl MeshPass {
         })
     }
 
-    /// Draws `mesh`; returns the number of draw calls.
+    /// Draws `mesh` (colour pass, or the depth-only shadow pass); returns the draw calls.
     pub fn draw(
         &self,
         rp: &mut wgpu::RenderPass<'_>,
-        bind: &wgpu::BindGroup,
+        frame: &wgpu::BindGroup,
+        shadow: &wgpu::BindGroup,
         mesh: &GpuMesh,
+        depth_only: bool,
     ) -> usize {
         if mesh.vertices == 0 {
             return 0;
         }
-        rp.set_pipeline(&self.pipeline);
-        rp.set_bind_group(0, bind, &[]);
+        rp.set_pipeline(if depth_only {
+            &self.shadow_pipeline
+        } else {
+            &self.pipeline
+        });
+        rp.set_bind_group(0, frame, &[]);
+        rp.set_bind_group(2, shadow, &[]);
         rp.set_vertex_buffer(0, mesh.buffer.slice(..));
-        rp.draw(0..mesh.vertices, 0..1);
-        1
+        for (range, bind) in &mesh.ranges {
+            rp.set_bind_group(1, bind, &[]);
+            rp.draw(range.clone(), 0..1);
+        }
+        mesh.ranges.len()
     }
 }

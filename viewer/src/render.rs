@@ -1,25 +1,36 @@
-//! The frame: opaque meshes first (depth write), then the volume slices (depth test only),
-//! into an Rgba16Float target. See [`crate::volume_pass`] for the slicing.
+//! The frame. Passes, each built only when the content needs it:
+//! 1. `shadow` — the light's depth map (meshes, clouds, volumes cast), only with
+//!    shadows on and something to cast ([`crate::shadow`]);
+//! 2. `mesh` — opaque meshes (and kept cloud trunks, the ground), depth write;
+//! 3. `cloud` — billboard clouds, alpha-tested, depth write ([`crate::cloud_pass`]);
+//! 4. `volume` — volumetric-billboard slices, back to front, depth test only, blended
+//!    into Rgba16Float ([`crate::volume_pass`], [`crate::volume_plan`]);
+//! 5. `resolve` — the read-back (headless) or the blit to the window.
 
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use billow_format::{Prism, VolumeAsset};
+use billow_format::{CloudAsset, Prism, VolumeAsset};
 use glam::{Mat4, Vec3};
-use wgpu::util::DeviceExt;
 
-use crate::mesh_pass::{GpuMesh, MeshData, MeshPass};
-use crate::slice_plan::{slice_depths, voxel_size};
+use crate::cloud_pass::{select_level, CloudInstance, CloudPass, GpuCloud};
+use crate::mesh_pass::{GpuMesh, MeshData, MeshFrame, MeshPass};
+use crate::shadow::{self, ShadowMap, SHADOW_MAP_SIZE};
 use crate::target::{RgbaImage, Target};
-use crate::volume_pass::{FrameUniform, GpuCell, GpuSlice, GpuVolume, VolumePass};
+use crate::volume_pass::{GpuVolume, VolumePass};
+use crate::volume_plan::{self, VolumePlan};
 use crate::{Gpu, SliceParams, ViewCamera, ViewError};
+use wgpu::util::DeviceExt;
 
 /// Vertices per cell × slice instance: a fan of 3 triangles covers the ≤ 5-gon.
 pub const VERTICES_PER_INSTANCE: u32 = 9;
 
 /// What a frame drew.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct FrameStats {
     pub slices: usize,
+    /// Slabs drawn, and slabs skipped because no cell meets them.
+    pub slabs: usize,
+    pub empty_slabs: usize,
     /// Cells of all volume instances.
     pub cells: usize,
     /// Cell × slice instances drawn (each up to a pentagon).
@@ -30,12 +41,29 @@ pub struct FrameStats {
     pub voxel_size: f32,
     pub min_spacing: f32,
     pub max_spacing: f32,
+    /// Per cloud instance: its level (0 = foliage mesh) and morph factor.
+    pub cloud_lods: Vec<(usize, f32)>,
+    /// Slices of the volumes' shadow pass (0 without shadows).
+    pub shadow_slices: usize,
 }
 
-struct VolumeEntry {
-    cells: Vec<Prism>,
+/// The cloud instances of a frame, grouped by (cloud, level): the buffer and, per run,
+/// (cloud, level, instance range).
+type CloudRuns = (wgpu::Buffer, Vec<(usize, usize, std::ops::Range<u32>)>);
+
+/// A volume asset on the GPU with its cells (object space) and instance transforms.
+pub struct VolumeEntry {
+    pub cells: Vec<Prism>,
+    pub instances: Vec<Mat4>,
+    pub gpu: GpuVolume,
+}
+
+struct CloudEntry {
+    gpu: GpuCloud,
     instances: Vec<Mat4>,
-    gpu: GpuVolume,
+    /// Transition distances (one per level change) and the transition fraction.
+    distances: Vec<f32>,
+    transition: f32,
 }
 
 /// Owns the device, the passes the content needs, and the uploaded content.
@@ -44,25 +72,49 @@ pub struct Renderer {
     pub params: SliceParams,
     volume_pass: Option<VolumePass>,
     volumes: Vec<VolumeEntry>,
+    batches: Vec<wgpu::BindGroup>,
     mesh_pass: Option<MeshPass>,
     meshes: Vec<GpuMesh>,
-    /// Light direction (towards the light) and ambient term for meshes.
+    cloud_pass: Option<CloudPass>,
+    clouds: Vec<CloudEntry>,
+    receiver_layout: wgpu::BindGroupLayout,
+    /// 1×1 stand-in bound where no shadow map is read.
+    no_shadow: ShadowMap,
+    shadow_map: Option<ShadowMap>,
+    /// Light direction (towards the light) and ambient term.
     pub light_dir: Vec3,
     pub ambient: f32,
+    /// Force a camera distance for LOD selection (tests); `None`: the eye's distance.
+    pub lod_distance_override: Option<f32>,
 }
 
 impl Renderer {
     pub fn new(gpu: Gpu) -> Renderer {
+        let receiver_layout = shadow::receiver_layout(&gpu.device);
+        let no_shadow = ShadowMap::new(&gpu, &receiver_layout, 1);
         Renderer {
             gpu,
             params: SliceParams::default(),
             volume_pass: None,
             volumes: Vec::new(),
+            batches: Vec::new(),
             mesh_pass: None,
             meshes: Vec::new(),
+            cloud_pass: None,
+            clouds: Vec::new(),
+            receiver_layout,
+            no_shadow,
+            shadow_map: None,
             light_dir: Vec3::new(0.3, 1.0, 0.5).normalize(),
             ambient: 0.3,
+            lod_distance_override: None,
         }
+    }
+
+    /// Turns the shadow map on (built now) or off (dropped).
+    pub fn set_shadows(&mut self, on: bool) {
+        self.shadow_map =
+            on.then(|| ShadowMap::new(&self.gpu, &self.receiver_layout, SHADOW_MAP_SIZE));
     }
 
     /// Adds a volume asset drawn once per transform in `instances` (they share its texture).
@@ -71,44 +123,209 @@ impl Renderer {
         asset: &VolumeAsset,
         instances: Vec<Mat4>,
     ) -> Result<(), ViewError> {
-        if !instances.iter().all(|m| m.is_finite()) {
-            return Err(ViewError::InvalidParam(
-                "instance transform is not finite".into(),
-            ));
-        }
+        check_transforms(&instances)?;
         let pass = self
             .volume_pass
-            .get_or_insert_with(|| VolumePass::new(&self.gpu));
+            .get_or_insert_with(|| VolumePass::new(&self.gpu, &self.receiver_layout));
         let gpu = pass.upload(&self.gpu, asset)?;
         self.volumes.push(VolumeEntry {
             cells: asset.cells.clone(),
             instances,
             gpu,
         });
+        self.batches = volume_plan::batch_bind_groups(pass, &self.gpu, &self.volumes);
         Ok(())
+    }
+
+    /// Replaces the cells of volume `index` (animated cells: the same texture, deformed
+    /// prisms), e.g. every frame.
+    pub fn set_volume_cells(&mut self, index: usize, cells: Vec<Prism>) -> Result<(), ViewError> {
+        let v = self
+            .volumes
+            .get_mut(index)
+            .ok_or_else(|| ViewError::InvalidParam(format!("no volume {index}")))?;
+        if cells
+            .iter()
+            .any(|c| !c.pos.iter().flatten().all(|x| x.is_finite()))
+        {
+            return Err(ViewError::InvalidParam(
+                "cell position is not finite".into(),
+            ));
+        }
+        v.cells = cells;
+        Ok(())
+    }
+
+    /// The cells of volume `index` as uploaded.
+    pub fn volume_cells(&self, index: usize) -> Option<&[Prism]> {
+        self.volumes.get(index).map(|v| v.cells.as_slice())
     }
 
     /// Adds an opaque triangle mesh (world space).
     pub fn add_mesh(&mut self, mesh: &MeshData) -> Result<(), ViewError> {
         let pass = self
             .mesh_pass
-            .get_or_insert_with(|| MeshPass::new(&self.gpu));
+            .get_or_insert_with(|| MeshPass::new(&self.gpu, &self.receiver_layout));
         let m = pass.upload(&self.gpu, mesh)?;
         self.meshes.push(m);
         Ok(())
     }
 
-    /// The passes a frame runs, in order (only those the content needs).
+    /// Adds a billboard-cloud asset drawn once per transform; its kept mesh is added to
+    /// the mesh pass once per instance. `distances`: the level-change distances
+    /// (`None`: [`default_lod_distances`]); `transition`: the fraction of each distance
+    /// over which vertices morph.
+    pub fn add_cloud(
+        &mut self,
+        asset: &CloudAsset,
+        instances: Vec<Mat4>,
+        distances: Option<Vec<f32>>,
+        transition: f32,
+        fov_y: f32,
+    ) -> Result<(), ViewError> {
+        check_transforms(&instances)?;
+        let pass = self
+            .cloud_pass
+            .get_or_insert_with(|| CloudPass::new(&self.gpu, &self.receiver_layout));
+        let gpu = pass.upload(&self.gpu, asset)?;
+        let levels = gpu.level_count();
+        let distances = match distances {
+            Some(d) => d,
+            None => default_lod_distances(gpu.radius, fov_y, levels),
+        };
+        if distances.len() + 1 != levels
+            || !distances.windows(2).all(|w| w[0] < w[1])
+            || !distances.iter().all(|d| *d > 0.0 && d.is_finite())
+        {
+            return Err(ViewError::InvalidParam(format!(
+                "a cloud with {levels} levels (foliage mesh + {} billboard levels) needs {} \
+                 increasing positive LOD distances, got {distances:?}",
+                levels - 1,
+                levels - 1
+            )));
+        }
+        if !(0.0..=1.0).contains(&transition) {
+            return Err(ViewError::InvalidParam(format!(
+                "transition {transition} must be in [0, 1]"
+            )));
+        }
+        if !gpu.trunk.vertices.is_empty() {
+            for m in &instances {
+                let mut t = gpu.trunk.clone();
+                for v in &mut t.vertices {
+                    v.pos = m.transform_point3(Vec3::from(v.pos)).to_array();
+                    v.normal = m.transform_vector3(Vec3::from(v.normal)).to_array();
+                }
+                self.add_mesh(&t)?;
+            }
+        }
+        self.clouds.push(CloudEntry {
+            gpu,
+            instances,
+            distances,
+            transition,
+        });
+        Ok(())
+    }
+
+    /// Whether anything casts into a shadow map.
+    fn has_casters(&self) -> bool {
+        self.passes().contains(&"shadow")
+    }
+
+    /// The passes a frame runs, in order (only those the content needs;
+    /// [`crate::content::pass_list`]).
     pub fn passes(&self) -> Vec<&'static str> {
-        let mut p = Vec::new();
-        if !self.meshes.is_empty() {
-            p.push("mesh");
+        crate::content::pass_list(crate::content::Needs {
+            meshes: !self.meshes.is_empty(),
+            clouds: !self.clouds.is_empty(),
+            volumes: !self.volumes.is_empty(),
+            shadows: self.shadow_map.is_some(),
+        })
+    }
+
+    /// Bounding sphere of all content (world space), for the shadow camera.
+    fn content_sphere(&self) -> (Vec3, f32) {
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        for v in &self.volumes {
+            for m in &v.instances {
+                for c in &v.cells {
+                    for p in &c.pos {
+                        let q = m.transform_point3(Vec3::from(*p));
+                        lo = lo.min(q);
+                        hi = hi.max(q);
+                    }
+                }
+            }
         }
-        if !self.volumes.is_empty() {
-            p.push("volume");
+        for c in &self.clouds {
+            for m in &c.instances {
+                let q = m.transform_point3(c.gpu.centre);
+                let r = c.gpu.radius * m.x_axis.truncate().length();
+                lo = lo.min(q - Vec3::splat(r));
+                hi = hi.max(q + Vec3::splat(r));
+            }
         }
-        p.push("resolve");
-        p
+        for m in &self.meshes {
+            lo = lo.min(m.bounds.0);
+            hi = hi.max(m.bounds.1);
+        }
+        if !(lo.x <= hi.x) {
+            return (Vec3::ZERO, 1.0);
+        }
+        (0.5 * (lo + hi), 0.5 * (hi - lo).length())
+    }
+
+    /// Per cloud instance (cloud-major): level and morph factor for `camera`.
+    fn cloud_levels(&self, camera: &ViewCamera) -> Vec<(usize, f32)> {
+        let eye = camera.eye();
+        let mut out = Vec::new();
+        for c in &self.clouds {
+            for m in &c.instances {
+                let z = self
+                    .lod_distance_override
+                    .unwrap_or_else(|| (m.transform_point3(c.gpu.centre) - eye).length());
+                out.push(select_level(z, &c.distances, c.transition));
+            }
+        }
+        out
+    }
+
+    /// The cloud instances, grouped by (cloud, level), in one buffer.
+    fn cloud_instances(&self, levels: &[(usize, f32)]) -> Option<CloudRuns> {
+        if self.clouds.is_empty() {
+            return None;
+        }
+        let mut data: Vec<CloudInstance> = Vec::new();
+        let mut runs = Vec::new();
+        let mut k = 0;
+        for (ci, c) in self.clouds.iter().enumerate() {
+            let lv = &levels[k..k + c.instances.len()];
+            k += c.instances.len();
+            for level in 0..c.gpu.level_count() {
+                let start = data.len() as u32;
+                for (m, (l, a)) in c.instances.iter().zip(lv) {
+                    if *l == level {
+                        data.push(crate::cloud_pass::instance(*m, *a));
+                    }
+                }
+                let end = data.len() as u32;
+                if end > start {
+                    runs.push((ci, level, start..end));
+                }
+            }
+        }
+        data.resize(data.len().max(1), Default::default());
+        let buf = self
+            .gpu
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("cloud instances"),
+                contents: bytemuck::cast_slice(&data),
+                usage: wgpu::BufferUsages::VERTEX,
+            });
+        Some((buf, runs))
     }
 
     /// Renders one frame into `target` (submitted, not waited for).
@@ -123,12 +340,64 @@ impl Renderer {
         }
         let mut stats = FrameStats::default();
         let device = &self.gpu.device;
-        let plan = self.plan_volumes(camera, &mut stats)?;
+        let levels = self.cloud_levels(camera);
+        stats.cloud_lods = levels.clone();
+        let clouds = self.cloud_instances(&levels);
+        let mut enc = device.create_command_encoder(&Default::default());
+
+        // 1. Shadow map.
+        let shadow = match &self.shadow_map {
+            Some(map) if self.has_casters() => {
+                let (centre, radius) = self.content_sphere();
+                let light = shadow::light_camera(self.light_dir, centre, radius, map.size);
+                self.shadow_pass(&mut enc, map, &light, clouds.as_ref(), &mut stats)?;
+                Some((map, light))
+            }
+            _ => None,
+        };
+        let receiver = shadow.map_or(&self.no_shadow.bind_group, |(m, _)| &m.bind_group);
+        let world_to_shadow = shadow.map(|(_, l)| {
+            (
+                l.projection() * l.view,
+                shadow::depth_bias(&l),
+                shadow::view_to_shadow(camera, &l),
+            )
+        });
+
+        // 2–4. Meshes, clouds, volumes.
+        let plan = self.plan(
+            camera,
+            self.params,
+            world_to_shadow.map(|w| (w.2, w.1)),
+            None,
+        )?;
+        if let Some(p) = &plan {
+            p.fill_stats(&mut stats);
+        }
+        let mesh_frame = MeshFrame {
+            view_proj: (camera.projection() * camera.view).to_cols_array_2d(),
+            world_to_shadow: world_to_shadow
+                .map_or(Mat4::IDENTITY, |w| w.0)
+                .to_cols_array_2d(),
+            light: {
+                let l = self.light_dir.normalize_or(Vec3::Y);
+                [l.x, l.y, l.z, self.ambient.clamp(0.0, 1.0)]
+            },
+            flags: [
+                f32::from(u8::from(shadow.is_some())),
+                0.0,
+                world_to_shadow.map_or(0.0, |w| w.1),
+                0.0,
+            ],
+        };
         let mesh_bind = self
             .mesh_pass
             .as_ref()
-            .map(|p| p.frame_bind_group(&self.gpu, camera, self.light_dir, self.ambient));
-        let mut enc = device.create_command_encoder(&Default::default());
+            .map(|p| p.frame_bind_group_from(&self.gpu, &mesh_frame));
+        let cloud_bind = self
+            .cloud_pass
+            .as_ref()
+            .map(|p| p.frame_bind_group(&self.gpu, &mesh_frame));
         {
             let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("frame"),
@@ -141,14 +410,7 @@ impl Renderer {
                         store: wgpu::StoreOp::Store,
                     },
                 })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &target.depth_view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
+                depth_stencil_attachment: Some(depth_attachment(&target.depth_view)),
                 timestamp_writes: None,
                 occlusion_query_set: None,
                 multiview_mask: None,
@@ -156,44 +418,112 @@ impl Renderer {
             if let (Some(pass), Some(bind)) = (&self.mesh_pass, &mesh_bind) {
                 for m in &self.meshes {
                     stats.mesh_triangles += m.triangles as usize;
-                    stats.draw_calls += pass.draw(&mut rp, bind, m);
+                    stats.draw_calls += pass.draw(&mut rp, bind, receiver, m, false);
+                }
+            }
+            if let (Some(pass), Some(bind), Some((buf, runs))) =
+                (&self.cloud_pass, &cloud_bind, &clouds)
+            {
+                for (ci, level, range) in runs {
+                    let c = &self.clouds[*ci];
+                    stats.draw_calls += pass.draw(
+                        &mut rp,
+                        bind,
+                        receiver,
+                        &c.gpu,
+                        buf,
+                        *level,
+                        range.clone(),
+                        false,
+                    );
                 }
             }
             if let (Some(pass), Some(plan)) = (&self.volume_pass, &plan) {
-                rp.set_pipeline(&pass.pipeline);
-                rp.set_bind_group(0, &plan.frame_bind, &[]);
-                let n = plan.total_cells;
-                if plan.groups.len() == 1 {
-                    let g = &plan.groups[0];
-                    rp.set_bind_group(1, &self.volumes[g.volume].gpu.bind_group, &[]);
-                    let (s0, s1) = g.slices;
-                    if s0 < s1 {
-                        rp.draw(0..VERTICES_PER_INSTANCE, s0 * n..s1 * n);
-                        stats.draw_calls += 1;
-                        stats.instances += u64::from((s1 - s0) * n);
-                    }
-                } else {
-                    let mut bound = usize::MAX;
-                    for s in 0..plan.slices {
-                        for g in &plan.groups {
-                            if !(g.slices.0 <= s && s < g.slices.1) {
-                                continue;
-                            }
-                            if bound != g.volume {
-                                rp.set_bind_group(1, &self.volumes[g.volume].gpu.bind_group, &[]);
-                                bound = g.volume;
-                            }
-                            let b = s * n + g.offset;
-                            rp.draw(0..VERTICES_PER_INSTANCE, b..b + g.count);
-                            stats.draw_calls += 1;
-                            stats.instances += u64::from(g.count);
-                        }
-                    }
-                }
+                stats.draw_calls += plan.draw(&mut rp, &pass.pipeline, &self.batches, receiver);
             }
         }
         self.gpu.queue.submit([enc.finish()]);
         Ok(stats)
+    }
+
+    /// The light's depth map: meshes, clouds (at the levels the viewer shows), volumes
+    /// sliced from the light with [`shadow::SHADOW_SPACING_BIAS`]× the spacing.
+    fn shadow_pass(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        map: &ShadowMap,
+        light: &ViewCamera,
+        clouds: Option<&CloudRuns>,
+        stats: &mut FrameStats,
+    ) -> Result<(), ViewError> {
+        let mut params = self.params;
+        params.spacing = params.spacing.scaled(shadow::SHADOW_SPACING_BIAS);
+        let plan = self.plan(light, params, None, Some(shadow::SHADOW_ALPHA_CUTOFF))?;
+        stats.shadow_slices = plan.as_ref().map_or(0, |p| p.slice_count());
+        let frame = MeshFrame {
+            view_proj: (light.projection() * light.view).to_cols_array_2d(),
+            world_to_shadow: Mat4::IDENTITY.to_cols_array_2d(),
+            light: [0.0, 1.0, 0.0, 1.0],
+            flags: [0.0; 4],
+        };
+        let none = &self.no_shadow.bind_group;
+        let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("shadow"),
+            color_attachments: &[],
+            depth_stencil_attachment: Some(depth_attachment(&map.view)),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        if let Some(pass) = &self.mesh_pass {
+            let bind = pass.frame_bind_group_from(&self.gpu, &frame);
+            for m in &self.meshes {
+                pass.draw(&mut rp, &bind, none, m, true);
+            }
+        }
+        if let (Some(pass), Some((buf, runs))) = (&self.cloud_pass, clouds) {
+            let bind = pass.frame_bind_group(&self.gpu, &frame);
+            for (ci, level, range) in runs {
+                let c = &self.clouds[*ci];
+                pass.draw(
+                    &mut rp,
+                    &bind,
+                    none,
+                    &c.gpu,
+                    buf,
+                    *level,
+                    range.clone(),
+                    true,
+                );
+            }
+        }
+        if let (Some(pass), Some(plan)) = (&self.volume_pass, &plan) {
+            plan.draw(&mut rp, &pass.shadow_pipeline, &self.batches, none);
+        }
+        Ok(())
+    }
+
+    /// The volume plan for `camera` (cells in camera space, slices, slabs, draws).
+    fn plan(
+        &self,
+        camera: &ViewCamera,
+        params: SliceParams,
+        shadow: Option<(Mat4, f32)>,
+        shadow_cutoff: Option<f32>,
+    ) -> Result<Option<VolumePlan>, ViewError> {
+        let Some(pass) = &self.volume_pass else {
+            return Ok(None);
+        };
+        let receive = shadow.map(|(m, bias)| (m, bias, self.ambient));
+        volume_plan::plan(
+            &self.gpu,
+            pass,
+            &self.volumes,
+            camera,
+            params,
+            receive,
+            shadow_cutoff,
+        )
     }
 
     /// Renders into a new target and reads it back.
@@ -203,181 +533,35 @@ impl Renderer {
         let stats = self.render(&target, camera)?;
         Ok((target.read(&self.gpu)?, stats))
     }
+}
 
-    /// Cells to camera space, slice placement, per-volume slice ranges, GPU buffers.
-    fn plan_volumes(
-        &self,
-        camera: &ViewCamera,
-        stats: &mut FrameStats,
-    ) -> Result<Option<VolumePlan>, ViewError> {
-        let Some(pass) = &self.volume_pass else {
-            return Ok(None);
-        };
-        let mut cells: Vec<GpuCell> = Vec::new();
-        let mut groups = Vec::new();
-        let (mut z_min, mut z_max) = (f32::INFINITY, f32::NEG_INFINITY);
-        let mut v0_all: Option<f32> = None;
-        for (vi, v) in self.volumes.iter().enumerate() {
-            let offset = cells.len();
-            let (mut gz0, mut gz1) = (f32::INFINITY, f32::NEG_INFINITY);
-            let mut v0g: Option<f32> = None;
-            for m in &v.instances {
-                let world: Vec<Prism> = if *m == Mat4::IDENTITY {
-                    v.cells.clone()
-                } else {
-                    v.cells
-                        .iter()
-                        .map(|c| Prism {
-                            pos: c.pos.map(|p| m.transform_point3(Vec3::from(p)).to_array()),
-                            uvw: c.uvw,
-                        })
-                        .collect()
-                };
-                if let Some(s) = voxel_size(&world, v.gpu.dims0) {
-                    v0g = Some(v0g.map_or(s, |b| b.min(s)));
-                }
-                for c in &world {
-                    let pos = c.pos.map(|p| camera.to_view(Vec3::from(p)).to_array());
-                    for p in &pos {
-                        gz0 = gz0.min(-p[2]);
-                        gz1 = gz1.max(-p[2]);
-                    }
-                    cells.push(GpuCell::new(&pos, &c.uvw));
-                }
-            }
-            let Some(v0g) = v0g else {
-                cells.truncate(offset); // no cell with a usable uvw mapping: nothing to draw
-                continue;
-            };
-            v0_all = Some(v0_all.map_or(v0g, |b| b.min(v0g)));
-            z_min = z_min.min(gz0);
-            z_max = z_max.max(gz1);
-            let max_lod = (v.gpu.levels - 1) as f32;
-            self.gpu.queue.write_buffer(
-                &v.gpu.params,
-                0,
-                bytemuck::cast_slice(&[v0g, max_lod, 0.0, 0.0]),
-            );
-            groups.push(Group {
-                volume: vi,
-                offset: offset as u32,
-                count: (cells.len() - offset) as u32,
-                z: (gz0, gz1),
-                slices: (0, 0),
-            });
-        }
-        stats.cells = cells.len();
-        let Some(v0) = v0_all else {
-            return Ok(None);
-        };
-        stats.voxel_size = v0;
-        let z_min = z_min.max(camera.near);
-        let z_max = z_max.min(camera.far);
-        if !(z_min < z_max) {
-            return Ok(None);
-        }
-        let mut slices = slice_depths(
-            camera,
-            self.params.spacing,
-            v0,
-            z_min,
-            z_max,
-            self.params.max_slices,
-        )?;
-        slices.reverse(); // back to front
-        stats.slices = slices.len();
-        stats.min_spacing = slices.iter().map(|s| s.1).fold(f32::INFINITY, f32::min);
-        stats.max_spacing = slices.iter().map(|s| s.1).fold(0.0, f32::max);
-        if slices.is_empty() {
-            return Ok(None);
-        }
-        let n = cells.len() as u64;
-        if n * slices.len() as u64 > u64::from(u32::MAX) {
-            return Err(ViewError::InvalidParam(format!(
-                "{} cells × {} slices exceed the instance limit of 2^32",
-                n,
-                slices.len()
-            )));
-        }
-        // Slices are sorted by decreasing depth: those within [gz0, gz1] form a run.
-        for g in &mut groups {
-            let first = slices.partition_point(|s| s.0 > g.z.1);
-            let last = slices.partition_point(|s| s.0 >= g.z.0);
-            g.slices = (first as u32, last.max(first) as u32);
-        }
-        let gpu_slices: Vec<GpuSlice> = slices
-            .iter()
-            .map(|&(depth, d)| GpuSlice {
-                zd: [-depth, d, 0.0, 0.0],
-            })
-            .collect();
-        let device = &self.gpu.device;
-        let frame = FrameUniform {
-            proj: camera.projection().to_cols_array_2d(),
-            counts: [cells.len() as u32, 0, 0, 0],
-        };
-        let mk = |label, contents: &[u8], usage| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage,
-            })
-        };
-        let fb = mk(
-            "frame",
-            bytemuck::bytes_of(&frame),
-            wgpu::BufferUsages::UNIFORM,
-        );
-        let cb = mk(
-            "cells",
-            bytemuck::cast_slice(&cells),
-            wgpu::BufferUsages::STORAGE,
-        );
-        let sb = mk(
-            "slices",
-            bytemuck::cast_slice(&gpu_slices),
-            wgpu::BufferUsages::STORAGE,
-        );
-        let frame_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("volume frame"),
-            layout: &pass.frame_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: fb.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: cb.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: sb.as_entire_binding(),
-                },
-            ],
-        });
-        Ok(Some(VolumePlan {
-            frame_bind,
-            total_cells: cells.len() as u32,
-            slices: slices.len() as u32,
-            groups,
-        }))
+fn depth_attachment(view: &wgpu::TextureView) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+    wgpu::RenderPassDepthStencilAttachment {
+        view,
+        depth_ops: Some(wgpu::Operations {
+            load: wgpu::LoadOp::Clear(1.0),
+            store: wgpu::StoreOp::Store,
+        }),
+        stencil_ops: None,
     }
 }
 
-struct Group {
-    volume: usize,
-    offset: u32,
-    count: u32,
-    /// Depth range of its cells.
-    z: (f32, f32),
-    /// Run of back-to-front slice indices that can cut its cells.
-    slices: (u32, u32),
+fn check_transforms(m: &[Mat4]) -> Result<(), ViewError> {
+    if !m.iter().all(|m| m.is_finite()) {
+        return Err(ViewError::InvalidParam(
+            "instance transform is not finite".into(),
+        ));
+    }
+    Ok(())
 }
 
-struct VolumePlan {
-    frame_bind: wgpu::BindGroup,
-    total_cells: u32,
-    slices: u32,
-    groups: Vec<Group>,
+/// Level-change distances when a scene gives none: with `Z₀ = R / tan(fov/2)` (the
+/// distance at which the cloud's bounding sphere fills the view, Lacewell §4), the
+/// foliage mesh is shown up to `2 Z₀` and each billboard level to twice the distance
+/// of the one before.
+pub fn default_lod_distances(radius: f32, fov_y: f32, levels: usize) -> Vec<f32> {
+    let z0 = radius.max(1e-6) / (0.5 * fov_y).tan().max(1e-6);
+    (0..levels.saturating_sub(1))
+        .map(|k| z0 * 2f32.powi(k as i32 + 1))
+        .collect()
 }

@@ -23,11 +23,13 @@ pub struct SceneFile {
     #[serde(default)]
     pub volumes: Vec<VolumeDesc>,
     #[serde(default)]
+    pub clouds: Vec<CloudDesc>,
+    #[serde(default)]
     pub meshes: Vec<MeshDesc>,
     #[serde(default)]
     pub ground: Option<GroundDesc>,
-    /// Directional shadow map (meshes, volumes cast). Not implemented yet: a scene
-    /// asking for it is rendered without shadows and the shadow pass is listed as missing.
+    /// Directional shadow map: meshes, clouds and volumes cast; meshes, clouds and
+    /// volume slices receive.
     #[serde(default)]
     pub shadows: bool,
 }
@@ -90,6 +92,29 @@ pub struct VolumeDesc {
 
 fn one_instance() -> Vec<Transform> {
     vec![Transform::default()]
+}
+
+/// A billboard-cloud asset (`billow bbcloud`) with its instances and LOD distances.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CloudDesc {
+    /// A `.billow` cloud asset.
+    pub asset: PathBuf,
+    #[serde(default = "one_instance")]
+    pub instances: Vec<Transform>,
+    /// Distances (from the eye to an instance's centre) where the level changes: the
+    /// foliage mesh → billboard level 0 → level 1 …, one per change, increasing.
+    /// Absent: `2·Z₀, 4·Z₀, …` with `Z₀` the distance at which the cloud fills the view.
+    #[serde(default)]
+    pub lod_distances: Option<Vec<f32>>,
+    /// Fraction of each distance over which vertices morph toward the parent level
+    /// (0 = switch abruptly).
+    #[serde(default = "quarter")]
+    pub transition: f32,
+}
+
+fn quarter() -> f32 {
+    0.25
 }
 
 #[derive(Clone, Debug, Deserialize, PartialEq)]
@@ -177,6 +202,15 @@ impl SceneFile {
                 )));
             }
         }
+        for (i, c) in scene.clouds.iter_mut().enumerate() {
+            c.asset = dir.join(&c.asset);
+            if !c.asset.is_file() {
+                return Err(err(format!(
+                    "clouds[{i}].asset: {} does not exist",
+                    c.asset.display()
+                )));
+            }
+        }
         for (i, m) in scene.meshes.iter_mut().enumerate() {
             m.path = dir.join(&m.path);
             if !m.path.is_file() {
@@ -250,6 +284,31 @@ impl SceneFile {
                 check_t(t, format!("volumes[{i}].instances[{k}]"))?;
             }
         }
+        for (i, c) in self.clouds.iter().enumerate() {
+            if c.instances.is_empty() {
+                return Err(format!(
+                    "clouds[{i}].instances: at least one instance is needed"
+                ));
+            }
+            for (k, t) in c.instances.iter().enumerate() {
+                check_t(t, format!("clouds[{i}].instances[{k}]"))?;
+            }
+            if let Some(d) = &c.lod_distances {
+                if !d.iter().all(|x| *x > 0.0 && x.is_finite())
+                    || !d.windows(2).all(|w| w[0] < w[1])
+                {
+                    return Err(format!(
+                        "clouds[{i}].lod_distances: {d:?} must be positive and increasing"
+                    ));
+                }
+            }
+            if !(0.0..=1.0).contains(&c.transition) {
+                return Err(format!(
+                    "clouds[{i}].transition: {} must be in [0, 1]",
+                    c.transition
+                ));
+            }
+        }
         for (i, m) in self.meshes.iter().enumerate() {
             check_t(&m.transform, format!("meshes[{i}].transform"))?;
         }
@@ -265,31 +324,5 @@ impl SceneFile {
             }
         }
         Ok(())
-    }
-
-    /// The passes a frame of this scene runs, in order (`--print-passes`): `mesh` only
-    /// with meshes or a ground, `volume` only with volumes, then `resolve`. There is no
-    /// shadow pass yet: `shadows: true` is accepted and reported as unsupported
-    /// ([`SceneFile::unsupported`]), never listed as a pass that does not run.
-    pub fn passes(&self) -> Vec<&'static str> {
-        let opaque = !self.meshes.is_empty() || self.ground.is_some();
-        let mut p = Vec::new();
-        if opaque {
-            p.push("mesh");
-        }
-        if !self.volumes.is_empty() {
-            p.push("volume");
-        }
-        p.push("resolve");
-        p
-    }
-
-    /// What the scene asks for that this viewer does not do yet (for a warning).
-    pub fn unsupported(&self) -> Vec<&'static str> {
-        let mut u = Vec::new();
-        if self.shadows {
-            u.push("shadows (no shadow pass yet; rendered unshadowed)");
-        }
-        u
     }
 }

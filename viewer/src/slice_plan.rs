@@ -24,11 +24,28 @@ pub enum Spacing {
     Uniform { spacing: f32 },
 }
 
+impl Spacing {
+    /// The same mode with slices `f` times farther apart.
+    pub fn scaled(self, f: f32) -> Spacing {
+        match self {
+            Spacing::Adaptive { bias } => Spacing::Adaptive { bias: bias * f },
+            Spacing::Uniform { spacing } => Spacing::Uniform {
+                spacing: spacing * f,
+            },
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SliceParams {
     pub spacing: Spacing,
     /// Refuse to render more slices than this.
     pub max_slices: usize,
+    /// Slab partitioning ([`crate::slab`]); off: every cell meets every slice (the
+    /// paper's plain slicing).
+    pub partition: bool,
+    /// Fewest slices a slab holds.
+    pub slab_min_slices: u32,
 }
 
 impl Default for SliceParams {
@@ -36,6 +53,8 @@ impl Default for SliceParams {
         SliceParams {
             spacing: Spacing::Adaptive { bias: 1.0 },
             max_slices: 100_000,
+            partition: true,
+            slab_min_slices: 16,
         }
     }
 }

@@ -1,14 +1,22 @@
 //! The volume pass: GPU slicing of volumetric billboards (VB §3.3).
 //!
-//! One pipeline; per volume asset a 3D texture with its MIP chain (`Rgba8UnormSrgb`
-//! for sRGB-premultiplied assets, so filtering happens on linear premultiplied values,
-//! as the CPU sampler decodes before filtering), a trilinear sampler (clamp, or repeat
-//! in x and z for shells, SPEC §8.5) and a bind group. Per frame every cell of every
-//! instance goes to one storage buffer, in camera space, and the slices to another;
-//! instance `i` of a draw is cell `i mod N` on slice `i div N`, so a single draw covers
-//! all cells of a texture on a run of slices in the fixed order (slice back to front,
-//! then cell ID). Blending is premultiplied "over" into Rgba16Float; slices test
-//! against the depth of the opaque meshes but do not write it.
+//! Per volume asset a 3D texture with its MIP chain (`Rgba8UnormSrgb` for
+//! sRGB-premultiplied assets, so filtering happens on linear premultiplied values, as the
+//! CPU sampler decodes before filtering). Up to [`TEXTURES_PER_BATCH`] textures are bound
+//! at once (a *batch*), so one draw covers cells of several assets and a slice keeps its
+//! cells in ID order whatever their texture; each cell names its asset (and so its
+//! texture slot, sampler and `v₀`).
+//!
+//! Per frame: every cell of every instance goes to one storage buffer in camera space,
+//! the slices (back to front) to another, and the slabs' cell lists to a third
+//! ([`crate::slab`]). A draw covers a run of slices × a list of cells: instance `i` is
+//! slice `first + i div n`, cell `list[offset + i mod n]`, so within a draw slices go
+//! back to front and, within a slice, cells by ascending ID. The vertex shader
+//! intersects its prism with its slice plane in WGSL (`prism_plane.wgsl`, a port of the
+//! Rust reference) with a budget of 9 vertices (a fan of 3 triangles covers the ≤ 5-gon).
+//! Blending is premultiplied "over" into Rgba16Float; slices test against the depth of
+//! the opaque meshes and do not write it. The same pipeline with depth writes and an
+//! alpha test renders volumes into the shadow map ([`VolumePass::shadow_pipeline`]).
 
 use billow_format::{ColourSpace, VolumeAsset};
 use bytemuck::{Pod, Zeroable};
@@ -16,16 +24,40 @@ use bytemuck::{Pod, Zeroable};
 use crate::target::{COLOR_FORMAT, DEPTH_FORMAT};
 use crate::{Gpu, ViewError};
 
-/// The WGSL of the volume pass (prism/plane intersection + slicing shaders).
+/// Textures bound at once.
+pub const TEXTURES_PER_BATCH: usize = 8;
+
+/// The WGSL of the volume pass (prism/plane intersection + slicing shaders + the
+/// texture-slot switch).
 pub fn shader_source() -> String {
+    let mut bindings = String::new();
+    let mut switch = String::new();
+    for i in 0..TEXTURES_PER_BATCH {
+        bindings += &format!("@group(1) @binding({i}) var vol_tex{i}: texture_3d<f32>;\n");
+        switch += &format!(
+            "        case {i}u: {{ if rep {{ return textureSampleLevel(vol_tex{i}, smp_repeat, uvw, lod); }} \
+             return textureSampleLevel(vol_tex{i}, smp_clamp, uvw, lod); }}\n"
+        );
+    }
+    let n = TEXTURES_PER_BATCH;
+    let sampler = format!(
+        "{bindings}@group(1) @binding({n}) var smp_clamp: sampler;\n\
+         @group(1) @binding({}) var smp_repeat: sampler;\n\
+         fn sample_volume(slot: u32, rep: bool, uvw: vec3<f32>, lod: f32) -> vec4<f32> {{\n\
+             switch slot {{\n{switch}        default: {{ return vec4<f32>(0.0); }}\n    }}\n}}\n",
+        n + 1
+    );
     format!(
-        "{}\n{}",
+        "{}\n{}\n{}\n{}",
         include_str!("shaders/prism_plane.wgsl"),
+        include_str!("shaders/shadow_lookup.wgsl"),
+        sampler,
         include_str!("shaders/volume.wgsl")
     )
 }
 
-/// One cell in camera space, as the shaders read it (vec4-padded).
+/// One cell in camera space, as the shaders read it (vec4-padded). `pos[0].w` holds the
+/// index of its asset ([`GpuCell::with_volume`]), as raw bits.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct GpuCell {
@@ -40,13 +72,24 @@ impl GpuCell {
             uvw: uvw.map(|p| [p[0], p[1], p[2], 0.0]),
         }
     }
+    /// The cell drawn with asset `volume`'s texture and parameters.
+    pub fn with_volume(mut self, volume: u32) -> Self {
+        self.pos[0][3] = f32::from_bits(volume);
+        self
+    }
 }
 
+/// Per-frame uniform of the volume pass.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct FrameUniform {
     pub proj: [[f32; 4]; 4],
-    pub counts: [u32; 4],
+    /// Camera view space → the shadow map's clip space (unused without shadows).
+    pub view_to_shadow: [[f32; 4]; 4],
+    /// x: 1 = receive shadows, y: alpha cut-off of the shadow pipeline.
+    pub flags: [f32; 4],
+    /// xyz unused, w: ambient (the unshadowed fraction of the light).
+    pub light: [f32; 4],
 }
 
 #[repr(C)]
@@ -56,23 +99,51 @@ pub struct GpuSlice {
     pub zd: [f32; 4],
 }
 
+/// Per asset: `v₀` (level-0 voxel size after the instance transform, the finest over its
+/// instances), max lod, texture slot in its batch, 1 = repeat addressing in x and z.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuVolumeParams {
+    pub p: [f32; 4],
+}
+
+/// One draw: slices `first_slice..first_slice + slice_count` × the `cell_count` cells at
+/// `list[list_offset..]` (one dynamic-offset uniform per draw, padded to 256 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuDraw {
+    pub first_slice: u32,
+    pub slice_count: u32,
+    pub list_offset: u32,
+    pub cell_count: u32,
+    pub pad: [u32; 60],
+}
+
+impl Default for GpuDraw {
+    fn default() -> Self {
+        Self::zeroed()
+    }
+}
+
 /// An asset's texture on the GPU, shared by all its instances.
 pub struct GpuVolume {
     pub dims0: [u32; 3],
     pub levels: u32,
+    pub repeat: bool,
     pub texture: wgpu::Texture,
     pub view: wgpu::TextureView,
-    pub sampler: wgpu::Sampler,
-    /// Group uniform (v₀, max lod), rewritten every frame.
-    pub params: wgpu::Buffer,
-    pub bind_group: wgpu::BindGroup,
 }
 
-/// Volume pipeline and layouts.
+/// Volume pipelines and layouts.
 pub struct VolumePass {
     pub pipeline: wgpu::RenderPipeline,
+    /// Depth-only, alpha-tested (shadow map).
+    pub shadow_pipeline: wgpu::RenderPipeline,
     pub frame_layout: wgpu::BindGroupLayout,
-    pub group_layout: wgpu::BindGroupLayout,
+    pub batch_layout: wgpu::BindGroupLayout,
+    pub samplers: [wgpu::Sampler; 2],
+    /// Bound in unused texture slots.
+    pub dummy: wgpu::TextureView,
 }
 
 /// The addressing of `asset` (SPEC §8.5): repeat in x and z for shells (header param
@@ -82,103 +153,193 @@ pub fn repeat_axes(asset: &VolumeAsset) -> [bool; 3] {
     [shell, false, shell]
 }
 
+fn entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    ty: wgpu::BindingType,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty,
+        count: None,
+    }
+}
+
+const STORAGE: wgpu::BindingType = wgpu::BindingType::Buffer {
+    ty: wgpu::BufferBindingType::Storage { read_only: true },
+    has_dynamic_offset: false,
+    min_binding_size: None,
+};
+
 impl VolumePass {
-    pub fn new(gpu: &Gpu) -> VolumePass {
+    pub fn new(gpu: &Gpu, shadow_layout: &wgpu::BindGroupLayout) -> VolumePass {
         let device = &gpu.device;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("volume.wgsl"),
             source: wgpu::ShaderSource::Wgsl(shader_source().into()),
         });
-        let entry = |binding, visibility, ty| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility,
-            ty,
-            count: None,
-        };
-        let storage = wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only: true },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        };
-        let uniform = wgpu::BindingType::Buffer {
+        let uniform = |dynamic| wgpu::BindingType::Buffer {
             ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
+            has_dynamic_offset: dynamic,
             min_binding_size: None,
         };
         let vs = wgpu::ShaderStages::VERTEX;
+        let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
+        let fs = wgpu::ShaderStages::FRAGMENT;
         let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("volume frame"),
             entries: &[
-                entry(0, vs, uniform),
-                entry(1, vs, storage),
-                entry(2, vs, storage),
+                entry(0, vf, uniform(false)),
+                entry(1, vs, STORAGE),
+                entry(2, vs, STORAGE),
+                entry(3, vs, STORAGE),
+                entry(4, vs, STORAGE),
+                entry(5, vs, uniform(true)),
             ],
         });
-        let group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("volume texture"),
-            entries: &[
-                entry(0, vs, uniform),
+        let mut batch_entries: Vec<_> = (0..TEXTURES_PER_BATCH as u32)
+            .map(|i| {
                 entry(
-                    1,
-                    wgpu::ShaderStages::FRAGMENT,
+                    i,
+                    fs,
                     wgpu::BindingType::Texture {
                         sample_type: wgpu::TextureSampleType::Float { filterable: true },
                         view_dimension: wgpu::TextureViewDimension::D3,
                         multisampled: false,
                     },
-                ),
-                entry(
-                    2,
-                    wgpu::ShaderStages::FRAGMENT,
-                    wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                ),
-            ],
+                )
+            })
+            .collect();
+        for i in 0..2 {
+            batch_entries.push(entry(
+                TEXTURES_PER_BATCH as u32 + i,
+                fs,
+                wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+            ));
+        }
+        let batch_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("volume textures"),
+            entries: &batch_entries,
         });
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("volume"),
-            bind_group_layouts: &[Some(&frame_layout), Some(&group_layout)],
+            bind_group_layouts: &[
+                Some(&frame_layout),
+                Some(&batch_layout),
+                Some(shadow_layout),
+            ],
             immediate_size: 0,
         });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("volume slices"),
-            layout: Some(&layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState {
-                topology: wgpu::PrimitiveTopology::TriangleList,
-                cull_mode: None,
+        let make = |label, fs_entry, target: Option<wgpu::ColorTargetState>, depth_write| {
+            let targets = [target];
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(&layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: wgpu::PrimitiveState {
+                    topology: wgpu::PrimitiveTopology::TriangleList,
+                    cull_mode: None,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(depth_write),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some(fs_entry),
+                    compilation_options: Default::default(),
+                    targets: if targets[0].is_some() { &targets } else { &[] },
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let pipeline = make(
+            "volume slices",
+            "fs_main",
+            Some(wgpu::ColorTargetState {
+                format: COLOR_FORMAT,
+                blend: Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
+                write_mask: wgpu::ColorWrites::ALL,
+            }),
+            false,
+        );
+        let shadow_pipeline = make("volume shadow slices", "fs_shadow", None, true);
+        let mode = |r: bool| {
+            if r {
+                wgpu::AddressMode::Repeat
+            } else {
+                wgpu::AddressMode::ClampToEdge
+            }
+        };
+        let sampler = |rep: bool| {
+            device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("volume trilinear"),
+                address_mode_u: mode(rep),
+                address_mode_v: mode(false),
+                address_mode_w: mode(rep),
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                mipmap_filter: wgpu::MipmapFilterMode::Linear,
                 ..Default::default()
-            },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(false),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: COLOR_FORMAT,
-                    blend: Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+            })
+        };
+        let dummy = device
+            .create_texture(&wgpu::TextureDescriptor {
+                label: Some("volume dummy"),
+                size: wgpu::Extent3d {
+                    width: 1,
+                    height: 1,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D3,
+                format: wgpu::TextureFormat::Rgba8Unorm,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            })
+            .create_view(&Default::default());
         VolumePass {
             pipeline,
+            shadow_pipeline,
             frame_layout,
-            group_layout,
+            batch_layout,
+            samplers: [sampler(false), sampler(true)],
+            dummy,
         }
+    }
+
+    /// The bind group of a batch: `views[i]` in slot `i`, the dummy in the others.
+    pub fn batch_bind_group(&self, gpu: &Gpu, views: &[&wgpu::TextureView]) -> wgpu::BindGroup {
+        let mut entries: Vec<wgpu::BindGroupEntry> = (0..TEXTURES_PER_BATCH)
+            .map(|i| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: wgpu::BindingResource::TextureView(views.get(i).unwrap_or(&&self.dummy)),
+            })
+            .collect();
+        for (i, s) in self.samplers.iter().enumerate() {
+            entries.push(wgpu::BindGroupEntry {
+                binding: (TEXTURES_PER_BATCH + i) as u32,
+                resource: wgpu::BindingResource::Sampler(s),
+            });
+        }
+        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("volume batch"),
+            layout: &self.batch_layout,
+            entries: &entries,
+        })
     }
 
     /// Uploads `asset`'s colour levels as a 3D texture with its MIP chain.
@@ -236,56 +397,13 @@ impl VolumePass {
             );
         }
         let view = texture.create_view(&Default::default());
-        let mode = |r: bool| {
-            if r {
-                wgpu::AddressMode::Repeat
-            } else {
-                wgpu::AddressMode::ClampToEdge
-            }
-        };
         let rep = repeat_axes(asset);
-        let sampler = gpu.device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("volume trilinear"),
-            address_mode_u: mode(rep[0]),
-            address_mode_v: mode(rep[1]),
-            address_mode_w: mode(rep[2]),
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            mipmap_filter: wgpu::MipmapFilterMode::Linear,
-            ..Default::default()
-        });
-        let params = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("volume params"),
-            size: 16,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let bind_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("volume"),
-            layout: &self.group_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: params.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(&view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: wgpu::BindingResource::Sampler(&sampler),
-                },
-            ],
-        });
         Ok(GpuVolume {
             dims0,
             levels,
+            repeat: rep[0] || rep[2],
             texture,
             view,
-            sampler,
-            params,
-            bind_group,
         })
     }
 }

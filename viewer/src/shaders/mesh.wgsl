@@ -1,41 +1,81 @@
-// Opaque meshes: one directional light (two-sided Lambert) plus ambient, linear colour.
+// Opaque meshes: base colour × vertex colour × texture, alpha-masked materials discard;
+// one directional light (two-sided Lambert) plus ambient, linear colour, shadowed when
+// the frame has a shadow map (shadow_lookup.wgsl is prepended).
 
 struct MeshFrame {
     view_proj: mat4x4<f32>,
+    world_to_shadow: mat4x4<f32>,
     // xyz: direction towards the light (unit), w: ambient
     light: vec4<f32>,
+    // x: 1 = receive shadows, z: depth bias
+    flags: vec4<f32>,
+}
+
+struct Material {
+    // x: alpha cut-off (0 = opaque), y: 1 = textured
+    params: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> mf: MeshFrame;
+@group(1) @binding(0) var<uniform> material: Material;
+@group(1) @binding(1) var base_tex: texture_2d<f32>;
+@group(1) @binding(2) var base_smp: sampler;
 
 struct VIn {
     @location(0) pos: vec3<f32>,
     @location(1) normal: vec3<f32>,
-    @location(2) color: vec4<f32>,
+    @location(2) uv: vec2<f32>,
+    @location(3) color: vec4<f32>,
 }
 
 struct VOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) normal: vec3<f32>,
     @location(1) color: vec4<f32>,
+    @location(2) uv: vec2<f32>,
+    @location(3) shadow_clip: vec4<f32>,
 }
 
 @vertex
 fn vs_main(v: VIn) -> VOut {
     var o: VOut;
     o.clip = mf.view_proj * vec4<f32>(v.pos, 1.0);
+    o.shadow_clip = mf.world_to_shadow * vec4<f32>(v.pos, 1.0);
     o.normal = v.normal;
     o.color = v.color;
+    o.uv = v.uv;
     return o;
+}
+
+fn base_colour(i: VOut) -> vec4<f32> {
+    var c = i.color;
+    if material.params.y > 0.5 {
+        c = c * textureSample(base_tex, base_smp, i.uv);
+    }
+    return c;
 }
 
 @fragment
 fn fs_main(i: VOut) -> @location(0) vec4<f32> {
+    let c = base_colour(i);
+    if c.a < material.params.x {
+        discard;
+    }
     let len = length(i.normal);
     var lambert = 1.0;
     if len > 0.0 {
         lambert = abs(dot(i.normal / len, mf.light.xyz));
     }
+    if mf.flags.x > 0.5 {
+        lambert = lambert * shadow_visibility(i.shadow_clip, mf.flags.z);
+    }
     let k = mf.light.w + (1.0 - mf.light.w) * lambert;
-    return vec4<f32>(i.color.rgb * k, 1.0);
+    return vec4<f32>(c.rgb * k, 1.0);
+}
+
+@fragment
+fn fs_shadow(i: VOut) {
+    if base_colour(i).a < material.params.x {
+        discard;
+    }
 }

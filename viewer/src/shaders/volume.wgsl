@@ -1,12 +1,16 @@
-// Volumetric billboards, the paper's GPU slicing (§3.3): one instance per cell × slice,
-// a fixed budget of 9 vertices (a fan of 3 triangles covers the ≤ 5-gon); the vertex
-// shader intersects its cell with its slice plane (prism_plane.wgsl, prepended).
+// Volumetric billboards, the paper's GPU slicing (§3.3): one instance per slice × cell
+// of a draw, a fixed budget of 9 vertices (a fan of 3 triangles covers the ≤ 5-gon);
+// the vertex shader intersects its cell with its slice plane (prism_plane.wgsl,
+// prepended, with shadow_lookup.wgsl and the texture-slot switch `sample_volume`).
 // Opacity correction and MIP choice as src/eval/slicer.rs.
 
 struct Frame {
     proj: mat4x4<f32>,
-    // x: total cells in the cell buffer (instance = slice · n + cell)
-    counts: vec4<u32>,
+    view_to_shadow: mat4x4<f32>,
+    // x: 1 = receive shadows, y: alpha cut-off of the shadow pipeline, z: shadow bias
+    flags: vec4<f32>,
+    // w: ambient
+    light: vec4<f32>,
 }
 
 struct Slice {
@@ -14,30 +18,42 @@ struct Slice {
     zd: vec4<f32>,
 }
 
-struct Group {
-    // x: v0 (level-0 voxel size), y: max lod (levels − 1)
-    params: vec4<f32>,
+struct VolumeParams {
+    // x: v0 (level-0 voxel size), y: max lod (levels − 1), z: texture slot, w: 1 = repeat
+    p: vec4<f32>,
+}
+
+struct Draw {
+    first_slice: u32,
+    slice_count: u32,
+    list_offset: u32,
+    cell_count: u32,
 }
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(1) var<storage, read> cells: array<Cell>;
 @group(0) @binding(2) var<storage, read> slices: array<Slice>;
-@group(1) @binding(0) var<uniform> group_params: Group;
-@group(1) @binding(1) var vol_tex: texture_3d<f32>;
-@group(1) @binding(2) var vol_smp: sampler;
+@group(0) @binding(3) var<storage, read> list: array<u32>;
+@group(0) @binding(4) var<storage, read> volumes: array<VolumeParams>;
+@group(0) @binding(5) var<uniform> draw: Draw;
 
 struct VOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) uvw: vec3<f32>,
+    // x: lod, y: opacity-correction ratio d / d0
     @location(1) @interpolate(flat) lod_ratio: vec2<f32>,
+    // x: texture slot, y: 1 = repeat addressing
+    @location(2) @interpolate(flat) slot: vec2<u32>,
+    @location(3) shadow_clip: vec4<f32>,
 }
 
 @vertex
 fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> VOut {
     var out: VOut;
-    let n = frame.counts.x;
-    let slice = slices[ii / n];
-    var c = cells[ii % n];
+    let n = max(draw.cell_count, 1u);
+    let slice = slices[draw.first_slice + ii / n];
+    var c = cells[list[draw.list_offset + ii % n]];
+    let vol = volumes[bitcast<u32>(c.pos[0].w)].p;
     var poly = intersect_prism_plane(&c, slice.zd.x);
     let tri = vi / 3u;
     let corner = vi % 3u;
@@ -46,17 +62,22 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
         out.clip = vec4<f32>(2.0, 2.0, 2.0, 1.0);
         out.uvw = vec3<f32>(0.0);
         out.lod_ratio = vec2<f32>(0.0);
+        out.slot = vec2<u32>(0u);
+        out.shadow_clip = vec4<f32>(0.0, 0.0, 0.0, 1.0);
         return out;
     }
     let k = select(tri + corner, 0u, corner == 0u);
-    out.clip = frame.proj * vec4<f32>(poly.pos[k], 1.0);
+    let p = vec4<f32>(poly.pos[k], 1.0);
+    out.clip = frame.proj * p;
+    out.shadow_clip = frame.view_to_shadow * p;
     out.uvw = poly.uvw[k];
     // MIP level from the spacing, opacity-correction ratio d / d0 (linear MIP filter).
     let d = slice.zd.y;
-    let v0 = group_params.params.x;
-    let lod = clamp(log2(d / v0), 0.0, group_params.params.y);
+    let v0 = vol.x;
+    let lod = clamp(log2(d / v0), 0.0, vol.y);
     let d0 = v0 * exp2(lod);
     out.lod_ratio = vec2<f32>(lod, d / d0);
+    out.slot = vec2<u32>(u32(vol.z), u32(vol.w));
     return out;
 }
 
@@ -102,8 +123,27 @@ fn correct_premultiplied(c: vec4<f32>, ratio: f32) -> vec4<f32> {
     return vec4<f32>(c.rgb * scale, a2);
 }
 
+fn sample_corrected(in: VOut) -> vec4<f32> {
+    let s = sample_volume(in.slot.x, in.slot.y == 1u, in.uvw, in.lod_ratio.x);
+    return correct_premultiplied(s, in.lod_ratio.y);
+}
+
 @fragment
 fn fs_main(in: VOut) -> @location(0) vec4<f32> {
-    let s = textureSampleLevel(vol_tex, vol_smp, in.uvw, in.lod_ratio.x);
-    return correct_premultiplied(s, in.lod_ratio.y);
+    var c = sample_corrected(in);
+    if frame.flags.x > 0.5 {
+        let vis = shadow_visibility(in.shadow_clip, frame.flags.z);
+        let k = frame.light.w + (1.0 - frame.light.w) * vis;
+        c = vec4<f32>(c.rgb * k, c.a);
+    }
+    return c;
+}
+
+// Shadow map: an opacity-scaled slice (fewer slices, opacity corrected for the larger
+// spacing) occludes where its opacity reaches the cut-off.
+@fragment
+fn fs_shadow(in: VOut) {
+    if sample_corrected(in).a < frame.flags.y {
+        discard;
+    }
 }

@@ -1,0 +1,547 @@
+//! Billboard clouds (Lacewell et al. 2006, §3): LOD chosen per instance by distance,
+//! smooth transitions by sliding vertices toward their orthogonal projections on the
+//! parent billboard, the kept (trunk) mesh drawn with them by the mesh pass.
+//!
+//! Levels of a cloud, finest first: `0` = the foliage base mesh (the source leaves,
+//! textured and alpha-masked), `1..=L` = the asset's billboard levels. With transition
+//! distances `D₀ < D₁ < … < D_{L−1}` and a transition fraction `w`, an instance at
+//! distance `z` from the eye (to its bounds' centre) shows level `k` = the number of
+//! `D` below `z`; within `[D_k (1 − w), D_k)` level `k` morphs toward level `k + 1`:
+//! `a = (z − D_k (1 − w)) / (D_k w)`, each vertex at `mix(own, projection on parent, a)`.
+//! At `a = 1` every vertex lies in its parent billboard's plane, so the silhouette does
+//! not pop when the parent replaces it (only the texture changes).
+//!
+//! Billboards are alpha-tested (cut-off 0.5) and write depth, so they share the
+//! z-buffer with meshes and cut volume slices like meshes do. Each billboard is two
+//! one-sided quads: the front texture seen from `+normal`, the back from `−normal`.
+//! Atlases are premultiplied (SPEC §9): the colour is un-premultiplied before output.
+//! Lighting is baked into the atlases; the foliage mesh is lit like meshes.
+
+use billow_format::{CloudAsset, NO_INDEX};
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3};
+use wgpu::util::DeviceExt;
+
+use crate::mesh_pass::{MeshData, MeshFrame, MeshMaterial, MeshVertex};
+use crate::target::{COLOR_FORMAT, DEPTH_FORMAT};
+use crate::texture::{upload_rgba8_mips, TextureData};
+use crate::{Gpu, ViewError};
+
+/// Alpha cut-off of billboard texels.
+pub const BILLBOARD_CUTOFF: f32 = 0.5;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct CloudVertex {
+    pub pos: [f32; 3],
+    /// Where the vertex goes at the end of its level's transition.
+    pub target: [f32; 3],
+    pub normal: [f32; 3],
+    pub uv: [f32; 2],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct CloudInstance {
+    pub model: [[f32; 4]; 4],
+    /// x: morph factor a.
+    pub morph: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+struct DrawUniform {
+    /// x: alpha cut-off, y: 1 = premultiplied texels, z: 1 = lit (Lambert), w: 1 = textured.
+    params: [f32; 4],
+    /// Linear base colour factor.
+    color: [f32; 4],
+}
+
+/// A draw range with its texture/material bind group.
+struct Range {
+    vertices: std::ops::Range<u32>,
+    bind: wgpu::BindGroup,
+    /// Drawn with back faces culled (billboard sides) or not (foliage mesh).
+    culled: bool,
+}
+
+/// A cloud asset on the GPU.
+pub struct GpuCloud {
+    buffer: wgpu::Buffer,
+    /// Per level (0 = foliage mesh): its draw ranges.
+    levels: Vec<Vec<Range>>,
+    /// Billboards per billboard level (for the stats).
+    pub billboards: Vec<u32>,
+    pub foliage_triangles: u32,
+    /// Object-space bounds centre and radius.
+    pub centre: Vec3,
+    pub radius: f32,
+    /// The kept mesh, for the mesh pass (object space).
+    pub trunk: MeshData,
+}
+
+impl GpuCloud {
+    /// Levels including the foliage mesh.
+    pub fn level_count(&self) -> usize {
+        self.levels.len()
+    }
+}
+
+/// Which level an instance at distance `z` shows, and its morph factor (module docs).
+pub fn select_level(z: f32, distances: &[f32], transition: f32) -> (usize, f32) {
+    let k = distances.iter().take_while(|&&d| z >= d).count();
+    let Some(&d) = distances.get(k) else {
+        return (k, 0.0);
+    };
+    let w = transition.clamp(0.0, 1.0);
+    let start = d * (1.0 - w);
+    if w <= 0.0 || z < start {
+        return (k, 0.0);
+    }
+    (k, ((z - start) / (d * w)).clamp(0.0, 1.0))
+}
+
+pub struct CloudPass {
+    culled: wgpu::RenderPipeline,
+    two_sided: wgpu::RenderPipeline,
+    shadow: wgpu::RenderPipeline,
+    pub frame_layout: wgpu::BindGroupLayout,
+    draw_layout: wgpu::BindGroupLayout,
+    sampler: wgpu::Sampler,
+    white: wgpu::TextureView,
+}
+
+impl CloudPass {
+    pub fn new(gpu: &Gpu, shadow_layout: &wgpu::BindGroupLayout) -> CloudPass {
+        let device = &gpu.device;
+        let src = format!(
+            "{}\n{}",
+            include_str!("shaders/shadow_lookup.wgsl"),
+            include_str!("shaders/cloud.wgsl")
+        );
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("cloud.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(src.into()),
+        });
+        let entry = |binding, visibility, ty| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility,
+            ty,
+            count: None,
+        };
+        let uniform = wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        };
+        let fs = wgpu::ShaderStages::FRAGMENT;
+        let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("cloud frame"),
+            entries: &[entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT, uniform)],
+        });
+        let draw_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("cloud draw"),
+            entries: &[
+                entry(0, fs, uniform),
+                entry(
+                    1,
+                    fs,
+                    wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                ),
+                entry(
+                    2,
+                    fs,
+                    wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                ),
+            ],
+        });
+        let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("cloud"),
+            bind_group_layouts: &[Some(&frame_layout), Some(&draw_layout), Some(shadow_layout)],
+            immediate_size: 0,
+        });
+        let vattrs = wgpu::vertex_attr_array![
+            0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32x2
+        ];
+        let iattrs = wgpu::vertex_attr_array![
+            4 => Float32x4, 5 => Float32x4, 6 => Float32x4, 7 => Float32x4, 8 => Float32x4
+        ];
+        let make = |label, fs_entry, cull: Option<wgpu::Face>, color: bool| {
+            let targets = [Some(wgpu::ColorTargetState {
+                format: COLOR_FORMAT,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            })];
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(&pl),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[
+                        Some(wgpu::VertexBufferLayout {
+                            array_stride: std::mem::size_of::<CloudVertex>() as u64,
+                            step_mode: wgpu::VertexStepMode::Vertex,
+                            attributes: &vattrs,
+                        }),
+                        Some(wgpu::VertexBufferLayout {
+                            array_stride: std::mem::size_of::<CloudInstance>() as u64,
+                            step_mode: wgpu::VertexStepMode::Instance,
+                            attributes: &iattrs,
+                        }),
+                    ],
+                },
+                primitive: wgpu::PrimitiveState {
+                    topology: wgpu::PrimitiveTopology::TriangleList,
+                    front_face: wgpu::FrontFace::Ccw,
+                    cull_mode: cull,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some(fs_entry),
+                    compilation_options: Default::default(),
+                    targets: if color { &targets } else { &[] },
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let culled = make("cloud billboards", "fs_main", Some(wgpu::Face::Back), true);
+        let two_sided = make("cloud foliage", "fs_main", None, true);
+        let shadow = make("cloud shadow", "fs_shadow", None, false);
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("cloud texture"),
+            address_mode_u: wgpu::AddressMode::Repeat,
+            address_mode_v: wgpu::AddressMode::Repeat,
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            mipmap_filter: wgpu::MipmapFilterMode::Linear,
+            ..Default::default()
+        });
+        let white =
+            upload_rgba8_mips(gpu, &TextureData::white(), "white").create_view(&Default::default());
+        CloudPass {
+            culled,
+            two_sided,
+            shadow,
+            frame_layout,
+            draw_layout,
+            sampler,
+            white,
+        }
+    }
+
+    fn bind(
+        &self,
+        gpu: &Gpu,
+        params: [f32; 4],
+        color: [f32; 4],
+        view: &wgpu::TextureView,
+    ) -> wgpu::BindGroup {
+        let buf = gpu
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("cloud draw"),
+                contents: bytemuck::bytes_of(&DrawUniform { params, color }),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("cloud draw"),
+            layout: &self.draw_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: buf.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::Sampler(&self.sampler),
+                },
+            ],
+        })
+    }
+
+    /// Uploads a cloud asset: atlases, billboard sides grouped by (level, atlas), the
+    /// foliage mesh grouped by material; the trunk is returned as [`GpuCloud::trunk`].
+    pub fn upload(&self, gpu: &Gpu, asset: &CloudAsset) -> Result<GpuCloud, ViewError> {
+        asset
+            .validate()
+            .map_err(|e| ViewError::InvalidAsset(e.to_string()))?;
+        let atlas_views: Vec<wgpu::TextureView> = asset
+            .atlases
+            .iter()
+            .map(|a| {
+                let t = TextureData {
+                    width: a.width,
+                    height: a.height,
+                    texels: a.mips[0].clone(),
+                    premultiplied: true,
+                    mips: a.mips[1..].to_vec(),
+                };
+                upload_rgba8_mips(gpu, &t, "cloud atlas").create_view(&Default::default())
+            })
+            .collect();
+        let mesh_textures: Vec<wgpu::TextureView> = asset
+            .textures
+            .iter()
+            .map(|t| {
+                let d = TextureData::straight(t.width, t.height, t.texels.clone());
+                upload_rgba8_mips(gpu, &d, "cloud mesh texture").create_view(&Default::default())
+            })
+            .collect();
+        let mut verts: Vec<CloudVertex> = Vec::new();
+        let mut levels: Vec<Vec<Range>> = Vec::new();
+        // Level 0: the foliage mesh, by material.
+        let f = &asset.foliage;
+        let mut ranges = Vec::new();
+        for (mi, m) in asset.materials.iter().enumerate() {
+            let start = verts.len() as u32;
+            for (t, tri) in f.triangles.iter().enumerate() {
+                if f.materials[t] as usize != mi {
+                    continue;
+                }
+                for &i in tri {
+                    let v = &f.vertices[i as usize];
+                    verts.push(CloudVertex {
+                        pos: v.position,
+                        target: f.morph[i as usize],
+                        normal: v.normal,
+                        uv: v.uv,
+                    });
+                }
+            }
+            let end = verts.len() as u32;
+            if end > start {
+                let cutoff = if m.alpha_mode == 1 {
+                    m.alpha_cutoff
+                } else {
+                    0.5
+                };
+                let view = m
+                    .texture
+                    .map_or(&self.white, |t| &mesh_textures[t as usize]);
+                let textured = f32::from(u8::from(m.texture.is_some()));
+                ranges.push(Range {
+                    vertices: start..end,
+                    bind: self.bind(gpu, [cutoff, 0.0, 1.0, textured], m.base_color_factor, view),
+                    culled: false,
+                });
+            }
+        }
+        levels.push(ranges);
+        // Billboard levels, by atlas.
+        let mut billboards = Vec::new();
+        for l in &asset.levels {
+            let bbs = &asset.billboards
+                [l.first_billboard as usize..(l.first_billboard + l.billboard_count) as usize];
+            billboards.push(l.billboard_count);
+            let mut ranges = Vec::new();
+            for a in l.first_atlas..l.first_atlas + l.atlas_count {
+                let start = verts.len() as u32;
+                for b in bbs {
+                    let n = [b.plane[0], b.plane[1], b.plane[2]];
+                    for (side, rect, order) in [
+                        (0, &b.front, [0usize, 1, 2, 0, 2, 3]),
+                        (1, &b.back, [0, 2, 1, 0, 3, 2]),
+                    ] {
+                        if rect.atlas != a {
+                            continue;
+                        }
+                        let [u0, v0, u1, v1] = rect.uv;
+                        let uv = [[u0, v0], [u1, v0], [u1, v1], [u0, v1]];
+                        let nn = if side == 0 { n } else { n.map(|x| -x) };
+                        for c in order {
+                            let target = if b.parent.is_some_and(|p| p != NO_INDEX) {
+                                b.parent_corners[c]
+                            } else {
+                                b.corners[c]
+                            };
+                            verts.push(CloudVertex {
+                                pos: b.corners[c],
+                                target,
+                                normal: nn,
+                                uv: uv[c],
+                            });
+                        }
+                    }
+                }
+                let end = verts.len() as u32;
+                if end > start {
+                    ranges.push(Range {
+                        vertices: start..end,
+                        bind: self.bind(
+                            gpu,
+                            [BILLBOARD_CUTOFF, 1.0, 0.0, 1.0],
+                            [1.0; 4],
+                            &atlas_views[a as usize],
+                        ),
+                        culled: true,
+                    });
+                }
+            }
+            levels.push(ranges);
+        }
+        let n = verts.len();
+        verts.resize(n.max(1), CloudVertex::default());
+        let buffer = gpu
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("cloud vertices"),
+                contents: bytemuck::cast_slice(&verts),
+                usage: wgpu::BufferUsages::VERTEX,
+            });
+        let b = &asset.header.bounds;
+        let (lo, hi) = (Vec3::from(b.min), Vec3::from(b.max));
+        Ok(GpuCloud {
+            buffer,
+            levels,
+            billboards,
+            foliage_triangles: f.triangles.len() as u32,
+            centre: 0.5 * (lo + hi),
+            radius: 0.5 * (hi - lo).length(),
+            trunk: trunk_mesh(asset),
+        })
+    }
+
+    /// Draws level `level` of `cloud` for the instances `instances` (a range of the
+    /// bound instance buffer). Returns the draw calls.
+    #[allow(clippy::too_many_arguments)]
+    pub fn draw(
+        &self,
+        rp: &mut wgpu::RenderPass<'_>,
+        frame: &wgpu::BindGroup,
+        shadow: &wgpu::BindGroup,
+        cloud: &GpuCloud,
+        instance_buffer: &wgpu::Buffer,
+        level: usize,
+        instances: std::ops::Range<u32>,
+        depth_only: bool,
+    ) -> usize {
+        let Some(ranges) = cloud.levels.get(level) else {
+            return 0;
+        };
+        if instances.is_empty() {
+            return 0;
+        }
+        rp.set_bind_group(0, frame, &[]);
+        rp.set_bind_group(2, shadow, &[]);
+        rp.set_vertex_buffer(0, cloud.buffer.slice(..));
+        rp.set_vertex_buffer(1, instance_buffer.slice(..));
+        for r in ranges {
+            rp.set_pipeline(match (depth_only, r.culled) {
+                (true, _) => &self.shadow,
+                (false, true) => &self.culled,
+                (false, false) => &self.two_sided,
+            });
+            rp.set_bind_group(1, &r.bind, &[]);
+            rp.draw(r.vertices.clone(), instances.clone());
+        }
+        ranges.len()
+    }
+
+    /// The frame bind group (the mesh pass's frame uniform layout).
+    pub fn frame_bind_group(&self, gpu: &Gpu, frame: &MeshFrame) -> wgpu::BindGroup {
+        let buf = gpu
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("cloud frame"),
+                contents: bytemuck::bytes_of(frame),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("cloud frame"),
+            layout: &self.frame_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: buf.as_entire_binding(),
+            }],
+        })
+    }
+}
+
+/// The instance data of a cloud instance (`model` transform, morph factor).
+pub fn instance(model: Mat4, morph: f32) -> CloudInstance {
+    CloudInstance {
+        model: model.to_cols_array_2d(),
+        morph: [morph, 0.0, 0.0, 0.0],
+    }
+}
+
+/// The asset's kept (non-foliage) mesh as mesh-pass data, object space.
+fn trunk_mesh(asset: &CloudAsset) -> MeshData {
+    let t = &asset.trunk;
+    let mut out = MeshData {
+        textures: asset
+            .textures
+            .iter()
+            .map(|x| TextureData::straight(x.width, x.height, x.texels.clone()))
+            .collect(),
+        materials: asset
+            .materials
+            .iter()
+            .map(|m| MeshMaterial {
+                texture: m.texture,
+                alpha_cutoff: match m.alpha_mode {
+                    1 => Some(m.alpha_cutoff),
+                    2 => Some(0.5),
+                    _ => None,
+                },
+            })
+            .collect(),
+        ..Default::default()
+    };
+    for (ti, tri) in t.triangles.iter().enumerate() {
+        let m = &asset.materials[t.materials[ti] as usize];
+        for &i in tri {
+            let v = &t.vertices[i as usize];
+            out.vertices.push(MeshVertex {
+                pos: v.position,
+                normal: v.normal,
+                uv: v.uv,
+                color: m.base_color_factor,
+            });
+        }
+        out.triangle_materials.push(t.materials[ti]);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::select_level;
+
+    #[test]
+    fn levels_and_morph_factors() {
+        let d = [10.0, 20.0, 40.0];
+        assert_eq!(select_level(1.0, &d, 0.25), (0, 0.0));
+        assert_eq!(select_level(7.5, &d, 0.25), (0, 0.0));
+        let (k, a) = select_level(8.75, &d, 0.25);
+        assert_eq!(k, 0);
+        assert!((a - 0.5).abs() < 1e-6);
+        assert_eq!(select_level(10.0, &d, 0.25), (1, 0.0));
+        assert_eq!(select_level(100.0, &d, 0.25), (3, 0.0));
+        // No transition band: a hard switch.
+        assert_eq!(select_level(9.99, &d, 0.0), (0, 0.0));
+        // Morph factor is continuous and reaches 1 at the switch.
+        let (_, a) = select_level(19.9999, &d, 0.5);
+        assert!(a > 0.999);
+    }
+}

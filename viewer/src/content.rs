@@ -1,0 +1,153 @@
+//! What a scene holds, on the CPU: loaded assets, meshes, light, options. The passes a
+//! frame needs follow from it alone ([`Content::passes`], `--print-passes`, no GPU
+//! needed), and [`Content::build`] uploads it into a [`Renderer`] that builds exactly
+//! those passes.
+
+use billow_format::{CloudAsset, VolumeAsset};
+use glam::{Mat4, Vec3};
+
+use crate::mesh_pass::MeshData;
+use crate::{Gpu, Renderer, SliceParams, ViewError};
+
+/// A cloud asset and how it is placed.
+#[derive(Clone, Debug)]
+pub struct CloudContent {
+    pub asset: CloudAsset,
+    pub instances: Vec<Mat4>,
+    pub lod_distances: Option<Vec<f32>>,
+    pub transition: f32,
+}
+
+/// Which kinds of content a frame draws (what decides its passes).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Needs {
+    pub meshes: bool,
+    pub clouds: bool,
+    pub volumes: bool,
+    pub shadows: bool,
+}
+
+/// The passes of a frame with `n`, in order: `shadow` only with shadows on and something
+/// to cast, `mesh` only with meshes (a ground, cloud trunks), `cloud` only with clouds,
+/// `volume` only with volumes, then `resolve`.
+pub fn pass_list(n: Needs) -> Vec<&'static str> {
+    let mut p = Vec::new();
+    if n.shadows && (n.meshes || n.clouds || n.volumes) {
+        p.push("shadow");
+    }
+    if n.meshes {
+        p.push("mesh");
+    }
+    if n.clouds {
+        p.push("cloud");
+    }
+    if n.volumes {
+        p.push("volume");
+    }
+    p.push("resolve");
+    p
+}
+
+#[derive(Clone, Debug)]
+pub struct Content {
+    pub volumes: Vec<(VolumeAsset, Vec<Mat4>)>,
+    pub clouds: Vec<CloudContent>,
+    /// World-space opaque meshes (the ground included).
+    pub meshes: Vec<MeshData>,
+    /// Direction towards the light, ambient fraction.
+    pub light_dir: Vec3,
+    pub ambient: f32,
+    pub shadows: bool,
+}
+
+impl Default for Content {
+    fn default() -> Self {
+        Content {
+            volumes: Vec::new(),
+            clouds: Vec::new(),
+            meshes: Vec::new(),
+            light_dir: Vec3::new(0.3, 1.0, 0.5),
+            ambient: 0.3,
+            shadows: false,
+        }
+    }
+}
+
+impl Content {
+    pub fn needs(&self) -> Needs {
+        Needs {
+            meshes: !self.meshes.is_empty()
+                || self
+                    .clouds
+                    .iter()
+                    .any(|c| !c.asset.trunk.triangles.is_empty()),
+            clouds: !self.clouds.is_empty(),
+            volumes: !self.volumes.is_empty(),
+            shadows: self.shadows,
+        }
+    }
+
+    pub fn passes(&self) -> Vec<&'static str> {
+        pass_list(self.needs())
+    }
+
+    /// World-space bounds (min, max) of everything; `None` when empty.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        let mut grow_box = |min: [f32; 3], max: [f32; 3], m: &Mat4| {
+            for i in 0..8 {
+                let c = Vec3::new(
+                    if i & 1 == 0 { min[0] } else { max[0] },
+                    if i & 2 == 0 { min[1] } else { max[1] },
+                    if i & 4 == 0 { min[2] } else { max[2] },
+                );
+                let p = m.transform_point3(c);
+                lo = lo.min(p);
+                hi = hi.max(p);
+            }
+        };
+        for (a, inst) in &self.volumes {
+            for m in inst {
+                grow_box(a.header.bounds.min, a.header.bounds.max, m);
+            }
+        }
+        for c in &self.clouds {
+            for m in &c.instances {
+                grow_box(c.asset.header.bounds.min, c.asset.header.bounds.max, m);
+            }
+        }
+        for m in &self.meshes {
+            for v in &m.vertices {
+                lo = lo.min(Vec3::from(v.pos));
+                hi = hi.max(Vec3::from(v.pos));
+            }
+        }
+        (lo.x <= hi.x).then_some((lo, hi))
+    }
+
+    /// A renderer on `gpu` holding this content (`fov_y` sets default LOD distances).
+    pub fn build(&self, gpu: Gpu, params: SliceParams, fov_y: f32) -> Result<Renderer, ViewError> {
+        let mut r = Renderer::new(gpu);
+        r.params = params;
+        r.light_dir = self.light_dir;
+        r.ambient = self.ambient;
+        r.set_shadows(self.shadows);
+        for m in &self.meshes {
+            r.add_mesh(m)?;
+        }
+        for c in &self.clouds {
+            r.add_cloud(
+                &c.asset,
+                c.instances.clone(),
+                c.lod_distances.clone(),
+                c.transition,
+                fov_y,
+            )?;
+        }
+        for (a, inst) in &self.volumes {
+            r.add_volume(a, inst.clone())?;
+        }
+        Ok(r)
+    }
+}

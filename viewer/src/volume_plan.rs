@@ -1,0 +1,326 @@
+//! A frame's volume work, planned on the CPU: every cell of every instance in camera
+//! space, the slices ([`crate::slice_plan`], back to front), the slabs
+//! ([`crate::slab`]) and the draws, uploaded as the volume pass's buffers.
+//!
+//! Draws: a slab whose cells all use textures of one batch is **one draw** (its slices ×
+//! its cells). A slab that mixes batches (more than
+//! [`TEXTURES_PER_BATCH`](crate::volume_pass::TEXTURES_PER_BATCH) assets) is drawn slice
+//! by slice, one draw per batch, so back-to-front order holds across batches.
+
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+use glam::{Mat4, Vec3};
+use wgpu::util::DeviceExt;
+
+use crate::render::{FrameStats, VolumeEntry, VERTICES_PER_INSTANCE};
+use crate::slab::partition;
+use crate::slice_plan::{slice_depths, voxel_size};
+use crate::volume_pass::{
+    FrameUniform, GpuCell, GpuDraw, GpuSlice, GpuVolumeParams, VolumePass, TEXTURES_PER_BATCH,
+};
+use crate::{Gpu, SliceParams, ViewCamera, ViewError};
+
+/// One planned draw: its batch, the dynamic offset of its [`GpuDraw`], its instances.
+struct Draw {
+    batch: usize,
+    offset: u32,
+    instances: u32,
+}
+
+/// The buffers and draws of one frame's volumes.
+pub struct VolumePlan {
+    frame_bind: wgpu::BindGroup,
+    draws: Vec<Draw>,
+    slices: usize,
+    slabs: usize,
+    empty_slabs: usize,
+    cells: usize,
+    instances: u64,
+    v0: f32,
+    spacing: (f32, f32),
+}
+
+impl VolumePlan {
+    pub fn slice_count(&self) -> usize {
+        self.slices
+    }
+
+    pub fn fill_stats(&self, s: &mut FrameStats) {
+        s.slices = self.slices;
+        s.slabs = self.slabs;
+        s.empty_slabs = self.empty_slabs;
+        s.cells = self.cells;
+        s.instances = self.instances;
+        s.voxel_size = self.v0;
+        s.min_spacing = self.spacing.0;
+        s.max_spacing = self.spacing.1;
+    }
+
+    /// Records the draws with `pipeline` (colour or shadow); returns the draw calls.
+    pub fn draw(
+        &self,
+        rp: &mut wgpu::RenderPass<'_>,
+        pipeline: &wgpu::RenderPipeline,
+        batches: &[wgpu::BindGroup],
+        receiver: &wgpu::BindGroup,
+    ) -> usize {
+        rp.set_pipeline(pipeline);
+        rp.set_bind_group(2, receiver, &[]);
+        let mut bound = usize::MAX;
+        for d in &self.draws {
+            rp.set_bind_group(0, &self.frame_bind, &[d.offset]);
+            if bound != d.batch {
+                rp.set_bind_group(1, &batches[d.batch], &[]);
+                bound = d.batch;
+            }
+            rp.draw(0..VERTICES_PER_INSTANCE, 0..d.instances);
+        }
+        self.draws.len()
+    }
+}
+
+/// The texture batches of `volumes`: volume `i` is slot `i % N` of batch `i / N`.
+pub fn batch_bind_groups(
+    pass: &VolumePass,
+    gpu: &Gpu,
+    volumes: &[VolumeEntry],
+) -> Vec<wgpu::BindGroup> {
+    volumes
+        .chunks(TEXTURES_PER_BATCH)
+        .map(|c| {
+            let views: Vec<&wgpu::TextureView> = c.iter().map(|v| &v.gpu.view).collect();
+            pass.batch_bind_group(gpu, &views)
+        })
+        .collect()
+}
+
+fn storage<T: bytemuck::Pod + Default>(gpu: &Gpu, label: &str, data: &[T]) -> wgpu::Buffer {
+    let one = [T::default()];
+    let contents: &[T] = if data.is_empty() { &one } else { data };
+    gpu.device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: bytemuck::cast_slice(contents),
+            usage: wgpu::BufferUsages::STORAGE,
+        })
+}
+
+/// Plans the volumes for `camera`. `receive`: (camera view → shadow clip, depth bias,
+/// ambient) when the slices receive shadows; `shadow_cutoff`: the alpha cut-off when
+/// this plan renders into the shadow map.
+pub fn plan(
+    gpu: &Gpu,
+    pass: &VolumePass,
+    volumes: &[VolumeEntry],
+    camera: &ViewCamera,
+    params: SliceParams,
+    receive: Option<(Mat4, f32, f32)>,
+    shadow_cutoff: Option<f32>,
+) -> Result<Option<VolumePlan>, ViewError> {
+    let _ = pass;
+    let mut cells: Vec<GpuCell> = Vec::new();
+    let mut ranges: Vec<(f32, f32)> = Vec::new();
+    let mut vparams: Vec<GpuVolumeParams> = Vec::new();
+    let mut batch_of_cell: Vec<u32> = Vec::new();
+    let (mut z_min, mut z_max) = (f32::INFINITY, f32::NEG_INFINITY);
+    let mut v0_all: Option<f32> = None;
+    for (vi, v) in volumes.iter().enumerate() {
+        let offset = cells.len();
+        let mut v0: Option<f32> = None;
+        for m in &v.instances {
+            let world: Vec<billow_format::Prism> = v
+                .cells
+                .iter()
+                .map(|c| billow_format::Prism {
+                    pos: c.pos.map(|p| m.transform_point3(Vec3::from(p)).to_array()),
+                    uvw: c.uvw,
+                })
+                .collect();
+            if let Some(s) = voxel_size(&world, v.gpu.dims0) {
+                v0 = Some(v0.map_or(s, |b| b.min(s)));
+            }
+            for c in &world {
+                let pos = c.pos.map(|p| camera.to_view(Vec3::from(p)).to_array());
+                let (mut a, mut b) = (f32::INFINITY, f32::NEG_INFINITY);
+                for p in &pos {
+                    a = a.min(-p[2]);
+                    b = b.max(-p[2]);
+                }
+                cells.push(GpuCell::new(&pos, &c.uvw).with_volume(vi as u32));
+                ranges.push((a, b));
+                batch_of_cell.push((vi / TEXTURES_PER_BATCH) as u32);
+            }
+        }
+        let slot = (vi % TEXTURES_PER_BATCH) as f32;
+        let max_lod = (v.gpu.levels - 1) as f32;
+        let repeat = f32::from(u8::from(v.gpu.repeat));
+        let Some(v0) = v0 else {
+            // No cell with a usable uvw mapping: nothing to draw for this asset.
+            cells.truncate(offset);
+            ranges.truncate(offset);
+            batch_of_cell.truncate(offset);
+            vparams.push(GpuVolumeParams {
+                p: [1.0, max_lod, slot, repeat],
+            });
+            continue;
+        };
+        vparams.push(GpuVolumeParams {
+            p: [v0, max_lod, slot, repeat],
+        });
+        v0_all = Some(v0_all.map_or(v0, |b| b.min(v0)));
+        for r in &ranges[offset..] {
+            z_min = z_min.min(r.0);
+            z_max = z_max.max(r.1);
+        }
+    }
+    let Some(v0) = v0_all else {
+        return Ok(None);
+    };
+    let z_lo = z_min.max(camera.near);
+    let z_hi = z_max.min(camera.far);
+    if !(z_lo < z_hi) {
+        return Ok(None);
+    }
+    let mut slices = slice_depths(camera, params.spacing, v0, z_lo, z_hi, params.max_slices)?;
+    slices.reverse(); // back to front
+    if slices.is_empty() {
+        return Ok(None);
+    }
+    let depths: Vec<f32> = slices.iter().map(|s| s.0).collect();
+    let (slabs, empty_slabs) =
+        partition(&depths, &ranges, params.partition, params.slab_min_slices);
+
+    // Draws: per slab, batch runs of its (ascending) cell list.
+    let mut list: Vec<u32> = Vec::new();
+    let mut draw_data: Vec<GpuDraw> = Vec::new();
+    let mut draws = Vec::new();
+    let mut instances = 0u64;
+    let stride = std::mem::size_of::<GpuDraw>() as u32;
+    let mut push = |draws: &mut Vec<Draw>, batch, first, count: u32, off, n: u32| {
+        let inst = u64::from(count) * u64::from(n);
+        if inst > u64::from(u32::MAX) {
+            return Err(ViewError::InvalidParam(format!(
+                "{n} cells × {count} slices in one slab exceed the instance limit of 2^32"
+            )));
+        }
+        draws.push(Draw {
+            batch,
+            offset: draw_data.len() as u32 * stride,
+            instances: inst as u32,
+        });
+        draw_data.push(GpuDraw {
+            first_slice: first,
+            slice_count: count,
+            list_offset: off,
+            cell_count: n,
+            pad: [0; 60],
+        });
+        instances += inst;
+        Ok(())
+    };
+    for slab in &slabs {
+        let mut runs: Vec<(usize, u32, u32)> = Vec::new(); // (batch, offset, count)
+        for &c in &slab.cells {
+            let b = batch_of_cell[c as usize] as usize;
+            match runs.last_mut() {
+                Some(r) if r.0 == b => r.2 += 1,
+                _ => runs.push((b, list.len() as u32, 1)),
+            }
+            list.push(c);
+        }
+        let (s0, s1) = slab.slices;
+        if runs.len() == 1 {
+            let (b, off, n) = runs[0];
+            push(&mut draws, b, s0, s1 - s0, off, n)?;
+        } else {
+            for s in s0..s1 {
+                for &(b, off, n) in &runs {
+                    push(&mut draws, b, s, 1, off, n)?;
+                }
+            }
+        }
+    }
+
+    let (view_to_shadow, bias, ambient) = receive.unwrap_or((Mat4::IDENTITY, 0.0, 1.0));
+    let frame = FrameUniform {
+        proj: camera.projection().to_cols_array_2d(),
+        view_to_shadow: view_to_shadow.to_cols_array_2d(),
+        flags: [
+            f32::from(u8::from(receive.is_some())),
+            shadow_cutoff.unwrap_or(0.5),
+            bias,
+            0.0,
+        ],
+        light: [0.0, 0.0, 0.0, ambient],
+    };
+    let gpu_slices: Vec<GpuSlice> = slices
+        .iter()
+        .map(|&(depth, d)| GpuSlice {
+            zd: [-depth, d, 0.0, 0.0],
+        })
+        .collect();
+    let device = &gpu.device;
+    let fb = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("volume frame"),
+        contents: bytemuck::bytes_of(&frame),
+        usage: wgpu::BufferUsages::UNIFORM,
+    });
+    draw_data.resize(draw_data.len().max(1), GpuDraw::default());
+    let db = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("volume draws"),
+        contents: bytemuck::cast_slice(&draw_data),
+        usage: wgpu::BufferUsages::UNIFORM,
+    });
+    let cb = storage(gpu, "cells", &cells);
+    let sb = storage(gpu, "slices", &gpu_slices);
+    let lb = storage(gpu, "cell lists", &list);
+    let vb = storage(gpu, "volume params", &vparams);
+    let frame_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("volume frame"),
+        layout: &pass.frame_layout,
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: fb.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: cb.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: sb.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 3,
+                resource: lb.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 4,
+                resource: vb.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 5,
+                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &db,
+                    offset: 0,
+                    size: wgpu::BufferSize::new(16),
+                }),
+            },
+        ],
+    });
+    let spacing = slices.iter().fold((f32::INFINITY, 0.0f32), |(lo, hi), s| {
+        (lo.min(s.1), hi.max(s.1))
+    });
+    Ok(Some(VolumePlan {
+        frame_bind,
+        draws,
+        slices: slices.len(),
+        slabs: slabs.len(),
+        empty_slabs,
+        cells: cells.len(),
+        instances,
+        v0,
+        spacing,
+    }))
+}
