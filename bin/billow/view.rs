@@ -67,8 +67,12 @@ pub struct Args {
     #[arg(long)]
     print_passes: bool,
     /// Render this many frames (timing: mean and minimum frame time are reported).
-    #[arg(long, default_value_t = 1)]
-    frames: u32,
+    /// Headless default 1; in a window: close after N frames (default: when closed).
+    #[arg(long)]
+    frames: Option<u32>,
+    /// Draw the edges of every volume cell over the frame (`W` in the window).
+    #[arg(long)]
+    wireframe: bool,
     /// Print a JSON summary on stdout.
     #[arg(long)]
     json: bool,
@@ -177,21 +181,21 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             return Err(bad("--lod-distance", format!("{d}: must be > 0")));
         }
     }
-    if args.frames == 0 {
+    if args.frames == Some(0) {
         return Err(bad("--frames", "must be at least 1"));
     }
     if args.slab_min_slices == 0 {
         return Err(bad("--slab-min-slices", "must be at least 1"));
     }
-    if !args.headless {
+    if args.headless && args.screenshot.is_none() {
+        return Err(bad("--screenshot", "--headless needs --screenshot OUT.png"));
+    }
+    if !args.headless && args.screenshot.is_some() {
         return Err(bad(
-            "--headless",
-            "window mode is not implemented yet; use --headless --screenshot OUT.png",
+            "--screenshot",
+            "screenshots are taken headless: add --headless",
         ));
     }
-    let Some(out) = &args.screenshot else {
-        return Err(bad("--screenshot", "--headless needs --screenshot OUT.png"));
-    };
     let eye = args
         .eye
         .as_deref()
@@ -240,9 +244,13 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         let dist = (eye - centre).length();
         let near = near.unwrap_or(((dist - radius) * 0.5).max(radius * 1e-3));
         let far = far.unwrap_or((dist + radius) * 2.0);
-        ViewCamera::look_at(eye, target, up, fov, width, height, near, far)
+        (
+            ViewCamera::look_at(eye, target, up, fov, width, height, near, far),
+            eye,
+            target,
+        )
     };
-    let camera = match (eye, &scene.camera) {
+    let (camera, cam_eye, cam_target) = match (eye, &scene.camera) {
         (Some(e), _) => look(e, look_at.unwrap_or(centre), Vec3::Y, None, None),
         (None, Some(c)) => look(
             Vec3::from(c.eye),
@@ -256,9 +264,26 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             if let Some(t) = look_at {
                 c.target = t;
             }
-            ViewCamera::from_parts(c.view(), c.fov_y, c.width, c.height, c.near, c.far)
+            (
+                ViewCamera::from_parts(c.view(), c.fov_y, c.width, c.height, c.near, c.far),
+                c.eye,
+                c.target,
+            )
         }
     };
+    if !args.headless {
+        return run_window(
+            &args,
+            content,
+            params,
+            fov,
+            (width, height),
+            (cam_eye, cam_target),
+            ctx,
+        );
+    }
+    let out = args.screenshot.as_ref().expect("checked above");
+    let frames = args.frames.unwrap_or(1);
 
     // Mesa's device-select Vulkan layer probes a display server and prints
     // "XDG_RUNTIME_DIR is invalid" on stderr without one; headless needs no display, so
@@ -272,10 +297,11 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let adapter = gpu.describe();
     let mut r = content.build(gpu, params, fov).map_err(view_err)?;
     r.lod_distance_override = args.lod_distance;
+    r.set_wireframe(args.wireframe);
     let target = billow_view::target::Target::new(&r.gpu, width, height);
     let mut stats = FrameStats::default();
     let (mut total, mut min) = (0.0f64, f64::INFINITY);
-    for _ in 0..args.frames {
+    for _ in 0..frames {
         let t = Instant::now();
         stats = r.render(&target, &camera).map_err(view_err)?;
         r.gpu.wait().map_err(view_err)?;
@@ -299,8 +325,8 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         width,
         height,
         passes,
-        frames: args.frames,
-        frame_ms_mean: 1e3 * total / f64::from(args.frames),
+        frames,
+        frame_ms_mean: 1e3 * total / f64::from(frames),
         frame_ms_min: 1e3 * min,
         stats,
     };
@@ -320,8 +346,49 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             s.draw_calls,
             summary.frame_ms_mean,
             summary.frame_ms_min,
-            args.frames,
+            frames,
             out.display()
+        );
+    }
+    Ok(())
+}
+
+/// Window mode: an orbit camera starting at the computed camera.
+fn run_window(
+    args: &Args,
+    content: billow_view::content::Content,
+    params: SliceParams,
+    fov: f32,
+    size: (u32, u32),
+    (eye, target): (Vec3, Vec3),
+    ctx: &Ctx,
+) -> Result<(), CliError> {
+    let lod = args.lod_distance;
+    let wire = args.wireframe;
+    let mut first = true;
+    let opts = billow_view::window::WindowOptions {
+        title: format!("billow view {}", args.target.display()),
+        size,
+        params,
+        orbit: billow_view::window::Orbit::from_eye(eye, target, fov),
+        max_frames: args.frames.map(u64::from),
+        animate: Some(Box::new(move |_t, r: &mut billow_view::Renderer| {
+            if first {
+                r.lod_distance_override = lod;
+                r.set_wireframe(wire);
+                first = false;
+            }
+        })),
+    };
+    let stats = billow_view::window::run(content, opts).map_err(view_err)?;
+    if args.json {
+        print_json(&stats)?;
+    } else if !ctx.quiet {
+        eprintln!(
+            "{}: window closed after the last frame's {} slices, {} cells",
+            args.target.display(),
+            stats.slices,
+            stats.cells
         );
     }
     Ok(())

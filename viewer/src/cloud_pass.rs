@@ -11,11 +11,16 @@
 //! At `a = 1` every vertex lies in its parent billboard's plane, so the silhouette does
 //! not pop when the parent replaces it (only the texture changes).
 //!
-//! Billboards are alpha-tested (cut-off 0.5) and write depth, so they share the
-//! z-buffer with meshes and cut volume slices like meshes do. Each billboard is two
-//! one-sided quads: the front texture seen from `+normal`, the back from `−normal`.
-//! Atlases are premultiplied (SPEC §9): the colour is un-premultiplied before output.
-//! Lighting is baked into the atlases; the foliage mesh is lit like meshes.
+//! The foliage mesh is alpha-tested (its materials' cut-off), writes depth and is lit
+//! like meshes. Billboards are semi-transparent: per frame and instance their quads are
+//! sorted back to front (by the depth of their morphed centres) and blended
+//! (premultiplied "over", atlases are premultiplied, SPEC §9) without writing depth,
+//! after a depth-only pre-pass of the texels with alpha ≥ [`BILLBOARD_CUTOFF`], so the
+//! dense parts occlude what lies behind them (meshes, other clouds and volume slices
+//! drawn later test against them) while thin leaves keep their partial coverage at a
+//! distance — an alpha test alone would erase leaves whose coverage in a texel is below
+//! the cut-off. Each billboard is two one-sided quads: the front texture seen from
+//! `+normal`, the back from `−normal`. Lighting is baked into the atlases.
 
 use billow_format::{CloudAsset, NO_INDEX};
 use bytemuck::{Pod, Zeroable};
@@ -27,7 +32,7 @@ use crate::target::{COLOR_FORMAT, DEPTH_FORMAT};
 use crate::texture::{upload_rgba8_mips, TextureData};
 use crate::{Gpu, ViewError};
 
-/// Alpha cut-off of billboard texels.
+/// Texels at least this opaque write depth (the pre-pass) and cast shadows.
 pub const BILLBOARD_CUTOFF: f32 = 0.5;
 
 #[repr(C)]
@@ -57,19 +62,27 @@ struct DrawUniform {
     color: [f32; 4],
 }
 
-/// A draw range with its texture/material bind group.
-struct Range {
+/// A foliage-mesh material's vertex range.
+struct MeshRange {
     vertices: std::ops::Range<u32>,
     bind: wgpu::BindGroup,
-    /// Drawn with back faces culled (billboard sides) or not (foliage mesh).
-    culled: bool,
+}
+
+/// The quads of one billboard level that use one atlas: 4 vertices each from
+/// `first_vertex`, with their own and target (parent) centres for sorting.
+struct QuadGroup {
+    bind: wgpu::BindGroup,
+    first_vertex: u32,
+    centres: Vec<(Vec3, Vec3)>,
 }
 
 /// A cloud asset on the GPU.
 pub struct GpuCloud {
     buffer: wgpu::Buffer,
-    /// Per level (0 = foliage mesh): its draw ranges.
-    levels: Vec<Vec<Range>>,
+    /// Level 0: the foliage mesh, by material.
+    foliage: Vec<MeshRange>,
+    /// Levels 1..: per billboard level, its quads by atlas.
+    billboard_levels: Vec<Vec<QuadGroup>>,
     /// Billboards per billboard level (for the stats).
     pub billboards: Vec<u32>,
     pub foliage_triangles: u32,
@@ -83,7 +96,7 @@ pub struct GpuCloud {
 impl GpuCloud {
     /// Levels including the foliage mesh.
     pub fn level_count(&self) -> usize {
-        self.levels.len()
+        1 + self.billboard_levels.len()
     }
 }
 
@@ -101,14 +114,50 @@ pub fn select_level(z: f32, distances: &[f32], transition: f32) -> (usize, f32) 
     (k, ((z - start) / (d * w)).clamp(0.0, 1.0))
 }
 
+/// One cloud instance to draw this frame.
+pub struct CloudDraw<'a> {
+    pub cloud: &'a GpuCloud,
+    /// Index into the frame's instance buffer.
+    pub instance: u32,
+    pub model: Mat4,
+    pub level: usize,
+    pub morph: f32,
+}
+
+/// A frame's cloud work: the instance and index buffers and the draws.
+pub struct CloudFrame<'a> {
+    instances: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    /// (vertex buffer, material range, instance).
+    mesh_draws: Vec<(&'a wgpu::Buffer, &'a MeshRange, u32)>,
+    /// (vertex buffer, atlas bind group, index range, instance).
+    quad_draws: Vec<(
+        &'a wgpu::Buffer,
+        &'a wgpu::BindGroup,
+        std::ops::Range<u32>,
+        u32,
+    )>,
+    /// Billboard quads drawn.
+    pub quads: usize,
+}
+
 pub struct CloudPass {
-    culled: wgpu::RenderPipeline,
-    two_sided: wgpu::RenderPipeline,
+    foliage: wgpu::RenderPipeline,
+    depth: wgpu::RenderPipeline,
+    blend: wgpu::RenderPipeline,
     shadow: wgpu::RenderPipeline,
     pub frame_layout: wgpu::BindGroupLayout,
     draw_layout: wgpu::BindGroupLayout,
     sampler: wgpu::Sampler,
     white: wgpu::TextureView,
+}
+
+#[derive(Clone, Copy)]
+enum Kind {
+    Foliage,
+    Depth,
+    Blend,
+    Shadow,
 }
 
 impl CloudPass {
@@ -170,12 +219,51 @@ impl CloudPass {
         let iattrs = wgpu::vertex_attr_array![
             4 => Float32x4, 5 => Float32x4, 6 => Float32x4, 7 => Float32x4, 8 => Float32x4
         ];
-        let make = |label, fs_entry, cull: Option<wgpu::Face>, color: bool| {
+        let make = |kind: Kind| {
+            let (label, fs_entry, cull, blend, writes, depth_write, compare) = match kind {
+                Kind::Foliage => (
+                    "cloud foliage",
+                    "fs_foliage",
+                    None,
+                    None,
+                    wgpu::ColorWrites::ALL,
+                    true,
+                    wgpu::CompareFunction::Less,
+                ),
+                Kind::Depth => (
+                    "cloud depth pre-pass",
+                    "fs_depth",
+                    Some(wgpu::Face::Back),
+                    None,
+                    wgpu::ColorWrites::empty(),
+                    true,
+                    wgpu::CompareFunction::Less,
+                ),
+                Kind::Blend => (
+                    "cloud billboards",
+                    "fs_blend",
+                    Some(wgpu::Face::Back),
+                    Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
+                    wgpu::ColorWrites::ALL,
+                    false,
+                    wgpu::CompareFunction::LessEqual,
+                ),
+                Kind::Shadow => (
+                    "cloud shadow",
+                    "fs_shadow",
+                    None,
+                    None,
+                    wgpu::ColorWrites::empty(),
+                    true,
+                    wgpu::CompareFunction::Less,
+                ),
+            };
             let targets = [Some(wgpu::ColorTargetState {
                 format: COLOR_FORMAT,
-                blend: None,
-                write_mask: wgpu::ColorWrites::ALL,
+                blend,
+                write_mask: writes,
             })];
+            let shadow = matches!(kind, Kind::Shadow);
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
                 layout: Some(&pl),
@@ -204,8 +292,8 @@ impl CloudPass {
                 },
                 depth_stencil: Some(wgpu::DepthStencilState {
                     format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    depth_write_enabled: Some(depth_write),
+                    depth_compare: Some(compare),
                     stencil: Default::default(),
                     bias: Default::default(),
                 }),
@@ -214,15 +302,12 @@ impl CloudPass {
                     module: &module,
                     entry_point: Some(fs_entry),
                     compilation_options: Default::default(),
-                    targets: if color { &targets } else { &[] },
+                    targets: if shadow { &[] } else { &targets },
                 }),
                 multiview_mask: None,
                 cache: None,
             })
         };
-        let culled = make("cloud billboards", "fs_main", Some(wgpu::Face::Back), true);
-        let two_sided = make("cloud foliage", "fs_main", None, true);
-        let shadow = make("cloud shadow", "fs_shadow", None, false);
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("cloud texture"),
             address_mode_u: wgpu::AddressMode::Repeat,
@@ -235,9 +320,10 @@ impl CloudPass {
         let white =
             upload_rgba8_mips(gpu, &TextureData::white(), "white").create_view(&Default::default());
         CloudPass {
-            culled,
-            two_sided,
-            shadow,
+            foliage: make(Kind::Foliage),
+            depth: make(Kind::Depth),
+            blend: make(Kind::Blend),
+            shadow: make(Kind::Shadow),
             frame_layout,
             draw_layout,
             sampler,
@@ -279,7 +365,7 @@ impl CloudPass {
         })
     }
 
-    /// Uploads a cloud asset: atlases, billboard sides grouped by (level, atlas), the
+    /// Uploads a cloud asset: atlases, billboard quads grouped by (level, atlas), the
     /// foliage mesh grouped by material; the trunk is returned as [`GpuCloud::trunk`].
     pub fn upload(&self, gpu: &Gpu, asset: &CloudAsset) -> Result<GpuCloud, ViewError> {
         asset
@@ -295,6 +381,7 @@ impl CloudPass {
                     texels: a.mips[0].clone(),
                     premultiplied: true,
                     mips: a.mips[1..].to_vec(),
+                    coverage_cutoff: None,
                 };
                 upload_rgba8_mips(gpu, &t, "cloud atlas").create_view(&Default::default())
             })
@@ -302,16 +389,27 @@ impl CloudPass {
         let mesh_textures: Vec<wgpu::TextureView> = asset
             .textures
             .iter()
-            .map(|t| {
-                let d = TextureData::straight(t.width, t.height, t.texels.clone());
+            .enumerate()
+            .map(|(i, t)| {
+                let mut d = TextureData::straight(t.width, t.height, t.texels.clone());
+                d.coverage_cutoff = asset
+                    .materials
+                    .iter()
+                    .find(|m| m.texture == Some(i as u32) && m.alpha_mode != 0)
+                    .map(|m| {
+                        if m.alpha_mode == 1 {
+                            m.alpha_cutoff
+                        } else {
+                            0.5
+                        }
+                    });
                 upload_rgba8_mips(gpu, &d, "cloud mesh texture").create_view(&Default::default())
             })
             .collect();
         let mut verts: Vec<CloudVertex> = Vec::new();
-        let mut levels: Vec<Vec<Range>> = Vec::new();
         // Level 0: the foliage mesh, by material.
         let f = &asset.foliage;
-        let mut ranges = Vec::new();
+        let mut foliage = Vec::new();
         for (mi, m) in asset.materials.iter().enumerate() {
             let start = verts.len() as u32;
             for (t, tri) in f.triangles.iter().enumerate() {
@@ -339,65 +437,72 @@ impl CloudPass {
                     .texture
                     .map_or(&self.white, |t| &mesh_textures[t as usize]);
                 let textured = f32::from(u8::from(m.texture.is_some()));
-                ranges.push(Range {
+                foliage.push(MeshRange {
                     vertices: start..end,
                     bind: self.bind(gpu, [cutoff, 0.0, 1.0, textured], m.base_color_factor, view),
-                    culled: false,
                 });
             }
         }
-        levels.push(ranges);
-        // Billboard levels, by atlas.
+        // Billboard levels, by atlas: 4 vertices per quad side.
         let mut billboards = Vec::new();
+        let mut billboard_levels = Vec::new();
         for l in &asset.levels {
             let bbs = &asset.billboards
                 [l.first_billboard as usize..(l.first_billboard + l.billboard_count) as usize];
             billboards.push(l.billboard_count);
-            let mut ranges = Vec::new();
+            let mut groups = Vec::new();
             for a in l.first_atlas..l.first_atlas + l.atlas_count {
-                let start = verts.len() as u32;
+                let first_vertex = verts.len() as u32;
+                let mut centres = Vec::new();
                 for b in bbs {
-                    let n = [b.plane[0], b.plane[1], b.plane[2]];
-                    for (side, rect, order) in [
-                        (0, &b.front, [0usize, 1, 2, 0, 2, 3]),
-                        (1, &b.back, [0, 2, 1, 0, 3, 2]),
+                    let n = Vec3::new(b.plane[0], b.plane[1], b.plane[2]);
+                    let has_parent = b.parent.is_some_and(|p| p != NO_INDEX);
+                    let target = |c: usize| {
+                        if has_parent {
+                            b.parent_corners[c]
+                        } else {
+                            b.corners[c]
+                        }
+                    };
+                    // Front: corners 0,1,2,3 (counter-clockwise from +normal); back: the
+                    // reverse order, so both sides are front faces where they are seen.
+                    for (rect, order, nn) in [
+                        (&b.front, [0usize, 1, 2, 3], n),
+                        (&b.back, [0, 3, 2, 1], -n),
                     ] {
                         if rect.atlas != a {
                             continue;
                         }
                         let [u0, v0, u1, v1] = rect.uv;
                         let uv = [[u0, v0], [u1, v0], [u1, v1], [u0, v1]];
-                        let nn = if side == 0 { n } else { n.map(|x| -x) };
                         for c in order {
-                            let target = if b.parent.is_some_and(|p| p != NO_INDEX) {
-                                b.parent_corners[c]
-                            } else {
-                                b.corners[c]
-                            };
                             verts.push(CloudVertex {
                                 pos: b.corners[c],
-                                target,
-                                normal: nn,
+                                target: target(c),
+                                normal: nn.to_array(),
                                 uv: uv[c],
                             });
                         }
+                        let mean = |p: [[f32; 3]; 4]| {
+                            p.iter().map(|q| Vec3::from(*q)).sum::<Vec3>() * 0.25
+                        };
+                        centres.push((mean(b.corners), mean([0, 1, 2, 3].map(target))));
                     }
                 }
-                let end = verts.len() as u32;
-                if end > start {
-                    ranges.push(Range {
-                        vertices: start..end,
+                if !centres.is_empty() {
+                    groups.push(QuadGroup {
                         bind: self.bind(
                             gpu,
                             [BILLBOARD_CUTOFF, 1.0, 0.0, 1.0],
                             [1.0; 4],
                             &atlas_views[a as usize],
                         ),
-                        culled: true,
+                        first_vertex,
+                        centres,
                     });
                 }
             }
-            levels.push(ranges);
+            billboard_levels.push(groups);
         }
         let n = verts.len();
         verts.resize(n.max(1), CloudVertex::default());
@@ -412,7 +517,8 @@ impl CloudPass {
         let (lo, hi) = (Vec3::from(b.min), Vec3::from(b.max));
         Ok(GpuCloud {
             buffer,
-            levels,
+            foliage,
+            billboard_levels,
             billboards,
             foliage_triangles: f.triangles.len() as u32,
             centre: 0.5 * (lo + hi),
@@ -421,40 +527,113 @@ impl CloudPass {
         })
     }
 
-    /// Draws level `level` of `cloud` for the instances `instances` (a range of the
-    /// bound instance buffer). Returns the draw calls.
-    #[allow(clippy::too_many_arguments)]
+    /// Plans a frame's clouds for a camera with world → view `view`: the instance
+    /// buffer, and per billboard instance its quads sorted back to front.
+    pub fn frame<'a>(&self, gpu: &Gpu, draws: &[CloudDraw<'a>], view: Mat4) -> CloudFrame<'a> {
+        let mut inst: Vec<CloudInstance> = Vec::new();
+        let mut indices: Vec<u32> = Vec::new();
+        let mut mesh_draws = Vec::new();
+        let mut quad_draws = Vec::new();
+        let mut quads = 0;
+        for d in draws {
+            let i = inst.len() as u32;
+            inst.push(instance(d.model, d.morph));
+            if d.level == 0 {
+                for r in &d.cloud.foliage {
+                    mesh_draws.push((&d.cloud.buffer, r, i));
+                }
+                continue;
+            }
+            let Some(groups) = d.cloud.billboard_levels.get(d.level - 1) else {
+                continue;
+            };
+            let mv = view * d.model;
+            for g in groups {
+                let mut order: Vec<(f32, u32)> = g
+                    .centres
+                    .iter()
+                    .enumerate()
+                    .map(|(q, (own, target))| {
+                        let p = mv.transform_point3(own.lerp(*target, d.morph));
+                        (p.z, q as u32)
+                    })
+                    .collect();
+                // Far first: most negative view z first; ties by quad index.
+                order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                let start = indices.len() as u32;
+                for (_, q) in &order {
+                    let b = g.first_vertex + 4 * q;
+                    indices.extend_from_slice(&[b, b + 1, b + 2, b, b + 2, b + 3]);
+                }
+                quads += order.len();
+                quad_draws.push((&d.cloud.buffer, &g.bind, start..indices.len() as u32, i));
+            }
+        }
+        inst.resize(inst.len().max(1), CloudInstance::default());
+        indices.resize(indices.len().max(3), 0);
+        let mk = |label, contents: &[u8], usage| {
+            gpu.device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    contents,
+                    usage,
+                })
+        };
+        CloudFrame {
+            instances: mk(
+                "cloud instances",
+                bytemuck::cast_slice(&inst),
+                wgpu::BufferUsages::VERTEX,
+            ),
+            indices: mk(
+                "cloud indices",
+                bytemuck::cast_slice(&indices),
+                wgpu::BufferUsages::INDEX,
+            ),
+            mesh_draws,
+            quad_draws,
+            quads,
+        }
+    }
+
+    /// Records the frame's clouds: the foliage meshes, then the billboards' depth
+    /// pre-pass and their sorted blend (`shadow`: everything alpha-tested into the
+    /// shadow map). Returns the draw calls.
     pub fn draw(
         &self,
         rp: &mut wgpu::RenderPass<'_>,
-        frame: &wgpu::BindGroup,
-        shadow: &wgpu::BindGroup,
-        cloud: &GpuCloud,
-        instance_buffer: &wgpu::Buffer,
-        level: usize,
-        instances: std::ops::Range<u32>,
-        depth_only: bool,
+        frame_bind: &wgpu::BindGroup,
+        receiver: &wgpu::BindGroup,
+        f: &CloudFrame<'_>,
+        shadow: bool,
     ) -> usize {
-        let Some(ranges) = cloud.levels.get(level) else {
-            return 0;
-        };
-        if instances.is_empty() {
-            return 0;
-        }
-        rp.set_bind_group(0, frame, &[]);
-        rp.set_bind_group(2, shadow, &[]);
-        rp.set_vertex_buffer(0, cloud.buffer.slice(..));
-        rp.set_vertex_buffer(1, instance_buffer.slice(..));
-        for r in ranges {
-            rp.set_pipeline(match (depth_only, r.culled) {
-                (true, _) => &self.shadow,
-                (false, true) => &self.culled,
-                (false, false) => &self.two_sided,
-            });
+        let mut n = 0;
+        rp.set_bind_group(0, frame_bind, &[]);
+        rp.set_bind_group(2, receiver, &[]);
+        rp.set_vertex_buffer(1, f.instances.slice(..));
+        rp.set_index_buffer(f.indices.slice(..), wgpu::IndexFormat::Uint32);
+        rp.set_pipeline(if shadow { &self.shadow } else { &self.foliage });
+        for (b, r, i) in &f.mesh_draws {
+            rp.set_vertex_buffer(0, b.slice(..));
             rp.set_bind_group(1, &r.bind, &[]);
-            rp.draw(r.vertices.clone(), instances.clone());
+            rp.draw(r.vertices.clone(), *i..*i + 1);
+            n += 1;
         }
-        ranges.len()
+        let passes: &[&wgpu::RenderPipeline] = if shadow {
+            &[&self.shadow]
+        } else {
+            &[&self.depth, &self.blend]
+        };
+        for p in passes {
+            rp.set_pipeline(p);
+            for (b, bind, range, i) in &f.quad_draws {
+                rp.set_vertex_buffer(0, b.slice(..));
+                rp.set_bind_group(1, *bind, &[]);
+                rp.draw_indexed(range.clone(), 0, *i..*i + 1);
+                n += 1;
+            }
+        }
+        n
     }
 
     /// The frame bind group (the mesh pass's frame uniform layout).

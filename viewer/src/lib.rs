@@ -18,7 +18,9 @@ pub mod cloud_pass;
 pub mod content;
 pub mod error;
 pub mod gpu;
+pub mod lines;
 pub mod mesh_pass;
+pub mod overlay;
 pub mod prism_plane_gpu;
 pub mod render;
 pub mod scene;
@@ -29,6 +31,7 @@ pub mod target;
 pub mod texture;
 pub mod volume_pass;
 pub mod volume_plan;
+pub mod window;
 
 pub use camera::ViewCamera;
 pub use error::ViewError;

@@ -267,7 +267,15 @@ impl MeshPass {
         let views: Vec<wgpu::TextureView> = mesh
             .textures
             .iter()
-            .map(|t| upload_rgba8_mips(gpu, t, "mesh texture").create_view(&Default::default()))
+            .enumerate()
+            .map(|(i, t)| {
+                let mut t = t.clone();
+                t.coverage_cutoff = materials
+                    .iter()
+                    .find(|m| m.texture == Some(i as u32) && m.alpha_cutoff.is_some())
+                    .and_then(|m| m.alpha_cutoff);
+                upload_rgba8_mips(gpu, &t, "mesh texture").create_view(&Default::default())
+            })
             .collect();
         // Vertices sorted by material (stable: triangle order within a material).
         let mut order: Vec<usize> = (0..tris).collect();

@@ -2,7 +2,8 @@
 //! 1. `shadow` — the light's depth map (meshes, clouds, volumes cast), only with
 //!    shadows on and something to cast ([`crate::shadow`]);
 //! 2. `mesh` — opaque meshes (and kept cloud trunks, the ground), depth write;
-//! 3. `cloud` — billboard clouds, alpha-tested, depth write ([`crate::cloud_pass`]);
+//! 3. `cloud` — billboard clouds: foliage meshes alpha-tested, billboards sorted and
+//!    blended after a depth pre-pass ([`crate::cloud_pass`]);
 //! 4. `volume` — volumetric-billboard slices, back to front, depth test only, blended
 //!    into Rgba16Float ([`crate::volume_pass`], [`crate::volume_plan`]);
 //! 5. `resolve` — the read-back (headless) or the blit to the window.
@@ -12,14 +13,13 @@
 use billow_format::{CloudAsset, Prism, VolumeAsset};
 use glam::{Mat4, Vec3};
 
-use crate::cloud_pass::{select_level, CloudInstance, CloudPass, GpuCloud};
+use crate::cloud_pass::{select_level, CloudDraw, CloudPass, GpuCloud};
 use crate::mesh_pass::{GpuMesh, MeshData, MeshFrame, MeshPass};
 use crate::shadow::{self, ShadowMap, SHADOW_MAP_SIZE};
 use crate::target::{RgbaImage, Target};
 use crate::volume_pass::{GpuVolume, VolumePass};
 use crate::volume_plan::{self, VolumePlan};
 use crate::{Gpu, SliceParams, ViewCamera, ViewError};
-use wgpu::util::DeviceExt;
 
 /// Vertices per cell × slice instance: a fan of 3 triangles covers the ≤ 5-gon.
 pub const VERTICES_PER_INSTANCE: u32 = 9;
@@ -45,11 +45,9 @@ pub struct FrameStats {
     pub cloud_lods: Vec<(usize, f32)>,
     /// Slices of the volumes' shadow pass (0 without shadows).
     pub shadow_slices: usize,
+    /// Billboard quads (sides) drawn.
+    pub cloud_quads: usize,
 }
-
-/// The cloud instances of a frame, grouped by (cloud, level): the buffer and, per run,
-/// (cloud, level, instance range).
-type CloudRuns = (wgpu::Buffer, Vec<(usize, usize, std::ops::Range<u32>)>);
 
 /// A volume asset on the GPU with its cells (object space) and instance transforms.
 pub struct VolumeEntry {
@@ -86,6 +84,8 @@ pub struct Renderer {
     pub ambient: f32,
     /// Force a camera distance for LOD selection (tests); `None`: the eye's distance.
     pub lod_distance_override: Option<f32>,
+    /// The cell wireframe, when on ([`Renderer::set_wireframe`]).
+    lines: Option<crate::lines::LinePass>,
 }
 
 impl Renderer {
@@ -108,7 +108,37 @@ impl Renderer {
             light_dir: Vec3::new(0.3, 1.0, 0.5).normalize(),
             ambient: 0.3,
             lod_distance_override: None,
+            lines: None,
         }
+    }
+
+    /// Draws the edges of every volume cell over the frame (on) or not (off).
+    pub fn set_wireframe(&mut self, on: bool) {
+        self.lines = on.then(|| crate::lines::LinePass::new(&self.gpu));
+    }
+
+    pub fn wireframe(&self) -> bool {
+        self.lines.is_some()
+    }
+
+    pub fn shadows(&self) -> bool {
+        self.shadow_map.is_some()
+    }
+
+    /// World-space end points of every cell edge of every volume instance.
+    fn cell_edges(&self) -> Vec<Vec3> {
+        let mut pts = Vec::new();
+        for v in &self.volumes {
+            for m in &v.instances {
+                for c in &v.cells {
+                    for (a, b) in crate::lines::PRISM_EDGES {
+                        pts.push(m.transform_point3(Vec3::from(c.pos[a])));
+                        pts.push(m.transform_point3(Vec3::from(c.pos[b])));
+                    }
+                }
+            }
+        }
+        pts
     }
 
     /// Turns the shadow map on (built now) or off (dropped).
@@ -292,40 +322,24 @@ impl Renderer {
         out
     }
 
-    /// The cloud instances, grouped by (cloud, level), in one buffer.
-    fn cloud_instances(&self, levels: &[(usize, f32)]) -> Option<CloudRuns> {
-        if self.clouds.is_empty() {
-            return None;
-        }
-        let mut data: Vec<CloudInstance> = Vec::new();
-        let mut runs = Vec::new();
+    /// One draw per cloud instance, at the levels `levels` ([`Renderer::cloud_levels`]).
+    fn cloud_draws(&self, levels: &[(usize, f32)]) -> Vec<CloudDraw<'_>> {
+        let mut out = Vec::new();
         let mut k = 0;
-        for (ci, c) in self.clouds.iter().enumerate() {
-            let lv = &levels[k..k + c.instances.len()];
-            k += c.instances.len();
-            for level in 0..c.gpu.level_count() {
-                let start = data.len() as u32;
-                for (m, (l, a)) in c.instances.iter().zip(lv) {
-                    if *l == level {
-                        data.push(crate::cloud_pass::instance(*m, *a));
-                    }
-                }
-                let end = data.len() as u32;
-                if end > start {
-                    runs.push((ci, level, start..end));
-                }
+        for c in &self.clouds {
+            for m in &c.instances {
+                let (level, morph) = levels[k];
+                out.push(CloudDraw {
+                    cloud: &c.gpu,
+                    instance: k as u32,
+                    model: *m,
+                    level,
+                    morph,
+                });
+                k += 1;
             }
         }
-        data.resize(data.len().max(1), Default::default());
-        let buf = self
-            .gpu
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("cloud instances"),
-                contents: bytemuck::cast_slice(&data),
-                usage: wgpu::BufferUsages::VERTEX,
-            });
-        Some((buf, runs))
+        out
     }
 
     /// Renders one frame into `target` (submitted, not waited for).
@@ -342,7 +356,7 @@ impl Renderer {
         let device = &self.gpu.device;
         let levels = self.cloud_levels(camera);
         stats.cloud_lods = levels.clone();
-        let clouds = self.cloud_instances(&levels);
+        let cloud_draws = self.cloud_draws(&levels);
         let mut enc = device.create_command_encoder(&Default::default());
 
         // 1. Shadow map.
@@ -350,7 +364,7 @@ impl Renderer {
             Some(map) if self.has_casters() => {
                 let (centre, radius) = self.content_sphere();
                 let light = shadow::light_camera(self.light_dir, centre, radius, map.size);
-                self.shadow_pass(&mut enc, map, &light, clouds.as_ref(), &mut stats)?;
+                self.shadow_pass(&mut enc, map, &light, &cloud_draws, &mut stats)?;
                 Some((map, light))
             }
             _ => None,
@@ -394,10 +408,12 @@ impl Renderer {
             .mesh_pass
             .as_ref()
             .map(|p| p.frame_bind_group_from(&self.gpu, &mesh_frame));
-        let cloud_bind = self
-            .cloud_pass
-            .as_ref()
-            .map(|p| p.frame_bind_group(&self.gpu, &mesh_frame));
+        let cloud_frame = self.cloud_pass.as_ref().map(|p| {
+            (
+                p.frame_bind_group(&self.gpu, &mesh_frame),
+                p.frame(&self.gpu, &cloud_draws, camera.view),
+            )
+        });
         {
             let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("frame"),
@@ -421,25 +437,17 @@ impl Renderer {
                     stats.draw_calls += pass.draw(&mut rp, bind, receiver, m, false);
                 }
             }
-            if let (Some(pass), Some(bind), Some((buf, runs))) =
-                (&self.cloud_pass, &cloud_bind, &clouds)
-            {
-                for (ci, level, range) in runs {
-                    let c = &self.clouds[*ci];
-                    stats.draw_calls += pass.draw(
-                        &mut rp,
-                        bind,
-                        receiver,
-                        &c.gpu,
-                        buf,
-                        *level,
-                        range.clone(),
-                        false,
-                    );
-                }
+            if let (Some(pass), Some((bind, cf))) = (&self.cloud_pass, &cloud_frame) {
+                stats.draw_calls += pass.draw(&mut rp, bind, receiver, cf, false);
+                stats.cloud_quads = cf.quads;
             }
             if let (Some(pass), Some(plan)) = (&self.volume_pass, &plan) {
                 stats.draw_calls += plan.draw(&mut rp, &pass.pipeline, &self.batches, receiver);
+            }
+            if let Some(lines) = &self.lines {
+                let vp = camera.projection() * camera.view;
+                let pts = self.cell_edges();
+                stats.draw_calls += lines.draw(&self.gpu, &mut rp, vp, &pts, [1.0, 0.85, 0.1, 1.0]);
             }
         }
         self.gpu.queue.submit([enc.finish()]);
@@ -453,7 +461,7 @@ impl Renderer {
         enc: &mut wgpu::CommandEncoder,
         map: &ShadowMap,
         light: &ViewCamera,
-        clouds: Option<&CloudRuns>,
+        clouds: &[CloudDraw<'_>],
         stats: &mut FrameStats,
     ) -> Result<(), ViewError> {
         let mut params = self.params;
@@ -481,21 +489,10 @@ impl Renderer {
                 pass.draw(&mut rp, &bind, none, m, true);
             }
         }
-        if let (Some(pass), Some((buf, runs))) = (&self.cloud_pass, clouds) {
+        if let Some(pass) = &self.cloud_pass {
             let bind = pass.frame_bind_group(&self.gpu, &frame);
-            for (ci, level, range) in runs {
-                let c = &self.clouds[*ci];
-                pass.draw(
-                    &mut rp,
-                    &bind,
-                    none,
-                    &c.gpu,
-                    buf,
-                    *level,
-                    range.clone(),
-                    true,
-                );
-            }
+            let cf = pass.frame(&self.gpu, clouds, light.view);
+            pass.draw(&mut rp, &bind, none, &cf, true);
         }
         if let (Some(pass), Some(plan)) = (&self.volume_pass, &plan) {
             plan.draw(&mut rp, &pass.shadow_pipeline, &self.batches, none);

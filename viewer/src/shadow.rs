@@ -15,7 +15,7 @@ use crate::target::DEPTH_FORMAT;
 use crate::{Gpu, ViewCamera};
 
 /// Side of the shadow map in texels.
-pub const SHADOW_MAP_SIZE: u32 = 2048;
+pub const SHADOW_MAP_SIZE: u32 = 1024;
 /// Shadow slices are this many times farther apart than the viewer's.
 pub const SHADOW_SPACING_BIAS: f32 = 4.0;
 /// Opacity at which a shadow slice occludes.

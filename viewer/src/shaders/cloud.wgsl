@@ -62,34 +62,44 @@ fn texel(i: VOut) -> vec4<f32> {
     return c;
 }
 
+fn visibility(i: VOut) -> f32 {
+    if frame.flags.x > 0.5 {
+        return shadow_visibility(i.shadow_clip, frame.flags.z);
+    }
+    return 1.0;
+}
+
+// The foliage base mesh: alpha-tested, lit like meshes (two-sided Lambert + ambient).
 @fragment
-fn fs_main(i: VOut) -> @location(0) vec4<f32> {
+fn fs_foliage(i: VOut) -> @location(0) vec4<f32> {
     let c = texel(i);
     if c.a < dr.params.x {
         discard;
     }
-    var rgb = c.rgb;
-    if dr.params.y > 0.5 {
-        rgb = rgb / max(c.a, 1e-6);
+    var lambert = 1.0;
+    let len = length(i.normal);
+    if len > 0.0 {
+        lambert = abs(dot(i.normal / len, frame.light.xyz));
     }
-    var light = 1.0;
-    if dr.params.z > 0.5 {
-        let len = length(i.normal);
-        if len > 0.0 {
-            light = abs(dot(i.normal / len, frame.light.xyz));
-        }
+    let k = frame.light.w + (1.0 - frame.light.w) * lambert * visibility(i);
+    return vec4<f32>(c.rgb * k, 1.0);
+}
+
+// Billboards, depth pre-pass: only texels at least as opaque as the cut-off write depth.
+@fragment
+fn fs_depth(i: VOut) -> @location(0) vec4<f32> {
+    if texel(i).a < dr.params.x {
+        discard;
     }
-    var vis = 1.0;
-    if frame.flags.x > 0.5 {
-        vis = shadow_visibility(i.shadow_clip, frame.flags.z);
-    }
-    // Baked billboards: their texels already hold the light; shadows scale it.
-    if dr.params.z > 0.5 {
-        light = frame.light.w + (1.0 - frame.light.w) * light * vis;
-    } else {
-        light = frame.light.w + (1.0 - frame.light.w) * vis;
-    }
-    return vec4<f32>(rgb * light, 1.0);
+    return vec4<f32>(0.0);
+}
+
+// Billboards, sorted blend: premultiplied texels (lighting baked in; shadows scale it).
+@fragment
+fn fs_blend(i: VOut) -> @location(0) vec4<f32> {
+    let c = texel(i);
+    let k = frame.light.w + (1.0 - frame.light.w) * visibility(i);
+    return vec4<f32>(c.rgb * k, c.a);
 }
 
 @fragment

@@ -1,0 +1,156 @@
+//! The cell wireframe (a debugging view, `W` in the window, `--wireframe` headless):
+//! the nine edges of every prism cell of every volume instance as lines, depth-tested
+//! against the opaque scene, drawn over the slices.
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3};
+use wgpu::util::DeviceExt;
+
+use crate::target::{COLOR_FORMAT, DEPTH_FORMAT};
+use crate::Gpu;
+
+/// Vertex index pairs of a prism's edges (0,1,2 bottom, 3,4,5 top).
+pub const PRISM_EDGES: [(usize, usize); 9] = [
+    (0, 1),
+    (1, 2),
+    (2, 0),
+    (3, 4),
+    (4, 5),
+    (5, 3),
+    (0, 3),
+    (1, 4),
+    (2, 5),
+];
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct LineFrame {
+    view_proj: [[f32; 4]; 4],
+    color: [f32; 4],
+}
+
+pub struct LinePass {
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+}
+
+impl LinePass {
+    pub fn new(gpu: &Gpu) -> LinePass {
+        let device = &gpu.device;
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("lines.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(
+                "struct F { view_proj: mat4x4<f32>, color: vec4<f32> }\n\
+                 @group(0) @binding(0) var<uniform> f: F;\n\
+                 @vertex fn vs(@location(0) p: vec3<f32>) -> @builtin(position) vec4<f32> {\n\
+                     return f.view_proj * vec4<f32>(p, 1.0);\n}\n\
+                 @fragment fn fs() -> @location(0) vec4<f32> { return f.color; }\n"
+                    .into(),
+            ),
+        });
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("lines"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            }],
+        });
+        let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("lines"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let attrs = wgpu::vertex_attr_array![0 => Float32x3];
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("cell wireframe"),
+            layout: Some(&pl),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: 12,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &attrs,
+                })],
+            },
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::LineList,
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(false),
+                depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: COLOR_FORMAT,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        LinePass { pipeline, layout }
+    }
+
+    /// Records `points` (pairs, world space) as lines of `color` seen by `view_proj`.
+    pub fn draw(
+        &self,
+        gpu: &Gpu,
+        rp: &mut wgpu::RenderPass<'_>,
+        view_proj: Mat4,
+        points: &[Vec3],
+        color: [f32; 4],
+    ) -> usize {
+        if points.len() < 2 {
+            return 0;
+        }
+        let frame = LineFrame {
+            view_proj: view_proj.to_cols_array_2d(),
+            color,
+        };
+        let ub = gpu
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("lines frame"),
+                contents: bytemuck::bytes_of(&frame),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+        let flat: Vec<[f32; 3]> = points.iter().map(|p| p.to_array()).collect();
+        let vb = gpu
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("lines"),
+                contents: bytemuck::cast_slice(&flat),
+                usage: wgpu::BufferUsages::VERTEX,
+            });
+        let bind = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("lines"),
+            layout: &self.layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: ub.as_entire_binding(),
+            }],
+        });
+        rp.set_pipeline(&self.pipeline);
+        rp.set_bind_group(0, &bind, &[]);
+        rp.set_vertex_buffer(0, vb.slice(..));
+        rp.draw(0..(points.len() as u32 / 2) * 2, 0..1);
+        1
+    }
+}

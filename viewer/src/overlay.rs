@@ -1,0 +1,270 @@
+//! The resolve pass and the on-screen stats line, shared by the window (and usable
+//! off-screen): the Rgba16Float frame (premultiplied linear) is composited over a
+//! background colour and written to an 8-bit target; a line of text (an 8×8 bitmap
+//! font, `font8x8`) is blended on top.
+
+use font8x8::UnicodeFonts;
+
+use crate::Gpu;
+
+/// Rasterizes `text` (ASCII; other characters show as `?`; `\n` starts a line) into
+/// straight-alpha RGBA8, `scale`× the 8×8 glyphs, white on a translucent black band.
+/// Returns (w, h, texels).
+pub fn text_image(text: &str, scale: u32) -> (u32, u32, Vec<u8>) {
+    let lines: Vec<Vec<char>> = text.lines().map(|l| l.chars().collect()).collect();
+    let cols = lines.iter().map(Vec::len).max().unwrap_or(0).max(1) as u32;
+    let rows = lines.len().max(1) as u32;
+    let s = scale.max(1);
+    let (w, h) = ((cols * 8 + 4) * s, (rows * 10 + 2) * s);
+    let mut img = vec![0u8; (w * h * 4) as usize];
+    for px in img.chunks_exact_mut(4) {
+        px.copy_from_slice(&[0, 0, 0, 150]);
+    }
+    for (li, line) in lines.iter().enumerate() {
+        for (i, ch) in line.iter().enumerate() {
+            let glyph = font8x8::BASIC_FONTS
+                .get(*ch)
+                .or_else(|| font8x8::BASIC_FONTS.get('?'))
+                .unwrap_or([0; 8]);
+            for (gy, row) in glyph.iter().enumerate() {
+                for gx in 0..8 {
+                    if row & (1 << gx) == 0 {
+                        continue;
+                    }
+                    for dy in 0..s {
+                        for dx in 0..s {
+                            let x = (2 + i as u32 * 8 + gx) * s + dx;
+                            let y = (2 + li as u32 * 10 + gy as u32) * s + dy;
+                            let o = ((y * w + x) * 4) as usize;
+                            img[o..o + 4].copy_from_slice(&[255, 255, 255, 255]);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    (w, h, img)
+}
+
+/// The resolve + overlay pipelines for one output format.
+pub struct Resolve {
+    pipeline: wgpu::RenderPipeline,
+    overlay: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    sampler: wgpu::Sampler,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct ResolveUniform {
+    /// Background colour (linear), then x: 1 = encode sRGB in the shader (the output is
+    /// a non-sRGB format), y..: overlay rectangle in NDC (x0, y0, x1, y1).
+    background: [f32; 4],
+    flags: [f32; 4],
+    rect: [f32; 4],
+}
+
+impl Resolve {
+    pub fn new(gpu: &Gpu, format: wgpu::TextureFormat) -> Resolve {
+        let device = &gpu.device;
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("resolve.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("shaders/resolve.wgsl").into()),
+        });
+        let fs = wgpu::ShaderStages::VERTEX_FRAGMENT;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("resolve"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: fs,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: fs,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 2,
+                    visibility: fs,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+            ],
+        });
+        let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("resolve"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let make = |entry_vs, entry_fs, blend| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("resolve"),
+                layout: Some(&pl),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some(entry_vs),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: Default::default(),
+                depth_stencil: None,
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some(entry_fs),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format,
+                        blend,
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let pipeline = make("vs_full", "fs_resolve", None);
+        let overlay = make(
+            "vs_rect",
+            "fs_overlay",
+            Some(wgpu::BlendState::ALPHA_BLENDING),
+        );
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("resolve"),
+            ..Default::default()
+        });
+        Resolve {
+            pipeline,
+            overlay,
+            layout,
+            sampler,
+        }
+    }
+
+    fn bind(&self, gpu: &Gpu, u: &ResolveUniform, view: &wgpu::TextureView) -> wgpu::BindGroup {
+        use wgpu::util::DeviceExt;
+        let buf = gpu
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("resolve"),
+                contents: bytemuck::bytes_of(u),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("resolve"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: buf.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::Sampler(&self.sampler),
+                },
+            ],
+        })
+    }
+
+    /// Composites `frame` over `background` into `out` (`srgb_out`: the output format
+    /// encodes sRGB itself), then blends the text line `text` at the top left.
+    #[allow(clippy::too_many_arguments)]
+    pub fn draw(
+        &self,
+        gpu: &Gpu,
+        enc: &mut wgpu::CommandEncoder,
+        frame: &wgpu::TextureView,
+        out: &wgpu::TextureView,
+        out_size: (u32, u32),
+        srgb_out: bool,
+        background: [f32; 3],
+        text: Option<&str>,
+    ) {
+        let flags = [f32::from(u8::from(!srgb_out)), 0.0, 0.0, 0.0];
+        let u = ResolveUniform {
+            background: [background[0], background[1], background[2], 1.0],
+            flags,
+            rect: [-1.0, -1.0, 1.0, 1.0],
+        };
+        let main = self.bind(gpu, &u, frame);
+        let overlay = text.map(|t| {
+            let scale = if out_size.0 >= 1400 { 2 } else { 1 };
+            let (w, h, texels) = text_image(t, scale);
+            let tex = crate::texture::upload_rgba8_mips(
+                gpu,
+                &crate::texture::TextureData::straight(w, h, texels),
+                "stats line",
+            );
+            let view = tex.create_view(&wgpu::TextureViewDescriptor {
+                mip_level_count: Some(1),
+                ..Default::default()
+            });
+            let (ow, oh) = (out_size.0.max(1) as f32, out_size.1.max(1) as f32);
+            let rect = [
+                -1.0,
+                1.0 - 2.0 * h as f32 / oh,
+                -1.0 + 2.0 * w as f32 / ow,
+                1.0,
+            ];
+            self.bind(gpu, &ResolveUniform { rect, ..u }, &view)
+        });
+        let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("resolve"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: out,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        rp.set_pipeline(&self.pipeline);
+        rp.set_bind_group(0, &main, &[]);
+        rp.draw(0..3, 0..1);
+        if let Some(o) = &overlay {
+            rp.set_pipeline(&self.overlay);
+            rp.set_bind_group(0, o, &[]);
+            rp.draw(0..6, 0..1);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn text_is_drawn_in_white_on_a_band() {
+        let (w, h, img) = super::text_image("A1", 1);
+        assert_eq!((w, h), (20, 12));
+        let white = img
+            .chunks_exact(4)
+            .filter(|p| p == &[255, 255, 255, 255])
+            .count();
+        assert!(white > 10, "glyph pixels: {white}");
+        assert_eq!(&img[0..4], &[0, 0, 0, 150]);
+        // Two lines, doubled: the band grows by a line, the width follows the longest.
+        let (w2, h2, _) = super::text_image("A1\nBCD", 2);
+        assert_eq!((w2, h2), (56, 44));
+    }
+}
