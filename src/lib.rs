@@ -7,6 +7,7 @@ pub mod eval;
 pub mod export;
 pub mod import;
 pub mod inspect;
+pub mod noise_volume;
 pub mod procgen;
 pub mod provenance;
 pub mod rng;

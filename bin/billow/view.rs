@@ -70,6 +70,10 @@ pub struct Args {
     /// Headless default 1; in a window: close after N frames (default: when closed).
     #[arg(long)]
     frames: Option<u32>,
+    /// Composite the screenshot over this opaque linear colour R,G,B (default: keep a
+    /// transparent background).
+    #[arg(long, value_name = "R,G,B")]
+    background: Option<String>,
     /// Draw the edges of every volume cell over the frame (`W` in the window).
     #[arg(long)]
     wireframe: bool,
@@ -212,6 +216,14 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             format!("'{}': expected a direction like -z or +x-y-z", args.view),
         )
     })?;
+    let background = args
+        .background
+        .as_deref()
+        .map(|s| parse_vec3("--background", s))
+        .transpose()?;
+    if background.is_some_and(|b| !(b.min_element() >= 0.0 && b.max_element() <= 1.0)) {
+        return Err(bad("--background", "components must be in [0, 1]"));
+    }
     let params = SliceParams {
         spacing,
         partition: !args.no_partition,
@@ -310,10 +322,22 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         min = min.min(s);
     }
     let img = target.read(&r.gpu).map_err(view_err)?;
+    let bg = background.map(|b| b.extend(1.0));
     let image = ImageF32 {
         width: img.width,
         height: img.height,
-        data: img.data.iter().map(|p| Vec4::from_array(*p)).collect(),
+        data: img
+            .data
+            .iter()
+            .map(|p| {
+                let c = Vec4::from_array(*p);
+                match bg {
+                    // Premultiplied "over" an opaque background.
+                    Some(b) => c + b * (1.0 - c.w.clamp(0.0, 1.0)),
+                    None => c,
+                }
+            })
+            .collect(),
     };
     image
         .write_png(out)

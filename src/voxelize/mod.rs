@@ -34,6 +34,7 @@ mod ao;
 pub mod asset;
 pub mod cells;
 pub mod combine;
+pub mod dense;
 pub mod expr;
 pub mod grid;
 pub mod mip;

@@ -57,7 +57,7 @@ pub fn shader_source() -> String {
 }
 
 /// One cell in camera space, as the shaders read it (vec4-padded). `pos[0].w` holds the
-/// index of its asset ([`GpuCell::with_volume`]), as raw bits.
+/// index of its instance's [`GpuVolumeParams`] ([`GpuCell::with_volume`]), as raw bits.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct GpuCell {
@@ -72,7 +72,7 @@ impl GpuCell {
             uvw: uvw.map(|p| [p[0], p[1], p[2], 0.0]),
         }
     }
-    /// The cell drawn with asset `volume`'s texture and parameters.
+    /// The cell drawn with the texture and parameters of params entry `volume`.
     pub fn with_volume(mut self, volume: u32) -> Self {
         self.pos[0][3] = f32::from_bits(volume);
         self
@@ -99,8 +99,8 @@ pub struct GpuSlice {
     pub zd: [f32; 4],
 }
 
-/// Per asset: `v₀` (level-0 voxel size after the instance transform, the finest over its
-/// instances), max lod, texture slot in its batch, 1 = repeat addressing in x and z.
+/// Per volume instance: `v₀` (its level-0 voxel size after its transform, the finest
+/// over its cells), its asset's max lod and texture slot, 1 = repeat addressing in x, z.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct GpuVolumeParams {

@@ -125,8 +125,9 @@ pub fn plan(
     let (mut z_min, mut z_max) = (f32::INFINITY, f32::NEG_INFINITY);
     let mut v0_all: Option<f32> = None;
     for (vi, v) in volumes.iter().enumerate() {
-        let offset = cells.len();
-        let mut v0: Option<f32> = None;
+        let slot = (vi % TEXTURES_PER_BATCH) as f32;
+        let max_lod = (v.gpu.levels - 1) as f32;
+        let repeat = f32::from(u8::from(v.gpu.repeat));
         for m in &v.instances {
             let world: Vec<billow_format::Prism> = v
                 .cells
@@ -136,9 +137,16 @@ pub fn plan(
                     uvw: c.uvw,
                 })
                 .collect();
-            if let Some(s) = voxel_size(&world, v.gpu.dims0) {
-                v0 = Some(v0.map_or(s, |b| b.min(s)));
-            }
+            // The MIP level follows each instance's own voxel size (instances of one
+            // asset may be scaled differently).
+            let Some(v0) = voxel_size(&world, v.gpu.dims0) else {
+                continue; // no cell with a usable uvw mapping: nothing to draw
+            };
+            let entry = vparams.len() as u32;
+            vparams.push(GpuVolumeParams {
+                p: [v0, max_lod, slot, repeat],
+            });
+            v0_all = Some(v0_all.map_or(v0, |b| b.min(v0)));
             for c in &world {
                 let pos = c.pos.map(|p| camera.to_view(Vec3::from(p)).to_array());
                 let (mut a, mut b) = (f32::INFINITY, f32::NEG_INFINITY);
@@ -146,31 +154,12 @@ pub fn plan(
                     a = a.min(-p[2]);
                     b = b.max(-p[2]);
                 }
-                cells.push(GpuCell::new(&pos, &c.uvw).with_volume(vi as u32));
+                cells.push(GpuCell::new(&pos, &c.uvw).with_volume(entry));
                 ranges.push((a, b));
                 batch_of_cell.push((vi / TEXTURES_PER_BATCH) as u32);
+                z_min = z_min.min(a);
+                z_max = z_max.max(b);
             }
-        }
-        let slot = (vi % TEXTURES_PER_BATCH) as f32;
-        let max_lod = (v.gpu.levels - 1) as f32;
-        let repeat = f32::from(u8::from(v.gpu.repeat));
-        let Some(v0) = v0 else {
-            // No cell with a usable uvw mapping: nothing to draw for this asset.
-            cells.truncate(offset);
-            ranges.truncate(offset);
-            batch_of_cell.truncate(offset);
-            vparams.push(GpuVolumeParams {
-                p: [1.0, max_lod, slot, repeat],
-            });
-            continue;
-        };
-        vparams.push(GpuVolumeParams {
-            p: [v0, max_lod, slot, repeat],
-        });
-        v0_all = Some(v0_all.map_or(v0, |b| b.min(v0)));
-        for r in &ranges[offset..] {
-            z_min = z_min.min(r.0);
-            z_max = z_max.max(r.1);
         }
     }
     let Some(v0) = v0_all else {
