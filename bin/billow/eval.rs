@@ -6,9 +6,10 @@ use std::time::Instant;
 
 use billow::camera::{parse_direction, view_directions, views_of, ViewDirections, ViewSpec};
 use billow::eval::image::write_comparisons_png;
+use billow::eval::lighting::Lighting;
 use billow::eval::slicer::{SlicerParams, Spacing};
 use billow::eval::suite::{
-    lighting_note, mean_errors, means_by_distance, view_file_stem, DistanceMeans, EvalOptions,
+    mean_errors, means_by_distance, reference_lighting, view_file_stem, DistanceMeans, EvalOptions,
     Evaluator, MeanErrors, PreparedAsset, ViewResult, EVAL_FOV_Y,
 };
 use billow::eval::EvalError;
@@ -55,12 +56,22 @@ pub struct Args {
     /// mesh | difference) and eval.json; created if missing. Written atomically.
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
+    /// Lighting of the reference: auto (the lighting the asset was baked with: its baked AO
+    /// at each hit point, or unlit) or unlit.
+    #[arg(long, value_enum, default_value_t = LightingArg::Auto)]
+    lighting: LightingArg,
     /// Treat import warnings (e.g. a missing texture) as errors.
     #[arg(long)]
     strict: bool,
     /// Print one machine-readable JSON document on stdout instead of the table.
     #[arg(long)]
     json: bool,
+}
+
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightingArg {
+    Auto,
+    Unlit,
 }
 
 #[derive(Serialize)]
@@ -74,11 +85,13 @@ struct Seconds {
 }
 
 #[derive(Serialize)]
-struct Lighting {
+struct LightingJson {
     /// The asset's `bake` parameter (`none` when absent).
     asset: String,
-    /// Always `unlit` for now.
+    /// `unlit` or `ao` (see `--lighting`).
     reference: &'static str,
+    /// The reference lighting with its parameters.
+    reference_details: String,
 }
 
 #[derive(Serialize)]
@@ -97,7 +110,7 @@ struct Summary {
     fov_y_degrees: f32,
     reference_spp: u32,
     spacing: String,
-    lighting: Lighting,
+    lighting: LightingJson,
     notes: Vec<String>,
     views: Vec<ViewResult>,
     mean: Means,
@@ -300,6 +313,24 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         .map_err(|e| CliError::new(eval_code(&e), format!("{asset_shown}: {e}")))?;
     let read_s = t.elapsed().as_secs_f64();
     let spacing = parse_spacing(&args.spacing, prepared.voxel_size())?;
+    let (lighting, lighting_note) = match args.lighting {
+        LightingArg::Auto => reference_lighting(&asset)
+            .map_err(|e| CliError::new(eval_code(&e), format!("{asset_shown}: {e}")))?,
+        LightingArg::Unlit => {
+            let note = asset
+                .header
+                .params
+                .get("bake")
+                .filter(|b| !matches!(b.trim(), "" | "none"))
+                .map(|b| {
+                    format!(
+                        "the asset has baked lighting (bake={b}) but --lighting unlit: the \
+                         errors include the lighting difference"
+                    )
+                });
+            (Lighting::Unlit, note)
+        }
+    };
 
     let options = EvalOptions {
         width,
@@ -311,6 +342,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             ..SlicerParams::default()
         },
         raster_1spp: true,
+        lighting,
     };
     let evaluator = Evaluator::new(&scene, options)
         .map_err(|e| CliError::new(Code::InvalidInput, format!("{source_shown}: {e}")))?;
@@ -350,7 +382,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     }
     bar.finish_and_clear();
 
-    let notes: Vec<String> = lighting_note(&asset).into_iter().collect();
+    let notes: Vec<String> = lighting_note.into_iter().collect();
     let sum = |f: &dyn Fn(&ViewResult) -> f64| results.iter().map(f).sum::<f64>();
     let summary = Summary {
         source: source_shown,
@@ -361,14 +393,15 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         fov_y_degrees: EVAL_FOV_Y.to_degrees(),
         reference_spp: args.spp,
         spacing: args.spacing.clone(),
-        lighting: Lighting {
+        lighting: LightingJson {
             asset: asset
                 .header
                 .params
                 .get("bake")
                 .cloned()
                 .unwrap_or_else(|| "none".into()),
-            reference: "unlit",
+            reference: lighting.name(),
+            reference_details: lighting.describe(),
         },
         notes,
         mean: Means {

@@ -7,6 +7,7 @@
 pub mod compositing;
 pub mod error;
 pub mod image;
+pub mod lighting;
 pub mod metrics;
 pub mod prism_plane;
 pub mod ray_triangle;

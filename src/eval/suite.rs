@@ -4,7 +4,9 @@
 //! - Every view is framed on the **source mesh's** bounds ([`crate::camera::Camera::framed`]),
 //!   so the reference images do not depend on the asset (its margin, resolution) and can be
 //!   reused for many assets of the same mesh ([`Evaluator::reference`]).
-//! - Reference: [`ReferenceRenderer`] with `n × n` stratified samples per pixel (unlit).
+//! - Reference: [`ReferenceRenderer`] with `n × n` stratified samples per pixel, unlit or
+//!   with the lighting the asset was baked with ([`EvalOptions::lighting`],
+//!   [`reference_lighting`]).
 //!   Also rendered per view: the mesh with **one sample per pixel** at the pixel centre —
 //!   what a rasterizer without anti-aliasing shows — and compared with the same reference,
 //!   so the asset's error can be read against the aliasing error of drawing the mesh.
@@ -19,6 +21,7 @@ use billow_format::{Prism, VolumeAsset};
 use glam::Vec3;
 use serde::Serialize;
 
+use super::lighting::Lighting;
 use super::metrics::{compare, ImageError};
 use super::reference::{ReferenceRenderer, Sampling};
 use super::slicer::{render_decoded, SlicerParams};
@@ -41,6 +44,8 @@ pub struct EvalOptions {
     pub slicer: SlicerParams,
     /// Also render the mesh with one sample per pixel (the aliasing baseline).
     pub raster_1spp: bool,
+    /// Lighting of the reference (and of the 1-spp render).
+    pub lighting: Lighting,
 }
 
 impl Default for EvalOptions {
@@ -53,6 +58,7 @@ impl Default for EvalOptions {
             reference_per_axis: 4,
             slicer: SlicerParams::default(),
             raster_1spp: true,
+            lighting: Lighting::Unlit,
         }
     }
 }
@@ -179,17 +185,17 @@ pub fn means_by_distance(results: &[ViewResult]) -> Vec<DistanceMeans> {
         .collect()
 }
 
-/// A note when the asset has baked lighting (header param `bake`, e.g. `bake=ao`) that the
-/// unlit reference does not reproduce; `None` for unlit assets.
-pub fn lighting_note(asset: &VolumeAsset) -> Option<String> {
-    let bake = asset.header.params.get("bake")?.trim();
-    if bake.is_empty() || bake == "none" {
-        return None;
-    }
-    Some(format!(
-        "the asset has baked lighting (bake={bake}) but the reference is unlit: the errors include \
-         the lighting difference (a lit reference is not implemented yet)"
-    ))
+/// The reference lighting that matches a volume asset's baked lighting (header `bake`,
+/// see [`Lighting::for_volume`]), and a note when its lighting cannot be reproduced.
+pub fn reference_lighting(asset: &VolumeAsset) -> Result<(Lighting, Option<String>), EvalError> {
+    let b = &asset.header.bounds;
+    Lighting::for_volume(
+        &asset.header.params,
+        Vec3::from(b.min),
+        Vec3::from(b.max),
+        asset.level_dims(0),
+    )
+    .map_err(EvalError::InvalidAsset)
 }
 
 /// The bounds every view is framed on: the source mesh's.
@@ -249,7 +255,7 @@ impl<'a> Evaluator<'a> {
         }
         let bounds = frame_bounds(scene)?;
         Ok(Evaluator {
-            renderer: ReferenceRenderer::new(scene),
+            renderer: ReferenceRenderer::new(scene).with_lighting(options.lighting)?,
             bounds,
             options,
         })
@@ -385,7 +391,7 @@ mod tests {
     }
 
     #[test]
-    fn baked_lighting_is_noted() {
+    fn baked_lighting_selects_the_reference_lighting() {
         use billow_format::{AssetKind, Bounds, ColourSpace, Header, TexelFormat, VolumeHeader};
         let mut asset = VolumeAsset {
             header: Header {
@@ -410,12 +416,16 @@ mod tests {
             normals: None,
             cells: vec![],
         };
-        assert_eq!(lighting_note(&asset), None);
+        assert_eq!(reference_lighting(&asset).unwrap(), (Lighting::Unlit, None));
         asset.header.params.insert("bake".into(), "none".into());
-        assert_eq!(lighting_note(&asset), None);
+        assert_eq!(reference_lighting(&asset).unwrap(), (Lighting::Unlit, None));
         asset.header.params.insert("bake".into(), "ao".into());
-        let note = lighting_note(&asset).unwrap();
-        assert!(note.contains("bake=ao") && note.contains("unlit"), "{note}");
+        let (l, note) = reference_lighting(&asset).unwrap();
+        assert!(matches!(l, Lighting::Ao { .. }) && note.is_none(), "{l:?}");
+        asset.header.params.insert("bake".into(), "gi".into());
+        let (l, note) = reference_lighting(&asset).unwrap();
+        assert_eq!(l, Lighting::Unlit);
+        assert!(note.unwrap().contains("bake=gi"));
     }
 
     #[test]
