@@ -447,13 +447,14 @@ fn print_table(s: &Summary) {
         println!("note: {n}");
     }
     println!(
-        "{:<14} {:>7} {:>6} {:>6} {:>7} {:>6} | {:>7} {:>6} {:>6} | {:>7} {:>7} {:>6} {:>9}",
+        "{:<14} {:>7} {:>6} {:>6} {:>7} {:>6} {:>6} | {:>7} {:>6} {:>6} | {:>7} {:>7} {:>6} {:>9}",
         "view",
         "RMSE",
         "PSNR",
         "|Δα|",
         "cov%",
         "SSIM",
+        "FLIP",
         "1spp",
         "PSNR",
         "SSIM",
@@ -464,13 +465,14 @@ fn print_table(s: &Summary) {
     );
     let row = |name: &str, a: &MeanErrors, r: &MeanErrors, tail: String| {
         println!(
-            "{:<14} {:>7.4} {:>6.2} {:>6.4} {:>+7.2} {:>6.3} | {:>7.4} {:>6.2} {:>6.3} |{}",
+            "{:<14} {:>7.4} {:>6.2} {:>6.4} {:>+7.2} {:>6.3} {:>6.4} | {:>7.4} {:>6.2} {:>6.3} |{}",
             name,
             a.rmse,
             a.psnr,
             a.mean_abs_alpha,
             100.0 * a.coverage_rel_diff,
             a.ssim_luma,
+            a.flip,
             r.rmse,
             r.psnr,
             r.ssim_luma,
@@ -500,7 +502,8 @@ fn print_table(s: &Summary) {
     let t = tail(s.seconds.reference, s.seconds.asset, s.slices, s.fragments);
     row("mean", &s.mean.asset, &s.mean.raster_1spp, t);
     println!(
-        "RMSE/PSNR on premultiplied linear RGBA; cov% = asset coverage vs reference; SSIM on luma. \
+        "RMSE/PSNR on premultiplied linear RGBA; cov% = asset coverage vs reference; SSIM on luma; \
+         FLIP over black. \
          Total {:.2} s.",
         s.seconds.total
     );

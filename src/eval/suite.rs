@@ -11,8 +11,8 @@
 //!   what a rasterizer without anti-aliasing shows — and compared with the same reference,
 //!   so the asset's error can be read against the aliasing error of drawing the mesh.
 //! - Asset: the CPU slicer ([`render_decoded`]) with the given [`SlicerParams`].
-//! - Metrics: [`compare`] (RMSE/PSNR on premultiplied linear RGBA, alpha coverage, SSIM).
-//!   Means over views: RMSE, |Δα|, coverage difference and SSIM are plain means;
+//! - Metrics: [`compare`] (RMSE/PSNR on premultiplied linear RGBA, alpha coverage, SSIM,
+//!   FLIP). Means over views: RMSE, |Δα|, coverage difference, SSIM and FLIP are plain means;
 //!   the mean PSNR is the PSNR of the mean MSE (finite unless every view is exact).
 
 use std::time::Instant;
@@ -117,6 +117,8 @@ pub struct MeanErrors {
     pub coverage_rel_diff: f64,
     pub ssim_luma: f64,
     pub ssim_alpha: f64,
+    /// Mean FLIP error.
+    pub flip: f64,
 }
 
 /// Means of `errors` (all zeros for an empty set).
@@ -135,6 +137,7 @@ pub fn mean_errors<'a>(errors: impl IntoIterator<Item = &'a ImageError>) -> Mean
         };
         m.ssim_luma += e.ssim_luma;
         m.ssim_alpha += e.ssim_alpha;
+        m.flip += e.flip;
     }
     if m.views == 0 {
         return m;
@@ -151,6 +154,7 @@ pub fn mean_errors<'a>(errors: impl IntoIterator<Item = &'a ImageError>) -> Mean
     m.coverage_rel_diff /= n;
     m.ssim_luma /= n;
     m.ssim_alpha /= n;
+    m.flip /= n;
     m
 }
 
@@ -376,6 +380,7 @@ mod tests {
             coverage_rel_diff: cov,
             ssim_luma: 1.0,
             ssim_alpha: 0.5,
+            flip: 0.1,
         }
     }
 
