@@ -98,6 +98,40 @@ fn hash01(x: u32, y: u32, s: u32, dim: u32) -> f32 {
     (h >> 8) as f32 * (1.0 / 16_777_216.0)
 }
 
+/// The position inside pixel `(x, y)` of sample `(sx, sy)` of an `n × n` pattern (in
+/// `[0,1)²`): the pixel centre for [`Sampling::Centre`], a fixed hash-jittered point of
+/// its stratum otherwise. Shared with the cloud renderer so both sample the same points.
+pub(crate) fn sample_offset(
+    sampling: Sampling,
+    x: u32,
+    y: u32,
+    sx: u32,
+    sy: u32,
+    n: u32,
+) -> (f32, f32) {
+    match sampling {
+        Sampling::Centre => (0.5, 0.5),
+        Sampling::Stratified { .. } => {
+            let s = sy * n + sx;
+            (
+                (sx as f32 + hash01(x, y, s, 0)) / n as f32,
+                (sy as f32 + hash01(x, y, s, 1)) / n as f32,
+            )
+        }
+    }
+}
+
+/// Samples per axis of `sampling` (1 for the centre), checked to be 1..=64.
+pub(crate) fn per_axis(sampling: Sampling) -> Result<u32, EvalError> {
+    match sampling {
+        Sampling::Centre => Ok(1),
+        Sampling::Stratified { per_axis } if (1..=64).contains(&per_axis) => Ok(per_axis),
+        Sampling::Stratified { per_axis } => Err(EvalError::InvalidParam(format!(
+            "samples per axis {per_axis} not in 1..=64"
+        ))),
+    }
+}
+
 pub(crate) fn validate_camera(camera: &Camera) -> Result<(), EvalError> {
     let ok = camera.width > 0
         && camera.height > 0
@@ -150,15 +184,7 @@ impl<'a> ReferenceRenderer<'a> {
     /// Renders one view.
     pub fn render(&self, camera: &Camera, sampling: Sampling) -> Result<ImageF32, EvalError> {
         validate_camera(camera)?;
-        let n = match sampling {
-            Sampling::Centre => 1,
-            Sampling::Stratified { per_axis } if (1..=64).contains(&per_axis) => per_axis,
-            Sampling::Stratified { per_axis } => {
-                return Err(EvalError::InvalidParam(format!(
-                    "samples per axis {per_axis} not in 1..=64"
-                )))
-            }
-        };
+        let n = per_axis(sampling)?;
         let mut img = ImageF32::new(camera.width, camera.height);
         let w = camera.width as usize;
         let inv = 1.0 / (n * n) as f32;
@@ -169,16 +195,7 @@ impl<'a> ReferenceRenderer<'a> {
                 let mut acc = Vec4::ZERO;
                 for sy in 0..n {
                     for sx in 0..n {
-                        let (jx, jy) = match sampling {
-                            Sampling::Centre => (0.5, 0.5),
-                            Sampling::Stratified { .. } => {
-                                let s = sy * n + sx;
-                                (
-                                    (sx as f32 + hash01(x, y, s, 0)) / n as f32,
-                                    (sy as f32 + hash01(x, y, s, 1)) / n as f32,
-                                )
-                            }
-                        };
+                        let (jx, jy) = sample_offset(sampling, x, y, sx, sy, n);
                         let r = camera.ray(x as f32 + jx, y as f32 + jy);
                         acc += self.trace(r.origin, r.dir, r.t_min, r.t_max);
                     }

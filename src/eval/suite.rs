@@ -21,6 +21,7 @@ use billow_format::{Prism, VolumeAsset};
 use glam::Vec3;
 use serde::Serialize;
 
+use super::cloud_render::{CloudRenderer, PreparedCloud};
 use super::lighting::Lighting;
 use super::metrics::{compare, ImageError};
 use super::reference::{ReferenceRenderer, Sampling};
@@ -336,6 +337,44 @@ impl<'a> Evaluator<'a> {
             polygons: r.stats.polygons,
             fragments: r.stats.fragments,
             pixel_in_voxels,
+        };
+        Ok((result, r.image))
+    }
+}
+
+impl<'a> Evaluator<'a> {
+    /// Renders LOD `lod` of a billboard cloud from `reference`'s view with the reference's
+    /// sampling and compares. In the result, `slices` is 0, `polygons` the billboards hit,
+    /// `fragments` the billboard samples shaded and `pixel_in_voxels` the pixel's size at
+    /// the target's depth in the level's texels.
+    pub fn cloud(
+        &self,
+        renderer: &CloudRenderer,
+        cloud: &PreparedCloud,
+        lod: usize,
+        reference: &ReferenceView,
+    ) -> Result<(ViewResult, ImageF32), EvalError> {
+        let n = self.options.reference_per_axis;
+        let r = renderer.render(lod, &reference.camera, Sampling::Stratified { per_axis: n })?;
+        let err = compare(&reference.image, &r.image)?;
+        let cam = &reference.camera;
+        let depth = (cam.target - cam.eye).length();
+        let spec = &reference.spec;
+        let result = ViewResult {
+            view: spec.name.clone(),
+            dir: spec.dir.to_array(),
+            distance_factor: spec.distance_factor,
+            asset: err,
+            raster_1spp: reference.raster_1spp.as_ref().map(|x| x.1),
+            seconds: ViewSeconds {
+                reference: reference.seconds,
+                asset: r.stats.seconds,
+                raster_1spp: reference.raster_1spp.as_ref().map_or(0.0, |x| x.2),
+            },
+            slices: 0,
+            polygons: r.stats.visible_billboards,
+            fragments: r.stats.fragments,
+            pixel_in_voxels: cam.pixel_size_at(depth) * cloud.texel_density(lod),
         };
         Ok((result, r.image))
     }
