@@ -326,6 +326,20 @@ pub struct CloudRenderer<'a> {
 /// A billboard hit: depth, billboard index, premultiplied colour.
 type Hit = (f32, usize, Vec4);
 
+/// Primary rays of a camera with the inverse view matrix computed once
+/// (same directions as [`Camera::ray`]).
+struct Rays<'c> {
+    camera: &'c Camera,
+    inv: glam::Mat4,
+}
+
+impl Rays<'_> {
+    fn dir(&self, px: f32, py: f32) -> Vec3 {
+        self.inv
+            .transform_vector3(self.camera.view_dir_of_pixel(px, py))
+    }
+}
+
 impl<'a> CloudRenderer<'a> {
     pub fn new(cloud: &'a PreparedCloud, lighting: Lighting) -> Result<Self, EvalError> {
         Ok(CloudRenderer {
@@ -350,7 +364,7 @@ impl<'a> CloudRenderer<'a> {
 
     /// Colour of quad `q` hit at `st` by a ray of direction `dir` through pixel
     /// `(px, py)`; `lod` from the rays through the neighbouring pixels.
-    fn shade(&self, q: &Quad, st: Vec2, dir: Vec3, camera: &Camera, px: f32, py: f32) -> Vec4 {
+    fn shade(&self, q: &Quad, st: Vec2, dir: Vec3, rays: &Rays, px: f32, py: f32) -> Vec4 {
         let side = usize::from(q.normal.dot(dir) > 0.0);
         let (atlas, r) = q.sides[side];
         let atlas = &self.cloud.atlases[atlas];
@@ -358,8 +372,7 @@ impl<'a> CloudRenderer<'a> {
         let scale = Vec2::new((r[2] - r[0]) * w0 as f32, (r[3] - r[1]) * h0 as f32);
         let uv_of = |st: Vec2| Vec2::new(r[0], r[1]) + st * Vec2::new(r[2] - r[0], r[3] - r[1]);
         let deriv = |ox: f32, oy: f32| -> Option<f32> {
-            let ray = camera.ray(px + ox, py + oy);
-            let (s2, _) = Self::plane_hit(q, ray.origin, ray.dir)?;
+            let (s2, _) = Self::plane_hit(q, rays.camera.eye, rays.dir(px + ox, py + oy))?;
             Some(((s2 - st) * scale).length())
         };
         let lod = match (deriv(1.0, 0.0), deriv(0.0, 1.0)) {
@@ -372,14 +385,9 @@ impl<'a> CloudRenderer<'a> {
 
     /// The billboards among `candidates` hit by one ray within `[t_min, t_max]`, shaded
     /// (`pc`: the pixel centre, for the MIP footprint).
-    fn hits(
-        &self,
-        candidates: &[usize],
-        ray: &crate::camera::CameraRay,
-        cam: &Camera,
-        pc: (f32, f32),
-    ) -> Vec<Hit> {
-        let (origin, dir, t_min, t_max) = (ray.origin, ray.dir, ray.t_min, ray.t_max);
+    fn hits(&self, candidates: &[usize], dir: Vec3, rays: &Rays, pc: (f32, f32)) -> Vec<Hit> {
+        let cam = rays.camera;
+        let (origin, t_min, t_max) = (cam.eye, cam.near, cam.far);
         let mut out = Vec::new();
         for &i in candidates {
             let q = &self.cloud.quads[i];
@@ -392,7 +400,7 @@ impl<'a> CloudRenderer<'a> {
             if !inside {
                 continue;
             }
-            let c = self.shade(q, st, dir, cam, pc.0, pc.1);
+            let c = self.shade(q, st, dir, rays, pc.0, pc.1);
             if c.w > 0.0 {
                 out.push((t, i, c));
             }
@@ -417,9 +425,13 @@ impl<'a> CloudRenderer<'a> {
             )));
         };
         let range = range.clone();
-        // Screen rows each billboard can touch (all rows when a corner is behind the eye).
+        // Screen box each billboard can touch (everything when a corner is behind the eye).
         let view = camera.view();
-        let rows: Vec<(usize, f32, f32)> = range
+        let rays = Rays {
+            camera,
+            inv: view.inverse(),
+        };
+        let boxes: Vec<(usize, [f32; 4])> = range
             .clone()
             .map(|i| {
                 let q = &self.cloud.quads[i];
@@ -427,18 +439,32 @@ impl<'a> CloudRenderer<'a> {
                 let e1 = q.du / q.du.length_squared().max(f32::MIN_POSITIVE);
                 let e3 = q.dv / q.dv.length_squared().max(f32::MIN_POSITIVE);
                 let corners = [q.c0, s(e1), s(e1 + e3), s(e3)];
-                let mut lo = f32::INFINITY;
-                let mut hi = f32::NEG_INFINITY;
+                let mut b = [
+                    f32::INFINITY,
+                    f32::INFINITY,
+                    f32::NEG_INFINITY,
+                    f32::NEG_INFINITY,
+                ];
                 for c in corners {
                     match camera.view_to_pixel(crate::camera::to_view(&view, c)) {
-                        Some((_, y)) if y.is_finite() => {
-                            lo = lo.min(y);
-                            hi = hi.max(y);
+                        Some((x, y)) if x.is_finite() && y.is_finite() => {
+                            b = [b[0].min(x), b[1].min(y), b[2].max(x), b[3].max(y)];
                         }
-                        _ => return (i, f32::NEG_INFINITY, f32::INFINITY),
+                        _ => {
+                            return (
+                                i,
+                                [
+                                    f32::NEG_INFINITY,
+                                    f32::NEG_INFINITY,
+                                    f32::INFINITY,
+                                    f32::INFINITY,
+                                ],
+                            )
+                        }
                     }
                 }
-                (i, lo - 1.0, hi + 1.0)
+                // One pixel of slack: samples anywhere in a pixel.
+                (i, [b[0] - 1.0, b[1] - 1.0, b[2] + 1.0, b[3] + 1.0])
             })
             .collect();
         let mut image = ImageF32::new(camera.width, camera.height);
@@ -450,26 +476,35 @@ impl<'a> CloudRenderer<'a> {
             .enumerate()
             .map(|(y, row)| {
                 let yf = y as f32;
-                let candidates: Vec<usize> = rows
+                let in_row: Vec<(usize, [f32; 4])> = boxes
                     .iter()
-                    .filter(|r| r.1 <= yf + 1.0 && yf <= r.2)
-                    .map(|r| r.0)
+                    .filter(|b| b.1[1] <= yf + 1.0 && yf <= b.1[3])
+                    .copied()
                     .collect();
+                let mut candidates: Vec<usize> = Vec::with_capacity(in_row.len());
                 let mut frags = 0u64;
                 let mut visible = Vec::new();
                 for (x, px) in row.iter_mut().enumerate() {
                     let (xu, yu) = (x as u32, y as u32);
+                    let xf = x as f32;
+                    candidates.clear();
+                    candidates.extend(
+                        in_row
+                            .iter()
+                            .filter(|b| b.1[0] <= xf + 1.0 && xf <= b.1[2])
+                            .map(|b| b.0),
+                    );
                     let mut acc = Vec4::ZERO;
                     for sy in 0..n {
                         for sx in 0..n {
                             let (jx, jy) = sample_offset(sampling, xu, yu, sx, sy, n);
-                            let r = camera.ray(x as f32 + jx, yf + jy);
-                            let mut hits =
-                                self.hits(&candidates, &r, camera, (x as f32 + 0.5, yf + 0.5));
+                            let dir = rays.dir(xf + jx, yf + jy);
+                            let mut hits = self.hits(&candidates, dir, &rays, (xf + 0.5, yf + 0.5));
                             frags += hits.len() as u64;
                             visible.extend(hits.iter().map(|h| h.1));
                             let (layers, stop) =
-                                self.trunk.trace_layers(r.origin, r.dir, r.t_min, r.t_max);
+                                self.trunk
+                                    .trace_layers(camera.eye, dir, camera.near, camera.far);
                             if let Some(s) = stop {
                                 hits.retain(|h| h.0 <= s.t);
                             }
