@@ -209,6 +209,108 @@ fn textured_cube_coverage_and_colour() {
     assert!(img.coverage() > 0.05);
 }
 
+/// 4×4 texels, every one a different colour (red grows with u, green with v), repeat.
+fn gradient_texture() -> Texture {
+    let mut texels = Vec::new();
+    for j in 0..4u8 {
+        for i in 0..4u8 {
+            texels.push([30 + 60 * i, 30 + 60 * j, 220 - 50 * i, 255]);
+        }
+    }
+    Texture {
+        name: "gradient".into(),
+        width: 4,
+        height: 4,
+        texels,
+        wrap_u: Wrap::Repeat,
+        wrap_v: Wrap::Repeat,
+    }
+}
+
+#[test]
+fn textured_cube_follows_the_uv_mapping() {
+    // The cube of `textured_cube_coverage_and_colour` with a texture whose every texel
+    // differs: at each pixel centre the colour must be the texture at the uv of the point
+    // the ray hits, computed here analytically from the face's corner uvs (a swapped,
+    // mirrored or mis-interpolated uv fails).
+    let mut sb = SceneBuilder::new();
+    let factor = Vec4::new(1.0, 0.8, 0.6, 1.0);
+    let mat = sb.material(material(factor, Some(0), AlphaMode::Opaque, false));
+    let mesh = sb.mesh("cube");
+    let c = |x: f32, y: f32, z: f32| Vec3::new(x, y, z) * 0.5;
+    // Front (+z) and right (+x) faces, corners a b c d with uv (0,1) (1,1) (1,0) (0,0).
+    quad(
+        &mut sb,
+        [
+            c(-1., -1., 1.),
+            c(1., -1., 1.),
+            c(1., 1., 1.),
+            c(-1., 1., 1.),
+        ],
+        mat,
+        mesh,
+    );
+    quad(
+        &mut sb,
+        [
+            c(1., -1., 1.),
+            c(1., -1., -1.),
+            c(1., 1., -1.),
+            c(1., 1., 1.),
+        ],
+        mat,
+        mesh,
+    );
+    let mut scene = sb.finish();
+    let tex = gradient_texture();
+    scene.textures.push(tex.clone());
+    // (camera, axis of the face, uv of a point on it)
+    type Uv = fn(Vec3) -> Vec2;
+    let views: [(Camera, usize, Uv); 2] = [
+        (camera_at(3.0), 2, |p| Vec2::new(p.x + 0.5, 0.5 - p.y)),
+        (
+            Camera {
+                eye: Vec3::new(3.0, 0.0, 0.0),
+                ..camera_at(3.0)
+            },
+            0,
+            |p| Vec2::new(0.5 - p.z, 0.5 - p.y),
+        ),
+    ];
+    for (cam, axis, uv_of) in views {
+        let img = render_reference(&scene, &cam, Sampling::Centre).unwrap();
+        let (mut checked, mut discriminating) = (0, 0);
+        for y in 0..N {
+            for x in 0..N {
+                let r = cam.ray(x as f32 + 0.5, y as f32 + 0.5);
+                let t = (0.5 - r.origin[axis]) / r.dir[axis];
+                let p = r.origin + r.dir * t;
+                let inside = (0..3).filter(|&a| a != axis).all(|a| p[a].abs() < 0.45);
+                if !inside {
+                    continue;
+                }
+                let uv = uv_of(p);
+                let want = factor * tex.sample_bilinear(uv);
+                let got = img.get(x, y);
+                assert!(
+                    (got - want).abs().max_element() < 2e-3,
+                    "axis {axis} pixel ({x},{y}) uv {uv}: {got} vs {want}"
+                );
+                let swapped = factor * tex.sample_bilinear(Vec2::new(uv.y, uv.x));
+                if (swapped - want).abs().max_element() > 0.05 {
+                    discriminating += 1;
+                }
+                checked += 1;
+            }
+        }
+        assert!(checked > 400, "{checked} pixels checked");
+        assert!(
+            discriminating > checked / 2,
+            "the texture would not catch swapped uvs"
+        );
+    }
+}
+
 #[test]
 fn mask_and_blend() {
     // Mask: left texel opaque, right transparent, clamp: alpha crosses 0.5 at u = 0.5.
@@ -235,10 +337,28 @@ fn mask_and_blend() {
         img.coverage(),
         0.5 * full
     );
-    assert!(img
-        .data
-        .iter()
-        .all(|p| p.w == 0.0 || (p.w - 1.0).abs() < 1e-6 || (p.w > 0.0 && p.w < 1.0)));
+    // Real values: white premultiplied (rgb = α); α a multiple of 1/16 (16 samples, each
+    // kept whole or cut); fully opaque left of the cut (screen x < N/2, where u < 0.5) and
+    // fully transparent right of it, inside the quad away from its edges.
+    let edge = (f64::from(N) / 2.0 - h).ceil() as u32 + 1;
+    for y in 0..N {
+        for x in 0..N {
+            let p = img.get(x, y);
+            assert!(
+                (p.truncate() - Vec3::splat(p.w)).abs().max_element() < 1e-6,
+                "{p}"
+            );
+            let k = p.w * 16.0;
+            assert!((k - k.round()).abs() < 1e-4, "({x},{y}) α {} not k/16", p.w);
+            let interior = (edge..N - edge).contains(&x) && (edge..N - edge).contains(&y);
+            if interior && x < N / 2 - 1 {
+                assert_eq!(p.w, 1.0, "({x},{y}) left of the cut");
+            }
+            if (interior && x > N / 2) || x > N - edge {
+                assert_eq!(p.w, 0.0, "({x},{y}) right of the cut");
+            }
+        }
+    }
 
     // Blend: red α 0.5 in front of blue α 0.5 → α 0.75, rgb (0.5, 0, 0.25).
     let mut sb = SceneBuilder::new();

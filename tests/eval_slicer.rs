@@ -3,11 +3,12 @@
 
 use std::collections::BTreeMap;
 
-use billow::camera::{view_set, ViewDirections};
+use billow::camera::{view_set, Camera, ViewDirections};
 use billow::eval::image::linear_to_srgb;
 use billow::eval::metrics::compare;
 use billow::eval::reference::{ReferenceRenderer, Sampling};
 use billow::eval::slicer::{render_volume, SlicerParams, Spacing};
+use billow::eval::volume_sampler::MipFilter;
 use billow::procgen::SceneBuilder;
 use billow::scene::{Aabb, AlphaMode, Material, Scene, Vertex};
 use billow_format::{
@@ -282,5 +283,166 @@ fn semi_transparent_volume_opacity_matches_theory() {
             "{spacing:?}: {got} vs {want} ({} slices)",
             out.stats.slices
         );
+    }
+}
+
+fn volume(dims: [u32; 3], levels: Vec<Vec<u8>>, cells: Vec<Prism>) -> VolumeAsset {
+    VolumeAsset {
+        header: Header {
+            kind: AssetKind::Volume,
+            tool: "test".into(),
+            source: None,
+            bounds: Bounds {
+                min: [0.0; 3],
+                max: [1.0; 3],
+            },
+            colour_space: ColourSpace::SrgbPremultiplied,
+            seed: None,
+            params: BTreeMap::new(),
+            volume: Some(VolumeHeader {
+                dims,
+                mip_count: levels.len() as u32,
+                texel: TexelFormat::Rgba8Unorm,
+                normals: None,
+            }),
+        },
+        levels,
+        normals: None,
+        cells,
+    }
+}
+
+/// Looking along −z at the unit cube from `distance` in front of its centre.
+fn front_camera(distance: f32, size: u32) -> Camera {
+    Camera {
+        eye: Vec3::new(0.5, 0.5, 0.5 + distance),
+        target: Vec3::splat(0.5),
+        up: Vec3::Y,
+        fov_y: FOV,
+        width: size,
+        height: size,
+        near: 0.01,
+        far: 1000.0,
+    }
+}
+
+#[test]
+fn mip_level_follows_the_pixel_footprint() {
+    // 16³ opaque, every MIP level a different pure colour: the centre pixel shows the
+    // level(s) of the front-most slice, lod = log2(d/v₀) with d = max(pixel footprint, v₀)
+    // at the slice depth z₀ = z_min + d(z_min)/2 (slicer.rs).
+    const LEVEL_RGB: [[u8; 3]; 5] = [
+        [255, 0, 0],
+        [0, 255, 0],
+        [0, 0, 255],
+        [255, 255, 0],
+        [0, 255, 255],
+    ];
+    let dims = [RES; 3];
+    let levels = (0..full_mip_count(dims))
+        .map(|l| {
+            let c = LEVEL_RGB[l as usize];
+            let d = mip_dims(dims, l);
+            [c[0], c[1], c[2], 255].repeat((d[0] * d[1] * d[2]) as usize)
+        })
+        .collect();
+    let asset = volume(dims, levels, box_prisms([0.0; 3], [1.0; 3]));
+    let v0 = 1.0 / RES as f32;
+    let rgb = |l: usize| Vec3::from_array(LEVEL_RGB[l].map(|c| f32::from(c) / 255.0));
+    let mut seen = Vec::new();
+    // 65 × 65: the centre of pixel (32, 32) is the image centre, so the cube covers it at
+    // every distance here (at 70 it is about one pixel wide).
+    for distance in [1.5f32, 5.0, 9.0, 14.0, 22.0, 30.0, 45.0, 70.0] {
+        let cam = front_camera(distance, 65);
+        let z_min = distance - 0.5;
+        let d_at = |z: f32| cam.pixel_size_at(z).max(v0);
+        let z0 = z_min + 0.5 * d_at(z_min);
+        let lod = (d_at(z0) / v0).log2().clamp(0.0, 4.0);
+        for filter in [MipFilter::Nearest, MipFilter::Linear] {
+            let p = SlicerParams {
+                mip_filter: filter,
+                ..SlicerParams::default()
+            };
+            let out = render_volume(&asset, &cam, &p).unwrap();
+            let got = out.image.get(32, 32);
+            let want = match filter {
+                MipFilter::Nearest => rgb(lod.round() as usize),
+                MipFilter::Linear => {
+                    let (l, f) = (lod.floor() as usize, lod.fract());
+                    rgb(l) * (1.0 - f) + rgb((l + 1).min(4)) * f
+                }
+            };
+            assert!(
+                (got.truncate() - want).abs().max_element() < 2e-3 && got.w > 0.999,
+                "distance {distance} ({filter:?}, lod {lod:.3}): {got} vs {want}"
+            );
+        }
+        seen.push(lod.round() as usize);
+    }
+    // Near views sample level 0 (magnified voxels), the far ones the 1×1×1 level, and every
+    // level in between is chosen at some distance.
+    assert_eq!(seen.first(), Some(&0));
+    assert_eq!(seen.last(), Some(&4));
+    for l in 0..5 {
+        assert!(seen.contains(&l), "level {l} never chosen: {seen:?}");
+    }
+}
+
+/// The two box prisms of `[min, max]` with u mapped to `[u0, u1]` (v, w to [0, 1]).
+fn box_cells(min: [f32; 3], max: [f32; 3], u0: f32, u1: f32) -> Vec<Prism> {
+    box_prisms(min, max)
+        .into_iter()
+        .map(|mut p| {
+            p.uvw.iter_mut().for_each(|t| t[0] = u0 + t[0] * (u1 - u0));
+            p
+        })
+        .collect()
+}
+
+#[test]
+fn cells_within_a_slice_are_drawn_in_id_order() {
+    // A 4×1×1 volume, red α ½ in x ∈ [0, ½), blue α ½ in [½, 1]. Cell A maps the red
+    // half onto the box, cell B the blue half onto a box 0.2 behind it (seen from +z).
+    // With one slice (uniform spacing = the voxel size = 1 here) both cells are cut by
+    // the same plane; the later ID is composited over the earlier one whatever the depth
+    // and the side the camera looks from.
+    let red = [188, 0, 0, 128];
+    let blue = [0, 0, 188, 128];
+    let level = [red, red, blue, blue].concat();
+    let a = box_cells([0.0; 3], [1.0; 3], 0.0, 0.25);
+    let b = box_cells([0.0, 0.0, -0.2], [1.0, 1.0, 0.8], 0.75, 1.0);
+    let render = |cells: Vec<Prism>, cam: &Camera| {
+        let asset = volume([4, 1, 1], vec![level.clone()], cells);
+        let p = SlicerParams {
+            spacing: Spacing::Uniform { spacing: 1.0 },
+            ..SlicerParams::default()
+        };
+        let out = render_volume(&asset, cam, &p).unwrap();
+        assert_eq!(out.stats.slices, 1, "one slice");
+        out.image.get(16, 16)
+    };
+    let behind = Camera {
+        eye: Vec3::new(0.5, 0.5, -4.0),
+        ..front_camera(4.0, 32)
+    };
+    for cam in [front_camera(4.0, 32), front_camera(9.0, 32), behind] {
+        let sa = render(a.clone(), &cam);
+        let sb = render(b.clone(), &cam);
+        assert!(
+            sa.x > 0.4 && sa.z == 0.0 && sb.z > 0.4 && sb.x == 0.0,
+            "{sa} {sb}"
+        );
+        let ab = render([a.clone(), b.clone()].concat(), &cam);
+        let ba = render([b.clone(), a.clone()].concat(), &cam);
+        let over = |f: Vec4, back: Vec4| f + back * (1.0 - f.w);
+        assert!(
+            (ab - over(sb, sa)).abs().max_element() < 1e-6,
+            "{ab} vs B over A"
+        );
+        assert!(
+            (ba - over(sa, sb)).abs().max_element() < 1e-6,
+            "{ba} vs A over B"
+        );
+        assert!(ab.z > ab.x && ba.x > ba.z);
     }
 }

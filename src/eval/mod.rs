@@ -4,9 +4,11 @@
 //! Every image here is **premultiplied linear RGBA, f32**, transparent background
 //! ([`image::ImageF32`]). The camera conventions are in [`crate::camera`].
 
+pub mod cloud_render;
 pub mod compositing;
 pub mod error;
 pub mod image;
+pub mod lighting;
 pub mod metrics;
 pub mod prism_plane;
 pub mod ray_triangle;

@@ -1,8 +1,10 @@
 //! Reference renderer: the source [`Scene`] ray-traced on the CPU (obvhs BVH2), the
 //! ground truth every asset is measured against.
 //!
-//! - Unlit: colour = `base_color_factor × texture(uv) × vertex colour` (all linear,
-//!   straight alpha; texture sampled bilinearly with [`Texture::sample_bilinear`]).
+//! - Colour = `base_color_factor × texture(uv) × vertex colour` (all linear, straight
+//!   alpha; texture sampled bilinearly with [`Texture::sample_bilinear`]), unlit by default;
+//!   [`ReferenceRenderer::with_lighting`] multiplies it by the lighting an asset was baked
+//!   with (baked AO at the hit point, or ambient + diffuse; [`super::lighting`]).
 //! - Alpha modes: `Opaque` stops the ray (alpha forced to 1); `Mask` stops it where
 //!   alpha ≥ cutoff and is invisible elsewhere (the ray continues); `Blend` is composited
 //!   front to back and the ray continues. Hits at the same `t` are ordered by triangle
@@ -20,20 +22,19 @@
 // `!(a < b)` comparisons are deliberate: they also catch NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use std::time::Duration;
-
 use glam::{Vec3, Vec3A, Vec4};
-use obvhs::bvh2::builder::build_bvh2_from_tris;
 use obvhs::bvh2::Bvh2;
 use obvhs::ray::{Ray, RayHit};
-use obvhs::BvhBuildParams;
 use rayon::prelude::*;
 
 use super::compositing::under;
+use super::lighting::{diffuse_factor, voxel_stream, Lighting};
 use super::ray_triangle::{TriangleHit, WatertightRay};
 use super::{EvalError, ImageF32};
+use crate::bvh::scene_bvh;
 use crate::camera::Camera;
 use crate::scene::{AlphaMode, Scene};
+use crate::voxelize::shade::{validate_scene, Shader};
 
 /// Pixel sampling pattern.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -56,6 +57,16 @@ pub struct ReferenceRenderer<'a> {
     scene: &'a Scene,
     bvh: Option<Bvh2>,
     has_blend: bool,
+    lighting: Lighting,
+    /// The voxelizer's view of the materials, for AO occlusion tests (same alpha as the bake).
+    shader: Option<Shader<'a>>,
+}
+
+/// A surface a ray meets: its view depth `t` and its premultiplied (lit) colour.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Layer {
+    pub t: f32,
+    pub colour: Vec4,
 }
 
 /// Renders `scene` from `camera` with `sampling`. Convenience for
@@ -87,6 +98,40 @@ fn hash01(x: u32, y: u32, s: u32, dim: u32) -> f32 {
     (h >> 8) as f32 * (1.0 / 16_777_216.0)
 }
 
+/// The position inside pixel `(x, y)` of sample `(sx, sy)` of an `n × n` pattern (in
+/// `[0,1)²`): the pixel centre for [`Sampling::Centre`], a fixed hash-jittered point of
+/// its stratum otherwise. Shared with the cloud renderer so both sample the same points.
+pub(crate) fn sample_offset(
+    sampling: Sampling,
+    x: u32,
+    y: u32,
+    sx: u32,
+    sy: u32,
+    n: u32,
+) -> (f32, f32) {
+    match sampling {
+        Sampling::Centre => (0.5, 0.5),
+        Sampling::Stratified { .. } => {
+            let s = sy * n + sx;
+            (
+                (sx as f32 + hash01(x, y, s, 0)) / n as f32,
+                (sy as f32 + hash01(x, y, s, 1)) / n as f32,
+            )
+        }
+    }
+}
+
+/// Samples per axis of `sampling` (1 for the centre), checked to be 1..=64.
+pub(crate) fn per_axis(sampling: Sampling) -> Result<u32, EvalError> {
+    match sampling {
+        Sampling::Centre => Ok(1),
+        Sampling::Stratified { per_axis } if (1..=64).contains(&per_axis) => Ok(per_axis),
+        Sampling::Stratified { per_axis } => Err(EvalError::InvalidParam(format!(
+            "samples per axis {per_axis} not in 1..=64"
+        ))),
+    }
+}
+
 pub(crate) fn validate_camera(camera: &Camera) -> Result<(), EvalError> {
     let ok = camera.width > 0
         && camera.height > 0
@@ -106,47 +151,40 @@ pub(crate) fn validate_camera(camera: &Camera) -> Result<(), EvalError> {
 }
 
 impl<'a> ReferenceRenderer<'a> {
-    /// Builds the BVH over all triangles of `scene`.
+    /// Builds the BVH over all triangles of `scene` ([`scene_bvh`]); unlit.
     pub fn new(scene: &'a Scene) -> Self {
-        let tris: Vec<obvhs::triangle::Triangle> = scene
-            .triangles
-            .iter()
-            .map(|t| obvhs::triangle::Triangle {
-                v0: t.v[0].position.into(),
-                v1: t.v[1].position.into(),
-                v2: t.v[2].position.into(),
-            })
-            .collect();
-        let bvh = (!tris.is_empty()).then(|| {
-            build_bvh2_from_tris(
-                &tris,
-                BvhBuildParams::medium_build(),
-                &mut Duration::default(),
-            )
-        });
         let has_blend = scene
             .materials
             .iter()
             .any(|m| m.alpha_mode == AlphaMode::Blend);
         ReferenceRenderer {
             scene,
-            bvh,
+            bvh: scene_bvh(scene),
             has_blend,
+            lighting: Lighting::Unlit,
+            shader: None,
         }
+    }
+
+    /// Shades with `lighting` ([`super::lighting`]). AO needs a scene whose material and
+    /// texture indices are valid.
+    pub fn with_lighting(mut self, lighting: Lighting) -> Result<Self, EvalError> {
+        if let Lighting::Ao { .. } = lighting {
+            validate_scene(self.scene).map_err(EvalError::InvalidParam)?;
+            self.shader = Some(Shader::new(self.scene));
+        }
+        self.lighting = lighting;
+        Ok(self)
+    }
+
+    pub fn lighting(&self) -> &Lighting {
+        &self.lighting
     }
 
     /// Renders one view.
     pub fn render(&self, camera: &Camera, sampling: Sampling) -> Result<ImageF32, EvalError> {
         validate_camera(camera)?;
-        let n = match sampling {
-            Sampling::Centre => 1,
-            Sampling::Stratified { per_axis } if (1..=64).contains(&per_axis) => per_axis,
-            Sampling::Stratified { per_axis } => {
-                return Err(EvalError::InvalidParam(format!(
-                    "samples per axis {per_axis} not in 1..=64"
-                )))
-            }
-        };
+        let n = per_axis(sampling)?;
         let mut img = ImageF32::new(camera.width, camera.height);
         let w = camera.width as usize;
         let inv = 1.0 / (n * n) as f32;
@@ -157,16 +195,7 @@ impl<'a> ReferenceRenderer<'a> {
                 let mut acc = Vec4::ZERO;
                 for sy in 0..n {
                     for sx in 0..n {
-                        let (jx, jy) = match sampling {
-                            Sampling::Centre => (0.5, 0.5),
-                            Sampling::Stratified { .. } => {
-                                let s = sy * n + sx;
-                                (
-                                    (sx as f32 + hash01(x, y, s, 0)) / n as f32,
-                                    (sy as f32 + hash01(x, y, s, 1)) / n as f32,
-                                )
-                            }
-                        };
+                        let (jx, jy) = sample_offset(sampling, x, y, sx, sy, n);
                         let r = camera.ray(x as f32 + jx, y as f32 + jy);
                         acc += self.trace(r.origin, r.dir, r.t_min, r.t_max);
                     }
@@ -191,6 +220,31 @@ impl<'a> ReferenceRenderer<'a> {
         m.base_color_factor * tex * vc
     }
 
+    /// [`ReferenceRenderer::shade`] with the lighting applied: straight RGBA of the hit of
+    /// the ray `origin + t·dir` on triangle `tri`.
+    pub fn shade_lit(&self, tri: usize, bary: [f32; 3], origin: Vec3, dir: Vec3, t: f32) -> Vec4 {
+        let c = self.shade(tri, bary);
+        let f = match self.lighting {
+            Lighting::Unlit => return c,
+            Lighting::Ao { rays, grid } => {
+                let (Some(bvh), Some(shader)) = (&self.bvh, &self.shader) else {
+                    return c;
+                };
+                let p = origin + dir * t;
+                rays.ambient_occlusion(self.scene, shader, bvh, p, voxel_stream(&grid, p))
+            }
+            Lighting::Diffuse { light, ambient } => {
+                let v = &self.scene.triangles[tri].v;
+                let face = (v[1].position - v[0].position).cross(v[2].position - v[0].position);
+                let n = (v[0].normal * bary[0] + v[1].normal * bary[1] + v[2].normal * bary[2])
+                    .normalize_or(face.normalize_or_zero());
+                let n = if n.dot(dir) > 0.0 { -n } else { n };
+                diffuse_factor(n, light, ambient)
+            }
+        };
+        (c.truncate() * f).extend(c.w)
+    }
+
     fn hit(&self, wr: &WatertightRay, tri: usize, t_min: f32, t_max: f32) -> Option<TriangleHit> {
         let t = &self.scene.triangles[tri];
         let h = wr.intersect(
@@ -205,8 +259,29 @@ impl<'a> ReferenceRenderer<'a> {
 
     /// Premultiplied linear RGBA seen along one ray (`t` in `[t_min, t_max]`).
     pub fn trace(&self, origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> Vec4 {
+        let (layers, stop) = self.trace_layers(origin, dir, t_min, t_max);
+        let mut acc = Vec4::ZERO;
+        for l in layers.iter().chain(&stop) {
+            acc = under(acc, l.colour);
+            if acc.w >= 1.0 {
+                break;
+            }
+        }
+        acc
+    }
+
+    /// What one ray meets: the blended surfaces in front of the stopping hit, front to back
+    /// (ties by triangle index), and the stopping hit (opaque, or mask ≥ cutoff; alpha 1),
+    /// all shaded and lit, premultiplied.
+    pub fn trace_layers(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        t_min: f32,
+        t_max: f32,
+    ) -> (Vec<Layer>, Option<Layer>) {
         let Some(bvh) = &self.bvh else {
-            return Vec4::ZERO;
+            return (Vec::new(), None);
         };
         let wr = WatertightRay::new(origin, dir);
         let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), t_min, t_max);
@@ -237,7 +312,7 @@ impl<'a> ReferenceRenderer<'a> {
             h.t
         });
         let t_stop = best.map_or(t_max, |b| b.0);
-        let mut acc = Vec4::ZERO;
+        let mut out = Vec::new();
         // Pass 2: blended surfaces in front of the stopping hit, front to back.
         if self.has_blend {
             let mut layers: Vec<(f32, usize, [f32; 3])> = Vec::new();
@@ -256,19 +331,27 @@ impl<'a> ReferenceRenderer<'a> {
             });
             layers.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
             layers.dedup_by_key(|l| l.1);
-            for (_, tri, bary) in layers {
-                let c = self.shade(tri, bary);
+            let mut opacity = 0.0f32;
+            for (t, tri, bary) in layers {
+                let c = self.shade_lit(tri, bary, origin, dir, t);
                 let a = c.w.clamp(0.0, 1.0);
-                acc = under(acc, (c.truncate() * a).extend(a));
-                if acc.w >= 1.0 {
-                    return acc;
+                out.push(Layer {
+                    t,
+                    colour: (c.truncate() * a).extend(a),
+                });
+                opacity += (1.0 - opacity) * a;
+                if opacity >= 1.0 {
+                    return (out, None);
                 }
             }
         }
-        if let Some((_, tri, bary)) = best {
-            let c = self.shade(tri, bary);
-            acc = under(acc, c.truncate().extend(1.0));
-        }
-        acc
+        let stop = best.map(|(t, tri, bary)| Layer {
+            t,
+            colour: self
+                .shade_lit(tri, bary, origin, dir, t)
+                .truncate()
+                .extend(1.0),
+        });
+        (out, stop)
     }
 }

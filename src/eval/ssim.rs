@@ -1,8 +1,13 @@
 //! SSIM (Wang, Bovik, Sheikh, Simoncelli 2004) on one channel of values in `[0,1]`.
 //!
-//! Implemented here rather than taken from a crate: the crates available
-//! (`image-compare`) work on 8-bit images, which would quantize the f32 renders first.
-//! Standard parameters: Gaussian window σ = 1.5 truncated to 11×11 (separable,
+//! Implemented here rather than taken from a crate, after looking: `image-compare` 0.5
+//! works on 8-bit images and its SSIM uses non-overlapping 8×8 windows whose "variances"
+//! are unnormalised sums (not Wang et al.'s statistic); `dssim-core` is a different,
+//! multi-scale metric in Lab and AGPL-3.0, which this MIT/Apache project cannot link.
+//! The perceptual metric billow takes from a crate is FLIP (`nv-flip`, see
+//! [`super::metrics`]); this SSIM is checked by the unit tests below (identity, the closed
+//! form for constant images, symmetry, bounds) and in `super::metrics` (it falls with noise
+//! and blur). Standard parameters: Gaussian window σ = 1.5 truncated to 11×11 (separable,
 //! normalised; clamp-to-edge at the borders, so every pixel gets a value),
 //! `C1 = (0.01)²`, `C2 = (0.03)²`, dynamic range 1. Returns the mean SSIM map; 1 for
 //! identical inputs. Accumulation in f64.
@@ -66,4 +71,33 @@ pub fn ssim(a: &[f32], b: &[f32], w: usize, h: usize) -> f64 {
             ((2.0 * mx * my + c1) * (2.0 * cxy + c2)) / ((mx * mx + my * my + c1) * (vx + vy + c2));
     }
     total / (w * h) as f64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn closed_forms_and_bounds() {
+        let (w, h) = (13, 9);
+        // Constant images a and b: both variances and the covariance are 0, so
+        // SSIM = (2ab + C1)/(a² + b² + C1) exactly, at every pixel.
+        for (a, b) in [(0.5f32, 0.5f32), (0.2, 0.6), (0.0, 1.0), (0.9, 0.1)] {
+            let (x, y) = (vec![a; w * h], vec![b; w * h]);
+            let (a, b) = (f64::from(a), f64::from(b));
+            let c1 = 1e-4;
+            let want = (2.0 * a * b + c1) / (a * a + b * b + c1);
+            assert!((ssim(&x, &y, w, h) - want).abs() < 1e-9, "{a} {b}");
+        }
+        // A pattern against itself: exactly 1; against its negative: far below 0;
+        // symmetric; invalid sizes give NaN.
+        let x: Vec<f32> = (0..w * h).map(|i| ((i * 37) % 17) as f32 / 16.0).collect();
+        let neg: Vec<f32> = x.iter().map(|v| 1.0 - v).collect();
+        assert_eq!(ssim(&x, &x, w, h), 1.0);
+        let s = ssim(&x, &neg, w, h);
+        assert!((-1.0..0.0).contains(&s), "{s}");
+        assert_eq!(s, ssim(&neg, &x, w, h));
+        assert!(ssim(&x, &x, w + 1, h).is_nan());
+        assert!(ssim(&[], &[], 0, 0).is_nan());
+    }
 }

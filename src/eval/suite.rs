@@ -4,13 +4,15 @@
 //! - Every view is framed on the **source mesh's** bounds ([`crate::camera::Camera::framed`]),
 //!   so the reference images do not depend on the asset (its margin, resolution) and can be
 //!   reused for many assets of the same mesh ([`Evaluator::reference`]).
-//! - Reference: [`ReferenceRenderer`] with `n × n` stratified samples per pixel (unlit).
+//! - Reference: [`ReferenceRenderer`] with `n × n` stratified samples per pixel, unlit or
+//!   with the lighting the asset was baked with ([`EvalOptions::lighting`],
+//!   [`reference_lighting`]).
 //!   Also rendered per view: the mesh with **one sample per pixel** at the pixel centre —
 //!   what a rasterizer without anti-aliasing shows — and compared with the same reference,
 //!   so the asset's error can be read against the aliasing error of drawing the mesh.
 //! - Asset: the CPU slicer ([`render_decoded`]) with the given [`SlicerParams`].
-//! - Metrics: [`compare`] (RMSE/PSNR on premultiplied linear RGBA, alpha coverage, SSIM).
-//!   Means over views: RMSE, |Δα|, coverage difference and SSIM are plain means;
+//! - Metrics: [`compare`] (RMSE/PSNR on premultiplied linear RGBA, alpha coverage, SSIM,
+//!   FLIP). Means over views: RMSE, |Δα|, coverage difference, SSIM and FLIP are plain means;
 //!   the mean PSNR is the PSNR of the mean MSE (finite unless every view is exact).
 
 use std::time::Instant;
@@ -19,6 +21,8 @@ use billow_format::{Prism, VolumeAsset};
 use glam::Vec3;
 use serde::Serialize;
 
+use super::cloud_render::{CloudRenderer, PreparedCloud};
+use super::lighting::Lighting;
 use super::metrics::{compare, ImageError};
 use super::reference::{ReferenceRenderer, Sampling};
 use super::slicer::{render_decoded, SlicerParams};
@@ -41,6 +45,8 @@ pub struct EvalOptions {
     pub slicer: SlicerParams,
     /// Also render the mesh with one sample per pixel (the aliasing baseline).
     pub raster_1spp: bool,
+    /// Lighting of the reference (and of the 1-spp render).
+    pub lighting: Lighting,
 }
 
 impl Default for EvalOptions {
@@ -53,6 +59,7 @@ impl Default for EvalOptions {
             reference_per_axis: 4,
             slicer: SlicerParams::default(),
             raster_1spp: true,
+            lighting: Lighting::Unlit,
         }
     }
 }
@@ -111,6 +118,8 @@ pub struct MeanErrors {
     pub coverage_rel_diff: f64,
     pub ssim_luma: f64,
     pub ssim_alpha: f64,
+    /// Mean FLIP error.
+    pub flip: f64,
 }
 
 /// Means of `errors` (all zeros for an empty set).
@@ -129,6 +138,7 @@ pub fn mean_errors<'a>(errors: impl IntoIterator<Item = &'a ImageError>) -> Mean
         };
         m.ssim_luma += e.ssim_luma;
         m.ssim_alpha += e.ssim_alpha;
+        m.flip += e.flip;
     }
     if m.views == 0 {
         return m;
@@ -145,6 +155,7 @@ pub fn mean_errors<'a>(errors: impl IntoIterator<Item = &'a ImageError>) -> Mean
     m.coverage_rel_diff /= n;
     m.ssim_luma /= n;
     m.ssim_alpha /= n;
+    m.flip /= n;
     m
 }
 
@@ -179,17 +190,17 @@ pub fn means_by_distance(results: &[ViewResult]) -> Vec<DistanceMeans> {
         .collect()
 }
 
-/// A note when the asset has baked lighting (header param `bake`, e.g. `bake=ao`) that the
-/// unlit reference does not reproduce; `None` for unlit assets.
-pub fn lighting_note(asset: &VolumeAsset) -> Option<String> {
-    let bake = asset.header.params.get("bake")?.trim();
-    if bake.is_empty() || bake == "none" {
-        return None;
-    }
-    Some(format!(
-        "the asset has baked lighting (bake={bake}) but the reference is unlit: the errors include \
-         the lighting difference (a lit reference is not implemented yet)"
-    ))
+/// The reference lighting that matches a volume asset's baked lighting (header `bake`,
+/// see [`Lighting::for_volume`]), and a note when its lighting cannot be reproduced.
+pub fn reference_lighting(asset: &VolumeAsset) -> Result<(Lighting, Option<String>), EvalError> {
+    let b = &asset.header.bounds;
+    Lighting::for_volume(
+        &asset.header.params,
+        Vec3::from(b.min),
+        Vec3::from(b.max),
+        asset.level_dims(0),
+    )
+    .map_err(EvalError::InvalidAsset)
 }
 
 /// The bounds every view is framed on: the source mesh's.
@@ -249,7 +260,7 @@ impl<'a> Evaluator<'a> {
         }
         let bounds = frame_bounds(scene)?;
         Ok(Evaluator {
-            renderer: ReferenceRenderer::new(scene),
+            renderer: ReferenceRenderer::new(scene).with_lighting(options.lighting)?,
             bounds,
             options,
         })
@@ -331,6 +342,44 @@ impl<'a> Evaluator<'a> {
     }
 }
 
+impl<'a> Evaluator<'a> {
+    /// Renders LOD `lod` of a billboard cloud from `reference`'s view with the reference's
+    /// sampling and compares. In the result, `slices` is 0, `polygons` the billboards hit,
+    /// `fragments` the billboard samples shaded and `pixel_in_voxels` the pixel's size at
+    /// the target's depth in the level's texels.
+    pub fn cloud(
+        &self,
+        renderer: &CloudRenderer,
+        cloud: &PreparedCloud,
+        lod: usize,
+        reference: &ReferenceView,
+    ) -> Result<(ViewResult, ImageF32), EvalError> {
+        let n = self.options.reference_per_axis;
+        let r = renderer.render(lod, &reference.camera, Sampling::Stratified { per_axis: n })?;
+        let err = compare(&reference.image, &r.image)?;
+        let cam = &reference.camera;
+        let depth = (cam.target - cam.eye).length();
+        let spec = &reference.spec;
+        let result = ViewResult {
+            view: spec.name.clone(),
+            dir: spec.dir.to_array(),
+            distance_factor: spec.distance_factor,
+            asset: err,
+            raster_1spp: reference.raster_1spp.as_ref().map(|x| x.1),
+            seconds: ViewSeconds {
+                reference: reference.seconds,
+                asset: r.stats.seconds,
+                raster_1spp: reference.raster_1spp.as_ref().map_or(0.0, |x| x.2),
+            },
+            slices: 0,
+            polygons: r.stats.visible_billboards,
+            fragments: r.stats.fragments,
+            pixel_in_voxels: cam.pixel_size_at(depth) * cloud.texel_density(lod),
+        };
+        Ok((result, r.image))
+    }
+}
+
 /// A file-name-safe form of a view name: `+` → `p`, `-` → `n`, `@` → `_`
 /// (`"+x-y+z@4x"` → `"pxnypz_4x"`).
 pub fn view_file_stem(name: &str) -> String {
@@ -370,6 +419,7 @@ mod tests {
             coverage_rel_diff: cov,
             ssim_luma: 1.0,
             ssim_alpha: 0.5,
+            flip: 0.1,
         }
     }
 
@@ -385,7 +435,7 @@ mod tests {
     }
 
     #[test]
-    fn baked_lighting_is_noted() {
+    fn baked_lighting_selects_the_reference_lighting() {
         use billow_format::{AssetKind, Bounds, ColourSpace, Header, TexelFormat, VolumeHeader};
         let mut asset = VolumeAsset {
             header: Header {
@@ -410,12 +460,16 @@ mod tests {
             normals: None,
             cells: vec![],
         };
-        assert_eq!(lighting_note(&asset), None);
+        assert_eq!(reference_lighting(&asset).unwrap(), (Lighting::Unlit, None));
         asset.header.params.insert("bake".into(), "none".into());
-        assert_eq!(lighting_note(&asset), None);
+        assert_eq!(reference_lighting(&asset).unwrap(), (Lighting::Unlit, None));
         asset.header.params.insert("bake".into(), "ao".into());
-        let note = lighting_note(&asset).unwrap();
-        assert!(note.contains("bake=ao") && note.contains("unlit"), "{note}");
+        let (l, note) = reference_lighting(&asset).unwrap();
+        assert!(matches!(l, Lighting::Ao { .. }) && note.is_none(), "{l:?}");
+        asset.header.params.insert("bake".into(), "gi".into());
+        let (l, note) = reference_lighting(&asset).unwrap();
+        assert_eq!(l, Lighting::Unlit);
+        assert!(note.unwrap().contains("bake=gi"));
     }
 
     #[test]

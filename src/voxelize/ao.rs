@@ -105,40 +105,40 @@ impl Bake {
 const NOT_YET: u16 = u16::MAX;
 const SCALE: f32 = (u16::MAX - 1) as f32;
 
-/// Traces and caches the AO of level-0 voxels.
-pub(crate) struct AoBaker<'a> {
-    scene: &'a Scene,
-    shader: &'a Shader<'a>,
-    bvh: Option<Bvh2>,
-    grid: GridSpec,
-    rays: u32,
-    t_min: f32,
-    t_max: f32,
-    cache: Vec<u16>,
+/// The AO estimator of the module docs, at any point: `rays` directions over the full
+/// sphere drawn from [`Pcg32`]`::seeded(seed, stream)`, hits counted for `t` in
+/// `[t_min, t_max]`. The bake evaluates it at voxel centres ([`AoRays::for_grid`], stream =
+/// voxel index); the evaluation's lit reference (`crate::eval::lighting`) at surface points,
+/// with the stream of the voxel containing the point ([`voxel_stream`]), so both draw the
+/// same directions.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AoRays {
+    pub rays: u32,
+    pub t_min: f32,
+    pub t_max: f32,
+    pub seed: u64,
 }
 
-impl<'a> AoBaker<'a> {
-    pub fn new(
-        scene: &'a Scene,
-        shader: &'a Shader<'a>,
-        grid: GridSpec,
-        rays: u32,
-        distance: f32,
-    ) -> Self {
-        AoBaker {
-            scene,
-            shader,
-            bvh: scene_bvh(scene),
-            grid,
+impl AoRays {
+    /// The bake's estimator on `grid`: `t_min` = half the voxel diagonal, seed [`AO_SEED`].
+    pub fn for_grid(grid: &GridSpec, rays: u32, distance: f32) -> Self {
+        AoRays {
             rays,
             t_min: 0.5 * grid.voxel.length(),
             t_max: distance,
-            cache: vec![NOT_YET; grid.voxel_count() as usize],
+            seed: AO_SEED,
         }
     }
 
     /// Visibility along one ray (1 = unoccluded).
-    fn visibility(&self, bvh: &Bvh2, origin: Vec3, dir: Vec3) -> f32 {
+    fn visibility(
+        &self,
+        scene: &Scene,
+        shader: &Shader,
+        bvh: &Bvh2,
+        origin: Vec3,
+        dir: Vec3,
+    ) -> f32 {
         let wr = WatertightRay::new(origin, dir);
         let ray = Ray::new(
             Vec3A::from(origin),
@@ -149,7 +149,7 @@ impl<'a> AoBaker<'a> {
         let mut blended: Vec<(u32, f32)> = Vec::new();
         let missed = bvh.ray_traverse_miss(ray, |r, id| {
             let tri_i = bvh.primitive_indices[id];
-            let tri = &self.scene.triangles[tri_i as usize];
+            let tri = &scene.triangles[tri_i as usize];
             let Some(h) = wr.intersect(
                 tri.v[0].position,
                 tri.v[1].position,
@@ -159,12 +159,12 @@ impl<'a> AoBaker<'a> {
             ) else {
                 return f32::INFINITY;
             };
-            let m = self.shader.material(tri.material);
+            let m = shader.material(tri.material);
             let alpha = || {
                 let b = h.bary;
                 let uv = tri.v[0].uv * b[0] + tri.v[1].uv * b[1] + tri.v[2].uv * b[2];
                 let vc = tri.v[0].color * b[0] + tri.v[1].color * b[1] + tri.v[2].color * b[2];
-                self.shader.alpha(m, uv, vc)
+                shader.alpha(m, uv, vc)
             };
             match m.alpha_mode {
                 AlphaMode::Opaque => h.t,
@@ -191,19 +191,21 @@ impl<'a> AoBaker<'a> {
         blended.iter().fold(1.0, |v, &(_, a)| v * (1.0 - a))
     }
 
-    /// AO of level-0 voxel `index` (see the module docs).
-    pub fn trace_voxel(&self, index: usize) -> f32 {
-        let Some(bvh) = &self.bvh else {
-            return 1.0;
-        };
-        if self.t_max <= self.t_min {
+    /// AO at `origin` (mean visibility of the rays, in [0, 1]) with the directions of
+    /// stream `stream`. The scene must have passed `shade::validate_scene`; `bvh` is
+    /// [`scene_bvh`] of it.
+    pub(crate) fn ambient_occlusion(
+        &self,
+        scene: &Scene,
+        shader: &Shader,
+        bvh: &Bvh2,
+        origin: Vec3,
+        stream: u64,
+    ) -> f32 {
+        if self.t_max <= self.t_min || self.rays == 0 {
             return 1.0;
         }
-        let d = self.grid.dims.map(|x| x as usize);
-        let p = [index % d[0], (index / d[0]) % d[1], index / (d[0] * d[1])];
-        let centre = self.grid.min
-            + self.grid.voxel * Vec3::new(p[0] as f32 + 0.5, p[1] as f32 + 0.5, p[2] as f32 + 0.5);
-        let mut rng = Pcg32::seeded(AO_SEED, index as u64);
+        let mut rng = Pcg32::seeded(self.seed, stream);
         let n = self.rays;
         let mut sum = 0.0f64;
         for r in 0..n {
@@ -218,9 +220,66 @@ impl<'a> AoBaker<'a> {
             };
             let s = (1.0 - z * z).max(0.0).sqrt() / l2.sqrt();
             let dir = Vec3::new(a * s, b * s, z);
-            sum += self.visibility(bvh, centre, dir) as f64;
+            sum += self.visibility(scene, shader, bvh, origin, dir) as f64;
         }
         (sum / n as f64) as f32
+    }
+}
+
+/// The index `x + dx (y + dy z)` of the level-0 voxel of `grid` containing `p` (clamped to
+/// the grid): the AO stream of that voxel.
+pub fn voxel_stream(grid: &GridSpec, p: Vec3) -> u64 {
+    let d = grid.dims;
+    let c = |i: usize| {
+        let f = ((p[i] - grid.min[i]) / grid.voxel[i]).floor();
+        if f.is_finite() {
+            (f.max(0.0) as u64).min(u64::from(d[i].max(1)) - 1)
+        } else {
+            0
+        }
+    };
+    c(0) + u64::from(d[0]) * (c(1) + u64::from(d[1]) * c(2))
+}
+
+/// Traces and caches the AO of level-0 voxels.
+pub(crate) struct AoBaker<'a> {
+    scene: &'a Scene,
+    shader: &'a Shader<'a>,
+    bvh: Option<Bvh2>,
+    grid: GridSpec,
+    rays: AoRays,
+    cache: Vec<u16>,
+}
+
+impl<'a> AoBaker<'a> {
+    pub fn new(
+        scene: &'a Scene,
+        shader: &'a Shader<'a>,
+        grid: GridSpec,
+        rays: u32,
+        distance: f32,
+    ) -> Self {
+        AoBaker {
+            scene,
+            shader,
+            bvh: scene_bvh(scene),
+            grid,
+            rays: AoRays::for_grid(&grid, rays, distance),
+            cache: vec![NOT_YET; grid.voxel_count() as usize],
+        }
+    }
+
+    /// AO of level-0 voxel `index` (see the module docs).
+    pub fn trace_voxel(&self, index: usize) -> f32 {
+        let Some(bvh) = &self.bvh else {
+            return 1.0;
+        };
+        let d = self.grid.dims.map(|x| x as usize);
+        let p = [index % d[0], (index / d[0]) % d[1], index / (d[0] * d[1])];
+        let centre = self.grid.min
+            + self.grid.voxel * Vec3::new(p[0] as f32 + 0.5, p[1] as f32 + 0.5, p[2] as f32 + 0.5);
+        self.rays
+            .ambient_occlusion(self.scene, self.shader, bvh, centre, index as u64)
     }
 
     fn cached(&self, index: usize) -> f32 {

@@ -39,7 +39,7 @@ pub mod expr;
 pub mod grid;
 pub mod mip;
 pub mod quantize;
-mod shade;
+pub(crate) mod shade;
 mod slices;
 pub mod toksvig;
 
@@ -49,7 +49,9 @@ use glam::{Vec3, Vec4};
 use half::f16;
 use rayon::prelude::*;
 
-pub use ao::{Bake, AO_SEED, DEFAULT_AO_RAYS, DEFAULT_DISTANCE_FRACTION, MAX_AO_RAYS};
+pub use ao::{
+    voxel_stream, AoRays, Bake, AO_SEED, DEFAULT_AO_RAYS, DEFAULT_DISTANCE_FRACTION, MAX_AO_RAYS,
+};
 pub use asset::bake_params;
 pub use cells::{box_prisms, Prism};
 pub use combine::{clamp_premultiplied, Combine, CombineFn, CombineParseError, Preset};

@@ -150,3 +150,85 @@ impl NormalAccum {
         out
     }
 }
+
+#[cfg(test)]
+mod tests {
+    //! Toksvig filtering through the real MIP path ([`downsample_normals`], the
+    //! level-by-level step of every direction's pyramid, then [`NormalAccum`]).
+
+    use super::*;
+
+    /// A 2×2×2 direction volume, opaque, whose weighted normals are `left` in the x = 0
+    /// voxels and `right` in the x = 1 voxels (siblings of one parent).
+    fn siblings(left: Vec3, right: Vec3) -> (Grid3<[f16; 4]>, Grid3<[f32; 4]>) {
+        let mut nrm = Grid3::<[f16; 4]>::new([2, 2, 2]);
+        let mut rgba = Grid3::<[f32; 4]>::new([2, 2, 2]);
+        for z in 0..2 {
+            for y in 0..2 {
+                for x in 0..2 {
+                    let i = nrm.index([x, y, z]);
+                    let n = if x == 0 { left } else { right };
+                    nrm.data[i] = <[f16; 4]>::store([n.x, n.y, n.z, 0.0]);
+                    rgba.data[i] = [0.5, 0.5, 0.5, 1.0];
+                }
+            }
+        }
+        (nrm, rgba)
+    }
+
+    fn parent_normal(left: Vec3, right: Vec3, view: Dir) -> (Vec3, f32) {
+        let (nrm, rgba) = siblings(left, right);
+        let n1 = downsample_normals(&nrm, &rgba, view);
+        let c1 = super::super::mip::downsample(&rgba, view);
+        assert_eq!(n1.dims, [1, 1, 1]);
+        let n = n1.get([0, 0, 0]);
+        let a = c1.get([0, 0, 0])[3];
+        (average_normal(Vec3::new(n[0], n[1], n[2]), a), a)
+    }
+
+    #[test]
+    fn opposite_normals_in_sibling_voxels_cancel() {
+        // Seen along z, the x siblings are averaged across the view axis: +X and −X cancel.
+        for view in [Dir::PosZ, Dir::NegZ, Dir::PosY] {
+            let (n, a) = parent_normal(Vec3::X, -Vec3::X, view);
+            assert!(n.is_finite(), "{view:?}: NaN normal");
+            assert_eq!(a, 1.0);
+            assert!(
+                n.length() < 1e-3,
+                "{view:?}: shortened length {}",
+                n.length()
+            );
+            // Roughness maximal: the Toksvig factor drives any exponent to 0, the variance
+            // of the implied distribution is infinite (or huge).
+            assert!(toksvig_factor(n.length(), 64.0) < 1e-3);
+            assert!(toksvig_variance(n.length()) > 1e3);
+            assert_eq!(crate::voxelize::quantize::encode_normal(n), [0, 0, 0, 0]);
+        }
+        // Along x the siblings are composited front to back: the opaque front one hides the
+        // other, so its normal survives at full length.
+        let (n, _) = parent_normal(Vec3::X, -Vec3::X, Dir::NegX);
+        assert!((n.length() - 1.0).abs() < 1e-3, "{n}");
+        // Perpendicular siblings: length 1/√2, no cancellation (Toksvig's shortening).
+        let (n, _) = parent_normal(Vec3::X, Vec3::Y, Dir::PosZ);
+        assert!(
+            (n.length() - std::f32::consts::FRAC_1_SQRT_2).abs() < 2e-3,
+            "{n}"
+        );
+        // Identical siblings: unit length, smooth.
+        let (n, _) = parent_normal(Vec3::Z, Vec3::Z, Dir::PosZ);
+        assert!((n - Vec3::Z).length() < 1e-3 && toksvig_factor(n.length(), 64.0) > 0.99);
+    }
+
+    #[test]
+    fn cancelled_normals_stay_zero_through_the_accumulator() {
+        // Two directions whose parent normals are +X and −X (e.g. the two sides of a
+        // double-sided leaf): the combined level is a zero normal, encoded as zeros.
+        let (pos, rgba) = siblings(Vec3::X, Vec3::X);
+        let (neg, _) = siblings(-Vec3::X, -Vec3::X);
+        let c1 = super::super::mip::downsample(&rgba, Dir::PosZ);
+        let mut acc = NormalAccum::new(&[8, 1]);
+        acc.fold(1, &downsample_normals(&pos, &rgba, Dir::PosZ), &c1);
+        acc.fold(1, &downsample_normals(&neg, &rgba, Dir::NegZ), &c1);
+        assert_eq!(acc.finish_level(1), vec![0, 0, 0, 0]);
+    }
+}

@@ -1,19 +1,23 @@
-//! `billow eval SOURCE ASSET`: how close a volume asset looks to its source mesh, view by
-//! view, against a supersampled ray-traced reference (docs/eval.md).
+//! `billow eval SOURCE ASSET`: how close a volume or billboard-cloud asset looks to its
+//! source mesh, view by view, against a supersampled ray-traced reference (docs/eval.md).
+//! Volumes here, clouds in [`cloud`].
+
+mod cloud;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use billow::camera::{parse_direction, view_directions, views_of, ViewDirections, ViewSpec};
 use billow::eval::image::write_comparisons_png;
+use billow::eval::lighting::Lighting;
 use billow::eval::slicer::{SlicerParams, Spacing};
 use billow::eval::suite::{
-    lighting_note, mean_errors, means_by_distance, view_file_stem, DistanceMeans, EvalOptions,
+    mean_errors, means_by_distance, reference_lighting, view_file_stem, DistanceMeans, EvalOptions,
     Evaluator, MeanErrors, PreparedAsset, ViewResult, EVAL_FOV_Y,
 };
 use billow::eval::EvalError;
 use billow::import::{import, ImportOptions};
-use billow_format::{read_file, AssetKind, VolumeAsset};
+use billow_format::{read_file, AssetKind, Container, VolumeAsset};
 use serde::Serialize;
 
 use crate::exit::{CliError, Code};
@@ -23,13 +27,13 @@ use crate::output::{print_json, progress, warn};
 use crate::Ctx;
 
 /// Heatmap gain of the difference panels: a difference of 1/4 or more is white.
-const DIFF_GAIN: f32 = 4.0;
+pub(crate) const DIFF_GAIN: f32 = 4.0;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// The source mesh (.gltf, .glb, .obj): the reference is ray-traced from it.
     source: PathBuf,
-    /// The volume asset (.billow) baked from it.
+    /// The asset (.billow) baked from it: a volume or a billboard cloud.
     asset: PathBuf,
     /// Which views: axes (±x ±y ±z), diagonals (the 8 corners), all, or a comma list of
     /// directions (`+x`, `-y`, `+x-y+z`) and exact views (`+x@4x`). Write `--views=-z`
@@ -55,6 +59,13 @@ pub struct Args {
     /// mesh | difference) and eval.json; created if missing. Written atomically.
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
+    /// Lighting of the reference: auto (the lighting the asset was baked with: its baked AO
+    /// at each hit point, or unlit) or unlit.
+    #[arg(long, value_enum, default_value_t = LightingArg::Auto)]
+    lighting: LightingArg,
+    /// Billboard clouds: evaluate only this LOD level (0 = finest); default all levels.
+    #[arg(long, value_name = "K")]
+    lod: Option<usize>,
     /// Treat import warnings (e.g. a missing texture) as errors.
     #[arg(long)]
     strict: bool,
@@ -63,8 +74,14 @@ pub struct Args {
     json: bool,
 }
 
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightingArg {
+    Auto,
+    Unlit,
+}
+
 #[derive(Serialize)]
-struct Seconds {
+pub(crate) struct Seconds {
     import: f64,
     read_asset: f64,
     reference: f64,
@@ -74,15 +91,17 @@ struct Seconds {
 }
 
 #[derive(Serialize)]
-struct Lighting {
+pub(crate) struct LightingJson {
     /// The asset's `bake` parameter (`none` when absent).
     asset: String,
-    /// Always `unlit` for now.
+    /// `unlit` or `ao` (see `--lighting`).
     reference: &'static str,
+    /// The reference lighting with its parameters.
+    reference_details: String,
 }
 
 #[derive(Serialize)]
-struct Means {
+pub(crate) struct Means {
     asset: MeanErrors,
     raster_1spp: MeanErrors,
 }
@@ -97,7 +116,7 @@ struct Summary {
     fov_y_degrees: f32,
     reference_spp: u32,
     spacing: String,
-    lighting: Lighting,
+    lighting: LightingJson,
     notes: Vec<String>,
     views: Vec<ViewResult>,
     mean: Means,
@@ -108,7 +127,7 @@ struct Summary {
     images: Vec<String>,
 }
 
-fn bad(flag: &str, e: impl std::fmt::Display) -> CliError {
+pub(crate) fn bad(flag: &str, e: impl std::fmt::Display) -> CliError {
     CliError::new(Code::BadParameter, format!("{flag}: {e}"))
 }
 
@@ -235,7 +254,7 @@ pub fn parse_spacing(s: &str, voxel: Option<f32>) -> Result<Spacing, CliError> {
     }
 }
 
-fn spp_per_axis(spp: u32) -> Result<u32, CliError> {
+pub(crate) fn spp_per_axis(spp: u32) -> Result<u32, CliError> {
     let n = (1..=16).find(|n| n * n == spp);
     n.ok_or_else(|| {
         bad(
@@ -245,7 +264,7 @@ fn spp_per_axis(spp: u32) -> Result<u32, CliError> {
     })
 }
 
-fn eval_code(e: &EvalError) -> Code {
+pub(crate) fn eval_code(e: &EvalError) -> Code {
     match e {
         EvalError::Io { .. } | EvalError::Encode { .. } => Code::OutputIo,
         EvalError::InvalidAsset(_) => Code::InvalidInput,
@@ -254,34 +273,13 @@ fn eval_code(e: &EvalError) -> Code {
     }
 }
 
-/// Reads a volume asset; any other kind is unsupported (exit 5).
-pub fn read_volume(path: &Path) -> Result<VolumeAsset, CliError> {
-    let shown = path.display();
-    let container = read_file(path).map_err(|e| CliError::new(format_code(&e), e))?;
-    if container.header.kind != AssetKind::Volume {
-        return Err(CliError::new(
-            Code::Unsupported,
-            format!(
-                "{shown}: a {:?} asset; billow eval compares volume assets only",
-                container.header.kind
-            ),
-        ));
-    }
-    VolumeAsset::from_container(container)
-        .map_err(|e| CliError::new(format_code(&e), format!("{shown}: {e}")))
+/// Reads an asset's container (Volume or Cloud; a newer format is exit 5).
+pub fn read_asset(path: &Path) -> Result<Container, CliError> {
+    read_file(path).map_err(|e| CliError::new(format_code(&e), e))
 }
 
-pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
-    let start = Instant::now();
-    let (width, height) = parse_size(&args.size)?;
-    let per_axis = spp_per_axis(args.spp)?;
-    let distances = parse_distances(&args.distances)?;
-    let views = parse_views(&args.views, &distances)?;
-    // Reject a bad --spacing before the (slow) work.
-    parse_spacing(&args.spacing, None)?;
-    let source_shown = args.source.display().to_string();
-    let asset_shown = args.asset.display().to_string();
-
+/// The source mesh, imported (warnings printed).
+pub(crate) fn import_source(args: &Args, ctx: &Ctx) -> Result<billow::scene::Scene, CliError> {
     let scene = import(
         &args.source,
         &ImportOptions {
@@ -290,16 +288,94 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     )
     .map_err(|e| CliError::new(import_code(&e), &e))?;
     for w in &scene.warnings {
-        warn(ctx, &format!("{source_shown}: {}", w.message));
+        warn(ctx, &format!("{}: {}", args.source.display(), w.message));
     }
-    let import_s = start.elapsed().as_secs_f64();
+    Ok(scene)
+}
 
+/// Creates the `--out` folder.
+pub(crate) fn create_out(args: &Args) -> Result<(), CliError> {
+    if let Some(dir) = &args.out {
+        std::fs::create_dir_all(dir).map_err(|e| {
+            CliError::new(
+                Code::OutputIo,
+                format!("{}: cannot create folder: {e}", dir.display()),
+            )
+        })?;
+    }
+    Ok(())
+}
+
+/// Writes `eval.json` into the `--out` folder, atomically.
+pub(crate) fn write_json_out(args: &Args, summary: &impl Serialize) -> Result<(), CliError> {
+    if let Some(dir) = &args.out {
+        let json = serde_json::to_vec_pretty(summary)
+            .map_err(|e| CliError::new(Code::Internal, format!("cannot encode JSON: {e}")))?;
+        let path = dir.join("eval.json");
+        billow_format::write_atomic(&path, &json)
+            .map_err(|e| CliError::new(Code::OutputIo, format!("cannot write output: {e}")))?;
+    }
+    Ok(())
+}
+
+pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
+    let start = Instant::now();
+    parse_size(&args.size)?;
+    spp_per_axis(args.spp)?;
+    parse_views(&args.views, &parse_distances(&args.distances)?)?;
+    // Reject a bad --spacing before the (slow) work.
+    parse_spacing(&args.spacing, None)?;
+    let scene = import_source(&args, ctx)?;
+    let import_s = start.elapsed().as_secs_f64();
     let t = Instant::now();
-    let asset = read_volume(&args.asset)?;
+    let container = read_asset(&args.asset)?;
+    if container.header.kind == AssetKind::Cloud {
+        return cloud::run(&args, ctx, &scene, container, start, import_s, t);
+    }
+    if args.lod.is_some() {
+        return Err(bad("--lod", "applies to billboard-cloud assets only"));
+    }
+    run_volume(&args, ctx, &scene, container, start, import_s, t)
+}
+
+fn run_volume(
+    args: &Args,
+    ctx: &Ctx,
+    scene: &billow::scene::Scene,
+    container: Container,
+    start: Instant,
+    import_s: f64,
+    t: Instant,
+) -> Result<(), CliError> {
+    let (width, height) = parse_size(&args.size)?;
+    let per_axis = spp_per_axis(args.spp)?;
+    let views = parse_views(&args.views, &parse_distances(&args.distances)?)?;
+    let source_shown = args.source.display().to_string();
+    let asset_shown = args.asset.display().to_string();
+    let asset = VolumeAsset::from_container(container)
+        .map_err(|e| CliError::new(format_code(&e), format!("{asset_shown}: {e}")))?;
     let prepared = PreparedAsset::new(&asset)
         .map_err(|e| CliError::new(eval_code(&e), format!("{asset_shown}: {e}")))?;
     let read_s = t.elapsed().as_secs_f64();
     let spacing = parse_spacing(&args.spacing, prepared.voxel_size())?;
+    let (lighting, lighting_note) = match args.lighting {
+        LightingArg::Auto => reference_lighting(&asset)
+            .map_err(|e| CliError::new(eval_code(&e), format!("{asset_shown}: {e}")))?,
+        LightingArg::Unlit => {
+            let note = asset
+                .header
+                .params
+                .get("bake")
+                .filter(|b| !matches!(b.trim(), "" | "none"))
+                .map(|b| {
+                    format!(
+                        "the asset has baked lighting (bake={b}) but --lighting unlit: the \
+                         errors include the lighting difference"
+                    )
+                });
+            (Lighting::Unlit, note)
+        }
+    };
 
     let options = EvalOptions {
         width,
@@ -311,18 +387,11 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             ..SlicerParams::default()
         },
         raster_1spp: true,
+        lighting,
     };
-    let evaluator = Evaluator::new(&scene, options)
+    let evaluator = Evaluator::new(scene, options)
         .map_err(|e| CliError::new(Code::InvalidInput, format!("{source_shown}: {e}")))?;
-
-    if let Some(dir) = &args.out {
-        std::fs::create_dir_all(dir).map_err(|e| {
-            CliError::new(
-                Code::OutputIo,
-                format!("{}: cannot create folder: {e}", dir.display()),
-            )
-        })?;
-    }
+    create_out(args)?;
 
     let bar = progress(ctx, views.len() as u64, "eval");
     let mut results = Vec::with_capacity(views.len());
@@ -350,7 +419,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     }
     bar.finish_and_clear();
 
-    let notes: Vec<String> = lighting_note(&asset).into_iter().collect();
+    let notes: Vec<String> = lighting_note.into_iter().collect();
     let sum = |f: &dyn Fn(&ViewResult) -> f64| results.iter().map(f).sum::<f64>();
     let summary = Summary {
         source: source_shown,
@@ -361,14 +430,15 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         fov_y_degrees: EVAL_FOV_Y.to_degrees(),
         reference_spp: args.spp,
         spacing: args.spacing.clone(),
-        lighting: Lighting {
+        lighting: LightingJson {
             asset: asset
                 .header
                 .params
                 .get("bake")
                 .cloned()
                 .unwrap_or_else(|| "none".into()),
-            reference: "unlit",
+            reference: lighting.name(),
+            reference_details: lighting.describe(),
         },
         notes,
         mean: Means {
@@ -389,13 +459,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         views: results,
         images,
     };
-    if let Some(dir) = &args.out {
-        let json = serde_json::to_vec_pretty(&summary)
-            .map_err(|e| CliError::new(Code::Internal, format!("cannot encode JSON: {e}")))?;
-        let path = dir.join("eval.json");
-        billow_format::write_atomic(&path, &json)
-            .map_err(|e| CliError::new(Code::OutputIo, format!("cannot write output: {e}")))?;
-    }
+    write_json_out(args, &summary)?;
     if args.json {
         print_json(&summary)?;
     } else {
@@ -413,31 +477,51 @@ fn print_table(s: &Summary) {
     for n in &s.notes {
         println!("note: {n}");
     }
+    let totals = (s.seconds.reference, s.seconds.asset, s.slices, s.fragments);
+    print_rows(&s.views, &s.by_distance, &s.mean, totals, "slices");
     println!(
-        "{:<14} {:>7} {:>6} {:>6} {:>7} {:>6} | {:>7} {:>6} {:>6} | {:>7} {:>7} {:>6} {:>9}",
+        "RMSE/PSNR on premultiplied linear RGBA; cov% = asset coverage vs reference; SSIM on luma; \
+         FLIP over black. Total {:.2} s.",
+        s.seconds.total
+    );
+}
+
+/// The table of views, per-distance means and the mean; `count` names the 4th timing
+/// column (`slices` for volumes, `bboards` for clouds: billboards hit).
+pub(crate) fn print_rows(
+    views: &[ViewResult],
+    by_distance: &[DistanceMeans],
+    mean: &Means,
+    totals: (f64, f64, usize, u64),
+    count: &str,
+) {
+    println!(
+        "{:<14} {:>7} {:>6} {:>6} {:>7} {:>6} {:>6} | {:>7} {:>6} {:>6} | {:>7} {:>7} {:>6} {:>9}",
         "view",
         "RMSE",
         "PSNR",
         "|Δα|",
         "cov%",
         "SSIM",
+        "FLIP",
         "1spp",
         "PSNR",
         "SSIM",
         "ref s",
         "asset s",
-        "slices",
+        count,
         "fragments"
     );
     let row = |name: &str, a: &MeanErrors, r: &MeanErrors, tail: String| {
         println!(
-            "{:<14} {:>7.4} {:>6.2} {:>6.4} {:>+7.2} {:>6.3} | {:>7.4} {:>6.2} {:>6.3} |{}",
+            "{:<14} {:>7.4} {:>6.2} {:>6.4} {:>+7.2} {:>6.3} {:>6.4} | {:>7.4} {:>6.2} {:>6.3} |{}",
             name,
             a.rmse,
             a.psnr,
             a.mean_abs_alpha,
             100.0 * a.coverage_rel_diff,
             a.ssim_luma,
+            a.flip,
             r.rmse,
             r.psnr,
             r.ssim_luma,
@@ -446,16 +530,21 @@ fn print_table(s: &Summary) {
     };
     let tail =
         |rs: f64, as_: f64, sl: usize, fr: u64| format!(" {rs:>7.2} {as_:>7.2} {sl:>6} {fr:>9}");
-    for v in &s.views {
+    for v in views {
         let a = mean_errors([&v.asset]);
         let r = v
             .raster_1spp
             .as_ref()
             .map_or_else(MeanErrors::default, |e| mean_errors([e]));
-        let t = tail(v.seconds.reference, v.seconds.asset, v.slices, v.fragments);
+        let count = if count == "slices" {
+            v.slices
+        } else {
+            v.polygons
+        };
+        let t = tail(v.seconds.reference, v.seconds.asset, count, v.fragments);
         row(&v.view, &a, &r, t);
     }
-    for m in &s.by_distance {
+    for m in by_distance {
         let r = m.raster_1spp.unwrap_or_default();
         row(
             &format!("mean @{}x", m.distance_factor),
@@ -464,11 +553,6 @@ fn print_table(s: &Summary) {
             String::new(),
         );
     }
-    let t = tail(s.seconds.reference, s.seconds.asset, s.slices, s.fragments);
-    row("mean", &s.mean.asset, &s.mean.raster_1spp, t);
-    println!(
-        "RMSE/PSNR on premultiplied linear RGBA; cov% = asset coverage vs reference; SSIM on luma. \
-         Total {:.2} s.",
-        s.seconds.total
-    );
+    let t = tail(totals.0, totals.1, totals.2, totals.3);
+    row("mean", &mean.asset, &mean.raster_1spp, t);
 }

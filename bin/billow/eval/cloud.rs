@@ -1,0 +1,256 @@
+//! `billow eval SOURCE CLOUD.billow`: every LOD level of a billboard cloud (or `--lod K`)
+//! rendered by the CPU cloud renderer against the same reference (docs/eval.md).
+
+use std::time::Instant;
+
+use billow::eval::cloud_render::{CloudRenderer, PreparedCloud};
+use billow::eval::image::write_comparisons_png;
+use billow::eval::lighting::Lighting;
+use billow::eval::suite::{
+    mean_errors, means_by_distance, view_file_stem, DistanceMeans, EvalOptions, Evaluator,
+    MeanErrors, ViewResult, EVAL_FOV_Y,
+};
+use billow::scene::Scene;
+use billow_format::{CloudAsset, Container};
+use serde::Serialize;
+
+use super::{
+    bad, create_out, eval_code, parse_distances, parse_size, parse_views, print_rows, spp_per_axis,
+    write_json_out, Args, LightingArg, LightingJson, Means, Seconds, DIFF_GAIN,
+};
+use crate::exit::{CliError, Code};
+use crate::info::format_code;
+use crate::output::{print_json, progress};
+use crate::Ctx;
+
+/// One LOD level's results.
+#[derive(Serialize)]
+struct LevelSummary {
+    lod: usize,
+    billboards: usize,
+    /// Slab half-width of the plane search, world units.
+    epsilon: f32,
+    /// Texels per world unit.
+    texel_density: f32,
+    /// Bytes of this level's atlases, all MIP levels.
+    texture_bytes: u64,
+    views: Vec<ViewResult>,
+    mean: MeanErrors,
+    by_distance: Vec<DistanceMeans>,
+    /// Cloud-render seconds, all views.
+    seconds: f64,
+    fragments: u64,
+}
+
+#[derive(Serialize)]
+struct CloudSummary {
+    source: String,
+    asset: String,
+    kind: &'static str,
+    asset_params: std::collections::BTreeMap<String, String>,
+    size: [u32; 2],
+    fov_y_degrees: f32,
+    reference_spp: u32,
+    lighting: LightingJson,
+    notes: Vec<String>,
+    levels: Vec<LevelSummary>,
+    /// The mesh at 1 spp against the reference, over the views.
+    raster_1spp: MeanErrors,
+    seconds: Seconds,
+    images: Vec<String>,
+}
+
+pub(super) fn run(
+    args: &Args,
+    ctx: &Ctx,
+    scene: &Scene,
+    container: Container,
+    start: Instant,
+    import_s: f64,
+    t: Instant,
+) -> Result<(), CliError> {
+    let (width, height) = parse_size(&args.size)?;
+    let per_axis = spp_per_axis(args.spp)?;
+    let views = parse_views(&args.views, &parse_distances(&args.distances)?)?;
+    let source_shown = args.source.display().to_string();
+    let asset_shown = args.asset.display().to_string();
+    let asset = CloudAsset::from_container(container).map_err(|e| {
+        let code = match &e {
+            billow_format::CloudError::Format(f) => format_code(f),
+            billow_format::CloudError::Invalid(_) => Code::InvalidInput,
+        };
+        CliError::new(code, format!("{asset_shown}: {e}"))
+    })?;
+    let prepared = PreparedCloud::new(&asset)
+        .map_err(|e| CliError::new(eval_code(&e), format!("{asset_shown}: {e}")))?;
+    let read_s = t.elapsed().as_secs_f64();
+    let lods: Vec<usize> = match args.lod {
+        Some(k) if k < prepared.level_count() => vec![k],
+        Some(k) => {
+            return Err(bad(
+                "--lod",
+                format!(
+                    "{k}: {asset_shown} has {} LOD levels (0..={})",
+                    prepared.level_count(),
+                    prepared.level_count() - 1
+                ),
+            ))
+        }
+        None => (0..prepared.level_count()).collect(),
+    };
+    let light = asset.header.params.get("light").cloned();
+    let lit = light.as_deref().is_some_and(|l| l.trim() != "unlit");
+    let (lighting, note) = match args.lighting {
+        LightingArg::Auto => (
+            Lighting::for_cloud(&asset.header.params)
+                .map_err(|e| CliError::new(Code::InvalidInput, format!("{asset_shown}: {e}")))?,
+            None,
+        ),
+        LightingArg::Unlit => (
+            Lighting::Unlit,
+            lit.then(|| {
+                "the cloud has baked lighting but --lighting unlit: the errors include the \
+                 lighting difference"
+                    .to_string()
+            }),
+        ),
+    };
+    let options = EvalOptions {
+        width,
+        height,
+        fov_y: EVAL_FOV_Y,
+        reference_per_axis: per_axis,
+        raster_1spp: true,
+        lighting,
+        ..EvalOptions::default()
+    };
+    let evaluator = Evaluator::new(scene, options)
+        .map_err(|e| CliError::new(Code::InvalidInput, format!("{source_shown}: {e}")))?;
+    let renderer = CloudRenderer::new(&prepared, lighting)
+        .map_err(|e| CliError::new(eval_code(&e), format!("{asset_shown}: {e}")))?;
+    create_out(args)?;
+
+    let bar = progress(ctx, (views.len() * lods.len()) as u64, "eval");
+    let mut per_lod: Vec<Vec<ViewResult>> = vec![Vec::new(); lods.len()];
+    let mut raster = Vec::new();
+    let mut images = Vec::new();
+    let mut reference_s = 0.0;
+    let mut raster_s = 0.0;
+    for spec in &views {
+        bar.set_message(spec.name.clone());
+        let reference = evaluator
+            .reference(spec)
+            .map_err(|e| CliError::new(eval_code(&e), format!("{source_shown}: {e}")))?;
+        reference_s += reference.seconds;
+        let mut panels = Vec::new();
+        for (i, &lod) in lods.iter().enumerate() {
+            let (result, image) = evaluator
+                .cloud(&renderer, &prepared, lod, &reference)
+                .map_err(|e| CliError::new(eval_code(&e), format!("{asset_shown}: {e}")))?;
+            per_lod[i].push(result);
+            panels.push(image);
+            bar.inc(1);
+        }
+        if let Some((img, err, s)) = &reference.raster_1spp {
+            raster.push(*err);
+            raster_s += s;
+            panels.push(img.clone());
+        }
+        if let Some(dir) = &args.out {
+            let path = dir.join(format!("{}.png", view_file_stem(&spec.name)));
+            let tests: Vec<_> = panels.iter().collect();
+            write_comparisons_png(&reference.image, &tests, DIFF_GAIN, &path)
+                .map_err(|e| CliError::new(eval_code(&e), e))?;
+            images.push(path.display().to_string());
+        }
+    }
+    bar.finish_and_clear();
+
+    let levels: Vec<LevelSummary> = lods
+        .iter()
+        .zip(per_lod)
+        .map(|(&lod, results)| LevelSummary {
+            lod,
+            billboards: prepared.billboards(lod),
+            epsilon: asset.levels[lod].epsilon,
+            texel_density: prepared.texel_density(lod),
+            texture_bytes: prepared.texture_bytes(&asset, lod),
+            mean: mean_errors(results.iter().map(|r| &r.asset)),
+            by_distance: means_by_distance(&results),
+            seconds: results.iter().map(|r| r.seconds.asset).sum(),
+            fragments: results.iter().map(|r| r.fragments).sum(),
+            views: results,
+        })
+        .collect();
+    let summary = CloudSummary {
+        source: source_shown,
+        asset: asset_shown,
+        kind: "cloud",
+        asset_params: asset.header.params.clone(),
+        size: [width, height],
+        fov_y_degrees: EVAL_FOV_Y.to_degrees(),
+        reference_spp: args.spp,
+        lighting: LightingJson {
+            asset: light.unwrap_or_else(|| "unlit".into()),
+            reference: lighting.name(),
+            reference_details: lighting.describe(),
+        },
+        notes: note.into_iter().collect(),
+        raster_1spp: mean_errors(&raster),
+        seconds: Seconds {
+            import: import_s,
+            read_asset: read_s,
+            reference: reference_s,
+            asset: levels.iter().map(|l| l.seconds).sum(),
+            raster_1spp: raster_s,
+            total: start.elapsed().as_secs_f64(),
+        },
+        levels,
+        images,
+    };
+    write_json_out(args, &summary)?;
+    if args.json {
+        print_json(&summary)?;
+    } else {
+        print_table(&summary);
+    }
+    Ok(())
+}
+
+fn print_table(s: &CloudSummary) {
+    println!(
+        "{} vs {} (billboard cloud, {} LOD level(s) evaluated), {}x{} px, {} spp, lighting {}",
+        s.asset,
+        s.source,
+        s.levels.len(),
+        s.size[0],
+        s.size[1],
+        s.reference_spp,
+        s.lighting.reference
+    );
+    for n in &s.notes {
+        println!("note: {n}");
+    }
+    for l in &s.levels {
+        println!(
+            "\nLOD {}: {} billboards, ε {:.4}, {:.3} texels/unit, {:.2} MiB of atlases",
+            l.lod,
+            l.billboards,
+            l.epsilon,
+            l.texel_density,
+            l.texture_bytes as f64 / f64::from(1u32 << 20)
+        );
+        let mean = Means {
+            asset: l.mean,
+            raster_1spp: s.raster_1spp,
+        };
+        let hit = l.views.iter().map(|v| v.polygons).max().unwrap_or(0);
+        let totals = (s.seconds.reference, l.seconds, hit, l.fragments);
+        print_rows(&l.views, &l.by_distance, &mean, totals, "bboard");
+    }
+    println!(
+        "\nRMSE/PSNR on premultiplied linear RGBA; cov% = asset coverage vs reference; SSIM on \
+         luma; FLIP over black; bboard = billboards hit. Total {:.2} s.",
+        s.seconds.total
+    );
+}

@@ -1,0 +1,124 @@
+//! The accuracy-versus-cost sweep behind `make accuracy`: regenerates `docs/accuracy.md`
+//! and its plots (`docs/accuracy/*.svg`, written by hand: no plotting dependency).
+//!
+//! `cargo run --release --example accuracy -- [REPORT.md] [--quick]`
+//!
+//! For each mesh (the bundled oak; `../shared/assets/spot_cow/spot.obj` and
+//! `../shared/assets/stanford_bunny/bunny.obj` when `../shared` exists), one factor at a
+//! time is varied from the baseline (128³, 4×4 supersampling, `opaque`, adaptive slicing
+//! with bias 1): voxel resolution 32/64/128/256, supersampling 1/2/4, combine
+//! mean/max/opaque, slice spacing adaptive 0.5/1/2 and uniform (one level-0 voxel, always
+//! MIP level 0). Each volume is rendered from every view of the evaluation set (14
+//! directions × 1/4/16× the framed distance, 128×128, see docs/eval.md) and compared with
+//! the 16-spp reference. `--quick` uses 64×64 images, the axis views and no 256³.
+//!
+//! Then the oak as a billboard cloud ([`cloud`]): ε, N and texel density swept against
+//! bake time and texture bytes, and a 4-level LOD chain's error against distance.
+//!
+//! Text between `<!-- emptyspace-sweep:begin -->` and `<!-- emptyspace-sweep:end -->` in
+//! the existing report (written by another sweep) is kept as it is; the markers are
+//! written when absent.
+
+mod cloud;
+mod plot;
+mod report;
+mod volume;
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+fn main() {
+    let mut out = PathBuf::from("docs/accuracy.md");
+    let mut quick = false;
+    for a in std::env::args().skip(1) {
+        if a == "--quick" {
+            quick = true;
+        } else {
+            out = PathBuf::from(a);
+        }
+    }
+    let start = Instant::now();
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let shared = root.join("../shared/assets");
+    let oak = "fixtures/oak/eztree_oak_medium.gltf";
+    let mut meshes = vec![("Oak".to_string(), root.join(oak), oak.to_string())];
+    let mut skipped = Vec::new();
+    for (name, rel) in [
+        ("Spot", "spot_cow/spot.obj"),
+        ("Bunny", "stanford_bunny/bunny.obj"),
+    ] {
+        let p = shared.join(rel);
+        if p.is_file() {
+            meshes.push((name.to_string(), p, format!("../shared/assets/{rel}")));
+        } else {
+            skipped.push(format!(
+                "{name}: `../shared/assets/{rel}` not found (run where `../shared` exists)"
+            ));
+        }
+    }
+    let mut reports = Vec::new();
+    for (name, path, shown) in &meshes {
+        match volume::run_mesh(name, path, shown, quick) {
+            Ok(r) => reports.push(r),
+            Err(e) => {
+                eprintln!("{name}: {e}");
+                skipped.push(format!("{name}: {e}"));
+            }
+        }
+    }
+    let cloud_section = match cloud::run(&root.join(oak), oak, quick) {
+        Ok(c) => Some(c),
+        Err(e) => {
+            eprintln!("cloud: {e}");
+            skipped.push(format!("Oak billboard cloud: {e}"));
+            None
+        }
+    };
+    let plot_dir = out.parent().unwrap_or(Path::new(".")).join("accuracy");
+    std::fs::create_dir_all(&plot_dir).expect("create the plot folder");
+    for m in &reports {
+        let p = plot_dir.join(format!("{}.svg", m.name.to_lowercase().replace(' ', "_")));
+        billow_format::write_atomic(&p, plot::plot(m).as_bytes()).expect("write plot");
+    }
+    let mut extra = String::new();
+    if let Some(c) = &cloud_section {
+        let (sweep, lods) = cloud::plots(c);
+        billow_format::write_atomic(&plot_dir.join("oak_cloud.svg"), sweep.as_bytes())
+            .expect("write plot");
+        billow_format::write_atomic(&plot_dir.join("oak_lods.svg"), lods.as_bytes())
+            .expect("write plot");
+        extra.push_str(&cloud::section(c));
+    }
+    extra.push_str(&emptyspace_block(&out));
+    // Relative paths in the report assume the plots sit next to it in `accuracy/`.
+    let text = report::report(
+        &reports,
+        &skipped,
+        start.elapsed().as_secs_f64(),
+        quick,
+        &extra,
+    );
+    billow_format::write_atomic(&out, text.as_bytes()).expect("write report");
+    eprintln!(
+        "wrote {} and {} plots in {:.0} s",
+        out.display(),
+        reports.len(),
+        start.elapsed().as_secs_f64()
+    );
+}
+
+const ES_BEGIN: &str = "<!-- emptyspace-sweep:begin -->";
+const ES_END: &str = "<!-- emptyspace-sweep:end -->";
+
+/// The emptyspace sweep's block of the existing report at `path`, markers included, kept
+/// byte for byte; empty markers when the report or the markers are absent.
+fn emptyspace_block(path: &Path) -> String {
+    let old = std::fs::read_to_string(path).unwrap_or_default();
+    let kept = old.find(ES_BEGIN).and_then(|b| {
+        old[b..]
+            .find(ES_END)
+            .map(|e| old[b..b + e + ES_END.len()].to_string())
+    });
+    let block = kept.unwrap_or_else(|| format!("{ES_BEGIN}\n{ES_END}"));
+    format!("{block}\n\n")
+}

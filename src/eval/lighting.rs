@@ -1,0 +1,221 @@
+//! The lighting of the reference renderer, chosen to match the lighting an asset was baked
+//! with, so that like is compared with like.
+//!
+//! - [`Lighting::Unlit`] (the default): base colour × texture × vertex colour.
+//! - [`Lighting::Ao`]: the voxelizer's baked ambient occlusion (`--bake ao`,
+//!   `src/voxelize/ao.rs`) evaluated **at the hit point** instead of at the voxel centre:
+//!   the same estimator ([`AoRays::ambient_occlusion`]: same ray count, full-sphere
+//!   stratified directions, `t_min` = half the asset's voxel diagonal, the asset's AO
+//!   distance and seed), with the random stream of the asset voxel that contains the hit
+//!   point ([`voxel_stream`]), so the reference and the bake draw the same directions and
+//!   differ only in where the rays start. The colour is multiplied by AO; alpha unchanged.
+//! - [`Lighting::Diffuse`]: the billboard-cloud bake's ambient + diffuse term
+//!   (`src/bbcloud/bake.rs`), `albedo · (ambient + (1 − ambient) · max(0, N·L))`, with the
+//!   interpolated shading normal turned towards the viewer.
+//!
+//! [`Lighting::for_volume`] and [`Lighting::for_cloud`] read the choice from an asset's
+//! header parameters (`bake`, `ao_rays`, `ao_distance`, `ao_seed`; `light`, `ambient`).
+
+use std::collections::BTreeMap;
+
+use glam::Vec3;
+
+use crate::voxelize::{
+    AoRays, GridSpec, AO_SEED, DEFAULT_AO_RAYS, DEFAULT_DISTANCE_FRACTION, MAX_AO_RAYS,
+};
+
+pub use crate::voxelize::voxel_stream;
+
+/// How the reference shades a hit (see the module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Lighting {
+    #[default]
+    Unlit,
+    /// Baked AO of a volume on `grid` (its level-0 voxel grid).
+    Ao { rays: AoRays, grid: GridSpec },
+    /// Ambient + diffuse with `light` the unit direction towards the light.
+    Diffuse { light: Vec3, ambient: f32 },
+}
+
+/// `ambient + (1 − ambient) · max(0, n·light)`: the billboard bake's lighting factor.
+#[inline]
+pub fn diffuse_factor(n: Vec3, light: Vec3, ambient: f32) -> f32 {
+    ambient + (1.0 - ambient) * n.dot(light).max(0.0)
+}
+
+fn num<T: std::str::FromStr>(
+    params: &BTreeMap<String, String>,
+    key: &str,
+) -> Result<Option<T>, String>
+where
+    T::Err: std::fmt::Display,
+{
+    params
+        .get(key)
+        .map(|v| {
+            v.trim()
+                .parse::<T>()
+                .map_err(|e| format!("header parameter {key}='{v}': {e}"))
+        })
+        .transpose()
+}
+
+impl Lighting {
+    /// `unlit`, `ao` or `diffuse`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Lighting::Unlit => "unlit",
+            Lighting::Ao { .. } => "ao",
+            Lighting::Diffuse { .. } => "diffuse",
+        }
+    }
+
+    /// A one-line description with the parameters.
+    pub fn describe(&self) -> String {
+        match self {
+            Lighting::Unlit => "unlit".into(),
+            Lighting::Ao { rays, .. } => format!(
+                "ambient occlusion at the hit point ({} rays, distance {}, seed {})",
+                rays.rays, rays.t_max, rays.seed
+            ),
+            Lighting::Diffuse { light, ambient } => format!(
+                "ambient {ambient} + diffuse, light towards ({}, {}, {})",
+                light.x, light.y, light.z
+            ),
+        }
+    }
+
+    /// The reference lighting of a volume asset: its header `params`, its bounds (the voxel
+    /// grid's box) and level-0 `dims`. Returns a note when the asset's `bake` is not one
+    /// the reference reproduces (the reference then stays unlit).
+    pub fn for_volume(
+        params: &BTreeMap<String, String>,
+        min: Vec3,
+        max: Vec3,
+        dims: [u32; 3],
+    ) -> Result<(Lighting, Option<String>), String> {
+        let bake = params.get("bake").map_or("none", |b| b.trim());
+        match bake {
+            "" | "none" => Ok((Lighting::Unlit, None)),
+            "ao" => {
+                if dims.contains(&0)
+                    || !(min.is_finite() && max.is_finite())
+                    || !(max.cmpgt(min).all())
+                {
+                    return Err("AO asset with an empty voxel grid".into());
+                }
+                let d = Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32);
+                let grid = GridSpec {
+                    dims,
+                    min,
+                    voxel: (max - min) / d,
+                };
+                let rays: u32 = num(params, "ao_rays")?.unwrap_or(DEFAULT_AO_RAYS);
+                if !(1..=MAX_AO_RAYS).contains(&rays) {
+                    return Err(format!(
+                        "header parameter ao_rays={rays} not in 1..={MAX_AO_RAYS}"
+                    ));
+                }
+                let distance: f32 = num(params, "ao_distance")?
+                    .unwrap_or(DEFAULT_DISTANCE_FRACTION * (max - min).length());
+                if !(distance.is_finite() && distance > 0.0) {
+                    return Err(format!(
+                        "header parameter ao_distance={distance} must be > 0"
+                    ));
+                }
+                let mut ao = AoRays::for_grid(&grid, rays, distance);
+                ao.seed = num(params, "ao_seed")?.unwrap_or(AO_SEED);
+                Ok((Lighting::Ao { rays: ao, grid }, None))
+            }
+            other => Ok((
+                Lighting::Unlit,
+                Some(format!(
+                    "the asset has baked lighting (bake={other}) that the reference does not \
+                     reproduce: the reference is unlit and the errors include the lighting \
+                     difference"
+                )),
+            )),
+        }
+    }
+
+    /// The reference lighting of a billboard-cloud asset (header `light` = `x,y,z` or
+    /// `unlit`, `ambient`).
+    pub fn for_cloud(params: &BTreeMap<String, String>) -> Result<Lighting, String> {
+        let light = params.get("light").map_or("unlit", |l| l.trim());
+        if light == "unlit" || light.is_empty() {
+            return Ok(Lighting::Unlit);
+        }
+        let v: Vec<f32> = light
+            .split(',')
+            .map(|x| x.trim().parse::<f32>())
+            .collect::<Result<_, _>>()
+            .map_err(|e| format!("header parameter light='{light}': {e}"))?;
+        let l = match v[..] {
+            [x, y, z] => Vec3::new(x, y, z),
+            _ => return Err(format!("header parameter light='{light}': expected x,y,z")),
+        };
+        if !(l.is_finite() && l.length() > 1e-6) {
+            return Err(format!("header parameter light='{light}': not a direction"));
+        }
+        let ambient: f32 = num(params, "ambient")?.unwrap_or(0.35);
+        if !(0.0..=1.0).contains(&ambient) {
+            return Err(format!("header parameter ambient={ambient} not in 0..=1"));
+        }
+        Ok(Lighting::Diffuse {
+            light: l.normalize(),
+            ambient,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn volume_params() {
+        let mut p = BTreeMap::new();
+        let (min, max) = (Vec3::ZERO, Vec3::new(2.0, 4.0, 8.0));
+        assert_eq!(
+            Lighting::for_volume(&p, min, max, [2, 4, 8]).unwrap().0,
+            Lighting::Unlit
+        );
+        p.insert("bake".into(), "ao".into());
+        p.insert("ao_rays".into(), "7".into());
+        p.insert("ao_distance".into(), "1.5".into());
+        let (l, note) = Lighting::for_volume(&p, min, max, [2, 4, 8]).unwrap();
+        assert!(note.is_none());
+        let Lighting::Ao { rays, grid } = l else {
+            panic!("{l:?}")
+        };
+        assert_eq!((rays.rays, rays.t_max, rays.seed), (7, 1.5, AO_SEED));
+        assert_eq!(grid.voxel, Vec3::ONE);
+        assert!((rays.t_min - 0.5 * 3f32.sqrt()).abs() < 1e-6);
+        p.insert("ao_rays".into(), "many".into());
+        assert!(Lighting::for_volume(&p, min, max, [2, 4, 8]).is_err());
+        p.insert("bake".into(), "gi".into());
+        let (l, note) = Lighting::for_volume(&p, min, max, [2, 4, 8]).unwrap();
+        assert_eq!(l, Lighting::Unlit);
+        assert!(note.unwrap().contains("bake=gi"));
+    }
+
+    #[test]
+    fn cloud_params() {
+        let mut p = BTreeMap::new();
+        assert_eq!(Lighting::for_cloud(&p).unwrap(), Lighting::Unlit);
+        p.insert("light".into(), "0,2,0".into());
+        p.insert("ambient".into(), "0.25".into());
+        let l = Lighting::for_cloud(&p).unwrap();
+        assert_eq!(
+            l,
+            Lighting::Diffuse {
+                light: Vec3::Y,
+                ambient: 0.25
+            }
+        );
+        assert_eq!(diffuse_factor(Vec3::Y, Vec3::Y, 0.25), 1.0);
+        assert_eq!(diffuse_factor(-Vec3::Y, Vec3::Y, 0.25), 0.25);
+        p.insert("light".into(), "0,0".into());
+        assert!(Lighting::for_cloud(&p).is_err());
+    }
+}
