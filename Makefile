@@ -14,9 +14,11 @@ OUT_DIR ?= $(OUT)/batch
 MESHES  := $(shell find $(IN_DIR) -type f \( -name '*.gltf' -o -name '*.glb' -o -name '*.obj' \) 2>/dev/null | grep -v ' ')
 REPORTS := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.inspect.json,$(MESHES))
 VOLUMES := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.volume.billow,$(MESHES))
+PRUNED  := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.pruned.billow,$(MESHES))
+CLOUDS  := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.cloud.billow,$(MESHES))
 BATCH_RES ?= 128
 
-.PHONY: all build demo test lint fmt batch clean fixtures accuracy bench
+.PHONY: all build demo test lint fmt batch clean fixtures accuracy bench gallery bench-view
 
 all: build
 
@@ -25,21 +27,37 @@ build:
 
 $(BILLOW): build
 
-## The main job on the bundled oak: inspect it, bake it into a volumetric billboard (plus a
-## KTX2 copy), describe the asset, and render it next to a ray-traced reference (CPU renders
-## in out/oak_eval/*.png, errors printed).
+## The main job on the bundled oak: bake it into a volumetric billboard (plus a KTX2 copy),
+## prune the volume's empty space, bake it into a billboard cloud with 3 LODs (plus a .glb),
+## compare volume and cloud with a ray-traced reference on the CPU (out/oak_eval/*.png), and
+## render both side by side in the GPU viewer, headless (out/oak_view.png; installs Mesa's
+## software Vulkan first when no adapter exists, like `make test`).
 demo: build
 	@mkdir -p $(OUT)
 	$(BILLOW) inspect $(SAMPLE)
 	$(BILLOW) voxelize $(SAMPLE) -o $(OUT)/oak.billow --res 128 --ktx2 $(OUT)/oak.ktx2
-	$(BILLOW) info $(OUT)/oak.billow
+	$(BILLOW) emptyspace $(OUT)/oak.billow -o $(OUT)/oak_pruned.billow
+	$(BILLOW) bbcloud $(SAMPLE) -o $(OUT)/oak_cloud.billow --lods 3 --gltf $(OUT)/oak_cloud.glb
+	$(BILLOW) info $(OUT)/oak_pruned.billow
 	$(BILLOW) eval $(SAMPLE) $(OUT)/oak.billow --views=+x+y+z,+x --distances 1,4 --size 256x256 --out $(OUT)/oak_eval
+	$(BILLOW) eval $(SAMPLE) $(OUT)/oak_cloud.billow --views=+x+y+z --distances 1,4 --size 256x256 --out $(OUT)/oak_cloud_eval
+	printf '%s\n' '(camera: Some((eye: (0.0, 45.0, 150.0), target: (0.0, 28.0, 0.0), fov_deg: 45.0)),' \
+		' volumes: [(asset: "oak_pruned.billow", instances: [(translate: (-30.0, 0.0, 0.0))])],' \
+		' clouds: [(asset: "oak_cloud.billow", instances: [(translate: (30.0, 0.0, 0.0))])],' \
+		' ground: Some((size: 160.0, color: (0.30, 0.36, 0.22))), shadows: true)' > $(OUT)/demo.ron
+	sh .ci/ensure-vulkan
+	$(BILLOW) view $(OUT)/demo.ron --headless --screenshot $(OUT)/oak_view.png --size 640x480 --background 0.55,0.62,0.72
 
 ## The whole test suite: format, lint, unit + integration tests (also what .ci/run runs).
+## The viewer's tests render on a Vulkan adapter: .ci/ensure-vulkan installs Mesa's
+## lavapipe when none is found; without one the suite stops here with the reason
+## (BILLOW_ALLOW_NO_GPU=1 runs it anyway, the GPU tests then say they skip).
 test:
 	$(CARGO) fmt --all -- --check
 	$(CARGO) clippy --locked --workspace --all-targets -- -D warnings
-	$(CARGO) test --locked --workspace
+	sh .ci/ensure-vulkan || [ -n "$$BILLOW_ALLOW_NO_GPU" ] || { \
+		echo "make test: no Vulkan adapter and none could be installed (see above); set BILLOW_ALLOW_NO_GPU=1 to skip the GPU tests" >&2; exit 1; }
+	NODEVICE_SELECT=1 $(CARGO) test --locked --workspace
 
 lint:
 	$(CARGO) fmt --all -- --check
@@ -49,8 +67,9 @@ fmt:
 	$(CARGO) fmt --all
 
 ## Batch rule: `make -j2 batch IN_DIR=some/folder` maps every mesh in the folder to an
-## import report (X.inspect.json) and a volume (X.volume.billow, --res BATCH_RES).
-batch: $(REPORTS) $(VOLUMES)
+## import report (X.inspect.json), a volume (X.volume.billow, --res BATCH_RES), the volume
+## with its empty space removed (X.pruned.billow) and a billboard cloud (X.cloud.billow).
+batch: $(REPORTS) $(VOLUMES) $(PRUNED) $(CLOUDS)
 
 $(OUT_DIR)/%.inspect.json: $(IN_DIR)/% | build
 	@mkdir -p $(dir $@)
@@ -59,6 +78,20 @@ $(OUT_DIR)/%.inspect.json: $(IN_DIR)/% | build
 $(OUT_DIR)/%.volume.billow: $(IN_DIR)/% | build
 	@mkdir -p $(dir $@)
 	$(BILLOW) voxelize -q --res $(BATCH_RES) $< -o $@
+
+$(OUT_DIR)/%.pruned.billow: $(OUT_DIR)/%.volume.billow | build
+	$(BILLOW) emptyspace -q $< -o $@
+
+# A cloud for every mesh with foliage (alpha MASK/BLEND materials); a mesh without any is
+# reported in X.cloud.skipped instead (bbcloud's exit code 4 and its one-line reason;
+# no .billow is written for it, so the rule runs again next time).
+$(OUT_DIR)/%.cloud.billow: $(IN_DIR)/% | build
+	@mkdir -p $(dir $@)
+	@rm -f $@.skipped
+	@$(BILLOW) bbcloud -q $< -o $@ 2> $@.err; rc=$$?; \
+	if [ $$rc -eq 0 ]; then rm -f $@.err; \
+	elif [ $$rc -eq 4 ] && grep -q 'no foliage' $@.err; then mv $@.err $@.skipped; \
+	else cat $@.err >&2; rm -f $@.err; exit $$rc; fi
 
 ## Regenerate the procedural hard-case shapes (truss, furry torus, fur tile) as OBJ files.
 fixtures:
@@ -71,6 +104,36 @@ accuracy:
 
 clean:
 	rm -rf $(OUT)
+
+## The gallery (docs/gallery.md): bakes the assets of fixtures/scenes/gallery/*.ron into
+## fixtures/scenes/gallery/assets/ (not committed) and renders each scene headless into
+## docs/gallery/*.png (lavapipe: tens of seconds per frame for the big scenes).
+GALLERY := fixtures/scenes/gallery
+GA      := $(GALLERY)/assets
+GALLERY_SIZE ?= 640x480
+gallery: build
+	@mkdir -p $(GA) docs/gallery $(OUT)/procedural
+	$(CARGO) run --release --locked --example gen_fixtures -- $(OUT)/procedural
+	$(CARGO) run --release --locked --example gen_gallery -- $(GALLERY) 64 1200
+	$(BILLOW) voxelize $(SAMPLE) -o $(GA)/oak128.billow --res 128 --combine mean -q
+	$(BILLOW) voxelize $(SAMPLE) -o $(GA)/oak64.billow --res 64 --combine mean -q
+	$(BILLOW) voxelize $(OUT)/procedural/truss.obj -o $(GA)/truss.billow --res 64x128x64 -q
+	$(BILLOW) voxelize $(OUT)/procedural/furry_torus.obj -o $(GA)/furry_ball.billow --res 64 -q
+	$(BILLOW) voxelize $(OUT)/procedural/fur_tile.obj -o $(GA)/fur_tile.billow --res 64 --bounds 0,0,0,1,1,1 -q
+	cp $(OUT)/procedural/torus.obj $(OUT)/procedural/torus.mtl $(GA)/
+	$(BILLOW) shell $(GA)/torus.obj $(GA)/fur_tile.billow -o $(GA)/furry_torus_shell.billow --height 0.25 --tiles 12,4
+	$(BILLOW) bbcloud $(SAMPLE) -o $(GA)/oak_cloud.billow --lods 4 -q
+	sh .ci/ensure-vulkan
+	for s in oak_trees field asteroid_belt furry_torus oak_clouds; do \
+		$(BILLOW) view $(GALLERY)/$$s.ron --headless --screenshot docs/gallery/$$s.png \
+			--size $(GALLERY_SIZE) || exit 1; done
+
+## The viewer's performance (docs/performance.md, like the paper's Tables 1 and 2): plain
+## uniform slicing vs adaptive vs adaptive + slab partitioning on the gallery's asteroid
+## belt and furry torus, and frame time against resolution; on whatever adapter is found
+## (lavapipe here). Needs `make gallery`'s assets.
+bench-view: build
+	python3 benches/view_bench.py --billow $(BILLOW) --scenes $(GALLERY) --out docs/performance.md
 
 ## Benchmark: `billow voxelize` vs. the raster floor on the 200k-triangle tree, side by side,
 ## medians of BENCH_RUNS runs at each of BENCH_RES; writes docs/benchmarks.md. Needs python3 and cc.

@@ -188,7 +188,7 @@ pub fn asteroid(res: u32, seed: u64) -> VolumeAsset {
 /// A dust cloud of `res`³ voxels (module docs).
 pub fn dust(res: u32, seed: u64) -> VolumeAsset {
     let noise = Perlin::new(seed);
-    let per_voxel = 4.0 / res.max(1) as f32; // opacity scale: thin per voxel
+    let per_voxel = 2.5 / res.max(1) as f32; // opacity scale: thin per voxel
     let g = dense(res, |c| {
         let fall = (1.0 - c.length()).clamp(0.0, 1.0);
         let d = (noise.fbm(c, 1.3, 5) + 0.25).max(0.0) * fall * fall;

@@ -151,3 +151,37 @@ fn headless_screenshot_of_a_scene() {
     assert!(opaque > 96 * 64 / 4, "opaque pixels: {opaque}");
     assert!(green > 50, "green pixels: {green}");
 }
+
+#[test]
+fn a_missing_adapter_says_how_to_install_a_driver() {
+    // No Metal backend on this platform (and DX12 only on Windows): no adapter at all,
+    // exactly what a machine without a Vulkan driver sees.
+    let backend = if cfg!(target_os = "macos") {
+        "dx12"
+    } else {
+        "metal"
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.png");
+    let r = common::run_with(
+        &[
+            "view",
+            scenes().join("oak32.billow").to_str().unwrap(),
+            "--headless",
+            "--screenshot",
+            out.to_str().unwrap(),
+        ],
+        dir.path(),
+        std::time::Duration::from_secs(60),
+        8 << 20,
+        &[("WGPU_BACKEND", backend)],
+    );
+    assert_eq!(r.code, Some(5), "{}", r.stderr);
+    assert_eq!(r.stderr.lines().count(), 1, "one line: {}", r.stderr);
+    assert!(
+        r.stderr.contains("no GPU adapter") && r.stderr.contains("mesa-vulkan-drivers"),
+        "{}",
+        r.stderr
+    );
+    assert!(!out.exists(), "no screenshot without a GPU");
+}

@@ -94,6 +94,8 @@ struct Summary {
     /// Mean and minimum wall time per frame (encode, submit, wait for the GPU), ms.
     frame_ms_mean: f64,
     frame_ms_min: f64,
+    /// The first frame (includes compiling the pipelines on most drivers).
+    frame_ms_first: f64,
     stats: FrameStats,
 }
 
@@ -220,7 +222,8 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         .background
         .as_deref()
         .map(|s| parse_vec3("--background", s))
-        .transpose()?;
+        .transpose()?
+        .or(scene.background.map(Vec3::from));
     if background.is_some_and(|b| !(b.min_element() >= 0.0 && b.max_element() <= 1.0)) {
         return Err(bad("--background", "components must be in [0, 1]"));
     }
@@ -284,11 +287,11 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         }
     };
     if !args.headless {
+        let bg = background.map_or([0.55, 0.62, 0.72], |b| b.to_array());
         return run_window(
             &args,
             content,
-            params,
-            fov,
+            (params, fov, bg),
             (width, height),
             (cam_eye, cam_target),
             ctx,
@@ -312,7 +315,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     r.set_wireframe(args.wireframe);
     let target = billow_view::target::Target::new(&r.gpu, width, height);
     let mut stats = FrameStats::default();
-    let (mut total, mut min) = (0.0f64, f64::INFINITY);
+    let (mut total, mut min, mut first) = (0.0f64, f64::INFINITY, None);
     for _ in 0..frames {
         let t = Instant::now();
         stats = r.render(&target, &camera).map_err(view_err)?;
@@ -320,6 +323,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         let s = t.elapsed().as_secs_f64();
         total += s;
         min = min.min(s);
+        first.get_or_insert(s);
     }
     let img = target.read(&r.gpu).map_err(view_err)?;
     let bg = background.map(|b| b.extend(1.0));
@@ -352,6 +356,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         frames,
         frame_ms_mean: 1e3 * total / f64::from(frames),
         frame_ms_min: 1e3 * min,
+        frame_ms_first: 1e3 * first.unwrap_or(0.0),
         stats,
     };
     if args.json {
@@ -381,8 +386,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
 fn run_window(
     args: &Args,
     content: billow_view::content::Content,
-    params: SliceParams,
-    fov: f32,
+    (params, fov, background): (SliceParams, f32, [f32; 3]),
     size: (u32, u32),
     (eye, target): (Vec3, Vec3),
     ctx: &Ctx,
@@ -395,6 +399,7 @@ fn run_window(
         size,
         params,
         orbit: billow_view::window::Orbit::from_eye(eye, target, fov),
+        background,
         max_frames: args.frames.map(u64::from),
         animate: Some(Box::new(move |_t, r: &mut billow_view::Renderer| {
             if first {

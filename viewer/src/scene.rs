@@ -28,6 +28,10 @@ pub struct SceneFile {
     pub meshes: Vec<MeshDesc>,
     #[serde(default)]
     pub ground: Option<GroundDesc>,
+    /// Opaque background colour (linear RGB) behind everything; absent: transparent in
+    /// screenshots, a sky blue in the window.
+    #[serde(default)]
+    pub background: Option<[f32; 3]>,
     /// Directional shadow map: meshes, clouds and volumes cast; meshes, clouds and
     /// volume slices receive.
     #[serde(default)]
@@ -311,6 +315,11 @@ impl SceneFile {
         }
         for (i, m) in self.meshes.iter().enumerate() {
             check_t(&m.transform, format!("meshes[{i}].transform"))?;
+        }
+        if let Some(b) = &self.background {
+            if !b.iter().all(|c| (0.0..=1.0).contains(c)) {
+                return Err("background: components must be in [0, 1]".into());
+            }
         }
         if let Some(g) = &self.ground {
             if !(g.size > 0.0 && g.size.is_finite()) {

@@ -80,6 +80,8 @@ pub struct WindowOptions {
     pub size: (u32, u32),
     pub params: SliceParams,
     pub orbit: Orbit,
+    /// Linear RGB behind everything.
+    pub background: [f32; 3],
     /// Close after this many frames (smoke tests); `None`: until the user quits.
     pub max_frames: Option<u64>,
     /// Called before each frame with the time since start (animation).
@@ -236,7 +238,7 @@ impl App {
             &view,
             (w, h),
             st.srgb,
-            [0.55, 0.62, 0.72],
+            self.opts.background,
             Some(&line),
         );
         st.renderer.gpu.queue.submit([enc.finish()]);
