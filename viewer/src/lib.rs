@@ -21,6 +21,7 @@ pub mod gpu;
 pub mod lines;
 pub mod mesh_pass;
 pub mod overlay;
+pub mod particles;
 pub mod prism_plane_gpu;
 pub mod render;
 pub mod scene;
