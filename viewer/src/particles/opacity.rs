@@ -173,7 +173,7 @@ mod tests {
                 let scene = 9.0 + i as f32 * 2.0 / 200.0;
                 let a = f(scene);
                 if let Some(b) = prev {
-                    m = m.max((a - b as f32).abs());
+                    m = m.max((a - b).abs());
                 }
                 prev = Some(a);
             }
