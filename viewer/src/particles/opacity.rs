@@ -168,7 +168,7 @@ mod tests {
         // The scene depth varies linearly across x: a tilted wall through the centre.
         let jump = |f: &dyn Fn(f32) -> f32| {
             let mut m = 0.0f32;
-            let mut prev = None;
+            let mut prev: Option<f32> = None;
             for i in 0..=200 {
                 let scene = 9.0 + i as f32 * 2.0 / 200.0;
                 let a = f(scene);
