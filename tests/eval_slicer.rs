@@ -103,6 +103,7 @@ fn cube_volume(alpha: f32) -> VolumeAsset {
         },
         levels,
         normals: None,
+        bands: Vec::new(),
         cells: box_prisms([0.0; 3], [1.0; 3]),
     }
 }

@@ -408,6 +408,7 @@ mod tests {
             },
             levels: vec![vec![0; 4]],
             normals: None,
+            bands: Vec::new(),
             cells: vec![],
         };
         assert_eq!(lighting_note(&asset), None);

@@ -93,6 +93,7 @@ impl Volume {
             header,
             levels: self.levels,
             normals: self.normals,
+            bands: Vec::new(),
             cells: box_prisms(b.min, b.max).to_vec(),
         }
     }
