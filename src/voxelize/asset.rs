@@ -33,6 +33,9 @@ pub fn bake_params(
             opts.margin.to_string()
         },
     );
+    if opts.align > 1 {
+        p.insert("align".into(), opts.align.to_string());
+    }
     if let Bake::Ao { rays, .. } = opts.bake {
         p.insert("bake".into(), "ao".into());
         p.insert("ao_rays".into(), rays.to_string());
