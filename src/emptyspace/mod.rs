@@ -12,8 +12,10 @@
 //!    slots = box + one-block apron, packed with shared zero aprons ([`pack`]); byte-exact
 //!    copies of levels `k` and `k + 1` ([`bricks`]); two prisms per box;
 //! 3. the *tail* `K`: the source's levels `K..` stored whole with the source's box cells;
-//! 4. `K` is chosen to minimise the texel bytes `Σ_{k<K} tier_k + tail_K`; `K = 0` keeps
-//!    the source whole (nothing to gain, or odd sides).
+//! 4. `K` is the largest tail level whose texel bytes `Σ_{k<K} tier_k + tail_K` are
+//!    within 1 % of the smallest and whose last tier leaves out at least a tenth of its
+//!    blocks (coarse tiers cost almost nothing and cut the work of distant views); `K = 0`
+//!    keeps the source whole (nothing to gain, or odd sides).
 //!
 //! The output's base texture is tier 0, its bands are tiers `1..K` (first level `k`) and
 //! the tail (first level `K`). A slice at LOD `λ` draws exactly one of them, sampling the
@@ -311,12 +313,26 @@ pub fn prune(asset: &VolumeAsset, o: &EmptySpaceOptions) -> Result<Pruned, Empty
             None => break,
         }
     }
-    // The tail level K that minimises the bytes.
+    // The tail level K: the most tiers whose bytes are within 1 % of the fewest bytes
+    // (coarse tiers cost next to nothing and cut the fragments of distant views), each
+    // of them leaving out at least a tenth of its level.
     let cost = |k: usize| {
         tiers[..k].iter().map(Tier::bytes).sum::<u64>()
             + level_bytes(&levels, normals.as_deref(), k)
     };
-    let tail = (0..=tiers.len()).min_by_key(|&k| (cost(k), k)).unwrap_or(0);
+    let least = (0..=tiers.len()).map(cost).min().unwrap_or(0);
+    let prunes = |t: &Tier| {
+        let kept: u64 = t
+            .boxes
+            .iter()
+            .map(|b| b.size().iter().map(|&v| v as u64).product::<u64>())
+            .sum();
+        10 * kept < 9 * t.blocks
+    };
+    let tail = (0..=tiers.len())
+        .rev()
+        .find(|&k| cost(k) as f64 <= 1.01 * least as f64 && (k == 0 || prunes(&tiers[k - 1])))
+        .unwrap_or(0);
     if tail == 0 {
         out.levels = levels;
         out.normals = normals;

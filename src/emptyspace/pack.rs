@@ -106,6 +106,56 @@ fn project(p: [usize; 3], axis: usize, placed: &[Boxed]) -> [usize; 3] {
     q
 }
 
+/// Placed slots listed by the 16-block buckets of the atlas they meet, so that a
+/// candidate is checked only against its neighbours.
+struct Buckets {
+    map: std::collections::HashMap<[usize; 3], Vec<usize>>,
+    stamp: Vec<usize>,
+    epoch: usize,
+}
+
+const BUCKET: usize = 16;
+
+impl Buckets {
+    fn range(lo: [usize; 3], hi: [usize; 3]) -> impl Iterator<Item = [usize; 3]> {
+        let (a, b) = (
+            lo.map(|v| v / BUCKET),
+            hi.map(|v| v.saturating_sub(1) / BUCKET),
+        );
+        (a[2]..=b[2]).flat_map(move |z| {
+            (a[1]..=b[1]).flat_map(move |y| (a[0]..=b[0]).map(move |x| [x, y, z]))
+        })
+    }
+
+    fn insert(&mut self, i: usize, b: &Boxed) {
+        for k in Self::range(b.lo, b.hi) {
+            self.map.entry(k).or_default().push(i);
+        }
+        self.stamp.push(0);
+    }
+
+    /// Whether `f` holds for every placed slot sharing a bucket with `[lo, hi)`.
+    fn all_near(
+        &mut self,
+        lo: [usize; 3],
+        hi: [usize; 3],
+        mut f: impl FnMut(usize) -> bool,
+    ) -> bool {
+        self.epoch += 1;
+        for k in Self::range(lo, hi) {
+            for &i in self.map.get(&k).map_or(&[][..], |v| v.as_slice()) {
+                if self.stamp[i] != self.epoch {
+                    self.stamp[i] = self.epoch;
+                    if !f(i) {
+                        return false;
+                    }
+                }
+            }
+        }
+        true
+    }
+}
+
 /// One greedy run with footprint `x_max × z_max` and height at most `y_max`.
 fn strip(
     slots: &[Slot],
@@ -115,6 +165,11 @@ fn strip(
     y_max: usize,
 ) -> Option<Packing> {
     let mut placed: Vec<Boxed> = Vec::with_capacity(slots.len());
+    let mut buckets = Buckets {
+        map: Default::default(),
+        stamp: Vec::new(),
+        epoch: 0,
+    };
     let mut result = vec![
         Placed {
             origin: [0; 3],
@@ -152,7 +207,7 @@ fn strip(
                         continue;
                     }
                     let cand = Boxed { lo, hi, soft };
-                    if placed.iter().all(|p| compatible(p, &cand)) {
+                    if buckets.all_near(lo, hi, |j| compatible(&placed[j], &cand)) {
                         best = Some((key, cand, *perm));
                     }
                 }
@@ -160,6 +215,7 @@ fn strip(
         }
         let (_, b, perm) = best?;
         result[i] = Placed { origin: b.lo, perm };
+        buckets.insert(placed.len(), &b);
         placed.push(b);
         for a in 0..3 {
             let mut p = b.lo;
@@ -182,9 +238,11 @@ fn strip(
         points.dedup();
         // Points strictly inside a placed slot can never take a slot.
         points.retain(|p| {
-            !placed
-                .iter()
-                .any(|b| (0..3).all(|a| b.lo[a] < p.pos[a] && p.pos[a] < b.hi[a]))
+            let q = p.pos.map(|v| v + 1);
+            buckets.all_near(p.pos, q, |j| {
+                let b = &placed[j];
+                !(0..3).all(|a| b.lo[a] < p.pos[a] && p.pos[a] < b.hi[a])
+            })
         });
     }
     let dims = [0, 1, 2].map(|a| placed.iter().map(|b| b.hi[a]).max().unwrap_or(0));

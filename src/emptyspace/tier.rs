@@ -34,6 +34,8 @@ pub struct Tier {
     pub normals: Option<Vec<Vec<u8>>>,
     /// The kd-tree's boxes, in blocks of this tier.
     pub boxes: Vec<BlockBox>,
+    /// Blocks in this tier's level (`n / 2` per axis).
+    pub blocks: u64,
     pub cells: Vec<Prism>,
 }
 
@@ -169,6 +171,7 @@ pub fn build_tier(src: &TierSource<'_>, world: (Vec3, Vec3), p: &TierParams) -> 
         colour,
         normals,
         boxes,
+        blocks: n1.iter().map(|&v| v as u64).product(),
         cells,
     })
 }
