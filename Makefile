@@ -16,7 +16,7 @@ REPORTS := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.inspect.json,$(MESHES))
 VOLUMES := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.volume.billow,$(MESHES))
 BATCH_RES ?= 128
 
-.PHONY: all build demo test lint fmt batch clean fixtures accuracy bench
+.PHONY: all build demo test lint fmt batch clean fixtures accuracy accuracy-emptyspace bench
 
 all: build
 
@@ -68,6 +68,14 @@ fixtures:
 ## minutes in release; Spot and the Bunny need ../shared/assets, skipped with a note otherwise).
 accuracy:
 	$(CARGO) run --release --locked --example accuracy -- docs/accuracy.md
+	$(MAKE) accuracy-emptyspace
+
+## Empty-space removal: memory, render work and image change of `billow emptyspace` on the
+## oak (128³, 256³) and Spot, and its --threshold / --min-box sweep; rewrites
+## docs/emptyspace_sweep.md, the section of docs/accuracy.md between the emptyspace-sweep
+## markers, and docs/accuracy/emptyspace.svg (about 2 minutes in release).
+accuracy-emptyspace:
+	$(CARGO) run --release --locked --example emptyspace_sweep -- --sweep-md docs/emptyspace_sweep.md --accuracy docs/accuracy.md
 
 clean:
 	rm -rf $(OUT)
