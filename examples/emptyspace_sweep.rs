@@ -174,7 +174,7 @@ fn run(name: &str, scene: &Scene, res: u32, quick: bool, sweep: bool) -> Volume 
             };
             rows.push(("min-box", row(format!("`--min-box {m}`"), &o)));
         }
-        for w in [128.0f64, 2048.0] {
+        for w in [64.0f64, 1024.0] {
             let o = EmptySpaceOptions {
                 cell_cost: w,
                 ..Default::default()
@@ -334,7 +334,11 @@ fn plot(v: &Volume) -> String {
         esc(&v.name)
     );
     let y_max = pts.iter().map(|p| p.2.rmse[0]).fold(0.0, f64::max) * 1.1;
-    let y_min = pts.iter().map(|p| p.2.rmse[0]).fold(f64::INFINITY, f64::min) * 0.9;
+    let y_min = pts
+        .iter()
+        .map(|p| p.2.rmse[0])
+        .fold(f64::INFINITY, f64::min)
+        * 0.9;
     for (k, (label, f)) in panels.iter().enumerate() {
         let x0 = k as f64 * pw;
         let xs: Vec<f64> = pts

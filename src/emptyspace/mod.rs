@@ -78,7 +78,7 @@ pub struct EmptySpaceOptions {
 }
 
 /// Default per-box cost, texels.
-pub const DEFAULT_CELL_COST: f64 = 512.0;
+pub const DEFAULT_CELL_COST: f64 = 256.0;
 /// Largest atlas side in texels: the smallest 3D-texture limit wgpu guarantees.
 pub const MAX_ATLAS_SIDE: usize = 2048;
 

@@ -16,7 +16,10 @@
 //! gives the lowest top (then the lowest y, z, x, orientation), with no conflict with the
 //! slots already placed; each placement adds the points at its three far faces (shifted
 //! back by its soft depth for overlaps) and their projections along the other axes. All
-//! integer, in a fixed order: deterministic.
+//! integer, in a fixed order: deterministic (footprints run in parallel, the best is
+//! chosen by a total order).
+
+use rayon::prelude::*;
 
 /// A slot to place: size in blocks and soft depth per face (`−x, +x, −y, +y, −z, +z`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -109,7 +112,9 @@ fn project(p: [usize; 3], axis: usize, placed: &[Boxed]) -> [usize; 3] {
 /// Placed slots listed by the 16-block buckets of the atlas they meet, so that a
 /// candidate is checked only against its neighbours.
 struct Buckets {
-    map: std::collections::HashMap<[usize; 3], Vec<usize>>,
+    /// Buckets per axis; bucket `[x, y, z]` is `cells[x + n[0] * (y + n[1] * z)]`.
+    n: [usize; 3],
+    cells: Vec<Vec<usize>>,
     stamp: Vec<usize>,
     epoch: usize,
 }
@@ -117,19 +122,28 @@ struct Buckets {
 const BUCKET: usize = 16;
 
 impl Buckets {
-    fn range(lo: [usize; 3], hi: [usize; 3]) -> impl Iterator<Item = [usize; 3]> {
-        let (a, b) = (
-            lo.map(|v| v / BUCKET),
-            hi.map(|v| v.saturating_sub(1) / BUCKET),
-        );
+    fn new(limit: [usize; 3]) -> Buckets {
+        let n = limit.map(|l| l.div_ceil(BUCKET).max(1));
+        Buckets {
+            n,
+            cells: vec![Vec::new(); n[0] * n[1] * n[2]],
+            stamp: Vec::new(),
+            epoch: 0,
+        }
+    }
+
+    fn range(&self, lo: [usize; 3], hi: [usize; 3]) -> impl Iterator<Item = usize> + use<> {
+        let n = self.n;
+        let a = lo.map(|v| v / BUCKET);
+        let b = [0, 1, 2].map(|k| (hi[k].saturating_sub(1) / BUCKET).min(n[k] - 1));
         (a[2]..=b[2]).flat_map(move |z| {
-            (a[1]..=b[1]).flat_map(move |y| (a[0]..=b[0]).map(move |x| [x, y, z]))
+            (a[1]..=b[1]).flat_map(move |y| (a[0]..=b[0]).map(move |x| x + n[0] * (y + n[1] * z)))
         })
     }
 
     fn insert(&mut self, i: usize, b: &Boxed) {
-        for k in Self::range(b.lo, b.hi) {
-            self.map.entry(k).or_default().push(i);
+        for k in self.range(b.lo, b.hi) {
+            self.cells[k].push(i);
         }
         self.stamp.push(0);
     }
@@ -142,8 +156,8 @@ impl Buckets {
         mut f: impl FnMut(usize) -> bool,
     ) -> bool {
         self.epoch += 1;
-        for k in Self::range(lo, hi) {
-            for &i in self.map.get(&k).map_or(&[][..], |v| v.as_slice()) {
+        for k in self.range(lo, hi) {
+            for &i in &self.cells[k] {
                 if self.stamp[i] != self.epoch {
                     self.stamp[i] = self.epoch;
                     if !f(i) {
@@ -165,11 +179,6 @@ fn strip(
     y_max: usize,
 ) -> Option<Packing> {
     let mut placed: Vec<Boxed> = Vec::with_capacity(slots.len());
-    let mut buckets = Buckets {
-        map: Default::default(),
-        stamp: Vec::new(),
-        epoch: 0,
-    };
     let mut result = vec![
         Placed {
             origin: [0; 3],
@@ -182,10 +191,21 @@ fn strip(
         from: None,
     }];
     let limit = [x_max, y_max, z_max];
+    let mut buckets = Buckets::new(limit);
     for &i in order {
         type Key = (usize, usize, usize, usize, usize);
         let mut best: Option<(Key, Boxed, [usize; 3])> = None;
+        // Points are sorted by y: once a slot standing on one (lowered by at most its soft
+        // depth) cannot top the best found so far, no later point can either.
+        let min_side = slots[i].size.iter().copied().min().unwrap_or(0);
+        let max_soft = slots[i].soft.iter().copied().max().unwrap_or(0);
         for pt in &points {
+            if best
+                .as_ref()
+                .is_some_and(|b| b.0 .0 < (pt.pos[1] + min_side).saturating_sub(max_soft))
+            {
+                break;
+            }
             for (pi, perm) in PERMS.iter().enumerate() {
                 let (size, soft) = oriented(&slots[i], *perm);
                 let shifts = match pt.from {
@@ -217,6 +237,12 @@ fn strip(
         result[i] = Placed { origin: b.lo, perm };
         buckets.insert(placed.len(), &b);
         placed.push(b);
+        // Points strictly inside a placed slot can never take a slot: drop the old points
+        // inside the new slot, and the new points inside any slot (below).
+        let inside =
+            |b: &Boxed, p: &Point| (0..3).all(|a| b.lo[a] < p.pos[a] && p.pos[a] < b.hi[a]);
+        points.retain(|p| !inside(&b, p));
+        let old = points.len();
         for a in 0..3 {
             let mut p = b.lo;
             p[a] = b.hi[a];
@@ -234,16 +260,14 @@ fn strip(
                 }
             }
         }
+        let mut fresh = points.split_off(old);
+        fresh.retain(|p| {
+            let q = p.pos.map(|v| v + 1);
+            buckets.all_near(p.pos, q, |j| !inside(&placed[j], p))
+        });
+        points.append(&mut fresh);
         points.sort_by_key(|p| (p.pos[1], p.pos[2], p.pos[0], p.from));
         points.dedup();
-        // Points strictly inside a placed slot can never take a slot.
-        points.retain(|p| {
-            let q = p.pos.map(|v| v + 1);
-            buckets.all_near(p.pos, q, |j| {
-                let b = &placed[j];
-                !(0..3).all(|a| b.lo[a] < p.pos[a] && p.pos[a] < b.hi[a])
-            })
-        });
     }
     let dims = [0, 1, 2].map(|a| placed.iter().map(|b| b.hi[a]).max().unwrap_or(0));
     Some(Packing {
@@ -294,21 +318,22 @@ pub fn pack(slots: &[Slot], max_side: usize) -> Option<Packing> {
         .collect();
     sides.sort_unstable();
     sides.dedup();
-    let mut best: Option<((usize, usize, usize, usize), Packing)> = None;
-    for &x in &sides {
-        for &z in sides.iter().filter(|&&z| z <= x) {
-            let Some(p) = strip(slots, &order, x, z, max_side) else {
-                continue;
-            };
+    // The footprints are independent: run them in parallel, pick the best in a fixed
+    // order (the result does not depend on the thread count).
+    let footprints: Vec<(usize, usize)> = sides
+        .iter()
+        .flat_map(|&x| sides.iter().filter(move |&&z| z <= x).map(move |&z| (x, z)))
+        .collect();
+    footprints
+        .par_iter()
+        .filter_map(|&(x, z)| {
+            let p = strip(slots, &order, x, z, max_side)?;
             let v = p.dims.iter().product::<usize>();
             let side = p.dims.iter().copied().max().unwrap_or(0);
-            let key = (v, side, x, z);
-            if best.as_ref().is_none_or(|b| key < b.0) {
-                best = Some((key, p));
-            }
-        }
-    }
-    best.map(|b| b.1)
+            Some(((v, side, x, z), p))
+        })
+        .min_by(|a, b| a.0.cmp(&b.0))
+        .map(|b| b.1)
 }
 
 #[cfg(test)]
