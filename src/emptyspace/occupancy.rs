@@ -46,13 +46,13 @@ pub fn is_empty_texel(t: &[u8], threshold: u8) -> bool {
 }
 
 /// The needed blocks of a volume whose level `L` is `levels[L]` (RGBA8, `level_dims[L]`),
-/// level-0 size `dims0`, considering levels `0..exact_levels`.
+/// level-0 size `dims0`, considering levels `0..levels_used`.
 pub fn needed_blocks(
     levels: &[&[u8]],
     level_dims: &[[u32; 3]],
     dims0: [u32; 3],
     block: usize,
-    exact_levels: usize,
+    levels_used: usize,
     threshold: u8,
 ) -> BlockGrid {
     let n0 = dims0.map(|d| d as usize);
@@ -61,7 +61,7 @@ pub fn needed_blocks(
         dims,
         needed: vec![false; dims[0] * dims[1] * dims[2]],
     };
-    for (l, bytes) in levels.iter().enumerate().take(exact_levels) {
+    for (l, bytes) in levels.iter().enumerate().take(levels_used) {
         let nl = level_dims[l].map(|d| d as usize);
         // Per axis and texel index: the block range its support meets (inclusive).
         let ranges: [Vec<(usize, usize)>; 3] = std::array::from_fn(|ax| {
