@@ -162,6 +162,7 @@ fn asset(res: u32, level0: &Grid3<[f32; 4]>, kind: &str, seed: u64) -> VolumeAss
         levels,
         normals: None,
         cells: box_prisms(lo, hi).to_vec(),
+        bands: Vec::new(),
     }
 }
 

@@ -227,6 +227,7 @@ pub fn shell_asset(volume: &VolumeAsset, shell: Shell) -> VolumeAsset {
         header,
         levels: volume.levels.clone(),
         normals: volume.normals.clone(),
+        bands: Vec::new(),
         cells: shell.prisms,
     }
 }

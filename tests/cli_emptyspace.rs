@@ -43,19 +43,14 @@ fn prunes_with_a_json_summary_deterministically() {
     write_sparse(dir.path(), "in.billow");
     let r = emptyspace(
         dir.path(),
-        &[
-            "in.billow",
-            "-o",
-            "out1.billow",
-            "--exact-levels",
-            "2",
-            "--json",
-        ],
+        &["in.billow", "-o", "out1.billow", "--json"],
         "1",
     );
     assert_eq!(r.code, Some(0), "{}", r.stderr);
     let v: serde_json::Value = serde_json::from_str(&r.stdout).expect("one JSON document");
     for key in [
+        "bands",
+        "tail_level",
         "cells",
         "atlas_dims",
         "texel_bytes_before",
@@ -72,13 +67,11 @@ fn prunes_with_a_json_summary_deterministically() {
     assert!(v["saving"].as_f64().unwrap() > 0.5, "{}", r.stdout);
     assert!(v["file_bytes_after"].as_u64() < v["file_bytes_before"].as_u64());
     let out = VolumeAsset::read(&dir.path().join("out1.billow")).unwrap();
-    assert_eq!(out.cells.len() as u64, v["cells"].as_u64().unwrap());
-    assert!(out.normals.is_some());
-    let r2 = emptyspace(
-        dir.path(),
-        &["in.billow", "-o", "out2.billow", "--exact-levels", "2"],
-        "2",
-    );
+    let all_cells = out.cells.len() + out.bands.iter().map(|b| b.cells.len()).sum::<usize>();
+    assert_eq!(all_cells as u64, v["cells"].as_u64().unwrap());
+    assert_eq!(out.bands.len() + 1, v["bands"].as_array().unwrap().len());
+    assert!(out.normals.is_some() && out.bands.iter().all(|b| b.normals.is_some()));
+    let r2 = emptyspace(dir.path(), &["in.billow", "-o", "out2.billow"], "2");
     assert_eq!(r2.code, Some(0), "{}", r2.stderr);
     assert!(r2.stdout.is_empty());
     assert_eq!(
@@ -118,7 +111,7 @@ fn refuses_clouds_pruned_volumes_and_bad_parameters() {
 
     let r = emptyspace(
         dir.path(),
-        &["in.billow", "-o", "q.billow", "--exact-levels", "0"],
+        &["in.billow", "-o", "q.billow", "--min-gain", "1"],
         "2",
     );
     assert_eq!(r.code, Some(8), "{}", r.stderr);
@@ -151,4 +144,30 @@ fn output_is_atomic_and_inputs_are_untouched() {
     assert_eq!(sha256(&dir.path().join("in.billow")), before);
     let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
     assert_eq!(names.len(), 3, "only in, bad and out: {names:?}");
+}
+
+#[test]
+fn odd_sides_are_kept_whole_with_a_warning_naming_the_fix() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = volume_from_fn([33, 16, 16], false, |x, _, _| {
+        if x < 3 {
+            [9, 9, 9, 99]
+        } else {
+            [0; 4]
+        }
+    });
+    std::fs::write(dir.path().join("odd.billow"), a.to_bytes().unwrap()).unwrap();
+    let r = emptyspace(dir.path(), &["odd.billow", "-o", "o.billow", "--json"], "2");
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    assert!(
+        r.stderr.contains("warning") && r.stderr.contains("--align 8"),
+        "{}",
+        r.stderr
+    );
+    let v: serde_json::Value = serde_json::from_str(&r.stdout).unwrap();
+    assert_eq!(v["kept_whole"], true);
+    assert_eq!(v["saving"].as_f64(), Some(0.0));
+    let out = VolumeAsset::read(&dir.path().join("o.billow")).unwrap();
+    assert_eq!(out.levels, a.levels);
+    assert!(out.bands.is_empty());
 }

@@ -261,3 +261,40 @@ fn shell_covers_a_torus_with_a_fur_tile() {
     assert_eq!(not_volume.code, Some(4), "{}", not_volume.stderr);
     assert!(not_volume.error_line().unwrap().contains("torus.obj"));
 }
+
+#[test]
+fn align_rounds_the_grid_up_and_bad_alignments_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let r = run(
+        &[
+            "voxelize",
+            &oak(),
+            "-o",
+            "a.billow",
+            "--res",
+            "40",
+            "--align",
+            "8",
+            "--json",
+        ],
+        dir.path(),
+    );
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let v: serde_json::Value = serde_json::from_str(&r.stdout).unwrap();
+    let dims: Vec<u64> = v["dims"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| d.as_u64().unwrap())
+        .collect();
+    assert_eq!(dims, [40, 40, 40], "33x40x34 rounded up to multiples of 8");
+    for bad in ["0", "4096"] {
+        let r = run(
+            &["voxelize", &oak(), "-o", "b.billow", "--align", bad],
+            dir.path(),
+        );
+        assert_eq!(r.code, Some(8), "--align {bad}: {}", r.stderr);
+        assert!(r.error_line().unwrap().contains("--align"));
+        assert!(!dir.path().join("b.billow").exists());
+    }
+}

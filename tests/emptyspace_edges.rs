@@ -1,70 +1,178 @@
 //! Edge cases of `billow::emptyspace::prune`: empty, full, single-voxel, odd and non-cubic
-//! volumes, normals travelling with their bricks, shells and already pruned assets refused,
-//! and level-0 sampling of the pruned volume equal to the source wherever a box is.
+//! volumes, normals travelling with their bricks, the threshold, shells and already pruned
+//! assets refused — and, for every pruned asset, **exact sampling at every MIP level**:
+//! each band samples, at every level it serves, what the source samples there, inside its
+//! cells, and the source samples zero outside them.
 
-use billow::emptyspace::synthetic::volume_from_fn;
+use billow::emptyspace::occupancy::apply_threshold;
+use billow::emptyspace::synthetic::{set_normal_field, volume_from_fn};
 use billow::emptyspace::{prune, EmptySpaceError, EmptySpaceOptions, PARAM_KEY};
 use billow::eval::volume_sampler::DecodedVolume;
-use billow_format::VolumeAsset;
-use glam::Vec3;
-
-fn opts(e: u32) -> EmptySpaceOptions {
-    EmptySpaceOptions {
-        exact_levels: e,
-        cell_cost: 0.0,
-        ..Default::default()
-    }
-}
+use billow_format::{ColourSpace, Prism, VolumeAsset};
+use glam::{Mat3, Vec3};
 
 fn roundtrip(a: &VolumeAsset) {
     let bytes = a.to_bytes().expect("valid asset");
-    let back = VolumeAsset::from_container(billow_format::from_bytes(&bytes).unwrap()).unwrap();
-    assert_eq!(&back, a);
+    assert_eq!(VolumeAsset::from_bytes(&bytes).unwrap(), *a);
 }
 
-/// Level-0 texel value of the source at every voxel centre inside the pruned cells equals
-/// the pruned asset's sample there (maps each cell's world point → its uvw).
-fn level0_matches(src: &VolumeAsset, pruned: &VolumeAsset) {
+/// The affine map world → uvw of a prism (from vertices 0..=3).
+fn uvw_map(c: &Prism) -> impl Fn(Vec3) -> Vec3 {
+    let p = |i: usize| Vec3::from(c.pos[i]) - Vec3::from(c.pos[0]);
+    let t = |i: usize| Vec3::from(c.uvw[i]) - Vec3::from(c.uvw[0]);
+    let m = Mat3::from_cols(t(1), t(2), t(3)) * Mat3::from_cols(p(1), p(2), p(3)).inverse();
+    let (p0, t0) = (Vec3::from(c.pos[0]), Vec3::from(c.uvw[0]));
+    move |x| t0 + m * (x - p0)
+}
+
+/// A cell box: world corners and its world → uvw map.
+type CellBox = (Vec3, Vec3, Box<dyn Fn(Vec3) -> Vec3>);
+
+/// World boxes of a band's cells (two prisms per box) with their uvw maps.
+fn boxes(cells: &[Prism]) -> Vec<CellBox> {
+    cells
+        .chunks(2)
+        .map(|pair| {
+            let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+            for c in pair {
+                for p in &c.pos {
+                    lo = lo.min(Vec3::from(*p));
+                    hi = hi.max(Vec3::from(*p));
+                }
+            }
+            let f: Box<dyn Fn(Vec3) -> Vec3> = Box::new(uvw_map(&pair[0]));
+            (lo, hi, f)
+        })
+        .collect()
+}
+
+/// The check of the module docs, on colour. Returns the number of points compared.
+fn samples_match(src: &VolumeAsset, pruned: &VolumeAsset) -> usize {
     let (s, p) = (
         DecodedVolume::decode(src).unwrap(),
         DecodedVolume::decode(pruned).unwrap(),
     );
-    let d = Vec3::from(src.level_dims(0).map(|v| v as f32));
+    let d0 = src.level_dims(0).map(|v| v as f32);
+    let levels = src.levels.len() as u32;
+    // Bands: (first level, last level served, decoded texture, cells).
+    let mut bands = vec![(0u32, &p, pruned.cells.as_slice())];
+    bands.extend(
+        p.bands
+            .iter()
+            .map(|b| (b.first_level, &b.volume, b.cells.as_slice())),
+    );
     let mut checked = 0;
-    for c in &pruned.cells {
-        let lo = Vec3::from(c.pos[0]).min(Vec3::from(c.pos[4]));
-        let hi = Vec3::from(c.pos[0]).max(Vec3::from(c.pos[4]));
-        let (tlo, thi) = (
-            Vec3::from(c.uvw[0]).min(Vec3::from(c.uvw[4])),
-            Vec3::from(c.uvw[0]).max(Vec3::from(c.uvw[4])),
-        );
-        // Every voxel centre inside the cell's box (the two prisms share it).
-        let v0 = (lo * d).round();
-        let v1 = (hi * d).round();
-        for z in v0.z as u32..v1.z as u32 {
-            for y in v0.y as u32..v1.y as u32 {
-                for x in v0.x as u32..v1.x as u32 {
-                    let w = (Vec3::new(x as f32, y as f32, z as f32) + 0.5) / d;
-                    let t = tlo + (thi - tlo) * (w - lo) / (hi - lo);
-                    let a = s.sample_level(0, w);
-                    let b = p.sample_level(0, t);
-                    assert!((a - b).abs().max_element() < 1e-5, "at {w}: {a} vs {b}");
-                    checked += 1;
+    for (i, &(first, vol, cells)) in bands.iter().enumerate() {
+        let last = bands.get(i + 1).map_or(levels - 1, |b| b.0);
+        let bx = boxes(cells);
+        for l in first..=last {
+            let lb = (l - first) as usize;
+            assert!(lb < vol.level_count(), "band {i} lacks level {l}");
+            // Inside: a jittered grid over each box, ~1.7 points per level-0 voxel.
+            for (lo, hi, map) in &bx {
+                let n = ((*hi - *lo) * Vec3::from(d0) * 1.7).ceil().max(Vec3::ONE);
+                for z in 0..n.z as u32 {
+                    for y in 0..n.y as u32 {
+                        for x in 0..n.x as u32 {
+                            let f = (Vec3::new(x as f32, y as f32, z as f32) + 0.37) / n;
+                            let w = *lo + (*hi - *lo) * f;
+                            let a = s.sample_level(l as usize, w);
+                            let b = vol.sample_level(lb, map(w));
+                            assert!(
+                                (a - b).abs().max_element() < 1e-5,
+                                "band {i} level {l} at {w}: source {a} vs pruned {b}"
+                            );
+                            checked += 1;
+                        }
+                    }
+                }
+            }
+            // Outside every box of the band the source samples exactly zero here.
+            let n = (Vec3::from(d0) * 1.3).ceil();
+            for z in 0..n.z as u32 {
+                for y in 0..n.y as u32 {
+                    for x in 0..n.x as u32 {
+                        let w = (Vec3::new(x as f32, y as f32, z as f32) + 0.41) / n;
+                        let inside = bx.iter().any(|(lo, hi, _)| {
+                            (w - *lo).min_element() >= -1e-4 && (*hi - w).min_element() >= -1e-4
+                        });
+                        if !inside {
+                            let a = s.sample_level(l as usize, w);
+                            assert!(
+                                a.max_element() == 0.0,
+                                "band {i} level {l}: source {a} at {w} dropped"
+                            );
+                        }
+                    }
                 }
             }
         }
     }
-    assert!(checked > 0 || pruned.cells.is_empty());
+    checked
+}
+
+/// The same volume with its normals in place of its colour (raw bytes read as unorm): the
+/// colour check then checks that every normal texel lands where its colour texel does.
+fn normals_as_colour(a: &VolumeAsset) -> VolumeAsset {
+    let mut n = a.clone();
+    n.header.colour_space = ColourSpace::LinearPremultiplied;
+    n.levels = a.normals.clone().expect("normals");
+    n.normals = None;
+    n.header.volume.as_mut().unwrap().normals = None;
+    for b in &mut n.bands {
+        b.levels = b.normals.take().expect("band normals");
+    }
+    n
+}
+
+fn exact(src: &VolumeAsset, pruned: &VolumeAsset) {
+    assert!(samples_match(src, pruned) > 0 || pruned.cells.is_empty());
+    if src.normals.is_some() {
+        samples_match(&normals_as_colour(src), &normals_as_colour(pruned));
+    }
+}
+
+/// Two blobs, a bar and a diagonal line, with a normal field that differs in every texel.
+fn sparse(dims: [u32; 3]) -> VolumeAsset {
+    let [w, h, d] = dims;
+    let mut a = volume_from_fn(dims, true, |x, y, z| {
+        let near = |c: [u32; 3], r: u32| {
+            x.abs_diff(c[0]) <= r && y.abs_diff(c[1]) <= r && z.abs_diff(c[2]) <= r
+        };
+        let bar = y == h / 2 && z == d / 2 && (w / 3..2 * w / 3).contains(&x);
+        // A diagonal line across the volume: boxes must cut through it, so aprons carry
+        // content there.
+        let diag = y == x * h / w && z == x * d / w && (w / 6..5 * w / 6).contains(&x);
+        if near([w / 5, h / 5, d / 5], 1) || near([w - 2, h - 2, d - 2], 0) || bar || diag {
+            [
+                (x * 5) as u8,
+                (y * 3) as u8,
+                (z * 7) as u8,
+                120 + (x + y + z) as u8 % 100,
+            ]
+        } else {
+            [0; 4]
+        }
+    });
+    set_normal_field(&mut a, |x, y, z| {
+        [
+            (x * 7 % 200) as i8,
+            ((y * 11 % 200) as i32 - 100) as i8,
+            (z * 13 % 127) as i8,
+        ]
+    });
+    a
 }
 
 #[test]
 fn an_all_empty_volume_gives_a_valid_asset_with_zero_cells() {
     let src = volume_from_fn([16, 8, 12], true, |_, _, _| [0; 4]);
-    let p = prune(&src, &opts(1)).unwrap();
-    assert_eq!(p.stats.boxes, 0);
-    assert!(p.asset.cells.is_empty());
+    let p = prune(&src, &EmptySpaceOptions::default()).unwrap();
+    assert_eq!((p.stats.boxes, p.stats.cells), (0, 0));
+    assert!(p.asset.cells.is_empty() && p.asset.bands.is_empty());
     assert_eq!(p.asset.level_dims(0), [1, 1, 1]);
     assert!(p.asset.header.params.contains_key(PARAM_KEY));
+    assert!(p.stats.saving > 0.99);
     roundtrip(&p.asset);
 }
 
@@ -73,115 +181,208 @@ fn an_all_opaque_volume_is_one_box_kept_whole() {
     let src = volume_from_fn([16, 16, 16], false, |x, y, z| {
         [x as u8, y as u8, z as u8, 255]
     });
-    for e in [1, 3] {
-        let p = prune(&src, &opts(e)).unwrap();
-        assert_eq!(p.stats.boxes, 1);
-        assert!(p.stats.kept_whole);
-        assert_eq!(p.asset.levels, src.levels);
-        assert_eq!(p.asset.cells, src.cells);
-        roundtrip(&p.asset);
-    }
+    let p = prune(&src, &EmptySpaceOptions::default()).unwrap();
+    assert!(p.stats.kept_whole, "{:?}", p.stats);
+    assert_eq!(p.stats.bands.len(), 1);
+    assert_eq!(
+        (p.asset.levels.clone(), p.asset.cells.clone()),
+        (src.levels.clone(), src.cells.clone())
+    );
+    assert!(p.asset.bands.is_empty());
+    assert_eq!(p.stats.saving, 0.0);
+    roundtrip(&p.asset);
 }
 
 #[test]
-fn a_single_voxel_becomes_one_small_brick() {
-    let src = volume_from_fn([32, 32, 32], true, |x, y, z| {
+fn a_single_voxel_becomes_small_bricks_exact_at_every_level() {
+    let mut src = volume_from_fn([32, 32, 32], true, |x, y, z| {
         if (x, y, z) == (20, 9, 13) {
             [10, 20, 30, 200]
         } else {
             [0; 4]
         }
     });
-    let p = prune(&src, &opts(1)).unwrap();
-    assert_eq!(p.stats.boxes, 1);
-    assert!(!p.stats.kept_whole);
-    // The voxel's filter support reaches its 26 neighbours: 3³ voxels, + 1-voxel apron.
-    assert_eq!(p.stats.voxels_kept, 27);
-    assert_eq!(p.stats.atlas_dims, [5, 5, 5]);
-    assert!(p.stats.saving > 0.99);
-    level0_matches(&src, &p.asset);
-    // Normals travel with the brick: the voxel's normal is in the atlas.
-    let n = &p.asset.normals.as_ref().unwrap()[0];
-    assert!(n.chunks(4).any(|t| t == [0, 127, 0, 0]));
+    set_normal_field(&mut src, |_, _, _| [-90, 20, 90]);
+    let p = prune(&src, &EmptySpaceOptions::default()).unwrap();
+    let s = &p.stats;
+    assert!(!s.kept_whole && s.saving > 0.9, "{s:?}");
+    // Level 0 keeps the voxel's trilinear support, a few blocks, not the 32³ volume.
+    assert!(s.voxels_kept <= 6 * 6 * 6 && s.voxels_kept >= 8, "{s:?}");
+    assert!(
+        p.asset.bands.len() >= 2,
+        "coarse levels are bricked too: {s:?}"
+    );
+    exact(&src, &p.asset);
     roundtrip(&p.asset);
 }
 
 #[test]
-fn odd_and_non_cubic_sizes_prune_and_sample_exactly_at_level_0() {
-    for dims in [[37u32, 19, 23], [64, 9, 33], [5, 70, 3]] {
-        let src = volume_from_fn(dims, true, |x, y, z| {
-            let blob = |c: [u32; 3], r: u32| {
-                let d = |a: u32, b: u32| a.abs_diff(b);
-                d(x, c[0]) <= r && d(y, c[1]) <= r && d(z, c[2]) <= r
-            };
-            let c1 = [dims[0] / 5, dims[1] / 5, dims[2] / 5];
-            let c2 = [dims[0] - 2, dims[1] - 2, dims[2] - 2];
-            if blob(c1, 1) || blob(c2, 0) {
-                [(x * 5) as u8, (y * 3) as u8, (z * 7) as u8, 180]
-            } else {
-                [0; 4]
-            }
-        });
-        for e in [1, 2] {
-            let p = prune(&src, &opts(e)).unwrap();
-            assert!(p.stats.boxes >= 1, "{dims:?}");
-            p.asset.validate().unwrap();
-            level0_matches(&src, &p.asset);
-            roundtrip(&p.asset);
-            let b = p.stats.block as u32;
-            if !p.stats.kept_whole {
-                assert!(
-                    p.stats.atlas_dims.iter().all(|d| d.is_multiple_of(b)),
-                    "{:?}",
-                    p.stats
-                );
-            }
-        }
+fn odd_sizes_are_kept_whole_with_a_clear_note() {
+    let src = sparse([37, 19, 23]);
+    let p = prune(&src, &EmptySpaceOptions::default()).unwrap();
+    assert!(p.stats.kept_whole && p.asset.bands.is_empty());
+    let note = p.stats.note.as_deref().unwrap();
+    assert!(
+        note.contains("37x19x23") && note.contains("--align"),
+        "{note}"
+    );
+    assert_eq!(p.asset.levels, src.levels);
+}
+
+#[test]
+fn even_non_cubic_sizes_prune_for_real_and_sample_exactly_at_every_level() {
+    for dims in [[64u32, 8, 36], [48, 32, 40], [12, 96, 8]] {
+        let src = sparse(dims);
+        let p = prune(&src, &EmptySpaceOptions::default()).unwrap();
+        let s = &p.stats;
+        assert!(!s.kept_whole, "{dims:?}: {s:?}");
+        println!(
+            "{dims:?}: saving {:.3}, kept {} of {} voxels, {} boxes, {} bands",
+            s.saving,
+            s.voxels_kept,
+            s.voxels_before,
+            s.boxes,
+            s.bands.len()
+        );
+        assert!(s.saving > 0.2, "{dims:?}: saving {:.3}", s.saving);
+        assert!(
+            s.voxels_kept * 3 < s.voxels_before,
+            "{dims:?}: level 0 keeps {} of {} voxels",
+            s.voxels_kept,
+            s.voxels_before
+        );
+        assert!(s.atlas_dims.iter().all(|d| d % 2 == 0), "{s:?}");
+        p.asset.validate().unwrap();
+        exact(&src, &p.asset);
+        roundtrip(&p.asset);
     }
 }
 
 #[test]
-fn shells_and_pruned_assets_are_refused_with_clear_errors() {
-    let src = volume_from_fn([16, 16, 16], false, |x, _, _| {
-        if x < 2 {
-            [9, 9, 9, 99]
+fn the_threshold_drops_faint_texels_and_nothing_else() {
+    let src = volume_from_fn([32, 16, 24], true, |x, y, z| {
+        let a = if x < 12 {
+            200
+        } else if (x + y + z) % 3 == 0 {
+            20
         } else {
-            [0; 4]
-        }
+            0
+        };
+        [a / 2, a / 3, a / 4, a]
     });
-    let p = prune(&src, &opts(1)).unwrap();
-    match prune(&p.asset, &opts(1)) {
+    let o = EmptySpaceOptions {
+        threshold: 40,
+        ..Default::default()
+    };
+    let p = prune(&src, &o).unwrap();
+    let plain = prune(&src, &EmptySpaceOptions::default()).unwrap();
+    assert!(
+        p.stats.saving > plain.stats.saving,
+        "{:?} vs {:?}",
+        p.stats,
+        plain.stats
+    );
+    // Exactly the source with every texel of alpha ≤ 40 zeroed.
+    let mut kept = src.clone();
+    for l in 0..kept.levels.len() {
+        apply_threshold(
+            &mut kept.levels[l],
+            kept.normals.as_mut().map(|n| n[l].as_mut_slice()),
+            40,
+        );
+    }
+    exact(&kept, &p.asset);
+}
+
+#[test]
+fn max_tiers_limits_the_bricked_levels() {
+    let src = sparse([48, 32, 40]);
+    let whole = prune(
+        &src,
+        &EmptySpaceOptions {
+            max_tiers: Some(0),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(whole.stats.kept_whole);
+    let one = prune(
+        &src,
+        &EmptySpaceOptions {
+            max_tiers: Some(1),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(one.stats.tail_level, 1);
+    assert_eq!(one.asset.bands.len(), 1);
+    exact(&src, &one.asset);
+}
+
+#[test]
+fn shells_pruned_and_banded_assets_and_bad_parameters_are_refused() {
+    let src = sparse([16, 16, 16]);
+    let p = prune(&src, &EmptySpaceOptions::default()).unwrap();
+    match prune(&p.asset, &EmptySpaceOptions::default()) {
         Err(EmptySpaceError::AlreadyPruned(s)) => assert!(s.contains("boxes=")),
         other => panic!("{other:?}"),
+    }
+    let mut unmarked = p.asset.clone();
+    unmarked.header.params.remove(PARAM_KEY);
+    if !unmarked.bands.is_empty() {
+        assert_eq!(
+            prune(&unmarked, &EmptySpaceOptions::default()),
+            Err(EmptySpaceError::HasBands)
+        );
     }
     let mut shell = src.clone();
     shell
         .header
         .params
         .insert("shell".into(), "height=0.1".into());
-    assert_eq!(prune(&shell, &opts(1)), Err(EmptySpaceError::Shell));
+    assert_eq!(
+        prune(&shell, &EmptySpaceOptions::default()),
+        Err(EmptySpaceError::Shell)
+    );
     let mut skew = src.clone();
     skew.cells[0].pos[1][0] += 0.25;
     assert!(matches!(
-        prune(&skew, &opts(1)),
+        prune(&skew, &EmptySpaceOptions::default()),
         Err(EmptySpaceError::NotABox(0))
     ));
-    assert!(matches!(
-        prune(&src, &opts(0)),
-        Err(EmptySpaceError::InvalidParam(_))
-    ));
+    for bad in [
+        EmptySpaceOptions {
+            min_gain: 1.0,
+            ..Default::default()
+        },
+        EmptySpaceOptions {
+            cell_cost: f64::NAN,
+            ..Default::default()
+        },
+        EmptySpaceOptions {
+            max_depth: 65,
+            ..Default::default()
+        },
+    ] {
+        assert!(
+            matches!(prune(&src, &bad), Err(EmptySpaceError::InvalidParam(_))),
+            "{bad:?}"
+        );
+    }
 }
 
 #[test]
 fn pruning_is_deterministic() {
-    let src = volume_from_fn([40, 24, 32], true, |x, y, z| {
-        if (x + 2 * y + 3 * z) % 37 < 2 && x > 5 {
-            [40, 50, 60, 128]
-        } else {
-            [0; 4]
-        }
-    });
-    let a = prune(&src, &opts(2)).unwrap().asset.to_bytes().unwrap();
-    let b = prune(&src, &opts(2)).unwrap().asset.to_bytes().unwrap();
+    let src = sparse([40, 24, 32]);
+    let a = prune(&src, &EmptySpaceOptions::default())
+        .unwrap()
+        .asset
+        .to_bytes()
+        .unwrap();
+    let b = prune(&src, &EmptySpaceOptions::default())
+        .unwrap()
+        .asset
+        .to_bytes()
+        .unwrap();
     assert_eq!(a, b);
 }

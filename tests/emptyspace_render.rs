@@ -1,107 +1,59 @@
-//! "No visible change": CPU slicer renders (the eval renderer, VB paper §3.3) of a volume
-//! before and after `emptyspace` agree within a tiny tolerance from the eval's view
-//! directions at 1×, 4× and 16× the framed distance — and a deliberately apron-less
-//! packing fails the very same comparison (so the test can see seams).
+//! "No visible change": CPU slicer renders (the eval renderer, VB paper §3.3) of a real
+//! baked volume before and after `emptyspace` at its **default** settings agree within a
+//! tiny tolerance from the eval's whole view set (6 axes + 8 diagonals) at 1×, 4× and 16×
+//! the framed distance — slices at every LOD from level 0 to the coarsest, through every
+//! band of the pruned asset — and a deliberately apron-less packing fails the very same
+//! comparison, so the test can see seams.
 //!
-//! The volume is 64³ with a staircase of three touching 18 × 8 × 8 steps, so the kd-tree
-//! cuts through content and brick borders carry content on both sides. With
-//! `exact_levels = 3` (levels 0–2 exact, bricks aligned to 4 voxels) the image sizes are
-//! chosen per distance so that every slice samples levels ≤ 2 (checked below from the
-//! slicer's spacing): 128 px at 1×, 160 px at 4×, 512 px at 16×; the 16× view thus
-//! exercises MIP levels 1–2 over the whole object.
-//!
-//! Both renders place their slices over the *source's* depth range
-//! ([`render_decoded_in_depth_range`]), so they sample the same depths; what remains is
-//! the volume data each pixel reads.
+//! The volume is the bundled oak baked inside the test (`voxelize --res 80 --align 8`,
+//! 72×80×72, 7 MIP levels). Images are 48×48: at 1× the slices sample LOD ≈ 0.6–1.5, at
+//! 16× the coarsest levels. Both assets are drawn by the plain renderer
+//! ([`render_decoded`]): each places its slices over its own cells' depth range — the
+//! pruned asset's tail band keeps the source's box, so the slices are the same (asserted).
 
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-use billow::camera::{to_view, Camera};
-use billow::emptyspace::synthetic::volume_from_fn;
-use billow::emptyspace::{prune, EmptySpaceOptions};
+use billow::camera::{view_set, Camera, ViewDirections};
+use billow::emptyspace::{prune, EmptySpaceOptions, Pruned};
 use billow::eval::image::write_comparisons_png;
-use billow::eval::slicer::{render_decoded_in_depth_range, SlicerParams};
+use billow::eval::slicer::{render_decoded, SliceStats, SlicerParams};
 use billow::eval::volume_sampler::DecodedVolume;
 use billow::eval::ImageF32;
+use billow::import::{import, ImportOptions};
 use billow::scene::Aabb;
+use billow::voxelize::{voxelize, Resolution, VoxelizeOptions};
 use billow_format::VolumeAsset;
 use glam::Vec3;
 
 /// Largest allowed per-pixel, per-channel difference (premultiplied linear, 0–1): a
 /// quarter of one 8-bit step.
 const MAX_ABS: f32 = 1.0 / 1024.0;
+const PX: u32 = 48;
 
-fn staircase() -> VolumeAsset {
-    volume_from_fn([64, 64, 64], true, |x, y, z| {
-        // Three 18 × 8 × 8 steps along x, each 6 voxels higher and deeper than the last;
-        // consecutive steps touch and overlap in y and z, so cuts between them have
-        // content on both sides.
-        let on = (0..3u32).any(|k| {
-            (4 + 18 * k..22 + 18 * k).contains(&x)
-                && (4 + 6 * k..12 + 6 * k).contains(&y)
-                && (4 + 6 * k..12 + 6 * k).contains(&z)
-        });
-        if !on {
-            return [0; 4];
-        }
-        // Varying colour and opacity so that misplaced texels show.
-        let a = 96 + ((x * 7 + y * 3 + z * 5) % 128) as u8;
-        let r = (u32::from(a) * (x * 4) / 255) as u8;
-        let g = (u32::from(a) * (y * 4) / 255) as u8;
-        let b = (u32::from(a) * (z * 4) / 255) as u8;
-        [r, g, b, a]
-    })
-}
-
-fn depth_range(asset: &VolumeAsset, cam: &Camera) -> (f32, f32) {
-    let view = cam.view();
-    let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
-    for c in &asset.cells {
-        for p in &c.pos {
-            let d = -to_view(&view, Vec3::from(*p)).z;
-            lo = lo.min(d);
-            hi = hi.max(d);
-        }
-    }
-    (lo, hi)
-}
-
-struct Views {
-    cams: Vec<(String, Camera)>,
-}
-
-fn views() -> Views {
-    let bounds = Aabb {
-        min: Vec3::ZERO,
-        max: Vec3::ONE,
+fn oak() -> VolumeAsset {
+    let path =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/oak/eztree_oak_medium.gltf");
+    let scene = import(&path, &ImportOptions::default()).unwrap();
+    let opts = VoxelizeOptions {
+        resolution: Resolution::Longest(80),
+        align: 8,
+        ..VoxelizeOptions::default()
     };
-    let mut cams = Vec::new();
-    for (name, dir) in [
-        ("-z", Vec3::NEG_Z),
-        ("+x", Vec3::X),
-        ("-x-y-z", Vec3::new(-1.0, -1.0, -1.0).normalize()),
-    ] {
-        for (f, px) in [(1.0f32, 128u32), (4.0, 160), (16.0, 512)] {
-            let cam = Camera::framed(&bounds, dir, std::f32::consts::FRAC_PI_4, px, px, f);
-            cams.push((format!("{name}@{f}x"), cam));
-        }
-    }
-    Views { cams }
+    let v = voxelize(&scene, &opts, &|_, _| {}).unwrap();
+    v.into_asset("emptyspace_render", None, BTreeMap::new())
 }
 
-fn render(asset: &VolumeAsset, cam: &Camera, range: (f32, f32)) -> (ImageF32, f32) {
-    let vol = DecodedVolume::decode(asset).unwrap();
-    let r = render_decoded_in_depth_range(
-        &vol,
-        asset.level_dims(0),
-        &asset.cells,
+fn render(vol: &DecodedVolume, a: &VolumeAsset, cam: &Camera) -> (ImageF32, SliceStats) {
+    let r = render_decoded(
+        vol,
+        a.level_dims(0),
+        &a.cells,
         cam,
         &SlicerParams::default(),
-        Some(range),
     )
     .unwrap();
-    let lod_max = (r.stats.max_spacing / r.stats.voxel_size).log2();
-    (r.image, lod_max)
+    (r.image, r.stats)
 }
 
 fn max_abs(a: &ImageF32, b: &ImageF32) -> f32 {
@@ -118,51 +70,89 @@ fn out_dir() -> PathBuf {
     d
 }
 
-/// Worst difference over the views, after writing a diff image for each view above the
-/// tolerance when `diff_on_fail`.
-fn worst(src: &VolumeAsset, pruned: &VolumeAsset, tag: &str, diff_on_fail: bool) -> f32 {
-    let mut worst = 0.0f32;
-    for (name, cam) in &views().cams {
-        let range = depth_range(src, cam);
-        let (a, lod_a) = render(src, cam, range);
-        let (b, _) = render(pruned, cam, range);
-        assert!(
-            lod_a <= 2.0 + 1e-3,
-            "{name}: the view samples level {lod_a:.2}, beyond the 3 exact levels"
-        );
-        assert!(a.coverage() > 0.0, "{name}: the source renders nothing");
-        let d = max_abs(&a, &b);
-        if d > MAX_ABS && diff_on_fail {
-            let path = out_dir().join(format!("{tag}_{}.png", name.replace(['@', '.'], "_")));
-            write_comparisons_png(&a, &[&b], 16.0, &path).unwrap();
-            eprintln!("{name}: max |Δ| = {d}; diff image {}", path.display());
-        }
-        println!("{tag} {name}: max abs diff {d:.2e}");
-        worst = worst.max(d);
-    }
-    worst
+/// The first level of each band of `a` (the base is 0).
+fn band_starts(a: &VolumeAsset) -> Vec<u32> {
+    std::iter::once(0)
+        .chain(a.bands.iter().map(|b| b.first_level))
+        .collect()
 }
 
-fn options(apron: bool) -> EmptySpaceOptions {
-    EmptySpaceOptions {
-        exact_levels: 3,
-        cell_cost: 0.0,
-        apron,
-        ..Default::default()
+/// Worst difference over the view set; writes a diff image for every view above the
+/// tolerance when `diff_on_fail`. Also returns, per band of the pruned asset, whether some
+/// slice's LOD fell in it, and the largest LOD sampled.
+fn compare(
+    src: &VolumeAsset,
+    pruned: &Pruned,
+    tag: &str,
+    diff_on_fail: bool,
+) -> (f32, Vec<bool>, f32) {
+    // Through the file format: what a reader gets.
+    let p = VolumeAsset::from_bytes(&pruned.asset.to_bytes().unwrap()).unwrap();
+    assert_eq!(p, pruned.asset);
+    let (vs, vp) = (
+        DecodedVolume::decode(src).unwrap(),
+        DecodedVolume::decode(&p).unwrap(),
+    );
+    let b = &src.header.bounds;
+    let bounds = Aabb {
+        min: Vec3::from(b.min),
+        max: Vec3::from(b.max),
+    };
+    let starts = band_starts(&p);
+    let max_lod = p.max_lod() as f32;
+    let mut used = vec![false; starts.len()];
+    let (mut worst, mut top) = (0.0f32, 0.0f32);
+    let views = view_set(ViewDirections::All);
+    assert_eq!(views.len(), 14 * 3);
+    for v in &views {
+        let cam = v.camera(&bounds, std::f32::consts::FRAC_PI_4, PX, PX);
+        let (a, sa) = render(&vs, src, &cam);
+        let (b, sb) = render(&vp, &p, &cam);
+        assert!(a.coverage() > 0.0, "{}: the source renders nothing", v.name);
+        assert_eq!(sa.slices, sb.slices, "{}: different slices", v.name);
+        assert!((sa.voxel_size - sb.voxel_size).abs() <= 1e-6 * sa.voxel_size);
+        let lod = |d: f32| (d / sa.voxel_size).log2().clamp(0.0, max_lod);
+        let (lo, hi) = (lod(sa.min_spacing), lod(sa.max_spacing));
+        top = top.max(hi);
+        for (i, u) in used.iter_mut().enumerate() {
+            let end = starts.get(i + 1).map_or(f32::INFINITY, |&f| f as f32);
+            *u |= lo < end && hi >= starts[i] as f32;
+        }
+        let d = max_abs(&a, &b);
+        if d > MAX_ABS && diff_on_fail {
+            let path = out_dir().join(format!("{tag}_{}.png", v.name.replace(['@', '.'], "_")));
+            write_comparisons_png(&a, &[&b], 16.0, &path).unwrap();
+            eprintln!("{}: max |Δ| = {d}; diff image {}", v.name, path.display());
+        }
+        worst = worst.max(d);
     }
+    (worst, used, top)
 }
 
 #[test]
-fn pruning_changes_no_pixel_beyond_a_quarter_of_an_8_bit_step() {
-    let src = staircase();
-    let p = prune(&src, &options(true)).unwrap();
-    assert!(
-        p.stats.boxes >= 2,
-        "the test needs brick borders: {:?}",
-        p.stats
+fn pruning_at_default_settings_changes_no_pixel_at_any_distance() {
+    let src = oak();
+    assert_eq!(src.level_dims(0), [72, 80, 72]);
+    let p = prune(&src, &EmptySpaceOptions::default()).unwrap();
+    let s = &p.stats;
+    assert!(!s.kept_whole && s.boxes >= 2, "{s:?}");
+    assert!(s.saving > 0.1, "the test needs a real saving: {s:?}");
+    assert!(!p.asset.bands.is_empty(), "{s:?}");
+    let (d, used, top) = compare(&src, &p, "apron", true);
+    println!(
+        "saving {:.3}, bands from {:?}, max |Δ| {d:.2e}, largest LOD {top:.2}",
+        s.saving,
+        band_starts(&p.asset)
     );
-    assert!(!p.stats.kept_whole && p.stats.saving > 0.3, "{:?}", p.stats);
-    let d = worst(&src, &p.asset, "apron", true);
+    assert!(
+        used.iter().all(|&u| u),
+        "every band must be exercised: {used:?} (bands from {:?})",
+        band_starts(&p.asset)
+    );
+    assert!(
+        top >= p.asset.max_lod() as f32 - 0.5,
+        "the 16× views must reach the coarsest levels: {top}"
+    );
     assert!(
         d <= MAX_ABS,
         "max |Δ| {d} > {MAX_ABS} (diff images in {})",
@@ -172,10 +162,15 @@ fn pruning_changes_no_pixel_beyond_a_quarter_of_an_8_bit_step() {
 
 #[test]
 fn an_apron_less_packing_shows_seams_in_the_same_comparison() {
-    let src = staircase();
-    let p = prune(&src, &options(false)).unwrap();
+    let src = oak();
+    let o = EmptySpaceOptions {
+        apron: false,
+        ..Default::default()
+    };
+    let p = prune(&src, &o).unwrap();
     assert!(p.stats.boxes >= 2 && !p.stats.kept_whole, "{:?}", p.stats);
-    let d = worst(&src, &p.asset, "no_apron", false);
+    let (d, _, _) = compare(&src, &p, "no_apron", false);
+    println!("without aprons: max |Δ| {d:.3}");
     assert!(
         d > 10.0 * MAX_ABS,
         "without aprons the renders should differ visibly at brick borders, max |Δ| = {d}"

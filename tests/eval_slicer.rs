@@ -104,6 +104,7 @@ fn cube_volume(alpha: f32) -> VolumeAsset {
         },
         levels,
         normals: None,
+        bands: Vec::new(),
         cells: box_prisms([0.0; 3], [1.0; 3]),
     }
 }
@@ -309,6 +310,7 @@ fn volume(dims: [u32; 3], levels: Vec<Vec<u8>>, cells: Vec<Prism>) -> VolumeAsse
         levels,
         normals: None,
         cells,
+        bands: Vec::new(),
     }
 }
 

@@ -47,6 +47,7 @@ fn asset(dims: [u32; 3], mip_count: u32, cs: ColourSpace) -> VolumeAsset {
         },
         levels,
         normals: None,
+        bands: Vec::new(),
         cells: vec![Prism {
             pos: [[0.0; 3]; 6],
             uvw: [[0.0; 3]; 6],

@@ -6,7 +6,6 @@ use std::time::Instant;
 
 use billow::emptyspace::{
     prune, EmptySpaceError, EmptySpaceOptions, EmptySpaceStats, DEFAULT_CELL_COST,
-    DEFAULT_EXACT_LEVELS,
 };
 use billow_format::{read_file, AssetKind, VolumeAsset};
 use serde::Serialize;
@@ -23,12 +22,12 @@ pub struct Args {
     /// Where to write the pruned volume asset (.billow). Written atomically.
     #[arg(short, long)]
     output: PathBuf,
-    /// A texel is empty when its alpha byte (0–255) is ≤ this; 0 (default): only exactly
-    /// transparent, colourless texels, so nothing visible is lost.
+    /// Texels whose alpha byte (0–255) is ≤ this are dropped; 0 (default): only exactly
+    /// transparent, colourless texels count as empty, so nothing visible is lost.
     #[arg(long, default_value_t = 0)]
     threshold: u8,
-    /// Smallest box edge a kd-tree split may leave, in voxels (rounded up to the brick
-    /// alignment 2^(exact-levels − 1)).
+    /// Smallest box edge a kd-tree split may leave, in level-0 voxels (rounded up to whole
+    /// 2-voxel blocks; halved for each coarser tier).
     #[arg(long, default_value_t = 0)]
     min_box: u32,
     /// Deepest kd-tree level (the root is 0).
@@ -37,13 +36,13 @@ pub struct Args {
     /// Smallest relative cost reduction worth a split (0–1).
     #[arg(long, default_value_t = 0.01)]
     min_gain: f64,
-    /// MIP levels that render exactly as the input (1 = level 0 only); bricks align to
-    /// 2^(N − 1) voxels and carry an apron that wide.
-    #[arg(long, default_value_t = DEFAULT_EXACT_LEVELS)]
-    exact_levels: u32,
-    /// Cost of one more box in the kd-tree's split cost, in voxels.
+    /// Cost of one more box in the kd-tree's split cost, in atlas texels.
     #[arg(long, default_value_t = DEFAULT_CELL_COST)]
     cell_cost: f64,
+    /// Most MIP tiers stored as bricks (default: as many as save memory); 0 keeps the
+    /// volume whole.
+    #[arg(long)]
+    max_tiers: Option<u32>,
     /// Print a machine-readable summary on stdout.
     #[arg(long)]
     json: bool,
@@ -64,8 +63,9 @@ fn code(e: &EmptySpaceError) -> Code {
     match e {
         EmptySpaceError::InvalidParam(_) => Code::BadParameter,
         EmptySpaceError::Shell | EmptySpaceError::NotABox(_) => Code::Unsupported,
-        EmptySpaceError::AtlasTooLarge => Code::Unsupported,
-        EmptySpaceError::InvalidAsset(_) | EmptySpaceError::AlreadyPruned(_) => Code::InvalidInput,
+        EmptySpaceError::InvalidAsset(_)
+        | EmptySpaceError::AlreadyPruned(_)
+        | EmptySpaceError::HasBands => Code::InvalidInput,
     }
 }
 
@@ -90,21 +90,14 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         min_box: args.min_box,
         max_depth: args.max_depth,
         min_gain: args.min_gain,
-        exact_levels: args.exact_levels,
         cell_cost: args.cell_cost,
+        max_tiers: args.max_tiers,
         apron: true,
     };
     let pruned =
         prune(&asset, &options).map_err(|e| CliError::new(code(&e), format!("{shown}: {e}")))?;
-    let s = &pruned.stats;
-    if !s.aligned && !s.kept_whole && s.exact_levels > 1 {
-        warn(
-            ctx,
-            &format!(
-                "{shown}: sides {}x{}x{} are not multiples of the brick alignment {}: MIP levels 1 and up are resampled at brick borders, not copied exactly",
-                s.source_dims[0], s.source_dims[1], s.source_dims[2], s.block
-            ),
-        );
+    if let Some(note) = &pruned.stats.note {
+        warn(ctx, &format!("{shown}: {note}"));
     }
     let bytes = pruned
         .asset
@@ -129,9 +122,10 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     } else if !ctx.quiet {
         let s = &summary.stats;
         eprintln!(
-            "{}: {} boxes ({} cells), atlas {}x{}x{} from {}x{}x{}, texels {} -> {} bytes ({:.1}% saved){}",
+            "{}: {} boxes, {} bands ({} cells), atlas {}x{}x{} from {}x{}x{}, texels {} -> {} bytes ({:.1}% saved){}",
             summary.output,
             s.boxes,
+            s.bands.len(),
             s.cells,
             s.atlas_dims[0],
             s.atlas_dims[1],
@@ -143,7 +137,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             s.texel_bytes_after,
             100.0 * s.saving,
             if s.kept_whole {
-                "; kept whole (an atlas would not be smaller)"
+                "; kept whole"
             } else {
                 ""
             }

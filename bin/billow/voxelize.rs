@@ -46,6 +46,11 @@ pub struct Args {
     /// Empty border around the mesh, in voxels.
     #[arg(long, default_value_t = 0.5)]
     margin: f32,
+    /// Round every side of the grid up to a multiple of N voxels (the box grows evenly with
+    /// empty voxels). `billow emptyspace` needs even sides, and sides that are multiples of
+    /// 2^k to prune MIP levels 1..k as well; 8 is a good choice.
+    #[arg(long, default_value_t = 1)]
+    align: u32,
     /// Bake exactly this box, `minx,miny,minz,maxx,maxy,maxz` (no margin), e.g. `0,0,0,1,1,1`
     /// for a tileable volume texture used by `billow shell`.
     #[arg(long)]
@@ -216,6 +221,17 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         args.margin,
     )?;
     opts.mip_levels = args.mips;
+    if !(1..=billow::voxelize::MAX_AXIS).contains(&args.align) {
+        return Err(bad(
+            "--align",
+            format!(
+                "must be between 1 and {} voxels, got {}",
+                billow::voxelize::MAX_AXIS,
+                args.align
+            ),
+        ));
+    }
+    opts.align = args.align;
     opts.bake = parse_bake(&args.bake, args.ao_rays, args.ao_distance)?;
     if let Some(b) = &args.bounds {
         opts.bounds = Some(parse_bounds(b)?);

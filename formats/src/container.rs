@@ -4,7 +4,7 @@ use std::io::Write;
 use std::path::Path;
 
 use crate::error::tag_str;
-use crate::{AssetKind, FormatError, Header, FORMAT_MAJOR, FORMAT_MINOR, MAGIC, PREAMBLE_LEN};
+use crate::{AssetKind, FormatError, Header, FORMAT_MAJOR, FORMAT_MINOR_BASE, MAGIC, PREAMBLE_LEN};
 
 /// Size of a chunk header in bytes.
 pub const CHUNK_HEADER_LEN: usize = 24;
@@ -138,8 +138,18 @@ pub(crate) struct ChunkRef<'a> {
     pub data: &'a [u8],
 }
 
-/// Encode header + chunks without copying the payloads first.
+/// Encode header + chunks without copying the payloads first (minor version 0).
 pub(crate) fn encode(header: &Header, chunks: &[ChunkRef<'_>]) -> Result<Vec<u8>, FormatError> {
+    encode_with_minor(header, chunks, FORMAT_MINOR_BASE)
+}
+
+/// [`encode`] writing minor version `minor` in the preamble (SPEC §5: the lowest minor
+/// whose features the file uses).
+pub(crate) fn encode_with_minor(
+    header: &Header,
+    chunks: &[ChunkRef<'_>],
+    minor: u16,
+) -> Result<Vec<u8>, FormatError> {
     header.validate()?;
     let ron = header.to_ron()?;
     let mut total = PREAMBLE_LEN + 2 * CHUNK_HEADER_LEN + ron.len() + 8;
@@ -174,7 +184,7 @@ pub(crate) fn encode(header: &Header, chunks: &[ChunkRef<'_>]) -> Result<Vec<u8>
         push_chunk(&mut out, ch.tag, ch.elem, ch.data);
     }
     push_chunk(&mut out, TAG_END, ElemType::Opaque, &[]);
-    write_preamble(&mut out, FORMAT_MAJOR, FORMAT_MINOR, header.kind.code());
+    write_preamble(&mut out, FORMAT_MAJOR, minor, header.kind.code());
     Ok(out)
 }
 

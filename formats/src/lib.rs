@@ -12,6 +12,7 @@
 
 #![forbid(unsafe_code)]
 
+mod bands;
 mod cloud;
 mod container;
 mod error;
@@ -19,6 +20,9 @@ mod header;
 mod inspect;
 mod volume;
 
+pub use bands::{
+    LodBand, BAND_RECORD_BYTES, MAX_FIRST_LEVEL, TAG_BCEL, TAG_BLEV, TAG_BNRM, TAG_VBND,
+};
 pub use cloud::{
     Atlas, AtlasRect, Billboard, CloudAsset, CloudError, CloudLevel, Mesh, MeshMaterial,
     MeshTexture, MeshVertex, MAX_TEXTURE_SIDE, NO_INDEX,
@@ -39,8 +43,11 @@ pub use volume::{
 
 /// Major format version: a reader refuses files with a different major.
 pub const FORMAT_MAJOR: u16 = 1;
-/// Minor format version: additive changes (new chunks, new optional header fields).
-pub const FORMAT_MINOR: u16 = 0;
+/// Minor format version implemented: additive changes (new chunks, new optional header
+/// fields). 1.1 added LOD bands to Volume assets (SPEC §8.6).
+pub const FORMAT_MINOR: u16 = 1;
+/// The minor version written for files that use no 1.1 feature (SPEC §5).
+pub const FORMAT_MINOR_BASE: u16 = 0;
 /// The first 8 bytes of every billow asset.
 pub const MAGIC: [u8; 8] = *b"\x89BLW\r\n\x1a\n";
 /// Size of the fixed preamble in bytes.

@@ -4,10 +4,14 @@
 //! - `VLEV` × `mip_count`, element `U8`: colour texels of level 0, 1, …
 //! - `VNRM` × `mip_count`, element `I8`, iff `volume.normals` is set: normals per level.
 //! - `CELL` × 1, element `F32`: the prisms, [`PRISM_BYTES`] each.
+//! - LOD bands, format 1.1, only when [`VolumeAsset::bands`] is not empty: `VBND`,
+//!   `BLEV`…, `BNRM`…, `BCEL`… ([`crate::bands`]).
 
 use std::path::Path;
 
-use crate::container::{encode, ChunkRef};
+use crate::bands::{band_table, prism_bytes, validate_bands, LodBand, RawBands};
+use crate::bands::{TAG_BCEL, TAG_BLEV, TAG_BNRM, TAG_VBND};
+use crate::container::{encode_with_minor, ChunkRef};
 use crate::{
     from_bytes, write_atomic, AssetKind, Chunk, Container, ElemType, FormatError, Header,
     NormalEncoding, TexelFormat, VolumeHeader,
@@ -40,7 +44,7 @@ pub struct Prism {
 }
 
 impl Prism {
-    fn write_le(&self, out: &mut Vec<u8>) {
+    pub(crate) fn write_le(&self, out: &mut Vec<u8>) {
         for v in self.pos.iter().chain(self.uvw.iter()) {
             for c in v {
                 out.extend_from_slice(&c.to_le_bytes());
@@ -48,7 +52,7 @@ impl Prism {
         }
     }
 
-    fn read_le(b: &[u8]) -> Prism {
+    pub(crate) fn read_le(b: &[u8]) -> Prism {
         let f = |i: usize| f32::from_le_bytes(b[4 * i..4 * i + 4].try_into().expect("4 bytes"));
         let v = |k: usize| [f(3 * k), f(3 * k + 1), f(3 * k + 2)];
         Prism {
@@ -68,6 +72,8 @@ pub struct VolumeAsset {
     /// Normals per level, same layout, 4 bytes (i8) per texel.
     pub normals: Option<Vec<Vec<u8>>>,
     pub cells: Vec<Prism>,
+    /// Extra LOD bands (format 1.1, SPEC §8.6), finest first; empty for an ordinary volume.
+    pub bands: Vec<LodBand>,
 }
 
 /// Size of MIP level `level`: `max(1, d >> level)` per axis.
@@ -127,20 +133,33 @@ impl VolumeAsset {
                 return bad(format!("CELL prism {i} has a non-finite coordinate"));
             }
         }
-        Ok(())
+        validate_bands(&self.bands, v.mip_count, v.normals.is_some())
     }
 
-    fn cell_bytes(&self) -> Vec<u8> {
-        let mut out = Vec::with_capacity(self.cells.len() * PRISM_BYTES);
-        for p in &self.cells {
-            p.write_le(&mut out);
+    /// The largest slice LOD a renderer uses (SPEC §8.6): `mip_count − 1` for an ordinary
+    /// volume, the last band's `first_level + mip_count − 1` otherwise.
+    pub fn max_lod(&self) -> u32 {
+        match self.bands.last() {
+            Some(b) => b.first_level + b.mip_count() - 1,
+            None => self.header.volume.map_or(1, |v| v.mip_count) - 1,
         }
-        out
+    }
+
+    /// Texel bytes of every colour and normal level of the base texture and every band.
+    pub fn texel_bytes(&self) -> u64 {
+        let sum = |l: &[Vec<u8>]| l.iter().map(|x| x.len() as u64).sum::<u64>();
+        let mut n = sum(&self.levels) + self.normals.as_deref().map_or(0, sum);
+        for b in &self.bands {
+            n += sum(&b.levels) + b.normals.as_deref().map_or(0, sum);
+        }
+        n
     }
 
     fn with_chunks<R>(&self, f: impl FnOnce(&[ChunkRef<'_>]) -> R) -> Result<R, FormatError> {
         self.validate()?;
-        let cells = self.cell_bytes();
+        let cells = prism_bytes(&self.cells);
+        let table = band_table(&self.bands);
+        let band_cells: Vec<Vec<u8>> = self.bands.iter().map(|b| prism_bytes(&b.cells)).collect();
         let mut refs: Vec<ChunkRef<'_>> = self
             .levels
             .iter()
@@ -162,6 +181,34 @@ impl VolumeAsset {
             elem: ElemType::F32,
             data: &cells,
         });
+        if !self.bands.is_empty() {
+            refs.push(ChunkRef {
+                tag: TAG_VBND,
+                elem: ElemType::U32,
+                data: &table,
+            });
+            for l in self.bands.iter().flat_map(|b| &b.levels) {
+                refs.push(ChunkRef {
+                    tag: TAG_BLEV,
+                    elem: ElemType::U8,
+                    data: l,
+                });
+            }
+            for l in self.bands.iter().flat_map(|b| b.normals.iter().flatten()) {
+                refs.push(ChunkRef {
+                    tag: TAG_BNRM,
+                    elem: ElemType::I8,
+                    data: l,
+                });
+            }
+            for c in &band_cells {
+                refs.push(ChunkRef {
+                    tag: TAG_BCEL,
+                    elem: ElemType::F32,
+                    data: c,
+                });
+            }
+        }
         Ok(f(&refs))
     }
 
@@ -182,7 +229,9 @@ impl VolumeAsset {
 
     /// Encode to file bytes without copying the texel data into a [`Container`] first.
     pub fn to_bytes(&self) -> Result<Vec<u8>, FormatError> {
-        self.with_chunks(|refs| encode(&self.header, refs))?
+        // Minor 1 only when the file uses LOD bands (SPEC §5).
+        let minor = if self.bands.is_empty() { 0 } else { 1 };
+        self.with_chunks(|refs| encode_with_minor(&self.header, refs, minor))?
     }
 
     /// Decode and validate a volume asset from a container. Chunks with
@@ -197,7 +246,30 @@ impl VolumeAsset {
         };
         validate_volume_header(&v)?;
         let (mut levels, mut normals, mut cells) = (Vec::new(), Vec::new(), None);
+        let mut raw = RawBands::default();
         for (i, ch) in chunks.into_iter().enumerate() {
+            let band_chunk = match &ch.tag {
+                b"VBND" => Some((ElemType::U32, None)),
+                b"BLEV" => Some((ElemType::U8, Some(&mut raw.levels))),
+                b"BNRM" => Some((ElemType::I8, Some(&mut raw.normals))),
+                b"BCEL" => Some((ElemType::F32, Some(&mut raw.cells))),
+                _ => None,
+            };
+            if let Some((want, list)) = band_chunk {
+                if ch.elem != want {
+                    let tag = crate::error::tag_str(&ch.tag);
+                    return bad(format!(
+                        "{tag} chunk (container chunk {i}) has element type {:?}, expected {want:?}",
+                        ch.elem
+                    ));
+                }
+                match list {
+                    Some(list) => list.push(ch.data),
+                    None if raw.table.is_some() => return bad("more than one VBND chunk".into()),
+                    None => raw.table = Some(ch.data),
+                }
+                continue;
+            }
             let (want, list) = match &ch.tag {
                 b"VLEV" => (ElemType::U8, &mut levels),
                 b"VNRM" => (ElemType::I8, &mut normals),
@@ -245,6 +317,7 @@ impl VolumeAsset {
             }
             (Some(_), _) => Some(normals),
         };
+        let bands = raw.into_bands(v.normals.is_some())?;
         let asset = VolumeAsset {
             header,
             levels,
@@ -253,6 +326,7 @@ impl VolumeAsset {
                 .chunks_exact(PRISM_BYTES)
                 .map(Prism::read_le)
                 .collect(),
+            bands,
         };
         asset.validate()?;
         Ok(asset)
@@ -303,8 +377,17 @@ fn check_levels(tag: &str, levels: &[Vec<u8>], v: VolumeHeader) -> Result<(), Fo
             v.mip_count
         ));
     }
+    check_level_sizes(tag, levels, v.dims)
+}
+
+/// Each level `i` of `levels` holds exactly `mip_dims(dims, i)` texels.
+pub(crate) fn check_level_sizes(
+    tag: &str,
+    levels: &[Vec<u8>],
+    dims: [u32; 3],
+) -> Result<(), FormatError> {
     for (i, l) in levels.iter().enumerate() {
-        let d = mip_dims(v.dims, i as u32);
+        let d = mip_dims(dims, i as u32);
         let want = level_bytes(d);
         if l.len() as u64 != want {
             return bad(format!(

@@ -98,6 +98,7 @@ fn generator_asset() -> VolumeAsset {
         header,
         levels: vec![level0, level1],
         normals: Some(vec![normals0, normals1]),
+        bands: Vec::new(),
         cells,
     }
 }

@@ -94,6 +94,7 @@ fn volume_asset() -> impl Strategy<Value = VolumeAsset> {
                         header,
                         levels,
                         normals,
+                        bands: Vec::new(),
                         cells,
                     }
                 })

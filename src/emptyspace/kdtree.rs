@@ -5,25 +5,34 @@
 //! **Cost.** A box `B` of `s_x × s_y × s_z` blocks of `A³` voxels costs
 //!
 //! ```text
-//! C(B) = (A·s_x + 2p)(A·s_y + 2p)(A·s_z + 2p) + W
+//! C(B) = A·(s_x + h_x⁻ + h_x⁺) · A·(s_y + h_y⁻ + h_y⁺) · A·(s_z + h_z⁻ + h_z⁺) + W
 //! ```
 //!
 //! voxels: the atlas texels it occupies — its rasterized volume, empty voxels included,
-//! plus its apron of `p` voxels per side (`p = A`, SPEC §8.6) — plus `W`, the cost of one
-//! more cell (two prisms clipped against every slice, a draw's worth of set-up), expressed
-//! in voxels ([`KdParams::cell_cost`]). A tree costs the sum over its leaves.
+//! plus its apron, one block per side (SPEC §8.6), counted only on the faces where the
+//! apron holds data (`h = 1`: a cut through content, or content at the volume's border);
+//! an all-zero apron is shared with the neighbouring bricks in the atlas
+//! ([`super::pack`]), so it costs nothing — plus `W`, the cost of one more cell (two
+//! prisms clipped against every slice, a draw's worth of set-up), expressed in voxels
+//! ([`KdParams::cell_cost`]). A tree costs the sum over its leaves.
 //!
 //! **Splitting.** A node is first shrunk to the tight bounds of its needed blocks (free:
 //! it removes only empty space). Every plane between blocks along x, y and z is tried; the
 //! children are shrunk to their tight bounds and the plane with the least
 //! `C(left) + C(right)` wins (ties: the lowest axis, then the lowest plane — deterministic).
 //!
-//! **Stopping rules**, checked in this order — a node becomes a leaf when
+//! **Growing, then pruning.** A greedy kd-tree that stops at the first split without gain
+//! cannot hollow out a shell (the first cut through a hollow object gains nothing; the
+//! second does), so the tree is grown first and pruned bottom-up. A node is split at its
+//! best plane unless
 //! 1. it contains no needed block (then it is dropped, not a leaf);
 //! 2. its depth is `max_depth` (the root has depth 0);
-//! 3. no plane leaves at least `min_box` blocks on both sides (before shrinking);
-//! 4. the best split does not gain at least `min_gain` of the node's cost:
-//!    `C(left) + C(right) ≥ (1 − min_gain) · C(node)`.
+//! 3. every block in it is needed (splitting can only add aprons);
+//! 4. no plane leaves at least `min_box` blocks on both sides (before shrinking).
+//!
+//! Then, from the leaves up, a split is kept only if its subtree costs less than the node
+//! as one leaf by at least `min_gain` of that: `C(subtree) < (1 − min_gain) · C(node)`;
+//! otherwise the node becomes a leaf.
 //!
 //! Leaves are returned depth first, left child before right.
 
@@ -44,8 +53,8 @@ impl BlockBox {
 pub struct KdParams {
     /// Voxels per block edge, `A`.
     pub block: usize,
-    /// Apron voxels per side, `p`.
-    pub apron: usize,
+    /// Whether boxes carry aprons (`h` above can be 1).
+    pub apron: bool,
     /// Per-box cost `W`, in voxels.
     pub cell_cost: f64,
     /// Smallest box edge a split may leave, in blocks (≥ 1).
@@ -59,6 +68,11 @@ pub struct KdParams {
 pub trait Needed {
     fn dims(&self) -> [usize; 3];
     fn needed(&self, b: [usize; 3]) -> bool;
+    /// Whether the apron of `b` on face `axis`, `upper` side — the one-block layer just
+    /// outside that face, over the face grown by one block on the other axes — holds data.
+    fn apron_has_data(&self, _b: &BlockBox, _axis: usize, _upper: bool) -> bool {
+        true
+    }
 }
 
 impl Needed for super::occupancy::BlockGrid {
@@ -70,11 +84,48 @@ impl Needed for super::occupancy::BlockGrid {
     }
 }
 
+/// The needed blocks of one tier with its data blocks, which decide the aprons' cost.
+pub struct TierGrid<'a> {
+    pub needed: &'a super::occupancy::BlockGrid,
+    pub data: &'a super::occupancy::DataGrid,
+}
+
+impl Needed for TierGrid<'_> {
+    fn dims(&self) -> [usize; 3] {
+        self.needed.dims
+    }
+    fn needed(&self, b: [usize; 3]) -> bool {
+        self.needed.is_needed(b)
+    }
+    fn apron_has_data(&self, b: &BlockBox, axis: usize, upper: bool) -> bool {
+        let (lo, hi) = apron_slab(b, axis, upper);
+        self.data.count(lo, hi) > 0
+    }
+}
+
+/// The apron layer of `b` on one face: `[lo, hi)` in block coordinates (may reach −1 and
+/// `dims`).
+pub fn apron_slab(b: &BlockBox, axis: usize, upper: bool) -> ([i64; 3], [i64; 3]) {
+    let mut lo = b.lo.map(|v| v as i64 - 1);
+    let mut hi = b.hi.map(|v| v as i64 + 1);
+    if upper {
+        lo[axis] = b.hi[axis] as i64;
+        hi[axis] = lo[axis] + 1;
+    } else {
+        hi[axis] = b.lo[axis] as i64;
+        lo[axis] = hi[axis] - 1;
+    }
+    (lo, hi)
+}
+
 /// The cost `C(B)` of the module docs.
-pub fn box_cost(b: &BlockBox, p: &KdParams) -> f64 {
+pub fn box_cost(grid: &impl Needed, b: &BlockBox, p: &KdParams) -> f64 {
     let s = b.size();
     (0..3)
-        .map(|a| (p.block * s[a] + 2 * p.apron) as f64)
+        .map(|a| {
+            let h = |upper| usize::from(p.apron && grid.apron_has_data(b, a, upper));
+            (p.block * (s[a] + h(false) + h(true))) as f64
+        })
         .product::<f64>()
         + p.cell_cost
 }
@@ -138,7 +189,7 @@ fn best_split(
     b: &BlockBox,
     p: &KdParams,
 ) -> Option<(f64, Option<BlockBox>, Option<BlockBox>)> {
-    let cost = |x: &Option<BlockBox>| x.as_ref().map_or(0.0, |x| box_cost(x, p));
+    let cost = |x: &Option<BlockBox>| x.as_ref().map_or(0.0, |x| box_cost(grid, x, p));
     let mut best: Option<(f64, Option<BlockBox>, Option<BlockBox>)> = None;
     for axis in 0..3 {
         let n = b.hi[axis] - b.lo[axis];
@@ -164,18 +215,31 @@ fn best_split(
     best
 }
 
-fn recurse(grid: &impl Needed, b: BlockBox, depth: u32, p: &KdParams, out: &mut Vec<BlockBox>) {
-    if depth >= p.max_depth {
-        out.push(b);
-        return;
+/// Every block of `b` is needed.
+fn full(grid: &impl Needed, b: &BlockBox) -> bool {
+    (b.lo[2]..b.hi[2])
+        .all(|z| (b.lo[1]..b.hi[1]).all(|y| (b.lo[0]..b.hi[0]).all(|x| grid.needed([x, y, z]))))
+}
+
+/// Grows the subtree of the (tight) node `b`, prunes it, and returns its cost and leaves.
+fn recurse(grid: &impl Needed, b: BlockBox, depth: u32, p: &KdParams) -> (f64, Vec<BlockBox>) {
+    let leaf = box_cost(grid, &b, p);
+    if depth >= p.max_depth || full(grid, &b) {
+        return (leaf, vec![b]);
     }
-    match best_split(grid, &b, p) {
-        Some((c, l, r)) if c < (1.0 - p.min_gain) * box_cost(&b, p) => {
-            for child in [l, r].into_iter().flatten() {
-                recurse(grid, child, depth + 1, p, out);
-            }
-        }
-        _ => out.push(b),
+    let Some((_, l, r)) = best_split(grid, &b, p) else {
+        return (leaf, vec![b]);
+    };
+    let (mut cost, mut leaves) = (0.0, Vec::new());
+    for child in [l, r].into_iter().flatten() {
+        let (c, mut v) = recurse(grid, child, depth + 1, p);
+        cost += c;
+        leaves.append(&mut v);
+    }
+    if cost < (1.0 - p.min_gain) * leaf {
+        (cost, leaves)
+    } else {
+        (leaf, vec![b])
     }
 }
 
@@ -185,7 +249,7 @@ pub fn subdivide(grid: &impl Needed, p: &KdParams) -> Vec<BlockBox> {
     let root = BlockBox { lo: [0; 3], hi: d };
     let mut out = Vec::new();
     if let Some(t) = tight(grid, &root) {
-        recurse(grid, t, 0, p, &mut out);
+        out = recurse(grid, t, 0, p).1;
     }
     out
 }
@@ -210,7 +274,7 @@ mod tests {
     fn params() -> KdParams {
         KdParams {
             block: 4,
-            apron: 4,
+            apron: true,
             cell_cost: 0.0,
             min_box: 1,
             max_depth: 16,

@@ -1,38 +1,42 @@
 //! Empty-space removal for volume assets (VB paper §4 "Optimizations", Figure 14): a
 //! kd-tree cuts the volume into non-empty boxes, the boxes are packed with an apron into
-//! a smaller 3D atlas, and each box becomes two prism cells whose texture coordinates
-//! point into the atlas. The result is an ordinary volume asset (formats/SPEC.md §8.6).
+//! smaller 3D atlases, and each box becomes two prism cells whose texture coordinates
+//! point into an atlas. The result is a volume asset with **LOD bands** (formats/SPEC.md
+//! §8.6) that renders exactly as the source at every MIP level.
 //!
 //! Pipeline ([`prune`]):
-//! 1. [`occupancy`]: the blocks (`A³` voxels, `A = 2^(E−1)`, `E` = exact levels) that any
-//!    non-empty texel of levels `0..E` reaches through trilinear filtering;
-//! 2. [`kdtree`]: split into tight boxes of needed blocks by the cost in its docs;
-//! 3. [`pack`]: boxes + apron (`A` voxels per side) packed block-aligned into the atlas;
-//! 4. [`bricks`]: every level of colour (and normals) copied brick by brick, aprons from the
-//!    source's neighbouring texels of the *same* level;
-//! 5. cells: each box as two prisms (the voxelizer's box split), uvw into the atlas.
+//! 1. `--threshold`: texels with alpha ≤ T are zeroed ([`occupancy::apply_threshold`]);
+//! 2. for each *tier* `k = 0, 1, …` whose level-`k` sides are even ([`tier`]): the blocks
+//!    (2×2×2 texels of level `k`) that any non-empty texel of levels `k, k + 1` reaches
+//!    through trilinear filtering ([`occupancy`]); kd-tree boxes over them ([`kdtree`]);
+//!    slots = box + one-block apron, packed with shared zero aprons ([`pack`]); byte-exact
+//!    copies of levels `k` and `k + 1` ([`bricks`]); two prisms per box;
+//! 3. the *tail* `K`: the source's levels `K..` stored whole with the source's box cells;
+//! 4. `K` is the largest tail level whose texel bytes `Σ_{k<K} tier_k + tail_K` are
+//!    within 1 % of the smallest and whose last tier leaves out at least a tenth of its
+//!    blocks (coarse tiers cost almost nothing and cut the work of distant views); `K = 0`
+//!    keeps the source whole (nothing to gain, or odd sides).
 //!
-//! Levels `0..E` render exactly as the source (bit-identical samples) when the source's
-//! sides are multiples of `2^(E−1)`; coarser levels are kept but approximate at brick
-//! borders (see docs/emptyspace.md). When the atlas would not be smaller than the source,
-//! the source is kept whole (one box, no apron).
+//! The output's base texture is tier 0, its bands are tiers `1..K` (first level `k`) and
+//! the tail (first level `K`). A slice at LOD `λ` draws exactly one of them, sampling the
+//! same texel values the source would sample at `λ` (SPEC §8.6).
 
 pub mod bricks;
 pub mod kdtree;
 pub mod occupancy;
 pub mod pack;
 pub mod synthetic;
+pub mod tier;
 
 use std::time::Instant;
 
-use billow_format::{full_mip_count, mip_dims, Prism, VolumeAsset, MAX_DIM};
+use billow_format::{mip_dims, LodBand, Prism, VolumeAsset};
 use glam::Vec3;
 use serde::Serialize;
 
-use self::bricks::{fill_level, Brick, Channel};
-use self::kdtree::{subdivide, BlockBox, KdParams};
-use self::occupancy::needed_blocks;
-use crate::voxelize::box_prisms;
+use self::kdtree::KdParams;
+use self::occupancy::{apply_threshold, TierSource};
+use self::tier::{build_tier, Tier, TierParams};
 
 /// Header `params` key that marks a pruned asset (its value records the parameters).
 pub const PARAM_KEY: &str = "emptyspace";
@@ -47,35 +51,36 @@ pub enum EmptySpaceError {
     AlreadyPruned(String),
     #[error("the asset's cells are not one box mapping the whole texture onto its bounds (cell {0}); only such volumes can be pruned")]
     NotABox(usize),
+    #[error("the asset already has LOD bands; only plain volumes can be pruned")]
+    HasBands,
     #[error("{0}")]
     InvalidParam(String),
-    #[error("the bricks do not fit an atlas of at most {MAX_DIM} texels per side")]
-    AtlasTooLarge,
 }
 
 /// Parameters of [`prune`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EmptySpaceOptions {
-    /// A texel is empty when its alpha byte is ≤ this (0: and all colour bytes 0).
+    /// Texels whose alpha byte is ≤ this are dropped (zeroed); 0: nothing is dropped.
     pub threshold: u8,
-    /// Smallest box edge a split may leave, in voxels (rounded up to whole blocks).
+    /// Smallest box edge a split may leave, in level-0 voxels (scaled to each tier,
+    /// rounded up to whole blocks).
     pub min_box: u32,
     /// Deepest kd-tree level (root = 0).
     pub max_depth: u32,
     /// Smallest relative cost reduction worth a split.
     pub min_gain: f64,
-    /// MIP levels rendered exactly, `E ≥ 1`: bricks align to `A = 2^(E−1)` voxels.
-    pub exact_levels: u32,
-    /// Per-box cost `W` of the kd-tree, in voxels.
+    /// Per-box cost `W` of the kd-tree, in atlas texels.
     pub cell_cost: f64,
+    /// Most tiers stored as bricks (`None`: as many as pay off; `Some(0)`: keep whole).
+    pub max_tiers: Option<u32>,
     /// Aprons around bricks. `false` exists only to show what seams look like (tests).
     pub apron: bool,
 }
 
-/// Default exact levels: enough for the eval views at 1×, 4× and 16× of a 128³ volume.
-pub const DEFAULT_EXACT_LEVELS: u32 = 4;
-/// Default per-box cost, voxels.
-pub const DEFAULT_CELL_COST: f64 = 4096.0;
+/// Default per-box cost, texels.
+pub const DEFAULT_CELL_COST: f64 = 256.0;
+/// Largest atlas side in texels: the smallest 3D-texture limit wgpu guarantees.
+pub const MAX_ATLAS_SIDE: usize = 2048;
 
 impl Default for EmptySpaceOptions {
     fn default() -> Self {
@@ -84,39 +89,55 @@ impl Default for EmptySpaceOptions {
             min_box: 0,
             max_depth: 24,
             min_gain: 0.01,
-            exact_levels: DEFAULT_EXACT_LEVELS,
             cell_cost: DEFAULT_CELL_COST,
+            max_tiers: None,
             apron: true,
         }
     }
 }
 
+/// One band of the output.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct BandStats {
+    pub first_level: u32,
+    pub dims: [u32; 3],
+    pub mip_count: u32,
+    /// kd-tree boxes (0 for the tail, which keeps the source's box).
+    pub boxes: usize,
+    pub cells: usize,
+    pub texel_bytes: u64,
+    /// The tail: the source's levels stored whole.
+    pub whole: bool,
+}
+
 /// What [`prune`] did.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct EmptySpaceStats {
+    /// kd-tree boxes over all bricked tiers.
     pub boxes: usize,
+    /// Prisms over all bands.
     pub cells: usize,
     pub source_dims: [u32; 3],
-    pub atlas_dims: [u32; 3],
     pub source_mip_count: u32,
+    /// The base texture (tier 0's atlas, or the source when kept whole).
+    pub atlas_dims: [u32; 3],
     pub mip_count: u32,
-    /// Levels that render exactly as the source (`E`, capped by the stored levels).
-    pub exact_levels: u32,
-    /// Brick alignment and apron, voxels.
-    pub block: u32,
-    /// The source's sides are multiples of `block`, so levels `0..exact_levels` are
-    /// byte-exact copies; otherwise levels ≥ 1 are resampled at the bricks (approximate).
-    pub aligned: bool,
-    /// Texel bytes (colour + normals, every level) before and after.
+    /// Base texture first, then the LOD bands.
+    pub bands: Vec<BandStats>,
+    /// First level stored whole (the tail); 0 when kept whole.
+    pub tail_level: u32,
+    /// Texel bytes (colour + normals, every level, every band) before and after.
     pub texel_bytes_before: u64,
     pub texel_bytes_after: u64,
     /// `1 − after / before`.
     pub saving: f64,
     pub voxels_before: u64,
-    /// Level-0 voxels inside the boxes (what the renderer still rasterizes).
+    /// Level-0 voxels inside tier 0's boxes (what the renderer still rasterizes up close).
     pub voxels_kept: u64,
-    /// The atlas was not smaller, so the source was kept as one box.
+    /// No brick layout was smaller (or the sides are odd): the source was kept as it is.
     pub kept_whole: bool,
+    /// Why the source was kept whole, if it was.
+    pub note: Option<String>,
     pub seconds: f64,
 }
 
@@ -125,12 +146,6 @@ pub struct EmptySpaceStats {
 pub struct Pruned {
     pub asset: VolumeAsset,
     pub stats: EmptySpaceStats,
-}
-
-fn texel_bytes(a: &VolumeAsset) -> u64 {
-    let c: usize = a.levels.iter().map(Vec::len).sum();
-    let n: usize = a.normals.iter().flatten().map(Vec::len).sum();
-    (c + n) as u64
 }
 
 /// The world box of the cells, checked to be one box whose uvw spans the texture:
@@ -161,21 +176,48 @@ fn world_box(cells: &[Prism]) -> Result<Option<(Vec3, Vec3)>, EmptySpaceError> {
     Ok(Some((lo, hi)))
 }
 
-fn params_text(o: &EmptySpaceOptions, e: u32, boxes: usize, dims: [u32; 3]) -> String {
+fn params_text(o: &EmptySpaceOptions, tail: u32, boxes: usize, dims: [u32; 3]) -> String {
     format!(
-        "threshold={} min_box={} max_depth={} min_gain={} exact_levels={} cell_cost={} apron={} boxes={} source_dims={}x{}x{}",
+        "threshold={} min_box={} max_depth={} min_gain={} cell_cost={} apron={} tail_level={} boxes={} source_dims={}x{}x{}",
         o.threshold,
         o.min_box,
         o.max_depth,
         o.min_gain,
-        e,
         o.cell_cost,
         if o.apron { "on" } else { "off" },
+        tail,
         boxes,
         dims[0],
         dims[1],
         dims[2]
     )
+}
+
+fn check_options(o: &EmptySpaceOptions) -> Result<(), EmptySpaceError> {
+    if !(0.0..1.0).contains(&o.min_gain) {
+        return Err(EmptySpaceError::InvalidParam(format!(
+            "minimum gain {} not in [0, 1)",
+            o.min_gain
+        )));
+    }
+    if !(o.cell_cost >= 0.0 && o.cell_cost.is_finite()) {
+        return Err(EmptySpaceError::InvalidParam(format!(
+            "cell cost {} must be finite and ≥ 0",
+            o.cell_cost
+        )));
+    }
+    if o.max_depth > 64 {
+        return Err(EmptySpaceError::InvalidParam(format!(
+            "maximum depth {} not in 0..=64",
+            o.max_depth
+        )));
+    }
+    Ok(())
+}
+
+fn level_bytes(levels: &[Vec<u8>], normals: Option<&[Vec<u8>]>, from: usize) -> u64 {
+    let n = |l: &[Vec<u8>]| l.iter().skip(from).map(|v| v.len() as u64).sum::<u64>();
+    n(levels) + normals.map_or(0, n)
 }
 
 /// Removes the empty space of `asset` (see the module docs).
@@ -190,226 +232,219 @@ pub fn prune(asset: &VolumeAsset, o: &EmptySpaceOptions) -> Result<Pruned, Empty
     if let Some(v) = asset.header.params.get(PARAM_KEY) {
         return Err(EmptySpaceError::AlreadyPruned(v.clone()));
     }
-    if o.exact_levels == 0 || o.exact_levels > 13 {
-        return Err(EmptySpaceError::InvalidParam(format!(
-            "exact levels {} not in 1..=13",
-            o.exact_levels
-        )));
+    if !asset.bands.is_empty() {
+        return Err(EmptySpaceError::HasBands);
     }
-    if !(0.0..1.0).contains(&o.min_gain) {
-        return Err(EmptySpaceError::InvalidParam(format!(
-            "minimum gain {} not in [0, 1)",
-            o.min_gain
-        )));
-    }
-    if !(o.cell_cost >= 0.0 && o.cell_cost.is_finite()) {
-        return Err(EmptySpaceError::InvalidParam(format!(
-            "cell cost {} must be finite and ≥ 0",
-            o.cell_cost
-        )));
-    }
+    check_options(o)?;
     let vh = asset.header.volume.expect("validated volume header");
     let dims0 = vh.dims;
-    let n0 = dims0.map(|d| d as usize);
-    let e = o.exact_levels.min(vh.mip_count);
-    let block = 1usize << (e - 1);
     let world = world_box(&asset.cells)?;
-    let level_dims: Vec<[u32; 3]> = (0..vh.mip_count).map(|l| mip_dims(dims0, l)).collect();
-    let grid = needed_blocks(
-        &asset.levels,
-        &level_dims,
-        dims0,
-        block,
-        e as usize,
-        o.threshold,
-    );
-    let kd = KdParams {
-        block,
-        apron: if o.apron { block } else { 0 },
-        cell_cost: o.cell_cost,
-        min_box: (o.min_box as usize).div_ceil(block).max(1),
-        max_depth: o.max_depth,
-        min_gain: o.min_gain,
-    };
-    let boxes: Vec<BlockBox> = match world {
-        Some(_) => subdivide(&grid, &kd),
-        None => Vec::new(),
-    };
-    let before = texel_bytes(asset);
+    // The source as it will be kept: faint texels dropped.
+    let mut levels = asset.levels.clone();
+    let mut normals = asset.normals.clone();
+    for l in 0..levels.len() {
+        apply_threshold(
+            &mut levels[l],
+            normals.as_mut().map(|n| n[l].as_mut_slice()),
+            o.threshold,
+        );
+    }
+    let before = asset.texel_bytes();
     let mut stats = EmptySpaceStats {
-        boxes: boxes.len(),
-        cells: 2 * boxes.len(),
+        boxes: 0,
+        cells: asset.cells.len(),
         source_dims: dims0,
-        atlas_dims: dims0,
         source_mip_count: vh.mip_count,
+        atlas_dims: dims0,
         mip_count: vh.mip_count,
-        exact_levels: e,
-        block: block as u32,
-        aligned: dims0.iter().all(|&d| (d as usize).is_multiple_of(block)),
+        bands: Vec::new(),
+        tail_level: 0,
         texel_bytes_before: before,
         texel_bytes_after: before,
         saving: 0.0,
-        voxels_before: n0.iter().map(|&d| d as u64).product(),
+        voxels_before: dims0.iter().map(|&d| u64::from(d)).product(),
         voxels_kept: 0,
         kept_whole: false,
+        note: None,
         seconds: 0.0,
     };
     let mut out = asset.clone();
-    let whole = |out: &mut VolumeAsset, stats: &mut EmptySpaceStats| {
-        stats.boxes = 1;
-        stats.cells = asset.cells.len();
-        stats.voxels_kept = stats.voxels_before;
-        stats.kept_whole = true;
-        out.header
-            .params
-            .insert(PARAM_KEY.into(), params_text(o, e, 1, dims0));
-    };
-    let Some((wlo, whi)) = world else {
-        // No cells: nothing is drawn, nothing needs storing.
-        empty_asset(&mut out, o, e, dims0);
+    let all_zero = levels.iter().all(|l| l.iter().all(|&b| b == 0));
+    let Some(world) = world.filter(|_| !all_zero) else {
+        empty_asset(&mut out, o, dims0);
         stats.cells = 0;
-        stats.boxes = 0;
-        finish(&mut stats, &out, start);
-        return Ok(Pruned { asset: out, stats });
+        return Ok(finish(stats, out, start));
     };
-    if boxes.is_empty() {
-        empty_asset(&mut out, o, e, dims0);
-        finish(&mut stats, &out, start);
-        return Ok(Pruned { asset: out, stats });
-    }
-    let grid_all = BlockBox {
-        lo: [0; 3],
-        hi: grid.dims,
+    // Tiers while the level's sides are even and the next level exists.
+    let tier_params = |k: u32| TierParams {
+        kd: KdParams {
+            block: 2,
+            apron: o.apron,
+            cell_cost: o.cell_cost,
+            min_box: (o.min_box as usize).div_ceil(2 << k).max(1),
+            max_depth: o.max_depth,
+            min_gain: o.min_gain,
+        },
+        max_side: MAX_ATLAS_SIDE / 2,
     };
-    if boxes.len() == 1 && boxes[0] == grid_all {
-        whole(&mut out, &mut stats);
-        finish(&mut stats, &out, start);
-        return Ok(Pruned { asset: out, stats });
-    }
-    let apron_blocks = usize::from(o.apron);
-    let sizes: Vec<[usize; 3]> = boxes
-        .iter()
-        .map(|b| b.size().map(|s| s + 2 * apron_blocks))
-        .collect();
-    let packing =
-        pack::pack(&sizes, MAX_DIM as usize / block).ok_or(EmptySpaceError::AtlasTooLarge)?;
-    let nd0 = packing.dims.map(|d| d * block);
-    let atlas_dims = nd0.map(|d| d as u32);
-    let mip_count = vh.mip_count.min(full_mip_count(atlas_dims));
-    let atlas_bytes: u64 = (0..mip_count)
-        .map(|l| {
-            mip_dims(atlas_dims, l)
-                .iter()
-                .map(|&d| u64::from(d))
-                .product::<u64>()
-                * 4
-        })
-        .sum::<u64>()
-        * if asset.normals.is_some() { 2 } else { 1 };
-    if atlas_bytes >= before {
-        whole(&mut out, &mut stats);
-        finish(&mut stats, &out, start);
-        return Ok(Pruned { asset: out, stats });
-    }
-    let bricks: Vec<Brick> = boxes
-        .iter()
-        .zip(&packing.origins)
-        .zip(&sizes)
-        .map(|((b, &org), sz)| Brick {
-            src: b.lo.map(|v| v * block),
-            dst: [0, 1, 2].map(|a| (org[a] + apron_blocks) * block),
-            slot_lo: org.map(|v| v * block),
-            slot_hi: [0, 1, 2].map(|a| (org[a] + sz[a]) * block),
-        })
-        .collect();
-    let fill = |ch: Channel, src_levels: &[Vec<u8>]| -> Vec<Vec<u8>> {
-        (0..mip_count)
-            .map(|l| {
-                let nd = mip_dims(atlas_dims, l).map(|d| d as usize);
-                let ns = level_dims[l as usize].map(|d| d as usize);
-                let mut dst = vec![0u8; nd.iter().product::<usize>() * 4];
-                fill_level(
-                    ch,
-                    &src_levels[l as usize],
-                    ns,
-                    n0,
-                    &mut dst,
-                    nd,
-                    nd0,
-                    &bricks,
-                );
-                dst
-            })
-            .collect()
-    };
-    out.levels = fill(Channel::Colour(asset.header.colour_space), &asset.levels);
-    out.normals = asset.normals.as_ref().map(|n| fill(Channel::Normal, n));
-    // Cells: world box and atlas uvw of each brick (its true extent, not the rounded slot).
-    let ext = whi - wlo;
-    out.cells = Vec::with_capacity(2 * boxes.len());
-    let mut kept = 0u64;
-    for (b, br) in boxes.iter().zip(&bricks) {
-        let s: [usize; 3] = [0, 1, 2].map(|a| (b.hi[a] * block).min(n0[a]) - b.lo[a] * block);
-        kept += s.iter().map(|&v| v as u64).product::<u64>();
-        let w = |a: usize, v: usize| wlo[a] + ext[a] * (v as f64 / n0[a] as f64) as f32;
-        let pmin = Vec3::new(w(0, br.src[0]), w(1, br.src[1]), w(2, br.src[2]));
-        let pmax = Vec3::new(
-            w(0, br.src[0] + s[0]),
-            w(1, br.src[1] + s[1]),
-            w(2, br.src[2] + s[2]),
-        );
-        let t = |a: usize, v: usize| (v as f64 / nd0[a] as f64) as f32;
-        let tlo = Vec3::new(t(0, br.dst[0]), t(1, br.dst[1]), t(2, br.dst[2]));
-        let thi = Vec3::new(
-            t(0, br.dst[0] + s[0]),
-            t(1, br.dst[1] + s[1]),
-            t(2, br.dst[2] + s[2]),
-        );
-        for mut p in box_prisms(pmin, pmax) {
-            for uvw in p.uvw.iter_mut() {
-                let u = Vec3::from(*uvw);
-                *uvw = (tlo + (thi - tlo) * u).to_array();
+    let max_tiers = o.max_tiers.unwrap_or(u32::MAX).min(vh.mip_count - 1);
+    let mut tiers: Vec<Tier> = Vec::new();
+    let mut note = None;
+    for k in 0..max_tiers {
+        let n = mip_dims(dims0, k);
+        if n.iter().any(|&d| d % 2 != 0) {
+            if k == 0 {
+                note = Some(format!(
+                    "sides {}x{}x{} are not all even, so no brick can hold MIP level 1 exactly; bake with `billow voxelize --align 8`",
+                    n[0], n[1], n[2]
+                ));
             }
-            out.cells.push(p);
+            break;
+        }
+        let src = TierSource {
+            n: n.map(|d| d as usize),
+            colour: [&levels[k as usize], &levels[k as usize + 1]],
+            normals: normals
+                .as_ref()
+                .map(|nr| [nr[k as usize].as_slice(), nr[k as usize + 1].as_slice()]),
+        };
+        match build_tier(&src, world, &tier_params(k)) {
+            Some(t) => tiers.push(t),
+            None => break,
         }
     }
+    // The tail level K: the most tiers whose bytes are within 1 % of the fewest bytes
+    // (coarse tiers cost next to nothing and cut the fragments of distant views), each
+    // of them leaving out at least a tenth of its level.
+    let cost = |k: usize| {
+        tiers[..k].iter().map(Tier::bytes).sum::<u64>()
+            + level_bytes(&levels, normals.as_deref(), k)
+    };
+    let least = (0..=tiers.len()).map(cost).min().unwrap_or(0);
+    let prunes = |t: &Tier| {
+        let kept: u64 = t
+            .boxes
+            .iter()
+            .map(|b| b.size().iter().map(|&v| v as u64).product::<u64>())
+            .sum();
+        10 * kept < 9 * t.blocks
+    };
+    let tail = (0..=tiers.len())
+        .rev()
+        .find(|&k| cost(k) as f64 <= 1.01 * least as f64 && (k == 0 || prunes(&tiers[k - 1])))
+        .unwrap_or(0);
+    if tail == 0 {
+        out.levels = levels;
+        out.normals = normals;
+        out.header
+            .params
+            .insert(PARAM_KEY.into(), params_text(o, 0, 0, dims0));
+        stats.kept_whole = true;
+        stats.voxels_kept = stats.voxels_before;
+        stats.note =
+            note.or_else(|| Some("no brick layout is smaller than the source; kept whole".into()));
+        stats.bands.push(BandStats {
+            first_level: 0,
+            dims: dims0,
+            mip_count: vh.mip_count,
+            boxes: 1,
+            cells: asset.cells.len(),
+            texel_bytes: before,
+            whole: true,
+        });
+        return Ok(finish(stats, out, start));
+    }
+    tiers.truncate(tail);
+    let mut tiers = tiers.into_iter();
+    let base = tiers.next().expect("tier 0");
+    stats.voxels_kept = base
+        .boxes
+        .iter()
+        .map(|b| b.size().iter().map(|&s| 2 * s as u64).product::<u64>())
+        .sum();
+    let band_stats = |first_level: u32, t: &Tier| BandStats {
+        first_level,
+        dims: t.dims,
+        mip_count: 2,
+        boxes: t.boxes.len(),
+        cells: t.cells.len(),
+        texel_bytes: t.bytes(),
+        whole: false,
+    };
+    stats.bands.push(band_stats(0, &base));
+    stats.boxes = base.boxes.len();
     let v = out.header.volume.as_mut().expect("volume header");
-    v.dims = atlas_dims;
-    v.mip_count = mip_count;
-    out.header
-        .params
-        .insert(PARAM_KEY.into(), params_text(o, e, boxes.len(), dims0));
-    stats.atlas_dims = atlas_dims;
-    stats.mip_count = mip_count;
-    stats.voxels_kept = kept;
-    finish(&mut stats, &out, start);
-    Ok(Pruned { asset: out, stats })
+    v.dims = base.dims;
+    v.mip_count = 2;
+    out.levels = base.colour;
+    out.normals = base.normals;
+    out.cells = base.cells;
+    out.bands = Vec::new();
+    for (k, t) in tiers.enumerate() {
+        let k = k as u32 + 1;
+        stats.bands.push(band_stats(k, &t));
+        stats.boxes += t.boxes.len();
+        out.bands.push(LodBand {
+            first_level: k,
+            dims: t.dims,
+            levels: t.colour,
+            normals: t.normals,
+            cells: t.cells,
+        });
+    }
+    let k = tail;
+    let tail_band = LodBand {
+        first_level: k as u32,
+        dims: mip_dims(dims0, k as u32),
+        levels: levels[k..].to_vec(),
+        normals: normals.as_ref().map(|n| n[k..].to_vec()),
+        cells: asset.cells.clone(),
+    };
+    stats.bands.push(BandStats {
+        first_level: tail_band.first_level,
+        dims: tail_band.dims,
+        mip_count: tail_band.levels.len() as u32,
+        boxes: 0,
+        cells: tail_band.cells.len(),
+        texel_bytes: level_bytes(&levels, normals.as_deref(), k),
+        whole: true,
+    });
+    out.bands.push(tail_band);
+    stats.tail_level = k as u32;
+    stats.cells = out.cells.len() + out.bands.iter().map(|b| b.cells.len()).sum::<usize>();
+    out.header.params.insert(
+        PARAM_KEY.into(),
+        params_text(o, k as u32, stats.boxes, dims0),
+    );
+    Ok(finish(stats, out, start))
 }
 
 /// A valid asset that draws nothing: 1×1×1 transparent texture, one level, no cells.
-fn empty_asset(out: &mut VolumeAsset, o: &EmptySpaceOptions, e: u32, dims0: [u32; 3]) {
+fn empty_asset(out: &mut VolumeAsset, o: &EmptySpaceOptions, dims0: [u32; 3]) {
     out.levels = vec![vec![0; 4]];
     if let Some(n) = out.normals.as_mut() {
         *n = vec![vec![0; 4]];
     }
     out.cells = Vec::new();
+    out.bands = Vec::new();
     let v = out.header.volume.as_mut().expect("volume header");
     v.dims = [1, 1, 1];
     v.mip_count = 1;
     out.header
         .params
-        .insert(PARAM_KEY.into(), params_text(o, e, 0, dims0));
+        .insert(PARAM_KEY.into(), params_text(o, 0, 0, dims0));
 }
 
-fn finish(stats: &mut EmptySpaceStats, out: &VolumeAsset, start: Instant) {
+fn finish(mut stats: EmptySpaceStats, out: VolumeAsset, start: Instant) -> Pruned {
     let v = out.header.volume.expect("volume header");
     stats.atlas_dims = v.dims;
     stats.mip_count = v.mip_count;
-    stats.texel_bytes_after = texel_bytes(out);
+    stats.texel_bytes_after = out.texel_bytes();
     stats.saving = if stats.texel_bytes_before > 0 {
         1.0 - stats.texel_bytes_after as f64 / stats.texel_bytes_before as f64
     } else {
         0.0
     };
     stats.seconds = start.elapsed().as_secs_f64();
+    Pruned { asset: out, stats }
 }

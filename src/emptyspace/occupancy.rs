@@ -1,5 +1,6 @@
-//! Which blocks of a volume must stay drawn: the support of every non-empty texel of every
-//! exactly-kept MIP level, on a grid of `A × A × A` blocks (`A` = the brick alignment).
+//! Which blocks of a volume must stay drawn ([`needed_blocks`]): the support of every
+//! non-empty texel of the MIP levels a tier covers, on a grid of `A × A × A` blocks; and
+//! which blocks hold any data at all ([`DataGrid`]), what aprons must carry.
 //!
 //! A renderer that samples level `L` trilinearly at a point `X` (level-0 texel units,
 //! `x_L = X · n_L / n_0 − 0.5`) reads texels `floor(x_L)` and `floor(x_L) + 1`, so texel
@@ -45,13 +46,13 @@ pub fn is_empty_texel(t: &[u8], threshold: u8) -> bool {
 }
 
 /// The needed blocks of a volume whose level `L` is `levels[L]` (RGBA8, `level_dims[L]`),
-/// level-0 size `dims0`, considering levels `0..exact_levels`.
+/// level-0 size `dims0`, considering levels `0..levels_used`.
 pub fn needed_blocks(
-    levels: &[Vec<u8>],
+    levels: &[&[u8]],
     level_dims: &[[u32; 3]],
     dims0: [u32; 3],
     block: usize,
-    exact_levels: usize,
+    levels_used: usize,
     threshold: u8,
 ) -> BlockGrid {
     let n0 = dims0.map(|d| d as usize);
@@ -60,7 +61,7 @@ pub fn needed_blocks(
         dims,
         needed: vec![false; dims[0] * dims[1] * dims[2]],
     };
-    for (l, bytes) in levels.iter().enumerate().take(exact_levels) {
+    for (l, bytes) in levels.iter().enumerate().take(levels_used) {
         let nl = level_dims[l].map(|d| d as usize);
         // Per axis and texel index: the block range its support meets (inclusive).
         let ranges: [Vec<(usize, usize)>; 3] = std::array::from_fn(|ax| {
@@ -98,9 +99,146 @@ pub fn needed_blocks(
     grid
 }
 
+/// Two consecutive MIP levels `k` and `k + 1` of a volume, the input of one tier: level
+/// `k` is `n` texels (every side even), level `k + 1` exactly `n / 2`.
+#[derive(Clone, Copy, Debug)]
+pub struct TierSource<'a> {
+    pub n: [usize; 3],
+    pub colour: [&'a [u8]; 2],
+    pub normals: Option<[&'a [u8]; 2]>,
+}
+
+impl TierSource<'_> {
+    /// Texel bytes of level `l ∈ {0, 1}` at `p`, clamped to the level (clamp-to-edge).
+    pub fn texel(&self, l: usize, p: [i64; 3]) -> (&[u8], Option<&[u8]>) {
+        let n = self.n.map(|d| d >> l);
+        let c = [0, 1, 2].map(|a| p[a].clamp(0, n[a] as i64 - 1) as usize);
+        let o = 4 * (c[0] + n[0] * (c[1] + n[1] * c[2]));
+        (
+            &self.colour[l][o..o + 4],
+            self.normals.map(|nr| &nr[l][o..o + 4]),
+        )
+    }
+
+    /// Whether block `b` (2×2×2 level-`k` texels, one level-`k+1` texel; outside the grid:
+    /// what clamp-to-edge reads there) has any non-zero colour or normal byte.
+    pub fn block_has_data(&self, b: [i64; 3]) -> bool {
+        let nz = |(c, n): (&[u8], Option<&[u8]>)| {
+            c.iter().any(|&v| v != 0) || n.is_some_and(|n| n.iter().any(|&v| v != 0))
+        };
+        if nz(self.texel(1, b)) {
+            return true;
+        }
+        (0..8).any(|i| {
+            let p = [0, 1, 2].map(|a| 2 * b[a] + ((i >> a) & 1) as i64);
+            nz(self.texel(0, p))
+        })
+    }
+}
+
+/// Blocks with data on the block grid (`n / 2` blocks) padded by one block on every side,
+/// as a summed-volume table so that any box can be queried in O(1).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct DataGrid {
+    /// Unpadded grid size in blocks.
+    pub dims: [usize; 3],
+    /// `(d + 3)` entries per axis (padded size + 1), x fastest.
+    sums: Vec<u32>,
+}
+
+impl DataGrid {
+    pub fn new(src: &TierSource<'_>) -> DataGrid {
+        let dims = src.n.map(|d| d / 2);
+        let s = dims.map(|d| d + 3);
+        let mut sums = vec![0u32; s[0] * s[1] * s[2]];
+        let at = |x: usize, y: usize, z: usize| x + s[0] * (y + s[1] * z);
+        for z in 1..s[2] {
+            for y in 1..s[1] {
+                for x in 1..s[0] {
+                    let b = [x as i64 - 2, y as i64 - 2, z as i64 - 2];
+                    let v = u32::from(src.block_has_data(b));
+                    sums[at(x, y, z)] =
+                        v + sums[at(x - 1, y, z)] + sums[at(x, y - 1, z)] + sums[at(x, y, z - 1)]
+                            - sums[at(x - 1, y - 1, z)]
+                            - sums[at(x - 1, y, z - 1)]
+                            - sums[at(x, y - 1, z - 1)]
+                            + sums[at(x - 1, y - 1, z - 1)];
+                }
+            }
+        }
+        DataGrid { dims, sums }
+    }
+
+    /// Data blocks in `[lo, hi)` (block coordinates, clipped to `-1 ..= dims`).
+    pub fn count(&self, lo: [i64; 3], hi: [i64; 3]) -> u32 {
+        let s = self.dims.map(|d| d + 3);
+        let c = |v: i64, a: usize| (v + 1).clamp(0, s[a] as i64 - 1) as usize;
+        let (l, h) = (
+            [0, 1, 2].map(|a| c(lo[a], a)),
+            [0, 1, 2].map(|a| c(hi[a], a)),
+        );
+        if (0..3).any(|a| h[a] <= l[a]) {
+            return 0;
+        }
+        let at = |x: usize, y: usize, z: usize| i64::from(self.sums[x + s[0] * (y + s[1] * z)]);
+        (at(h[0], h[1], h[2]) - at(l[0], h[1], h[2]) - at(h[0], l[1], h[2]) - at(h[0], h[1], l[2])
+            + at(l[0], l[1], h[2])
+            + at(l[0], h[1], l[2])
+            + at(h[0], l[1], l[2])
+            - at(l[0], l[1], l[2])) as u32
+    }
+}
+
+/// Sets every texel whose alpha byte is `≤ threshold` to zero (colour and normal), at every
+/// level: what `--threshold` drops. `threshold = 0` changes nothing that is not all zero
+/// already, except colour-only texels with zero alpha, which it keeps.
+pub fn apply_threshold(colour: &mut [u8], normals: Option<&mut [u8]>, threshold: u8) {
+    if threshold == 0 {
+        return;
+    }
+    let mut dropped = Vec::new();
+    for (i, t) in colour.chunks_exact_mut(4).enumerate() {
+        if t[3] <= threshold {
+            t.fill(0);
+            dropped.push(i);
+        }
+    }
+    if let Some(n) = normals {
+        for i in dropped {
+            n[4 * i..4 * i + 4].fill(0);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn data_blocks_and_box_counts_include_clamped_border_reads() {
+        // 4×2×2 texels level 0 (2×1×1 blocks), level 1 2×1×1; one texel at x = 3 (block 1).
+        let mut c0 = vec![0u8; 4 * 4 * 2 * 2];
+        c0[4 * 3 + 3] = 9;
+        let c1 = vec![0u8; 2 * 4];
+        let src = TierSource {
+            n: [4, 2, 2],
+            colour: [&c0, &c1],
+            normals: None,
+        };
+        assert!(!src.block_has_data([0, 0, 0]));
+        assert!(src.block_has_data([1, 0, 0]));
+        // Beyond the +x border, clamp-to-edge reads texel 3 again; so do the blocks below
+        // y = 0 and z = 0, not those above (they read the zero texels at y = 1, z = 1).
+        assert!(src.block_has_data([2, 0, 0]));
+        assert!(src.block_has_data([1, -1, -1]));
+        assert!(!src.block_has_data([1, 1, 0]));
+        assert!(!src.block_has_data([-1, 0, 0]));
+        let g = DataGrid::new(&src);
+        assert_eq!(g.count([-1, -1, -1], [3, 2, 2]), 2 * 2 * 2);
+        assert_eq!(g.count([0, 0, 0], [1, 1, 1]), 0);
+        assert_eq!(g.count([1, 0, 0], [2, 1, 1]), 1);
+        assert_eq!(g.count([5, 0, 0], [9, 1, 1]), 0);
+    }
 
     #[test]
     fn a_voxel_needs_the_blocks_its_filter_support_touches() {
@@ -108,21 +246,21 @@ mod tests {
         // support (6.5, 8.5) meets blocks 1 and 2.
         let mut l0 = vec![0u8; 16 * 4];
         l0[7 * 4 + 3] = 10;
-        let g = needed_blocks(&[l0], &[[16, 1, 1]], [16, 1, 1], 4, 1, 0);
+        let g = needed_blocks(&[&l0], &[[16, 1, 1]], [16, 1, 1], 4, 1, 0);
         assert_eq!(g.needed, vec![false, true, true, false]);
         // Voxel 5 (inside block 1): support (4.5, 6.5), block 1 only.
         let mut l0 = vec![0u8; 16 * 4];
         l0[5 * 4 + 3] = 10;
-        let g = needed_blocks(&[l0], &[[16, 1, 1]], [16, 1, 1], 4, 1, 0);
+        let g = needed_blocks(&[&l0], &[[16, 1, 1]], [16, 1, 1], 4, 1, 0);
         assert_eq!(g.needed, vec![false, true, false, false]);
     }
 
     #[test]
     fn the_threshold_drops_faint_texels_and_zero_keeps_colour_only_texels() {
         let l0 = vec![0, 0, 0, 3, 5, 0, 0, 0];
-        let g = needed_blocks(std::slice::from_ref(&l0), &[[2, 1, 1]], [2, 1, 1], 1, 1, 3);
+        let g = needed_blocks(&[&l0], &[[2, 1, 1]], [2, 1, 1], 1, 1, 3);
         assert_eq!(g.count(), 0);
-        let g = needed_blocks(&[l0], &[[2, 1, 1]], [2, 1, 1], 1, 1, 0);
+        let g = needed_blocks(&[&l0], &[[2, 1, 1]], [2, 1, 1], 1, 1, 0);
         assert_eq!(g.count(), 2);
     }
 }

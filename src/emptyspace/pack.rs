@@ -1,113 +1,371 @@
 //! Packing brick slots into one 3D atlas (formats/SPEC.md §8.6), in whole blocks.
 //!
-//! Every slot is a box of whole blocks (`A³` voxels: the brick rounded up to blocks plus
-//! its apron), so every slot origin is a multiple of `A` voxels and MIP level
-//! `L ≤ log2 A` of the atlas holds each brick at an integer texel offset.
+//! A *slot* is a box of blocks (a brick plus its one-block apron) with, per face, its
+//! *soft depth*: how many of its outer block layers, counted from that face, hold only
+//! zero texels. Two slots may overlap where both are zero: along an axis, slot `P` below
+//! slot `Q` may overlap it by `o ≤ min(soft(P, +axis), soft(Q, −axis))` layers, whatever
+//! their other axes do. Zero aprons are thus shared between neighbouring bricks, and a
+//! brick's own zero border can serve as its neighbour's apron.
 //!
-//! The packer is a deterministic layered shelf packer: slots sorted by height (y), then
-//! depth (z), then width (x), then index, all descending except the index; a *layer* is a
-//! slab along y as high as its first slot; inside it, *rows* along x (at most `width`
-//! blocks) are stacked along z (at most `depth` blocks); a row is as deep as its deepest
-//! slot. Every `width` from the widest slot to the total width and every `depth` likewise
-//! is tried, and the packing with the smallest atlas volume wins (ties: the smallest
-//! largest side, then the smallest `width`, then `depth`).
+//! Slots may be rotated by any of the 6 axis permutations (trilinear filtering and the 2:1
+//! MIP grid do not care which axis is which; the cells' uvw carry the permutation).
+//!
+//! The packer is an *extreme-point* strip packer (Crainic, Perboli & Tadei 2008), run for
+//! a few footprints `X × Z` (in blocks) and keeping the smallest atlas: slots are placed
+//! largest first; each goes to the candidate point, orientation and soft overlap that
+//! gives the lowest top (then the lowest y, z, x, orientation), with no conflict with the
+//! slots already placed; each placement adds the points at its three far faces (shifted
+//! back by its soft depth for overlaps) and their projections along the other axes. All
+//! integer, in a fixed order: deterministic (footprints run in parallel, the best is
+//! chosen by a total order).
 
-/// Where each slot went, in blocks, and the atlas size in blocks.
+use rayon::prelude::*;
+
+/// A slot to place: size in blocks and soft depth per face (`−x, +x, −y, +y, −z, +z`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Slot {
+    pub size: [usize; 3],
+    pub soft: [usize; 6],
+}
+
+/// Where a slot went: atlas origin (blocks) and orientation (atlas axis `a` holds the
+/// slot's axis `perm[a]`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Placed {
+    pub origin: [usize; 3],
+    pub perm: [usize; 3],
+}
+
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Packing {
-    pub origins: Vec<[usize; 3]>,
+    pub placed: Vec<Placed>,
+    /// Atlas size in blocks.
     pub dims: [usize; 3],
 }
 
-fn shelf(sizes: &[[usize; 3]], order: &[usize], width: usize, depth: usize) -> Option<Packing> {
-    let mut origins = vec![[0; 3]; sizes.len()];
-    let (mut layer_y, mut layer_h) = (0usize, 0usize);
-    let (mut row_z, mut row_d) = (0usize, 0usize);
-    let mut x = 0usize;
-    let mut dims = [0usize; 3];
-    let mut first = true;
-    for &i in order {
-        let s = sizes[i];
-        if s[0] > width || s[2] > depth {
-            return None;
-        }
-        if first {
-            layer_h = s[1];
-            first = false;
-        }
-        if x + s[0] > width {
-            // New row.
-            x = 0;
-            row_z += row_d;
-            row_d = 0;
-        }
-        if row_z + s[2] > depth {
-            // New layer.
-            layer_y += layer_h;
-            layer_h = s[1];
-            row_z = 0;
-            row_d = 0;
-            x = 0;
-        }
-        origins[i] = [x, layer_y, row_z];
-        x += s[0];
-        row_d = row_d.max(s[2]);
-        dims[0] = dims[0].max(x);
-        dims[1] = dims[1].max(layer_y + s[1]);
-        dims[2] = dims[2].max(row_z + s[2]);
-    }
-    Some(Packing { origins, dims })
+/// The 6 axis permutations, identity first.
+pub const PERMS: [[usize; 3]; 6] = [
+    [0, 1, 2],
+    [0, 2, 1],
+    [1, 0, 2],
+    [1, 2, 0],
+    [2, 0, 1],
+    [2, 1, 0],
+];
+
+/// A slot in atlas space.
+#[derive(Clone, Copy, Debug)]
+struct Boxed {
+    lo: [usize; 3],
+    hi: [usize; 3],
+    soft: [usize; 6],
 }
 
-/// Packs boxes of `sizes` blocks; no side of the atlas exceeds `max_side` blocks
-/// (`None` when that is impossible with this packer).
-pub fn pack(sizes: &[[usize; 3]], max_side: usize) -> Option<Packing> {
-    if sizes.is_empty() {
+fn oriented(s: &Slot, perm: [usize; 3]) -> ([usize; 3], [usize; 6]) {
+    let size = perm.map(|p| s.size[p]);
+    let mut soft = [0; 6];
+    for a in 0..3 {
+        soft[2 * a] = s.soft[2 * perm[a]];
+        soft[2 * a + 1] = s.soft[2 * perm[a] + 1];
+    }
+    (size, soft)
+}
+
+/// Whether two placed slots may coexist (disjoint, or overlapping only in zero layers).
+fn compatible(p: &Boxed, q: &Boxed) -> bool {
+    if (0..3).any(|a| p.hi[a] <= q.lo[a] || q.hi[a] <= p.lo[a]) {
+        return true;
+    }
+    (0..3).any(|a| {
+        let below = |p: &Boxed, q: &Boxed| {
+            q.lo[a] >= p.lo[a] && q.hi[a] >= p.hi[a] && {
+                let o = p.hi[a] - q.lo[a];
+                o <= p.soft[2 * a + 1] && o <= q.soft[2 * a]
+            }
+        };
+        below(p, q) || below(q, p)
+    })
+}
+
+/// A candidate point; `from`: the axis of the face that made it and that face's soft depth
+/// (the new slot may move back along it by up to that much).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Point {
+    pos: [usize; 3],
+    from: Option<(usize, usize)>,
+}
+
+/// Projects `p` along `−axis` onto the nearest placed face (or 0).
+fn project(p: [usize; 3], axis: usize, placed: &[Boxed]) -> [usize; 3] {
+    let mut best = 0;
+    for b in placed {
+        let inside = (0..3).all(|c| c == axis || (b.lo[c] <= p[c] && p[c] < b.hi[c]));
+        if inside && b.hi[axis] <= p[axis] {
+            best = best.max(b.hi[axis]);
+        }
+    }
+    let mut q = p;
+    q[axis] = best;
+    q
+}
+
+/// Placed slots listed by the 16-block buckets of the atlas they meet, so that a
+/// candidate is checked only against its neighbours.
+struct Buckets {
+    /// Buckets per axis; bucket `[x, y, z]` is `cells[x + n[0] * (y + n[1] * z)]`.
+    n: [usize; 3],
+    cells: Vec<Vec<usize>>,
+    stamp: Vec<usize>,
+    epoch: usize,
+}
+
+const BUCKET: usize = 16;
+
+impl Buckets {
+    fn new(limit: [usize; 3]) -> Buckets {
+        let n = limit.map(|l| l.div_ceil(BUCKET).max(1));
+        Buckets {
+            n,
+            cells: vec![Vec::new(); n[0] * n[1] * n[2]],
+            stamp: Vec::new(),
+            epoch: 0,
+        }
+    }
+
+    fn range(&self, lo: [usize; 3], hi: [usize; 3]) -> impl Iterator<Item = usize> + use<> {
+        let n = self.n;
+        let a = lo.map(|v| v / BUCKET);
+        let b = [0, 1, 2].map(|k| (hi[k].saturating_sub(1) / BUCKET).min(n[k] - 1));
+        (a[2]..=b[2]).flat_map(move |z| {
+            (a[1]..=b[1]).flat_map(move |y| (a[0]..=b[0]).map(move |x| x + n[0] * (y + n[1] * z)))
+        })
+    }
+
+    fn insert(&mut self, i: usize, b: &Boxed) {
+        for k in self.range(b.lo, b.hi) {
+            self.cells[k].push(i);
+        }
+        self.stamp.push(0);
+    }
+
+    /// Whether `f` holds for every placed slot sharing a bucket with `[lo, hi)`.
+    fn all_near(
+        &mut self,
+        lo: [usize; 3],
+        hi: [usize; 3],
+        mut f: impl FnMut(usize) -> bool,
+    ) -> bool {
+        self.epoch += 1;
+        for k in self.range(lo, hi) {
+            for &i in &self.cells[k] {
+                if self.stamp[i] != self.epoch {
+                    self.stamp[i] = self.epoch;
+                    if !f(i) {
+                        return false;
+                    }
+                }
+            }
+        }
+        true
+    }
+}
+
+/// One greedy run with footprint `x_max × z_max` and height at most `y_max`.
+fn strip(
+    slots: &[Slot],
+    order: &[usize],
+    x_max: usize,
+    z_max: usize,
+    y_max: usize,
+) -> Option<Packing> {
+    let mut placed: Vec<Boxed> = Vec::with_capacity(slots.len());
+    let mut result = vec![
+        Placed {
+            origin: [0; 3],
+            perm: PERMS[0]
+        };
+        slots.len()
+    ];
+    let mut points = vec![Point {
+        pos: [0; 3],
+        from: None,
+    }];
+    let limit = [x_max, y_max, z_max];
+    let mut buckets = Buckets::new(limit);
+    for &i in order {
+        type Key = (usize, usize, usize, usize, usize);
+        let mut best: Option<(Key, Boxed, [usize; 3])> = None;
+        // Points are sorted by y: once a slot standing on one (lowered by at most its soft
+        // depth) cannot top the best found so far, no later point can either.
+        let min_side = slots[i].size.iter().copied().min().unwrap_or(0);
+        let max_soft = slots[i].soft.iter().copied().max().unwrap_or(0);
+        for pt in &points {
+            if best
+                .as_ref()
+                .is_some_and(|b| b.0 .0 < (pt.pos[1] + min_side).saturating_sub(max_soft))
+            {
+                break;
+            }
+            for (pi, perm) in PERMS.iter().enumerate() {
+                let (size, soft) = oriented(&slots[i], *perm);
+                let shifts = match pt.from {
+                    Some((a, s)) if s.min(soft[2 * a]) > 0 => {
+                        let o = s.min(soft[2 * a]).min(pt.pos[a]);
+                        let mut q = pt.pos;
+                        q[a] -= o;
+                        [Some(pt.pos), Some(q)]
+                    }
+                    _ => [Some(pt.pos), None],
+                };
+                for lo in shifts.into_iter().flatten() {
+                    let hi = [0, 1, 2].map(|a| lo[a] + size[a]);
+                    if (0..3).any(|a| hi[a] > limit[a]) {
+                        continue;
+                    }
+                    let key = (hi[1], lo[1], lo[2], lo[0], pi);
+                    if best.as_ref().is_some_and(|b| b.0 <= key) {
+                        continue;
+                    }
+                    let cand = Boxed { lo, hi, soft };
+                    if buckets.all_near(lo, hi, |j| compatible(&placed[j], &cand)) {
+                        best = Some((key, cand, *perm));
+                    }
+                }
+            }
+        }
+        let (_, b, perm) = best?;
+        result[i] = Placed { origin: b.lo, perm };
+        buckets.insert(placed.len(), &b);
+        placed.push(b);
+        // Points strictly inside a placed slot can never take a slot: drop the old points
+        // inside the new slot, and the new points inside any slot (below).
+        let inside =
+            |b: &Boxed, p: &Point| (0..3).all(|a| b.lo[a] < p.pos[a] && p.pos[a] < b.hi[a]);
+        points.retain(|p| !inside(&b, p));
+        let old = points.len();
+        for a in 0..3 {
+            let mut p = b.lo;
+            p[a] = b.hi[a];
+            points.push(Point {
+                pos: p,
+                from: Some((a, b.soft[2 * a + 1])),
+            });
+            for c in (0..3).filter(|&c| c != a) {
+                let q = project(p, c, &placed);
+                if q != p {
+                    points.push(Point {
+                        pos: q,
+                        from: Some((a, 0)),
+                    });
+                }
+            }
+        }
+        let mut fresh = points.split_off(old);
+        fresh.retain(|p| {
+            let q = p.pos.map(|v| v + 1);
+            buckets.all_near(p.pos, q, |j| !inside(&placed[j], p))
+        });
+        points.append(&mut fresh);
+        points.sort_by_key(|p| (p.pos[1], p.pos[2], p.pos[0], p.from));
+        points.dedup();
+    }
+    let dims = [0, 1, 2].map(|a| placed.iter().map(|b| b.hi[a]).max().unwrap_or(0));
+    Some(Packing {
+        placed: result,
+        dims,
+    })
+}
+
+/// Packs `slots`; no side of the atlas exceeds `max_side` blocks (`None` when this packer
+/// cannot do it).
+pub fn pack(slots: &[Slot], max_side: usize) -> Option<Packing> {
+    if slots.is_empty() {
         return Some(Packing {
-            origins: Vec::new(),
+            placed: Vec::new(),
             dims: [0; 3],
         });
     }
-    let mut order: Vec<usize> = (0..sizes.len()).collect();
-    order.sort_by(|&a, &b| {
-        let (sa, sb) = (sizes[a], sizes[b]);
-        (sb[1], sb[2], sb[0], a).cmp(&(sa[1], sa[2], sa[0], b))
+    let vol = |s: &Slot| s.size.iter().product::<usize>();
+    let mut order: Vec<usize> = (0..slots.len()).collect();
+    order.sort_by_key(|&i| {
+        let s = &slots[i];
+        (
+            std::cmp::Reverse(vol(s)),
+            std::cmp::Reverse(s.size.iter().copied().max().unwrap_or(0)),
+            i,
+        )
     });
-    let max_w = sizes.iter().map(|s| s[0]).max().unwrap_or(1);
-    let max_d = sizes.iter().map(|s| s[2]).max().unwrap_or(1);
-    let sum_w: usize = sizes.iter().map(|s| s[0]).sum();
-    let sum_d: usize = sizes.iter().map(|s| s[2]).sum();
-    let mut best: Option<(usize, usize, usize, usize, Packing)> = None;
-    for width in max_w..=sum_w.min(max_side) {
-        for depth in max_d..=sum_d.min(max_side) {
-            let Some(p) = shelf(sizes, &order, width, depth) else {
-                continue;
-            };
-            if p.dims.iter().any(|&d| d > max_side) {
-                continue;
-            }
-            let vol = p.dims.iter().product::<usize>();
-            let side = p.dims.iter().copied().max().unwrap_or(0);
-            let key = (vol, side, width, depth);
-            if best.as_ref().is_none_or(|b| key < (b.0, b.1, b.2, b.3)) {
-                best = Some((vol, side, width, depth, p));
-            }
-        }
+    // Every slot must fit the footprint in some orientation: both footprint sides at least
+    // the largest "second largest side" and one at least the largest smallest side.
+    let mut sorted: Vec<[usize; 3]> = slots
+        .iter()
+        .map(|s| {
+            let mut v = s.size;
+            v.sort_unstable();
+            v
+        })
+        .collect();
+    sorted.sort_unstable();
+    let need = sorted.iter().map(|v| v[1]).max().unwrap_or(1).max(1);
+    if need > max_side || sorted.iter().any(|v| v[0] > max_side) {
+        return None;
     }
-    best.map(|b| b.4)
+    let total: usize = slots.iter().map(vol).sum();
+    let base = (total as f64 / 0.8).cbrt();
+    let mut sides: Vec<usize> = [0.7, 0.85, 1.0, 1.2, 1.45, 1.8]
+        .iter()
+        .map(|f| ((base * f).round() as usize).clamp(need, max_side))
+        .collect();
+    sides.sort_unstable();
+    sides.dedup();
+    // The footprints are independent: run them in parallel, pick the best in a fixed
+    // order (the result does not depend on the thread count).
+    let footprints: Vec<(usize, usize)> = sides
+        .iter()
+        .flat_map(|&x| sides.iter().filter(move |&&z| z <= x).map(move |&z| (x, z)))
+        .collect();
+    footprints
+        .par_iter()
+        .filter_map(|&(x, z)| {
+            let p = strip(slots, &order, x, z, max_side)?;
+            let v = p.dims.iter().product::<usize>();
+            let side = p.dims.iter().copied().max().unwrap_or(0);
+            Some(((v, side, x, z), p))
+        })
+        .min_by(|a, b| a.0.cmp(&b.0))
+        .map(|b| b.1)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn overlaps(a: ([usize; 3], [usize; 3]), b: ([usize; 3], [usize; 3])) -> bool {
-        (0..3).all(|i| a.0[i] < b.0[i] + b.1[i] && b.0[i] < a.0[i] + a.1[i])
+    fn atlas_box(s: &Slot, p: &Placed) -> Boxed {
+        let (size, soft) = oriented(s, p.perm);
+        Boxed {
+            lo: p.origin,
+            hi: [0, 1, 2].map(|a| p.origin[a] + size[a]),
+            soft,
+        }
+    }
+
+    fn check(slots: &[Slot], p: &Packing) {
+        for (i, s) in slots.iter().enumerate() {
+            let b = atlas_box(s, &p.placed[i]);
+            assert!((0..3).all(|a| b.hi[a] <= p.dims[a]), "{i} outside: {p:?}");
+            for a in 0..3 {
+                assert_eq!(b.hi[a] - b.lo[a], s.size[p.placed[i].perm[a]]);
+            }
+            for (j, sj) in slots.iter().enumerate().take(i) {
+                let c = atlas_box(sj, &p.placed[j]);
+                assert!(compatible(&b, &c), "{i} and {j} conflict: {p:?}");
+            }
+        }
     }
 
     #[test]
-    fn slots_never_overlap_and_stay_inside() {
-        let sizes = vec![
+    fn hard_slots_never_overlap_and_stay_inside() {
+        let sizes = [
             [3, 2, 1],
             [1, 1, 1],
             [2, 3, 2],
@@ -115,27 +373,49 @@ mod tests {
             [1, 2, 3],
             [2, 2, 2],
         ];
-        let p = pack(&sizes, 64).unwrap();
-        for (i, size) in sizes.iter().enumerate() {
-            for (k, dim) in p.dims.iter().enumerate() {
-                assert!(p.origins[i][k] + size[k] <= *dim);
-            }
-            for (j, sj) in sizes.iter().enumerate().take(i) {
-                assert!(
-                    !overlaps((p.origins[i], *size), (p.origins[j], *sj)),
-                    "{i} and {j} overlap: {p:?}"
-                );
-            }
-        }
+        let slots: Vec<Slot> = sizes
+            .iter()
+            .map(|&size| Slot { size, soft: [0; 6] })
+            .collect();
+        let p = pack(&slots, 64).unwrap();
+        check(&slots, &p);
         let total: usize = sizes.iter().map(|s| s.iter().product::<usize>()).sum();
         assert!(p.dims.iter().product::<usize>() >= total);
     }
 
     #[test]
     fn equal_cubes_pack_densely_and_limits_are_respected() {
-        let p = pack(&[[2, 2, 2]; 8], 64).unwrap();
+        let s = Slot {
+            size: [2, 2, 2],
+            soft: [0; 6],
+        };
+        let p = pack(&[s; 8], 64).unwrap();
         assert_eq!(p.dims.iter().product::<usize>(), 64);
-        assert!(pack(&[[5, 1, 1]], 4).is_none());
+        let long = Slot {
+            size: [5, 5, 1],
+            soft: [0; 6],
+        };
+        assert!(pack(&[long], 4).is_none());
         assert_eq!(pack(&[], 4).unwrap().dims, [0; 3]);
+    }
+
+    #[test]
+    fn soft_layers_are_shared_and_slots_rotate() {
+        // Two 4×3×3 slots whose ±x faces have two zero layers: side by side they share them.
+        let s = Slot {
+            size: [4, 3, 3],
+            soft: [2, 2, 0, 0, 0, 0],
+        };
+        let p = pack(&[s, s], 64).unwrap();
+        check(&[s, s], &p);
+        assert_eq!(p.dims.iter().product::<usize>(), 6 * 3 * 3, "{p:?}");
+        // A long thin slot fits a narrow atlas only lying down.
+        let thin = Slot {
+            size: [1, 1, 9],
+            soft: [0; 6],
+        };
+        let p = pack(&[thin], 9).unwrap();
+        check(&[thin], &p);
+        assert_eq!(p.dims.iter().product::<usize>(), 9);
     }
 }

@@ -26,6 +26,11 @@
 //!   the result is composited with "over" into premultiplied linear RGBA f32.
 //! - Rows are processed in parallel; every pixel sees the same sequence of fragments,
 //!   so the result is deterministic.
+//! - **LOD bands** (formats/SPEC.md §8.6, pruned volumes): `v₀` is the smallest
+//!   `voxel_size(band cells) / 2^first_level` over the base texture and its bands, slices
+//!   span every band's cells, `lod` is clamped to the asset's last level, and each slice
+//!   draws only the band with the largest `first_level ≤ lod`, sampling its texture at
+//!   `lod − first_level`; opacity correction uses the slice's `lod`.
 
 // `!(a < b)` comparisons are deliberate: they also catch NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -129,6 +134,16 @@ struct ScreenPoly {
     gy: Vec3,
     lod: f32,
     ratio: f32,
+    /// Index of the band (0 = the base texture) whose texture this polygon samples.
+    band: usize,
+}
+
+/// The base texture or one LOD band: what a slice may draw.
+struct Part<'a> {
+    vol: &'a DecodedVolume,
+    dims0: [u32; 3],
+    cells: &'a [Prism],
+    first_level: u32,
 }
 
 /// Slice depths and spacings, front to back.
@@ -220,18 +235,39 @@ pub fn render_decoded_in_depth_range(
     if vol.level_count() == 0 {
         return Err(EvalError::InvalidAsset("no MIP levels".into()));
     }
-    let Some(v0) = voxel_size(cells, dims0) else {
+    let mut parts = vec![Part {
+        vol,
+        dims0,
+        cells,
+        first_level: 0,
+    }];
+    parts.extend(vol.bands.iter().map(|b| Part {
+        vol: &b.volume,
+        dims0: b.dims0,
+        cells: &b.cells,
+        first_level: b.first_level,
+    }));
+    let v0 = parts
+        .iter()
+        .filter_map(|p| voxel_size(p.cells, p.dims0).map(|s| s / 2f32.powi(p.first_level as i32)))
+        .reduce(f32::min);
+    let Some(v0) = v0 else {
         stats.seconds = start.elapsed().as_secs_f64();
         return Ok(SliceRender { image, stats });
     };
     stats.voxel_size = v0;
     let view = camera.view();
-    let cam_cells: Vec<[[f32; 3]; 6]> = cells
+    let cam_cells: Vec<Vec<[[f32; 3]; 6]>> = parts
         .iter()
-        .map(|c| c.pos.map(|p| to_view(&view, Vec3::from(p)).to_array()))
+        .map(|part| {
+            part.cells
+                .iter()
+                .map(|c| c.pos.map(|p| to_view(&view, Vec3::from(p)).to_array()))
+                .collect()
+        })
         .collect();
     let (mut z_min, mut z_max) = (f32::INFINITY, f32::NEG_INFINITY);
-    for c in &cam_cells {
+    for c in cam_cells.iter().flatten() {
         for p in c {
             z_min = z_min.min(-p[2]);
             z_max = z_max.max(-p[2]);
@@ -249,7 +285,9 @@ pub fn render_decoded_in_depth_range(
     stats.slices = slices.len();
     stats.min_spacing = slices.iter().map(|s| s.1).fold(f32::INFINITY, f32::min);
     stats.max_spacing = slices.iter().map(|s| s.1).fold(0.0, f32::max);
-    let max_lod = (vol.level_count() - 1) as f32;
+    let last = parts.last().expect("the base part");
+    let max_lod = (last.first_level as usize + last.vol.level_count() - 1) as f32;
+    let vols: Vec<&DecodedVolume> = parts.iter().map(|p| p.vol).collect();
     let w = camera.width as usize;
     const BATCH: usize = 1 << 16;
     let mut polys: Vec<ScreenPoly> = Vec::new();
@@ -258,7 +296,7 @@ pub fn render_decoded_in_depth_range(
             .data
             .par_chunks_mut(w)
             .enumerate()
-            .map(|(y, row)| raster_row(row, y, polys, vol, params.mip_filter))
+            .map(|(y, row)| raster_row(row, y, polys, &vols, params.mip_filter))
             .sum();
         polys.clear();
         frags
@@ -271,12 +309,20 @@ pub fn render_decoded_in_depth_range(
         };
         let ratio = d / d0;
         let z = -depth;
-        for (ci, c) in cam_cells.iter().enumerate() {
-            let poly = intersect_prism_plane(c, &cells[ci].uvw, z);
+        // The band this slice draws: the last one starting at or below `lod`.
+        let band = parts
+            .iter()
+            .rposition(|p| p.first_level as f32 <= lod)
+            .unwrap_or(0);
+        let part_lod = lod - parts[band].first_level as f32;
+        for (ci, c) in cam_cells[band].iter().enumerate() {
+            let poly = intersect_prism_plane(c, &parts[band].cells[ci].uvw, z);
             if poly.is_empty() {
                 continue;
             }
-            if let Some(sp) = to_screen(camera, &poly.pos, &poly.uvw, poly.count, lod, ratio) {
+            let sp = to_screen(camera, &poly.pos, &poly.uvw, poly.count, part_lod, ratio);
+            if let Some(mut sp) = sp {
+                sp.band = band;
                 polys.push(sp);
                 stats.polygons += 1;
             }
@@ -339,6 +385,7 @@ fn to_screen(
         gy,
         lod,
         ratio,
+        band: 0,
     })
 }
 
@@ -355,7 +402,7 @@ fn raster_row(
     row: &mut [Vec4],
     y: usize,
     polys: &[ScreenPoly],
-    vol: &DecodedVolume,
+    vols: &[&DecodedVolume],
     filter: MipFilter,
 ) -> u64 {
     let yc = y as f32 + 0.5;
@@ -390,7 +437,7 @@ fn raster_row(
         for x in x0..x1 {
             let xc = x as f32 + 0.5;
             let uvw = p.base + p.gx * (xc - p.origin[0]) + p.gy * dy;
-            let s = vol.sample(p.lod, uvw, filter);
+            let s = vols[p.band].sample(p.lod, uvw, filter);
             let s = correct_premultiplied(s, p.ratio);
             let px = &mut row[x as usize];
             *px = over(s, *px);

@@ -458,6 +458,7 @@ mod tests {
             },
             levels: vec![vec![0; 4]],
             normals: None,
+            bands: Vec::new(),
             cells: vec![],
         };
         assert_eq!(reference_lighting(&asset).unwrap(), (Lighting::Unlit, None));

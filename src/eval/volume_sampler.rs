@@ -40,6 +40,19 @@ pub struct DecodedVolume {
     pub levels: Vec<Level>,
     /// Per axis (x, y, z): repeat addressing (`true`) or clamp-to-edge.
     pub repeat: [bool; 3],
+    /// The asset's extra LOD bands (formats/SPEC.md §8.6), decoded; empty for an
+    /// ordinary volume. The slicer draws them instead of the base levels on the slices
+    /// whose LOD falls in their band.
+    pub bands: Vec<DecodedBand>,
+}
+
+/// One decoded LOD band: its texture (`volume.bands` empty), level-0 size and cells.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DecodedBand {
+    pub first_level: u32,
+    pub dims0: [u32; 3],
+    pub volume: DecodedVolume,
+    pub cells: Vec<billow_format::Prism>,
 }
 
 /// The addressing a reader must use for `asset` (SPEC §8.5): repeat in x and z for a
@@ -56,9 +69,32 @@ impl DecodedVolume {
             .validate()
             .map_err(|e| EvalError::InvalidAsset(e.to_string()))?;
         let srgb = asset.header.colour_space == ColourSpace::SrgbPremultiplied;
+        let repeat = repeat_axes(asset);
+        let dims0 = asset.level_dims(0);
+        let bands = asset
+            .bands
+            .iter()
+            .map(|b| DecodedBand {
+                first_level: b.first_level,
+                dims0: b.dims,
+                volume: Self::decode_levels(&b.levels, b.dims, srgb, repeat),
+                cells: b.cells.clone(),
+            })
+            .collect();
+        Ok(DecodedVolume {
+            bands,
+            ..Self::decode_levels(&asset.levels, dims0, srgb, repeat)
+        })
+    }
+
+    fn decode_levels(
+        levels: &[Vec<u8>],
+        dims0: [u32; 3],
+        srgb: bool,
+        repeat: [bool; 3],
+    ) -> DecodedVolume {
         let lut = srgb_to_linear_lut();
-        let levels = asset
-            .levels
+        let levels = levels
             .iter()
             .enumerate()
             .map(|(i, bytes)| {
@@ -76,15 +112,16 @@ impl DecodedVolume {
                     })
                     .collect();
                 Level {
-                    dims: asset.level_dims(i as u32),
+                    dims: billow_format::mip_dims(dims0, i as u32),
                     texels,
                 }
             })
             .collect();
-        Ok(DecodedVolume {
+        DecodedVolume {
             levels,
-            repeat: repeat_axes(asset),
-        })
+            repeat,
+            bands: Vec::new(),
+        }
     }
 
     pub fn level_count(&self) -> usize {
@@ -169,6 +206,7 @@ mod tests {
         DecodedVolume {
             levels: vec![Level { dims, texels }],
             repeat,
+            bands: Vec::new(),
         }
     }
 
@@ -235,6 +273,7 @@ mod tests {
             },
             levels: vec![vec![0, 0, 0, 0]],
             normals: None,
+            bands: Vec::new(),
             cells: vec![],
         };
         assert_eq!(repeat_axes(&asset), [false; 3]);

@@ -33,6 +33,9 @@ pub fn bake_params(
             opts.margin.to_string()
         },
     );
+    if opts.align > 1 {
+        p.insert("align".into(), opts.align.to_string());
+    }
     if let Bake::Ao { rays, .. } = opts.bake {
         p.insert("bake".into(), "ao".into());
         p.insert("ao_rays".into(), rays.to_string());
@@ -93,6 +96,7 @@ impl Volume {
             header,
             levels: self.levels,
             normals: self.normals,
+            bands: Vec::new(),
             cells: box_prisms(b.min, b.max).to_vec(),
         }
     }

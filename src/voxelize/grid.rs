@@ -202,6 +202,40 @@ pub enum GridError {
     BadMargin(f32),
     #[error(transparent)]
     Resolution(#[from] ResolutionError),
+    #[error("alignment must be in 1..={MAX_AXIS} voxels, got {0}")]
+    BadAlign(u32),
+    #[error("aligning {dims:?} to multiples of {align} exceeds {MAX_AXIS} voxels per axis")]
+    AlignTooLarge { dims: [u32; 3], align: u32 },
+}
+
+/// Rounds every side of `g` up to a multiple of `align` voxels, keeping the voxel size and
+/// the box centre (the added voxels are split evenly between both ends, the odd one at the
+/// max end). `align = 1` returns `g` unchanged. With `align = 2^k` every MIP level `< k`
+/// halves exactly, which `billow emptyspace` needs for MIP-exact bricks.
+pub fn align_grid(g: &GridSpec, align: u32) -> Result<GridSpec, GridError> {
+    if align == 0 || align > MAX_AXIS {
+        return Err(GridError::BadAlign(align));
+    }
+    if align == 1 {
+        return Ok(*g);
+    }
+    let dims = g.dims.map(|d| d.div_ceil(align) * align);
+    if dims.iter().any(|&d| d > MAX_AXIS) {
+        return Err(GridError::AlignTooLarge {
+            dims: g.dims,
+            align,
+        });
+    }
+    let mut min = g.min;
+    for a in 0..3 {
+        let extra = dims[a] - g.dims[a];
+        min[a] = (f64::from(g.min[a]) - f64::from(extra / 2) * f64::from(g.voxel[a])) as f32;
+    }
+    Ok(GridSpec {
+        dims,
+        min,
+        voxel: g.voxel,
+    })
 }
 
 /// Fits a grid of resolution `res` around `bounds` with `margin` voxels of empty space on
@@ -259,4 +293,38 @@ pub fn fit_grid(bounds: &Aabb, res: Resolution, margin: f32) -> Result<GridSpec,
         min: Vec3::from_array(min),
         voxel: Vec3::from_array(voxel.map(|v| v as f32)),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn aligning_grows_every_side_to_a_multiple_and_keeps_voxels_and_centre() {
+        let b = Aabb {
+            min: Vec3::ZERO,
+            max: Vec3::new(1.0, 0.8, 0.3),
+        };
+        let g = fit_grid(&b, Resolution::Longest(64), 0.5).unwrap();
+        let a = align_grid(&g, 8).unwrap();
+        assert!(a.dims.iter().all(|d| d % 8 == 0), "{:?}", a.dims);
+        assert!((0..3).all(|i| a.dims[i] >= g.dims[i] && a.dims[i] < g.dims[i] + 8));
+        assert_eq!(a.voxel, g.voxel);
+        // The old grid lies inside the new one, on whole voxels.
+        for i in 0..3 {
+            let shift = (g.min[i] - a.min[i]) / g.voxel[i];
+            assert!((shift - shift.round()).abs() < 1e-3 && shift >= 0.0);
+            assert!(a.max()[i] >= g.max()[i] - 1e-5);
+        }
+        assert_eq!(align_grid(&g, 1).unwrap(), g);
+        assert!(matches!(align_grid(&g, 0), Err(GridError::BadAlign(0))));
+        let big = GridSpec {
+            dims: [MAX_AXIS - 1, 4, 4],
+            ..g
+        };
+        assert!(matches!(
+            align_grid(&big, 3),
+            Err(GridError::AlignTooLarge { .. })
+        ));
+    }
 }

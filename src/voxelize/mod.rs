@@ -124,6 +124,9 @@ pub struct VoxelizeOptions {
     pub margin: f32,
     /// Use exactly this box for the grid instead of the scene's bounds plus margin.
     pub bounds: Option<Aabb>,
+    /// Round every side of the grid up to a multiple of this many voxels (1 = off), growing
+    /// the box symmetrically with empty voxels of the same size (see [`grid::align_grid`]).
+    pub align: u32,
     /// Number of MIP levels; `None` = the full chain down to 1×1×1.
     pub mip_levels: Option<u32>,
     /// Refuse grids whose estimated peak memory exceeds this (bytes). Default 16 GiB.
@@ -141,6 +144,7 @@ impl Default for VoxelizeOptions {
             normals: false,
             margin: 0.5,
             bounds: None,
+            align: 1,
             mip_levels: None,
             memory_limit: 16 << 30,
             bake: Bake::None,
@@ -354,6 +358,11 @@ fn estimate_bytes(scene: &Scene, opts: &VoxelizeOptions, grid: &GridSpec, mips: 
 /// The grid `voxelize` would use for this scene and these options.
 pub fn grid_for(scene: &Scene, opts: &VoxelizeOptions) -> Result<GridSpec, VoxelizeError> {
     opts.resolution.validate()?;
+    let g = unaligned_grid(scene, opts)?;
+    Ok(grid::align_grid(&g, opts.align)?)
+}
+
+fn unaligned_grid(scene: &Scene, opts: &VoxelizeOptions) -> Result<GridSpec, VoxelizeError> {
     match opts.bounds {
         Some(b) => Ok(fit_grid(&b, opts.resolution, 0.0)?),
         None => {

@@ -151,6 +151,7 @@ pub fn ball_asset(shell: bool) -> VolumeAsset {
         },
         levels,
         normals: None,
+        bands: Vec::new(),
         cells,
     }
 }

@@ -1,0 +1,177 @@
+//! One *tier* of a pruned volume (formats/SPEC.md §8.6): two consecutive MIP levels
+//! `k, k + 1` of the source, cut into kd-tree boxes of 2×2×2-texel blocks, packed with
+//! their aprons into a two-level atlas, each box becoming two prism cells.
+//!
+//! A renderer draws tier `k` on the slices whose LOD `λ` lies in `[k, k + 1)`, sampling
+//! its atlas at `λ − k`: levels `0` and `1` of the atlas are exact copies of the source's
+//! levels `k` and `k + 1`, so every trilinear (and level-linear) sample inside a box reads
+//! exactly the texels the source reads — one texel beyond the box at either level, which is
+//! the one-block apron.
+
+use billow_format::Prism;
+use glam::Vec3;
+
+use super::bricks::{fill_level, Brick};
+use super::kdtree::{subdivide, BlockBox, KdParams, TierGrid};
+use super::occupancy::{needed_blocks, DataGrid, TierSource};
+use super::pack::{pack, Slot};
+use crate::voxelize::box_prisms;
+
+/// Parameters of one tier (the kd-tree's, in this tier's texels).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TierParams {
+    pub kd: KdParams,
+    /// Largest atlas side, in blocks.
+    pub max_side: usize,
+}
+
+/// A built tier.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Tier {
+    /// Atlas level-0 size, texels (level 1 is half of it).
+    pub dims: [u32; 3],
+    pub colour: Vec<Vec<u8>>,
+    pub normals: Option<Vec<Vec<u8>>>,
+    /// The kd-tree's boxes, in blocks of this tier.
+    pub boxes: Vec<BlockBox>,
+    /// Blocks in this tier's level (`n / 2` per axis).
+    pub blocks: u64,
+    pub cells: Vec<Prism>,
+}
+
+impl Tier {
+    pub fn bytes(&self) -> u64 {
+        let n = |l: &[Vec<u8>]| l.iter().map(|v| v.len() as u64).sum::<u64>();
+        n(&self.colour) + self.normals.as_deref().map_or(0, n)
+    }
+}
+
+/// Consecutive all-zero layers of the slot `[lo, hi)` (blocks) seen from each face.
+fn soft_depths(data: &DataGrid, lo: [i64; 3], hi: [i64; 3]) -> [usize; 6] {
+    let mut out = [0; 6];
+    for a in 0..3 {
+        let n = (hi[a] - lo[a]) as usize;
+        for (side, o) in out[2 * a..2 * a + 2].iter_mut().enumerate() {
+            while *o < n {
+                let (mut l, mut h) = (lo, hi);
+                if side == 0 {
+                    l[a] = lo[a] + *o as i64;
+                    h[a] = l[a] + 1;
+                } else {
+                    h[a] = hi[a] - *o as i64;
+                    l[a] = h[a] - 1;
+                }
+                if data.count(l, h) > 0 {
+                    break;
+                }
+                *o += 1;
+            }
+        }
+    }
+    out
+}
+
+/// Two prisms of the world box `[pmin, pmax]` with the voxelizer's topology
+/// ([`box_prisms`]), corner positions taken exactly from `pmin`/`pmax` (so neighbouring
+/// boxes share faces bit for bit) and `uvw(t)` at corner `t ∈ {0, 1}³`.
+pub fn box_cells(pmin: Vec3, pmax: Vec3, uvw: impl Fn([f32; 3]) -> [f32; 3]) -> [Prism; 2] {
+    box_prisms(Vec3::ZERO, Vec3::ONE).map(|p| {
+        let t = p.uvw;
+        Prism {
+            pos: t.map(|t| [0, 1, 2].map(|a| if t[a] > 0.5 { pmax[a] } else { pmin[a] })),
+            uvw: t.map(&uvw),
+        }
+    })
+}
+
+/// Builds the tier for `src` whose world box is `world` (`None` when the atlas would not
+/// fit `max_side`).
+pub fn build_tier(src: &TierSource<'_>, world: (Vec3, Vec3), p: &TierParams) -> Option<Tier> {
+    let n = src.n;
+    let n1 = n.map(|d| d / 2);
+    let level_dims = [n, n1].map(|d| d.map(|v| v as u32));
+    let needed = needed_blocks(&src.colour, &level_dims, level_dims[0], 2, 2, 0);
+    let data = DataGrid::new(src);
+    let boxes = subdivide(
+        &TierGrid {
+            needed: &needed,
+            data: &data,
+        },
+        &p.kd,
+    );
+    let ring = i64::from(p.kd.apron);
+    let slots: Vec<([i64; 3], Slot)> = boxes
+        .iter()
+        .map(|b| {
+            let lo = b.lo.map(|v| v as i64 - ring);
+            let hi = b.hi.map(|v| v as i64 + ring);
+            let size = [0, 1, 2].map(|a| (hi[a] - lo[a]) as usize);
+            let soft = if p.kd.apron {
+                soft_depths(&data, lo, hi)
+            } else {
+                [0; 6]
+            };
+            (lo, Slot { size, soft })
+        })
+        .collect();
+    let plain: Vec<Slot> = slots.iter().map(|s| s.1).collect();
+    let packing = pack(&plain, p.max_side)?;
+    // An empty tier still needs a valid two-level texture.
+    let blocks = packing.dims.map(|d| d.max(1));
+    let dims = blocks.map(|d| 2 * d);
+    let bricks: Vec<Brick> = slots
+        .iter()
+        .zip(&packing.placed)
+        .map(|((lo, s), pl)| Brick {
+            src: *lo,
+            size: s.size,
+            dst: pl.origin,
+            perm: pl.perm,
+        })
+        .collect();
+    let fill = |levels: [&[u8]; 2]| -> Vec<Vec<u8>> {
+        [(dims, n, 2), (blocks, n1, 1)]
+            .iter()
+            .enumerate()
+            .map(|(l, &(nd, ns, t))| {
+                let mut out = vec![0u8; 4 * nd.iter().product::<usize>()];
+                fill_level(levels[l], ns, &mut out, nd, t, &bricks);
+                out
+            })
+            .collect()
+    };
+    let colour = fill(src.colour);
+    let normals = src.normals.map(fill);
+    // Cells: the box in the world (from the source's box cell), uvw into the atlas.
+    let (wlo, whi) = world;
+    let ext = whi - wlo;
+    let mut cells = Vec::with_capacity(2 * boxes.len());
+    for (b, pl) in boxes.iter().zip(&packing.placed) {
+        let w = |a: usize, v: usize| wlo[a] + ext[a] * (2.0 * v as f64 / n[a] as f64) as f32;
+        let pmin = Vec3::from_array([0, 1, 2].map(|a| w(a, b.lo[a])));
+        let pmax = Vec3::from_array([0, 1, 2].map(|a| w(a, b.hi[a])));
+        let s = b.size();
+        let uvw = |t: [f32; 3]| {
+            [0, 1, 2].map(|a| {
+                let src_axis = pl.perm[a];
+                let start = 2 * (pl.origin[a] + ring as usize);
+                let v = start
+                    + if t[src_axis] > 0.5 {
+                        2 * s[src_axis]
+                    } else {
+                        0
+                    };
+                (v as f64 / dims[a] as f64) as f32
+            })
+        };
+        cells.extend(box_cells(pmin, pmax, uvw));
+    }
+    Some(Tier {
+        dims: dims.map(|d| d as u32),
+        colour,
+        normals,
+        boxes,
+        blocks: n1.iter().map(|&v| v as u64).product(),
+        cells,
+    })
+}
