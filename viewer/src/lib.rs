@@ -13,6 +13,7 @@
 //!
 //! Images are premultiplied linear RGBA f32, like `billow::eval::ImageF32`.
 
+pub mod animate;
 pub mod camera;
 pub mod cloud_pass;
 pub mod content;

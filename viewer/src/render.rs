@@ -18,6 +18,7 @@ use crate::mesh_pass::{GpuMesh, MeshData, MeshFrame, MeshPass};
 use crate::shadow::{self, ShadowMap, SHADOW_MAP_SIZE};
 use crate::target::{RgbaImage, Target};
 use crate::volume_pass::{GpuVolume, VolumePass};
+
 use crate::volume_plan::{self, VolumePlan};
 use crate::{Gpu, SliceParams, ViewCamera, ViewError};
 
@@ -49,11 +50,27 @@ pub struct FrameStats {
     pub cloud_quads: usize,
 }
 
-/// A volume asset on the GPU with its cells (object space) and instance transforms.
-pub struct VolumeEntry {
+/// One texture of a volume asset and the cells that sample it: band 0 is the base, the
+/// others are its LOD bands (SPEC §8.6).
+pub struct VolumeBand {
+    /// Object space.
     pub cells: Vec<Prism>,
-    pub instances: Vec<Mat4>,
     pub gpu: GpuVolume,
+    /// The slice LOD from which this band is drawn.
+    pub first_level: u32,
+    /// Index among all volume textures (batch `texture / 8`, slot `texture % 8`).
+    pub texture: usize,
+}
+
+/// A volume asset on the GPU with its instance transforms.
+pub struct VolumeEntry {
+    pub bands: Vec<VolumeBand>,
+    pub instances: Vec<Mat4>,
+    /// The asset's largest LOD `L` (the last band's `first_level + mip_count − 1`).
+    pub max_lod: u32,
+    /// Object-space bounds (the asset header's).
+    pub bounds: (Vec3, Vec3),
+    pub animation: Option<crate::animate::Sway>,
 }
 
 struct CloudEntry {
@@ -86,6 +103,8 @@ pub struct Renderer {
     pub lod_distance_override: Option<f32>,
     /// The cell wireframe, when on ([`Renderer::set_wireframe`]).
     lines: Option<crate::lines::LinePass>,
+    /// Scene time in seconds (animated cells, particles).
+    pub time: f32,
 }
 
 impl Renderer {
@@ -109,6 +128,7 @@ impl Renderer {
             ambient: 0.3,
             lod_distance_override: None,
             lines: None,
+            time: 0.0,
         }
     }
 
@@ -130,7 +150,7 @@ impl Renderer {
         let mut pts = Vec::new();
         for v in &self.volumes {
             for m in &v.instances {
-                for c in &v.cells {
+                for c in v.bands.iter().flat_map(|b| &b.cells) {
                     for (a, b) in crate::lines::PRISM_EDGES {
                         pts.push(m.transform_point3(Vec3::from(c.pos[a])));
                         pts.push(m.transform_point3(Vec3::from(c.pos[b])));
@@ -147,48 +167,68 @@ impl Renderer {
             on.then(|| ShadowMap::new(&self.gpu, &self.receiver_layout, SHADOW_MAP_SIZE));
     }
 
-    /// Adds a volume asset drawn once per transform in `instances` (they share its texture).
+    /// Adds a volume asset drawn once per transform in `instances` (they share its
+    /// textures: the base and any LOD bands).
     pub fn add_volume(
         &mut self,
         asset: &VolumeAsset,
         instances: Vec<Mat4>,
     ) -> Result<(), ViewError> {
+        self.add_animated_volume(asset, instances, None)
+    }
+
+    /// [`Renderer::add_volume`] with cells deformed over time by `animation`.
+    pub fn add_animated_volume(
+        &mut self,
+        asset: &VolumeAsset,
+        instances: Vec<Mat4>,
+        animation: Option<crate::animate::Sway>,
+    ) -> Result<(), ViewError> {
         check_transforms(&instances)?;
+        if let Some(a) = &animation {
+            a.validate().map_err(ViewError::InvalidParam)?;
+        }
         let pass = self
             .volume_pass
             .get_or_insert_with(|| VolumePass::new(&self.gpu, &self.receiver_layout));
-        let gpu = pass.upload(&self.gpu, asset)?;
+        let textures = pass.upload(&self.gpu, asset)?;
+        let first_texture: usize = self.volumes.iter().map(|v| v.bands.len()).sum();
+        let b = &asset.header.bounds;
+        let bounds = (Vec3::from(b.min), Vec3::from(b.max));
+        let mut bands = Vec::new();
+        for (i, gpu) in textures.into_iter().enumerate() {
+            let (cells, first_level) = match i {
+                0 => (asset.cells.clone(), 0),
+                _ => (
+                    asset.bands[i - 1].cells.clone(),
+                    asset.bands[i - 1].first_level,
+                ),
+            };
+            // An animated single box bends only once it is cut into layers.
+            let cells = match (&animation, asset.bands.is_empty()) {
+                (Some(a), true) => {
+                    crate::animate::layered_box(&cells, bounds, a.layers).unwrap_or(cells)
+                }
+                _ => cells,
+            };
+            bands.push(VolumeBand {
+                cells,
+                gpu,
+                first_level,
+                texture: first_texture + i,
+            });
+        }
+        let last = bands.last().expect("a base texture");
+        let max_lod = last.first_level + last.gpu.levels - 1;
         self.volumes.push(VolumeEntry {
-            cells: asset.cells.clone(),
+            bands,
             instances,
-            gpu,
+            max_lod,
+            bounds,
+            animation,
         });
         self.batches = volume_plan::batch_bind_groups(pass, &self.gpu, &self.volumes);
         Ok(())
-    }
-
-    /// Replaces the cells of volume `index` (animated cells: the same texture, deformed
-    /// prisms), e.g. every frame.
-    pub fn set_volume_cells(&mut self, index: usize, cells: Vec<Prism>) -> Result<(), ViewError> {
-        let v = self
-            .volumes
-            .get_mut(index)
-            .ok_or_else(|| ViewError::InvalidParam(format!("no volume {index}")))?;
-        if cells
-            .iter()
-            .any(|c| !c.pos.iter().flatten().all(|x| x.is_finite()))
-        {
-            return Err(ViewError::InvalidParam(
-                "cell position is not finite".into(),
-            ));
-        }
-        v.cells = cells;
-        Ok(())
-    }
-
-    /// The cells of volume `index` as uploaded.
-    pub fn volume_cells(&self, index: usize) -> Option<&[Prism]> {
-        self.volumes.get(index).map(|v| v.cells.as_slice())
     }
 
     /// Adds an opaque triangle mesh (world space).
@@ -280,7 +320,7 @@ impl Renderer {
         let mut hi = Vec3::splat(f32::NEG_INFINITY);
         for v in &self.volumes {
             for m in &v.instances {
-                for c in &v.cells {
+                for c in v.bands.iter().flat_map(|b| &b.cells) {
                     for p in &c.pos {
                         let q = m.transform_point3(Vec3::from(*p));
                         lo = lo.min(q);
@@ -520,6 +560,7 @@ impl Renderer {
             params,
             receive,
             shadow_cutoff,
+            self.time,
         )
     }
 

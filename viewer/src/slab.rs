@@ -22,9 +22,9 @@ pub struct Slab {
 }
 
 /// Partitions back-to-front `slices` (`depth` decreasing) into slabs and assigns the
-/// cells (`depth ranges`, view distances `[near, far]`). `partition = false` gives one
-/// slab with every slice and every cell (the paper's plain slicing). Slabs without
-/// cells are dropped; their count is returned with the slabs.
+/// cells (`depth ranges`, view distances `[near, far]`; `near > far` = never cut).
+/// `partition = false` gives one slab with every slice and every cell (the paper's plain
+/// slicing). Slabs without cells are dropped; their count is returned with the slabs.
 pub fn partition(
     slice_depths: &[f32],
     cell_ranges: &[(f32, f32)],
@@ -64,6 +64,9 @@ pub fn partition(
     let lo: Vec<f32> = bounds.iter().map(|b| slice_depths[b.1 - 1]).collect();
     let mut cells: Vec<Vec<u32>> = vec![Vec::new(); bounds.len()];
     for (id, &(z0, z1)) in cell_ranges.iter().enumerate() {
+        if z0 > z1 {
+            continue; // an empty range: a cell no slice may cut (another band's)
+        }
         // Slabs are ordered by decreasing depth: first slab with lo <= z1 .. last with hi >= z0.
         let first = lo.partition_point(|&l| l > z1);
         let last = hi.partition_point(|&h| h >= z0);

@@ -99,12 +99,15 @@ pub struct GpuSlice {
     pub zd: [f32; 4],
 }
 
-/// Per volume instance: `v₀` (its level-0 voxel size after its transform, the finest
-/// over its cells), its asset's max lod and texture slot, 1 = repeat addressing in x, z.
+/// Per (volume instance, LOD band): `p` = (the band's `v₀·2^f`, its max lod, texture
+/// slot, 1 = repeat addressing in x and z); `q` = (the instance's asset-wide `v₀`, the
+/// asset's largest LOD `L`, and the slice-LOD range `[f_b, f_{b+1})` the band draws).
+/// Without bands: `q = (v₀, levels − 1, −∞, ∞)` (SPEC §8.6).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct GpuVolumeParams {
     pub p: [f32; 4],
+    pub q: [f32; 4],
 }
 
 /// One draw: slices `first_slice..first_slice + slice_count` × the `cell_count` cells at
@@ -342,68 +345,92 @@ impl VolumePass {
         })
     }
 
-    /// Uploads `asset`'s colour levels as a 3D texture with its MIP chain.
-    pub fn upload(&self, gpu: &Gpu, asset: &VolumeAsset) -> Result<GpuVolume, ViewError> {
+    /// Uploads `asset`'s textures: the base texture first, then one per LOD band
+    /// (SPEC §8.6), each with its MIP chain.
+    pub fn upload(&self, gpu: &Gpu, asset: &VolumeAsset) -> Result<Vec<GpuVolume>, ViewError> {
         asset
             .validate()
             .map_err(|e| ViewError::InvalidAsset(e.to_string()))?;
-        let dims0 = asset.level_dims(0);
-        let levels = asset.levels.len() as u32;
-        let max3d = gpu.device.limits().max_texture_dimension_3d;
-        if dims0.iter().any(|&d| d > max3d) || levels == 0 {
-            return Err(ViewError::InvalidAsset(format!(
-                "volume {}x{}x{} with {levels} levels does not fit a 3D texture (max {max3d})",
-                dims0[0], dims0[1], dims0[2]
-            )));
-        }
-        let format = match asset.header.colour_space {
-            ColourSpace::SrgbPremultiplied => wgpu::TextureFormat::Rgba8UnormSrgb,
-            ColourSpace::LinearPremultiplied => wgpu::TextureFormat::Rgba8Unorm,
-        };
-        let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("volume"),
-            size: wgpu::Extent3d {
-                width: dims0[0],
-                height: dims0[1],
-                depth_or_array_layers: dims0[2],
-            },
-            mip_level_count: levels,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D3,
-            format,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-            view_formats: &[],
-        });
-        for (l, bytes) in asset.levels.iter().enumerate() {
-            let d = asset.level_dims(l as u32);
-            gpu.queue.write_texture(
-                wgpu::TexelCopyTextureInfo {
-                    texture: &texture,
-                    mip_level: l as u32,
-                    origin: wgpu::Origin3d::ZERO,
-                    aspect: wgpu::TextureAspect::All,
-                },
-                bytes,
-                wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(4 * d[0]),
-                    rows_per_image: Some(d[1]),
-                },
-                wgpu::Extent3d {
-                    width: d[0],
-                    height: d[1],
-                    depth_or_array_layers: d[2],
-                },
-            );
-        }
-        let view = texture.create_view(&Default::default());
         let rep = repeat_axes(asset);
-        Ok(GpuVolume {
-            dims0,
-            levels,
-            repeat: rep[0] || rep[2],
-            texture,
-            view,
-        })
+        let repeat = rep[0] || rep[2];
+        let cs = asset.header.colour_space;
+        let mut out = vec![upload_levels(
+            gpu,
+            asset.level_dims(0),
+            &asset.levels,
+            cs,
+            repeat,
+        )?];
+        for b in &asset.bands {
+            // Bands address their textures with clamp-to-edge (SPEC §8.6).
+            out.push(upload_levels(gpu, b.dims, &b.levels, cs, false)?);
+        }
+        Ok(out)
     }
+}
+
+/// One 3D texture with its MIP chain (`levels[l]` is `mip_dims(dims0, l)` texels).
+fn upload_levels(
+    gpu: &Gpu,
+    dims0: [u32; 3],
+    levels: &[Vec<u8>],
+    colour_space: ColourSpace,
+    repeat: bool,
+) -> Result<GpuVolume, ViewError> {
+    let count = levels.len() as u32;
+    let max3d = gpu.device.limits().max_texture_dimension_3d;
+    if dims0.iter().any(|&d| d > max3d) || count == 0 {
+        return Err(ViewError::InvalidAsset(format!(
+            "volume {}x{}x{} with {count} levels does not fit a 3D texture (max {max3d})",
+            dims0[0], dims0[1], dims0[2]
+        )));
+    }
+    let format = match colour_space {
+        ColourSpace::SrgbPremultiplied => wgpu::TextureFormat::Rgba8UnormSrgb,
+        ColourSpace::LinearPremultiplied => wgpu::TextureFormat::Rgba8Unorm,
+    };
+    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("volume"),
+        size: wgpu::Extent3d {
+            width: dims0[0],
+            height: dims0[1],
+            depth_or_array_layers: dims0[2],
+        },
+        mip_level_count: count,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D3,
+        format,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    for (l, bytes) in levels.iter().enumerate() {
+        let d = billow_format::mip_dims(dims0, l as u32);
+        gpu.queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &texture,
+                mip_level: l as u32,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            bytes,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(4 * d[0]),
+                rows_per_image: Some(d[1]),
+            },
+            wgpu::Extent3d {
+                width: d[0],
+                height: d[1],
+                depth_or_array_layers: d[2],
+            },
+        );
+    }
+    let view = texture.create_view(&Default::default());
+    Ok(GpuVolume {
+        dims0,
+        levels: count,
+        repeat,
+        texture,
+        view,
+    })
 }

@@ -79,18 +79,20 @@ impl VolumePlan {
     }
 }
 
-/// The texture batches of `volumes`: volume `i` is slot `i % N` of batch `i / N`.
+/// The texture batches of `volumes`: texture `t` (volumes' bands in order) is slot
+/// `t % N` of batch `t / N`.
 pub fn batch_bind_groups(
     pass: &VolumePass,
     gpu: &Gpu,
     volumes: &[VolumeEntry],
 ) -> Vec<wgpu::BindGroup> {
-    volumes
+    let views: Vec<&wgpu::TextureView> = volumes
+        .iter()
+        .flat_map(|v| v.bands.iter().map(|b| &b.gpu.view))
+        .collect();
+    views
         .chunks(TEXTURES_PER_BATCH)
-        .map(|c| {
-            let views: Vec<&wgpu::TextureView> = c.iter().map(|v| &v.gpu.view).collect();
-            pass.batch_bind_group(gpu, &views)
-        })
+        .map(|c| pass.batch_bind_group(gpu, c))
         .collect()
 }
 
@@ -105,9 +107,10 @@ fn storage<T: bytemuck::Pod + Default>(gpu: &Gpu, label: &str, data: &[T]) -> wg
         })
 }
 
-/// Plans the volumes for `camera`. `receive`: (camera view → shadow clip, depth bias,
-/// ambient) when the slices receive shadows; `shadow_cutoff`: the alpha cut-off when
-/// this plan renders into the shadow map.
+/// Plans the volumes for `camera` at time `time` (animated cells). `receive`: (camera
+/// view → shadow clip, depth bias, ambient) when the slices receive shadows;
+/// `shadow_cutoff`: the alpha cut-off when this plan renders into the shadow map.
+#[allow(clippy::too_many_arguments)]
 pub fn plan(
     gpu: &Gpu,
     pass: &VolumePass,
@@ -116,49 +119,80 @@ pub fn plan(
     params: SliceParams,
     receive: Option<(Mat4, f32, f32)>,
     shadow_cutoff: Option<f32>,
+    time: f32,
 ) -> Result<Option<VolumePlan>, ViewError> {
     let _ = pass;
     let mut cells: Vec<GpuCell> = Vec::new();
     let mut ranges: Vec<(f32, f32)> = Vec::new();
     let mut vparams: Vec<GpuVolumeParams> = Vec::new();
     let mut batch_of_cell: Vec<u32> = Vec::new();
+    // Per cell: its params entry (for the band's LOD range).
+    let mut entry_of_cell: Vec<u32> = Vec::new();
     let (mut z_min, mut z_max) = (f32::INFINITY, f32::NEG_INFINITY);
     let mut v0_all: Option<f32> = None;
-    for (vi, v) in volumes.iter().enumerate() {
-        let slot = (vi % TEXTURES_PER_BATCH) as f32;
-        let max_lod = (v.gpu.levels - 1) as f32;
-        let repeat = f32::from(u8::from(v.gpu.repeat));
-        for m in &v.instances {
-            let world: Vec<billow_format::Prism> = v
-                .cells
+    for v in volumes {
+        for (ii, m) in v.instances.iter().enumerate() {
+            // Object-space cells of every band, deformed when animated (a per-instance
+            // phase), then to world space.
+            let world: Vec<Vec<billow_format::Prism>> = v
+                .bands
                 .iter()
-                .map(|c| billow_format::Prism {
-                    pos: c.pos.map(|p| m.transform_point3(Vec3::from(p)).to_array()),
-                    uvw: c.uvw,
+                .map(|b| {
+                    let local = match &v.animation {
+                        Some(a) => a.deform(&b.cells, v.bounds, time, ii as f32 * 2.399_963),
+                        None => b.cells.clone(),
+                    };
+                    local
+                        .iter()
+                        .map(|c| billow_format::Prism {
+                            pos: c.pos.map(|p| m.transform_point3(Vec3::from(p)).to_array()),
+                            uvw: c.uvw,
+                        })
+                        .collect()
                 })
                 .collect();
-            // The MIP level follows each instance's own voxel size (instances of one
-            // asset may be scaled differently).
-            let Some(v0) = voxel_size(&world, v.gpu.dims0) else {
+            // The instance's level-0 voxel size (SPEC §8.6: the finest over the bands,
+            // each band's scaled back by 2^first_level); its MIP levels follow it
+            // (instances of one asset may be scaled differently).
+            let v0 = v
+                .bands
+                .iter()
+                .zip(&world)
+                .filter_map(|(b, w)| {
+                    voxel_size(w, b.gpu.dims0).map(|s| s / (b.first_level as f32).exp2())
+                })
+                .reduce(f32::min);
+            let Some(v0) = v0 else {
                 continue; // no cell with a usable uvw mapping: nothing to draw
             };
-            let entry = vparams.len() as u32;
-            vparams.push(GpuVolumeParams {
-                p: [v0, max_lod, slot, repeat],
-            });
             v0_all = Some(v0_all.map_or(v0, |b| b.min(v0)));
-            for c in &world {
-                let pos = c.pos.map(|p| camera.to_view(Vec3::from(p)).to_array());
-                let (mut a, mut b) = (f32::INFINITY, f32::NEG_INFINITY);
-                for p in &pos {
-                    a = a.min(-p[2]);
-                    b = b.max(-p[2]);
+            for (bi, (b, w)) in v.bands.iter().zip(&world).enumerate() {
+                let entry = vparams.len() as u32;
+                let lo = if bi == 0 { -1.0 } else { b.first_level as f32 };
+                let hi = v.bands.get(bi + 1).map_or(1e30, |n| n.first_level as f32);
+                vparams.push(GpuVolumeParams {
+                    p: [
+                        v0 * (b.first_level as f32).exp2(),
+                        (b.gpu.levels - 1) as f32,
+                        (b.texture % TEXTURES_PER_BATCH) as f32,
+                        f32::from(u8::from(b.gpu.repeat)),
+                    ],
+                    q: [v0, v.max_lod as f32, lo, hi],
+                });
+                for c in w {
+                    let pos = c.pos.map(|p| camera.to_view(Vec3::from(p)).to_array());
+                    let (mut a, mut z) = (f32::INFINITY, f32::NEG_INFINITY);
+                    for p in &pos {
+                        a = a.min(-p[2]);
+                        z = z.max(-p[2]);
+                    }
+                    cells.push(GpuCell::new(&pos, &c.uvw).with_volume(entry));
+                    ranges.push((a, z));
+                    batch_of_cell.push((b.texture / TEXTURES_PER_BATCH) as u32);
+                    entry_of_cell.push(entry);
+                    z_min = z_min.min(a);
+                    z_max = z_max.max(z);
                 }
-                cells.push(GpuCell::new(&pos, &c.uvw).with_volume(entry));
-                ranges.push((a, b));
-                batch_of_cell.push((vi / TEXTURES_PER_BATCH) as u32);
-                z_min = z_min.min(a);
-                z_max = z_max.max(b);
             }
         }
     }
@@ -176,6 +210,7 @@ pub fn plan(
         return Ok(None);
     }
     let depths: Vec<f32> = slices.iter().map(|s| s.0).collect();
+    restrict_to_bands(&mut ranges, &entry_of_cell, &vparams, &slices);
     let (slabs, empty_slabs) =
         partition(&depths, &ranges, params.partition, params.slab_min_slices);
 
@@ -312,4 +347,33 @@ pub fn plan(
         v0,
         spacing,
     }))
+}
+
+/// A banded asset draws each slice with one band (SPEC §8.6): clip each cell's depth
+/// range to the slices whose LOD `λ = clamp(log2(d/v₀), 0, L)` falls in its band's
+/// `[f_b, f_{b+1})`; a cell whose band no slice uses gets an empty range (`lo > hi`) and
+/// no slab lists it. `slices` are back to front (depth decreasing, λ non-increasing).
+/// The vertex shader checks the band again, so this only saves work.
+fn restrict_to_bands(
+    ranges: &mut [(f32, f32)],
+    entry_of_cell: &[u32],
+    vparams: &[GpuVolumeParams],
+    slices: &[(f32, f32)],
+) {
+    for (r, &e) in ranges.iter_mut().zip(entry_of_cell) {
+        let q = vparams[e as usize].q;
+        if q[2] < 0.0 && q[3] >= 1e29 {
+            continue; // the only band
+        }
+        let lambda = |d: f32| (d / q[0]).log2().clamp(0.0, q[1]);
+        // Back-to-front indices: λ is non-increasing along the list.
+        let first = slices.partition_point(|s| lambda(s.1) >= q[3]);
+        let last = slices.partition_point(|s| lambda(s.1) >= q[2]);
+        if first >= last {
+            *r = (1.0, 0.0);
+            continue;
+        }
+        let (far, near) = (slices[first].0, slices[last - 1].0);
+        *r = (r.0.max(near), r.1.min(far));
+    }
 }

@@ -19,8 +19,10 @@ struct Slice {
 }
 
 struct VolumeParams {
-    // x: v0 (level-0 voxel size), y: max lod (levels − 1), z: texture slot, w: 1 = repeat
+    // The band's: x: v0 · 2^first_level, y: its max lod, z: texture slot, w: 1 = repeat
     p: vec4<f32>,
+    // The asset's: x: v0, y: largest LOD L, z..w: slice-LOD range [f_b, f_{b+1}) of the band
+    q: vec4<f32>,
 }
 
 struct Draw {
@@ -53,11 +55,16 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
     let n = max(draw.cell_count, 1u);
     let slice = slices[draw.first_slice + ii / n];
     var c = cells[list[draw.list_offset + ii % n]];
-    let vol = volumes[bitcast<u32>(c.pos[0].w)].p;
+    let params = volumes[bitcast<u32>(c.pos[0].w)];
+    let vol = params.p;
+    // The slice's LOD λ (SPEC §8.6): a banded asset draws each slice with one band.
+    let d = slice.zd.y;
+    let lambda = clamp(log2(d / params.q.x), 0.0, params.q.y);
+    let in_band = lambda >= params.q.z && lambda < params.q.w;
     var poly = intersect_prism_plane(&c, slice.zd.x);
     let tri = vi / 3u;
     let corner = vi % 3u;
-    if poly.count < tri + 3u {
+    if !in_band || poly.count < tri + 3u {
         // Unused vertex of the budget: a degenerate triangle outside the clip volume.
         out.clip = vec4<f32>(2.0, 2.0, 2.0, 1.0);
         out.uvw = vec3<f32>(0.0);
@@ -71,11 +78,11 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
     out.clip = frame.proj * p;
     out.shadow_clip = frame.view_to_shadow * p;
     out.uvw = poly.uvw[k];
-    // MIP level from the spacing, opacity-correction ratio d / d0 (linear MIP filter).
-    let d = slice.zd.y;
+    // MIP level from the spacing (the band's own LOD λ − f_b), opacity-correction ratio
+    // d / d0 with d0 = v0 · 2^λ (linear MIP filter).
     let v0 = vol.x;
     let lod = clamp(log2(d / v0), 0.0, vol.y);
-    let d0 = v0 * exp2(lod);
+    let d0 = params.q.x * exp2(lambda);
     out.lod_ratio = vec2<f32>(lod, d / d0);
     out.slot = vec2<u32>(u32(vol.z), u32(vol.w));
     return out;
