@@ -105,6 +105,9 @@ pub struct Renderer {
     lines: Option<crate::lines::LinePass>,
     /// Scene time in seconds (animated cells, particles).
     pub time: f32,
+    /// Volume textures bound at once (clamped to the device's limit when the volume
+    /// pass is built, on the first volume added); tests lower it to exercise batches.
+    pub texture_batch: usize,
 }
 
 impl Renderer {
@@ -129,6 +132,7 @@ impl Renderer {
             lod_distance_override: None,
             lines: None,
             time: 0.0,
+            texture_batch: crate::volume_pass::MAX_TEXTURES_PER_BATCH,
         }
     }
 
@@ -188,9 +192,9 @@ impl Renderer {
         if let Some(a) = &animation {
             a.validate().map_err(ViewError::InvalidParam)?;
         }
-        let pass = self
-            .volume_pass
-            .get_or_insert_with(|| VolumePass::new(&self.gpu, &self.receiver_layout));
+        let pass = self.volume_pass.get_or_insert_with(|| {
+            VolumePass::new(&self.gpu, &self.receiver_layout, self.texture_batch)
+        });
         let textures = pass.upload(&self.gpu, asset)?;
         let first_texture: usize = self.volumes.iter().map(|v| v.bands.len()).sum();
         let b = &asset.header.bounds;

@@ -2,8 +2,8 @@
 //!
 //! Per volume asset a 3D texture with its MIP chain (`Rgba8UnormSrgb` for
 //! sRGB-premultiplied assets, so filtering happens on linear premultiplied values, as the
-//! CPU sampler decodes before filtering). Up to [`TEXTURES_PER_BATCH`] textures are bound
-//! at once (a *batch*), so one draw covers cells of several assets and a slice keeps its
+//! CPU sampler decodes before filtering). Up to [`batch_size`] textures (the device's
+//! limit, at most [`MAX_TEXTURES_PER_BATCH`]) are bound at once (a *batch*), so one draw covers cells of several assets and a slice keeps its
 //! cells in ID order whatever their texture; each cell names its asset (and so its
 //! texture slot, sampler and `v₀`).
 //!
@@ -24,22 +24,28 @@ use bytemuck::{Pod, Zeroable};
 use crate::target::{COLOR_FORMAT, DEPTH_FORMAT};
 use crate::{Gpu, ViewError};
 
-/// Textures bound at once.
-pub const TEXTURES_PER_BATCH: usize = 8;
+/// Most textures bound at once (the shaders switch over this many slots at most).
+pub const MAX_TEXTURES_PER_BATCH: usize = 32;
 
-/// The WGSL of the volume pass (prism/plane intersection + slicing shaders + the
-/// texture-slot switch).
-pub fn shader_source() -> String {
+/// Textures per batch on `gpu`: as many as the fragment stage may sample, keeping two
+/// for the shadow map and a spare, at most [`MAX_TEXTURES_PER_BATCH`].
+pub fn batch_size(gpu: &Gpu) -> usize {
+    let n = gpu.device.limits().max_sampled_textures_per_shader_stage as usize;
+    n.saturating_sub(2).clamp(1, MAX_TEXTURES_PER_BATCH)
+}
+
+/// The WGSL of the volume pass for `n` texture slots (prism/plane intersection +
+/// slicing shaders + the texture-slot switch).
+pub fn shader_source(n: usize) -> String {
     let mut bindings = String::new();
     let mut switch = String::new();
-    for i in 0..TEXTURES_PER_BATCH {
+    for i in 0..n {
         bindings += &format!("@group(1) @binding({i}) var vol_tex{i}: texture_3d<f32>;\n");
         switch += &format!(
             "        case {i}u: {{ if rep {{ return textureSampleLevel(vol_tex{i}, smp_repeat, uvw, lod); }} \
              return textureSampleLevel(vol_tex{i}, smp_clamp, uvw, lod); }}\n"
         );
     }
-    let n = TEXTURES_PER_BATCH;
     let sampler = format!(
         "{bindings}@group(1) @binding({n}) var smp_clamp: sampler;\n\
          @group(1) @binding({}) var smp_repeat: sampler;\n\
@@ -147,6 +153,8 @@ pub struct VolumePass {
     pub samplers: [wgpu::Sampler; 2],
     /// Bound in unused texture slots.
     pub dummy: wgpu::TextureView,
+    /// Texture slots per batch.
+    pub batch: usize,
 }
 
 /// The addressing of `asset` (SPEC §8.5): repeat in x and z for shells (header param
@@ -176,11 +184,13 @@ const STORAGE: wgpu::BindingType = wgpu::BindingType::Buffer {
 };
 
 impl VolumePass {
-    pub fn new(gpu: &Gpu, shadow_layout: &wgpu::BindGroupLayout) -> VolumePass {
+    /// The pipelines with `batch` texture slots (at most [`batch_size`]`(gpu)`).
+    pub fn new(gpu: &Gpu, shadow_layout: &wgpu::BindGroupLayout, batch: usize) -> VolumePass {
+        let batch = batch.clamp(1, batch_size(gpu));
         let device = &gpu.device;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("volume.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(shader_source().into()),
+            source: wgpu::ShaderSource::Wgsl(shader_source(batch).into()),
         });
         let uniform = |dynamic| wgpu::BindingType::Buffer {
             ty: wgpu::BufferBindingType::Uniform,
@@ -201,7 +211,7 @@ impl VolumePass {
                 entry(5, vs, uniform(true)),
             ],
         });
-        let mut batch_entries: Vec<_> = (0..TEXTURES_PER_BATCH as u32)
+        let mut batch_entries: Vec<_> = (0..batch as u32)
             .map(|i| {
                 entry(
                     i,
@@ -216,7 +226,7 @@ impl VolumePass {
             .collect();
         for i in 0..2 {
             batch_entries.push(entry(
-                TEXTURES_PER_BATCH as u32 + i,
+                batch as u32 + i,
                 fs,
                 wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
             ));
@@ -321,12 +331,13 @@ impl VolumePass {
             batch_layout,
             samplers: [sampler(false), sampler(true)],
             dummy,
+            batch,
         }
     }
 
     /// The bind group of a batch: `views[i]` in slot `i`, the dummy in the others.
     pub fn batch_bind_group(&self, gpu: &Gpu, views: &[&wgpu::TextureView]) -> wgpu::BindGroup {
-        let mut entries: Vec<wgpu::BindGroupEntry> = (0..TEXTURES_PER_BATCH)
+        let mut entries: Vec<wgpu::BindGroupEntry> = (0..self.batch)
             .map(|i| wgpu::BindGroupEntry {
                 binding: i as u32,
                 resource: wgpu::BindingResource::TextureView(views.get(i).unwrap_or(&&self.dummy)),
@@ -334,7 +345,7 @@ impl VolumePass {
             .collect();
         for (i, s) in self.samplers.iter().enumerate() {
             entries.push(wgpu::BindGroupEntry {
-                binding: (TEXTURES_PER_BATCH + i) as u32,
+                binding: (self.batch + i) as u32,
                 resource: wgpu::BindingResource::Sampler(s),
             });
         }

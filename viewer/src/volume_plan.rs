@@ -3,9 +3,9 @@
 //! ([`crate::slab`]) and the draws, uploaded as the volume pass's buffers.
 //!
 //! Draws: a slab whose cells all use textures of one batch is **one draw** (its slices ×
-//! its cells). A slab that mixes batches (more than
-//! [`TEXTURES_PER_BATCH`](crate::volume_pass::TEXTURES_PER_BATCH) assets) is drawn slice
-//! by slice, one draw per batch, so back-to-front order holds across batches.
+//! its cells). A slab that mixes batches (more textures than
+//! [`batch_size`](crate::volume_pass::batch_size)) is drawn slice by slice, one draw per
+//! batch, so back-to-front order holds across batches.
 
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
@@ -15,9 +15,7 @@ use wgpu::util::DeviceExt;
 use crate::render::{FrameStats, VolumeEntry, VERTICES_PER_INSTANCE};
 use crate::slab::partition;
 use crate::slice_plan::{slice_depths, voxel_size};
-use crate::volume_pass::{
-    FrameUniform, GpuCell, GpuDraw, GpuSlice, GpuVolumeParams, VolumePass, TEXTURES_PER_BATCH,
-};
+use crate::volume_pass::{FrameUniform, GpuCell, GpuDraw, GpuSlice, GpuVolumeParams, VolumePass};
 use crate::{Gpu, SliceParams, ViewCamera, ViewError};
 
 /// One planned draw: its batch, the dynamic offset of its [`GpuDraw`], its instances.
@@ -91,7 +89,7 @@ pub fn batch_bind_groups(
         .flat_map(|v| v.bands.iter().map(|b| &b.gpu.view))
         .collect();
     views
-        .chunks(TEXTURES_PER_BATCH)
+        .chunks(pass.batch)
         .map(|c| pass.batch_bind_group(gpu, c))
         .collect()
 }
@@ -121,7 +119,6 @@ pub fn plan(
     shadow_cutoff: Option<f32>,
     time: f32,
 ) -> Result<Option<VolumePlan>, ViewError> {
-    let _ = pass;
     let mut cells: Vec<GpuCell> = Vec::new();
     let mut ranges: Vec<(f32, f32)> = Vec::new();
     let mut vparams: Vec<GpuVolumeParams> = Vec::new();
@@ -174,7 +171,7 @@ pub fn plan(
                     p: [
                         v0 * (b.first_level as f32).exp2(),
                         (b.gpu.levels - 1) as f32,
-                        (b.texture % TEXTURES_PER_BATCH) as f32,
+                        (b.texture % pass.batch) as f32,
                         f32::from(u8::from(b.gpu.repeat)),
                     ],
                     q: [v0, v.max_lod as f32, lo, hi],
@@ -188,7 +185,7 @@ pub fn plan(
                     }
                     cells.push(GpuCell::new(&pos, &c.uvw).with_volume(entry));
                     ranges.push((a, z));
-                    batch_of_cell.push((b.texture / TEXTURES_PER_BATCH) as u32);
+                    batch_of_cell.push((b.texture / pass.batch) as u32);
                     entry_of_cell.push(entry);
                     z_min = z_min.min(a);
                     z_max = z_max.max(z);

@@ -1,8 +1,8 @@
 //! Slab partitioning and texture batches change what is drawn, never the picture:
 //! - partitioned vs plain slicing of instances spread in depth: bit-identical images,
 //!   fewer cell × slice instances, empty slabs skipped;
-//! - nine assets (two texture batches, drawn slice by slice) vs one asset with nine
-//!   instances (one batch, one draw per slab): bit-identical images.
+//! - nine assets in batches of 8 textures (two batches, drawn slice by slice) vs one
+//!   asset with nine instances (one batch, one draw per slab): bit-identical images.
 
 mod common;
 
@@ -79,6 +79,7 @@ fn two_texture_batches_draw_the_same_picture_as_one() {
     one.add_volume(&ball, positions()).expect("upload");
     let (a, sa) = render(&mut one, true);
     let mut many = Renderer::new(one.gpu);
+    many.texture_batch = 8;
     for m in positions() {
         many.add_volume(&ball, vec![m]).expect("upload");
     }
