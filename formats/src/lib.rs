@@ -39,8 +39,10 @@ pub use volume::{
 
 /// Major format version: a reader refuses files with a different major.
 pub const FORMAT_MAJOR: u16 = 1;
-/// Minor format version: additive changes (new chunks, new optional header fields).
-pub const FORMAT_MINOR: u16 = 0;
+/// Minor format version implemented (additive changes: new chunks, new optional header
+/// fields). 1.1 added the Cloud normal maps (`ANRM`). A writer writes the lowest minor
+/// version whose chunks the file uses (SPEC §5).
+pub const FORMAT_MINOR: u16 = 1;
 /// The first 8 bytes of every billow asset.
 pub const MAGIC: [u8; 8] = *b"\x89BLW\r\n\x1a\n";
 /// Size of the fixed preamble in bytes.

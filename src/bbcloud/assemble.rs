@@ -1,6 +1,8 @@
 //! Assembling the asset: per level, pack the billboard textures into atlases (with MIPs),
 //! write the billboards with their atlas rectangles and parent projections, and the foliage
 //! base mesh with each vertex's projection onto its level-0 billboard (morph target).
+//! Normal maps, when baked, are composed with the colour atlas's packing (same places, same
+//! gutters) and get the same number of MIP levels.
 
 use billow_format::{AtlasRect, Billboard, CloudAsset, CloudLevel, Header, Mesh};
 
@@ -21,7 +23,8 @@ pub fn assemble(
     scene: &Scene,
     levels: &[Level],
     per_level: &[LevelLayout],
-    images: &[(bake::Image, bake::Image)],
+    images: &[bake::Baked],
+    mip_levels: u32,
     leaves: &[u32],
     trunk: Mesh,
     header: Header,
@@ -44,10 +47,13 @@ pub fn assemble(
         let t = Instant::now();
         progress(Stage::Pack, l as f32 / levels.len() as f32);
         let (d, layout, rects) = &per_level[l];
-        let imgs: Vec<&bake::Image> = images[img_off..img_off + level.boards.len()]
+        let baked = &images[img_off..img_off + level.boards.len()];
+        let imgs: Vec<&bake::Image> = baked.iter().flat_map(|b| [&b.front, &b.back]).collect();
+        let nrms: Option<Vec<&bake::Image>> = baked
             .iter()
-            .flat_map(|(f, b)| [f, b])
-            .collect();
+            .map(|b| b.normals.as_ref().map(|[f, k]| [f, k]))
+            .collect::<Option<Vec<_>>>()
+            .map(|v| v.into_iter().flatten().collect());
         img_off += level.boards.len();
         let sizes: Vec<(u32, u32)> = imgs.iter().map(|i| (i.width, i.height)).collect();
         let packing = atlas::pack(&sizes, layout).ok_or_else(|| {
@@ -57,6 +63,7 @@ pub fn assemble(
             ))
         })?;
         let composed = atlas::compose(&imgs, &packing, layout);
+        let composed_n = nrms.map(|n| atlas::compose(&n, &packing, layout));
         let alpha_sum: f64 = imgs
             .iter()
             .map(|i| i.texels.iter().map(|t| f64::from(t.w)).sum::<f64>())
@@ -64,12 +71,18 @@ pub fn assemble(
         secs.pack += t.elapsed().as_secs_f64();
         let t = Instant::now();
         let first_atlas = atlases.len() as u32;
+        let mut normal_maps = composed_n.map(|v| v.into_iter());
         for a in composed {
             let (w, h) = (a.width, a.height);
+            let normals = normal_maps
+                .as_mut()
+                .and_then(|it| it.next())
+                .map(|n| atlas::normal_chain(n, mip_levels));
             atlases.push(billow_format::Atlas {
                 width: w,
                 height: h,
-                mips: atlas::mip_chain(a),
+                mips: atlas::mip_chain(a, mip_levels),
+                normals,
             });
         }
         secs.mips += t.elapsed().as_secs_f64();

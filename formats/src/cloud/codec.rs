@@ -100,6 +100,9 @@ impl CloudAsset {
         for m in self.atlases.iter().flat_map(|a| &a.mips) {
             push(b"ATEX", ElemType::U8, m.clone());
         }
+        for m in self.atlases.iter().flat_map(|a| a.normals.iter().flatten()) {
+            push(b"ANRM", ElemType::U8, m.clone());
+        }
         let (mut mf, mut mi) = (Vec::new(), Vec::new());
         for m in &self.materials {
             put_f32(&mut mf, &m.base_color_factor);
@@ -176,14 +179,20 @@ impl CloudAsset {
             return bad(format!("asset kind is {:?}, not Cloud", header.kind));
         }
         let mut single: [Option<Vec<u8>>; 12] = Default::default();
-        let (mut atex, mut mtex) = (Vec::new(), Vec::new());
+        let (mut atex, mut mtex, mut anrm) = (Vec::new(), Vec::new(), Vec::new());
         for ch in chunks {
             let Some(k) = LAYOUT.iter().position(|(t, _, _)| **t == ch.tag) else {
-                if &ch.tag == b"MTEX" {
-                    if ch.elem != ElemType::U8 {
-                        return bad("MTEX chunk must have element type U8");
+                for (tag, list) in [(b"MTEX", &mut mtex), (b"ANRM", &mut anrm)] {
+                    if &ch.tag == tag {
+                        if ch.elem != ElemType::U8 {
+                            return bad(format!(
+                                "{} chunk must have element type U8",
+                                crate::tag_str(tag)
+                            ));
+                        }
+                        list.push(ch.data);
+                        break;
                     }
-                    mtex.push(ch.data);
                 }
                 continue; // unknown chunk of a newer minor version
             };
@@ -253,6 +262,14 @@ impl CloudAsset {
                 elements: i[3],
             });
         let al = u32s(&take(4)?);
+        if !anrm.is_empty() && anrm.len() != atex.len() {
+            return bad(format!(
+                "{} ANRM chunks for {} ATEX chunks (must be none or one each)",
+                anrm.len(),
+                atex.len()
+            ));
+        }
+        let mut anrm = (!anrm.is_empty()).then(|| anrm.into_iter());
         let mut atex = atex.into_iter();
         let mut atlases = Vec::with_capacity(al.len() / 4);
         for (i, a) in al.chunks_exact(4).enumerate() {
@@ -263,10 +280,14 @@ impl CloudAsset {
             if mips.len() != a[2] as usize {
                 return bad(format!("atlas {i}: fewer ATEX chunks than its MIP count"));
             }
+            let normals = anrm
+                .as_mut()
+                .map(|n| n.by_ref().take(a[2] as usize).collect());
             atlases.push(Atlas {
                 width: a[0],
                 height: a[1],
                 mips,
+                normals,
             });
         }
         if atex.next().is_some() {
