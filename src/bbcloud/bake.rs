@@ -88,6 +88,15 @@ const EMPTY: Sample = Sample {
     b: Vec4::ZERO,
 };
 
+/// The samples of one band of rows: K² per texel, the normals of the winning fragments
+/// (with normal maps), and which texels any fragment reached — the others are left empty
+/// and skipped (a billboard's rectangle is mostly gaps between leaves).
+struct Band {
+    samples: Vec<Sample>,
+    nrm: Vec<[Vec3; 2]>,
+    touched: Vec<bool>,
+}
+
 /// Render the front and back textures of one billboard (and its normal maps when `normals`).
 pub fn render(scene: &Scene, job: &Job<'_>, k: u32, shading: &Shading, normals: bool) -> Baked {
     let (w, h) = (job.width, job.height);
@@ -124,28 +133,40 @@ pub fn render(scene: &Scene, job: &Job<'_>, k: u32, shading: &Shading, normals: 
     let mut front = vec![Vec4::ZERO; (w * h) as usize];
     let mut back = vec![Vec4::ZERO; (w * h) as usize];
     let kk = (k * k) as usize;
-    let mut samples = vec![EMPTY; (w * BAND) as usize * kk];
     let texels = if normals { (w * h) as usize } else { 0 };
     let (mut front_n, mut back_n) = (vec![Vec4::ZERO; texels], vec![Vec4::ZERO; texels]);
-    let mut nrm = vec![[Vec3::ZERO; 2]; if normals { samples.len() } else { 0 }];
+    let n_samples = (w * BAND) as usize * kk;
+    let mut band = Band {
+        samples: vec![EMPTY; n_samples],
+        nrm: vec![[Vec3::ZERO; 2]; if normals { n_samples } else { 0 }],
+        touched: vec![false; (w * BAND) as usize],
+    };
     let tangent_front = |n: Vec3| Vec3::new(n.dot(r.u), -n.dot(r.v), n.dot(job.normal));
     let inv_k = 1.0 / k as f32;
     for y0 in (0..h).step_by(BAND as usize) {
         let y1 = (y0 + BAND).min(h);
-        samples.fill(EMPTY);
         for t in prep
             .iter()
             .filter(|t| t.tmax >= y0 as f32 && t.tmin <= y1 as f32)
         {
             if normals {
-                raster::<true>(scene, t, job, y0, y1, k, shading, &mut samples, &mut nrm);
+                raster::<true>(scene, t, job, y0, y1, k, shading, &mut band);
             } else {
-                raster::<false>(scene, t, job, y0, y1, k, shading, &mut samples, &mut []);
+                raster::<false>(scene, t, job, y0, y1, k, shading, &mut band);
             }
         }
+        let Band {
+            samples,
+            nrm,
+            touched,
+        } = &mut band;
         for y in y0..y1 {
             for x in 0..w {
-                let base = (((y - y0) * w + x) as usize) * kk;
+                let ti = ((y - y0) * w + x) as usize;
+                if !std::mem::take(&mut touched[ti]) {
+                    continue; // no fragment: stays empty, its samples are still EMPTY
+                }
+                let base = ti * kk;
                 let (mut f, mut b) = (Vec4::ZERO, Vec4::ZERO);
                 for s in &samples[base..base + kk] {
                     f += s.f;
@@ -165,6 +186,7 @@ pub fn render(scene: &Scene, job: &Job<'_>, k: u32, shading: &Shading, normals: 
                     front_n[i] = nf * inv_k * inv_k;
                     back_n[i] = nb * inv_k * inv_k;
                 }
+                samples[base..base + kk].fill(EMPTY);
             }
         }
     }
@@ -191,8 +213,7 @@ fn raster<const NORMALS: bool>(
     y1: u32,
     k: u32,
     sh: &Shading,
-    out: &mut [Sample],
-    nrm: &mut [[Vec3; 2]],
+    band: &mut Band,
 ) {
     let w = job.width;
     let kf = k as f32;
@@ -230,7 +251,7 @@ fn raster<const NORMALS: bool>(
             let (x, i) = ((sx / k as i64) as u32, (sx % k as i64) as usize);
             let (yy, j) = ((ty / k as i64) as u32 - y0, (ty % k as i64) as usize);
             let si = ((yy * w + x) as usize) * kk + j * k as usize + i;
-            let s = &mut out[si];
+            let s = &mut band.samples[si];
             if !(z > s.fz || z < s.bz) {
                 continue;
             }
@@ -272,16 +293,17 @@ fn raster<const NORMALS: bool>(
                 s.fz = z;
                 s.f = (cf * alpha).extend(alpha);
                 if NORMALS {
-                    nrm[si][0] = nf;
+                    band.nrm[si][0] = nf;
                 }
             }
             if z < s.bz {
                 s.bz = z;
                 s.b = (cb * alpha).extend(alpha);
                 if NORMALS {
-                    nrm[si][1] = -nf;
+                    band.nrm[si][1] = -nf;
                 }
             }
+            band.touched[(yy * w + x) as usize] = true;
         }
     }
 }
