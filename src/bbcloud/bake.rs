@@ -59,7 +59,7 @@ pub struct Job<'a> {
     pub height: u32,
     pub triangles: &'a [u32],
     /// The scene's textures decoded for sampling (`None`: not used by the foliage).
-    pub textures: &'a [Option<Decoded>],
+    pub textures: &'a [Option<Decoded<'a>>],
 }
 
 const BAND: u32 = 16;
