@@ -15,6 +15,8 @@ use super::{BbcloudError, LevelStats, Seconds, Stage};
 use crate::scene::Scene;
 use std::time::Instant;
 
+use rayon::prelude::*;
+
 /// Density, layout and snapped (rectangle, texture width, height) per billboard, per level.
 pub type LevelLayout = (f32, Layout, Vec<(PlaneRect, u32, u32)>);
 
@@ -31,61 +33,88 @@ pub fn assemble(
     secs: &mut Seconds,
     progress: &(dyn Fn(Stage, f32) + Sync),
 ) -> Result<(CloudAsset, Vec<LevelStats>), BbcloudError> {
-    // Pack, compose and MIP each level's atlases; assemble the asset.
+    // Pack, compose and MIP each level's atlases (levels in parallel: they are
+    // independent), then assemble the asset in level order.
     let mut asset_levels = Vec::new();
     let mut billboards = Vec::new();
     let mut atlases = Vec::new();
     let mut stats_levels = Vec::new();
-    let mut img_off = 0;
     let first_of = |l: usize| {
         levels[..l]
             .iter()
             .map(|v| v.boards.len() as u32)
             .sum::<u32>()
     };
-    for (l, level) in levels.iter().enumerate() {
-        let t = Instant::now();
-        progress(Stage::Pack, l as f32 / levels.len() as f32);
-        let (d, layout, rects) = &per_level[l];
-        let baked = &images[img_off..img_off + level.boards.len()];
-        let imgs: Vec<&bake::Image> = baked.iter().flat_map(|b| [&b.front, &b.back]).collect();
-        let nrms: Option<Vec<&bake::Image>> = baked
+    let baked_of = |l: usize| {
+        let first = first_of(l) as usize;
+        &images[first..first + levels[l].boards.len()]
+    };
+    let sides = |l: usize| -> Vec<&bake::Image> {
+        baked_of(l)
             .iter()
-            .map(|b| b.normals.as_ref().map(|[f, k]| [f, k]))
-            .collect::<Option<Vec<_>>>()
-            .map(|v| v.into_iter().flatten().collect());
-        img_off += level.boards.len();
-        let sizes: Vec<(u32, u32)> = imgs.iter().map(|i| (i.width, i.height)).collect();
-        let packing = atlas::pack(&sizes, layout).ok_or_else(|| {
-            BbcloudError::BadParameter(format!(
-                "level {l}: a billboard texture does not fit a {} atlas",
-                layout.max_size
-            ))
-        })?;
-        let composed = atlas::compose(&imgs, &packing, layout);
-        let composed_n = nrms.map(|n| atlas::compose(&n, &packing, layout));
-        let alpha_sum: f64 = imgs
-            .iter()
-            .map(|i| i.texels.iter().map(|t| f64::from(t.w)).sum::<f64>())
-            .sum();
-        secs.pack += t.elapsed().as_secs_f64();
-        let t = Instant::now();
+            .flat_map(|b| [&b.front, &b.back])
+            .collect()
+    };
+    let t = Instant::now();
+    let packings = (0..levels.len())
+        .into_par_iter()
+        .map(|l| {
+            let layout = &per_level[l].1;
+            let sizes: Vec<(u32, u32)> = sides(l).iter().map(|i| (i.width, i.height)).collect();
+            atlas::pack(&sizes, layout).ok_or_else(|| {
+                BbcloudError::BadParameter(format!(
+                    "level {l}: a billboard texture does not fit a {} atlas",
+                    layout.max_size
+                ))
+            })
+        })
+        .collect::<Vec<_>>()
+        .into_iter()
+        .collect::<Result<Vec<_>, _>>()?;
+    secs.pack += t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let built: Vec<(Vec<billow_format::Atlas>, f64)> = (0..levels.len())
+        .into_par_iter()
+        .map(|l| {
+            progress(Stage::Pack, l as f32 / levels.len() as f32);
+            let (layout, packing, imgs) = (&per_level[l].1, &packings[l], sides(l));
+            let nrms: Option<Vec<&bake::Image>> = baked_of(l)
+                .iter()
+                .map(|b| b.normals.as_ref().map(|[f, k]| [f, k]))
+                .collect::<Option<Vec<_>>>()
+                .map(|v| v.into_iter().flatten().collect());
+            let composed = atlas::compose(&imgs, packing, layout);
+            let mut normal_maps = nrms.map(|n| atlas::compose(&n, packing, layout).into_iter());
+            let alpha_sum: f64 = imgs
+                .iter()
+                .map(|i| i.texels.iter().map(|t| f64::from(t.w)).sum::<f64>())
+                .sum();
+            let out = composed
+                .into_iter()
+                .map(|a| {
+                    let (w, h) = (a.width, a.height);
+                    let normals = normal_maps
+                        .as_mut()
+                        .and_then(|it| it.next())
+                        .map(|n| atlas::normal_chain(n, mip_levels));
+                    billow_format::Atlas {
+                        width: w,
+                        height: h,
+                        mips: atlas::mip_chain(a, mip_levels),
+                        normals,
+                    }
+                })
+                .collect();
+            (out, alpha_sum)
+        })
+        .collect();
+    secs.mips += t.elapsed().as_secs_f64();
+    for (((l, level), (level_atlases, alpha_sum)), packing) in
+        levels.iter().enumerate().zip(built).zip(packings)
+    {
+        let (d, _, rects) = &per_level[l];
         let first_atlas = atlases.len() as u32;
-        let mut normal_maps = composed_n.map(|v| v.into_iter());
-        for a in composed {
-            let (w, h) = (a.width, a.height);
-            let normals = normal_maps
-                .as_mut()
-                .and_then(|it| it.next())
-                .map(|n| atlas::normal_chain(n, mip_levels));
-            atlases.push(billow_format::Atlas {
-                width: w,
-                height: h,
-                mips: atlas::mip_chain(a, mip_levels),
-                normals,
-            });
-        }
-        secs.mips += t.elapsed().as_secs_f64();
+        atlases.extend(level_atlases);
         let next = levels.get(l + 1);
         for (bi, b) in level.boards.iter().enumerate() {
             let (r, w, h) = rects[bi];

@@ -41,6 +41,7 @@ pub use plane_search::{Element, Found, Plane, SearchParams, SearchStats};
 pub use view::{ViewDirs, ViewPreference};
 
 use crate::scene::Scene;
+use assemble::LevelLayout;
 use atlas::Layout;
 use lod::{build_chain, ChainParams, Level};
 
@@ -315,51 +316,50 @@ pub fn bake(
     });
     secs.search = t.elapsed().as_secs_f64();
 
-    // Texel density and snapped rectangles per level.
+    // Texel density and snapped rectangles per level (levels in parallel).
     let t = Instant::now();
-    let mut per_level = Vec::new(); // (density, layout, snapped rects, sizes)
-    for (l, level) in levels.iter().enumerate() {
-        let (gutter, align) = gutter_and_align(opts.gutter, opts.mip_levels);
-        let mut layout = Layout {
-            max_size: opts.atlas_size,
-            gutter,
-            align,
-        };
-        let d = match opts.texel_density {
-            None => {
-                layout.max_size = (opts.atlas_size >> l).max(64);
-                // The cross (last level of a chain) is never denser than half the previous
-                // level: filling its atlas would give it a density above level 0's, and it
-                // would cost more to render than all of level 0.
-                let prev = per_level
-                    .last()
-                    .map_or(f32::INFINITY, |p: &(f32, _, _)| p.0);
-                let cross = l > 0 && l + 1 == levels.len();
-                let d = budget_density(level, &layout);
-                if cross {
-                    d.min(0.5 * prev)
-                } else {
-                    d
+    let (gutter, align) = gutter_and_align(opts.gutter, opts.mip_levels);
+    let mut per_level: Vec<LevelLayout> = levels
+        .par_iter()
+        .enumerate()
+        .map(|(l, level)| {
+            let mut layout = Layout {
+                max_size: opts.atlas_size,
+                gutter,
+                align,
+            };
+            let d = match opts.texel_density {
+                None => {
+                    layout.max_size = (opts.atlas_size >> l).max(64);
+                    budget_density(level, &layout)
                 }
-            }
-            Some(d0) => {
-                let side = level
-                    .boards
-                    .iter()
-                    .map(|b| b.rect.width.max(b.rect.height))
-                    .fold(1e-6f32, f32::max);
-                let cap = (opts.atlas_size - 2 * gutter - align) as f32 / side;
-                (d0 / (1u32 << l) as f32).min(cap)
-            }
-        };
-        let mut rects = Vec::new();
+                Some(d0) => {
+                    let side = level
+                        .boards
+                        .iter()
+                        .map(|b| b.rect.width.max(b.rect.height))
+                        .fold(1e-6f32, f32::max);
+                    let cap = (opts.atlas_size - 2 * gutter - align) as f32 / side;
+                    (d0 / (1u32 << l) as f32).min(cap)
+                }
+            };
+            (d, layout, Vec::new())
+        })
+        .collect();
+    // The cross (last level of a chain) is never denser than half the previous level:
+    // filling its atlas would give it a density above level 0's, and it would cost more to
+    // render than all of level 0.
+    if opts.texel_density.is_none() && per_level.len() > 1 {
+        let n = per_level.len();
+        per_level[n - 1].0 = per_level[n - 1].0.min(0.5 * per_level[n - 2].0);
+    }
+    for (level, (d, _, rects)) in levels.iter().zip(per_level.iter_mut()) {
         for b in &level.boards {
-            let (w, h) = tex_size(&b.rect, d);
+            let (w, h) = tex_size(&b.rect, *d);
             let mut r = b.rect;
-            (r.width, r.height) = (w as f32 / d, h as f32 / d);
+            (r.width, r.height) = (w as f32 / *d, h as f32 / *d);
             rects.push((r, w, h));
         }
-        per_level.push((d, layout, rects));
     }
     secs.trim_and_density = t.elapsed().as_secs_f64();
 
