@@ -191,3 +191,69 @@ fn oak_atlases_keep_billboards_apart_at_every_stored_level() {
         }
     }
 }
+
+/// The bake builds each side's chain alone and copies it into place; that gives the same
+/// bytes as composing the float atlas and filtering it whole (colour and normal maps).
+#[test]
+fn per_side_chains_equal_the_whole_atlas_chain() {
+    use billow::bbcloud::atlas::{assemble_levels, normal_chain, side_chain};
+    let mut rng = Pcg32::seeded(21, 4);
+    for m in 1..=5u32 {
+        let (gutter, align) = gutter_and_align(2, m);
+        let layout = Layout {
+            max_size: 256,
+            gutter,
+            align,
+        };
+        let images: Vec<Image> = (0..60)
+            .map(|_| {
+                let (w, h) = (1 + rng.below(30), 1 + rng.below(30));
+                let texels = (0..w * h)
+                    .map(|_| {
+                        let a = if rng.below(3) == 0 {
+                            0.0
+                        } else {
+                            rng.next_f32()
+                        };
+                        Vec4::new(rng.next_f32(), rng.next_f32(), rng.next_f32(), 1.0) * a
+                    })
+                    .collect();
+                Image {
+                    width: w,
+                    height: h,
+                    texels,
+                }
+            })
+            .collect();
+        let sizes: Vec<(u32, u32)> = images.iter().map(|i| (i.width, i.height)).collect();
+        let p = pack(&sizes, &layout).unwrap();
+        let refs: Vec<&Image> = images.iter().collect();
+        for normals in [false, true] {
+            let whole: Vec<Vec<Vec<u8>>> = compose(&refs, &p, &layout)
+                .into_iter()
+                .map(|a| {
+                    if normals {
+                        normal_chain(a, m)
+                    } else {
+                        mip_chain(a, m)
+                    }
+                })
+                .collect();
+            let chains: Vec<Vec<Vec<u8>>> = images
+                .iter()
+                .map(|i| side_chain(i, &layout, m, normals))
+                .collect();
+            let slices: Vec<&[Vec<u8>]> = chains.iter().map(Vec::as_slice).collect();
+            let empty = if normals {
+                [128, 128, 255, 255]
+            } else {
+                [0; 4]
+            };
+            let parts = assemble_levels(&slices, &sizes, &p, &layout, m, empty);
+            assert!(
+                parts == whole,
+                "M {m}, normals {normals}: per-side chains differ"
+            );
+        }
+    }
+}

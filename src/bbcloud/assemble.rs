@@ -1,8 +1,10 @@
 //! Assembling the asset: per level, pack the billboard textures into atlases (with MIPs),
 //! write the billboards with their atlas rectangles and parent projections, and the foliage
 //! base mesh with each vertex's projection onto its level-0 billboard (morph target).
-//! Normal maps, when baked, are composed with the colour atlas's packing (same places, same
-//! gutters) and get the same number of MIP levels.
+//! Each side's MIP chain is built right after it is rendered (`atlas::side_chain`, its
+//! allocation alone: allocations are aligned so no stored level crosses one), so assembling
+//! an atlas is packing the sides and copying their levels into place. Normal maps, when
+//! baked, use the colour atlas's packing (same places, same gutters, same levels).
 
 use billow_format::{AtlasRect, Billboard, CloudAsset, CloudLevel, Header, Mesh};
 
@@ -20,12 +22,40 @@ use rayon::prelude::*;
 /// Density, layout and snapped (rectangle, texture width, height) per billboard, per level.
 pub type LevelLayout = (f32, Layout, Vec<(PlaneRect, u32, u32)>);
 
+/// One billboard's two sides, ready for packing: content sizes, each side's encoded MIP
+/// chain (built right after rendering, [`atlas::side_chain`]), and summed coverage.
+pub struct Sides {
+    pub sizes: [(u32, u32); 2],
+    pub colour: [Vec<Vec<u8>>; 2],
+    pub normals: Option<[Vec<Vec<u8>>; 2]>,
+    pub alpha: f64,
+}
+
+impl Sides {
+    pub fn new(b: bake::Baked, layout: &Layout, levels: u32) -> Sides {
+        let chain = |i: &bake::Image, n| atlas::side_chain(i, layout, levels, n);
+        let alpha = [&b.front, &b.back]
+            .iter()
+            .map(|i| i.texels.iter().map(|t| f64::from(t.w)).sum::<f64>())
+            .sum();
+        Sides {
+            sizes: [&b.front, &b.back].map(|i| (i.width, i.height)),
+            colour: [chain(&b.front, false), chain(&b.back, false)],
+            normals: b
+                .normals
+                .as_ref()
+                .map(|[f, k]| [chain(f, true), chain(k, true)]),
+            alpha,
+        }
+    }
+}
+
 #[allow(clippy::too_many_arguments)]
 pub fn assemble(
     scene: &Scene,
     levels: &[Level],
     per_level: &[LevelLayout],
-    images: &[bake::Baked],
+    images: &[Sides],
     mip_levels: u32,
     leaves: &[u32],
     trunk: Mesh,
@@ -33,7 +63,7 @@ pub fn assemble(
     secs: &mut Seconds,
     progress: &(dyn Fn(Stage, f32) + Sync),
 ) -> Result<(CloudAsset, Vec<LevelStats>), BbcloudError> {
-    // Pack, compose and MIP each level's atlases (levels in parallel: they are
+    // Pack each level's sides and put their chains in place (levels in parallel: they are
     // independent), then assemble the asset in level order.
     let mut asset_levels = Vec::new();
     let mut billboards = Vec::new();
@@ -45,23 +75,18 @@ pub fn assemble(
             .map(|v| v.boards.len() as u32)
             .sum::<u32>()
     };
-    let baked_of = |l: usize| {
+    let sides_of = |l: usize| {
         let first = first_of(l) as usize;
         &images[first..first + levels[l].boards.len()]
     };
-    let sides = |l: usize| -> Vec<&bake::Image> {
-        baked_of(l)
-            .iter()
-            .flat_map(|b| [&b.front, &b.back])
-            .collect()
-    };
+    let sizes =
+        |l: usize| -> Vec<(u32, u32)> { sides_of(l).iter().flat_map(|s| s.sizes).collect() };
     let t = Instant::now();
     let packings = (0..levels.len())
         .into_par_iter()
         .map(|l| {
             let layout = &per_level[l].1;
-            let sizes: Vec<(u32, u32)> = sides(l).iter().map(|i| (i.width, i.height)).collect();
-            atlas::pack(&sizes, layout).ok_or_else(|| {
+            atlas::pack(&sizes(l), layout).ok_or_else(|| {
                 BbcloudError::BadParameter(format!(
                     "level {l}: a billboard texture does not fit a {} atlas",
                     layout.max_size
@@ -77,35 +102,32 @@ pub fn assemble(
         .into_par_iter()
         .map(|l| {
             progress(Stage::Pack, l as f32 / levels.len() as f32);
-            let (layout, packing, imgs) = (&per_level[l].1, &packings[l], sides(l));
-            let nrms: Option<Vec<&bake::Image>> = baked_of(l)
+            let (layout, packing, sides) = (&per_level[l].1, &packings[l], sides_of(l));
+            let colour: Vec<&[Vec<u8>]> = sides
                 .iter()
-                .map(|b| b.normals.as_ref().map(|[f, k]| [f, k]))
+                .flat_map(|s| s.colour.iter().map(Vec::as_slice))
+                .collect();
+            let place = |chains: &[&[Vec<u8>]], empty| {
+                atlas::assemble_levels(chains, &sizes(l), packing, layout, mip_levels, empty)
+            };
+            let mips = place(&colour, [0; 4]);
+            let normals: Option<Vec<&[Vec<u8>]>> = sides
+                .iter()
+                .map(|s| s.normals.as_ref().map(|n| n.iter().map(Vec::as_slice)))
                 .collect::<Option<Vec<_>>>()
                 .map(|v| v.into_iter().flatten().collect());
-            let composed = atlas::compose(&imgs, packing, layout);
-            let mut normal_maps = nrms.map(|n| atlas::compose(&n, packing, layout).into_iter());
-            let alpha_sum: f64 = imgs
-                .iter()
-                .map(|i| i.texels.iter().map(|t| f64::from(t.w)).sum::<f64>())
-                .sum();
-            let out = composed
+            let mut normal_maps = normals.map(|n| place(&n, [128, 128, 255, 255]).into_iter());
+            let out = mips
                 .into_iter()
-                .map(|a| {
-                    let (w, h) = (a.width, a.height);
-                    let normals = normal_maps
-                        .as_mut()
-                        .and_then(|it| it.next())
-                        .map(|n| atlas::normal_chain(n, mip_levels));
-                    billow_format::Atlas {
-                        width: w,
-                        height: h,
-                        mips: atlas::mip_chain(a, mip_levels),
-                        normals,
-                    }
+                .zip(&packing.sizes)
+                .map(|(mips, &(width, height))| billow_format::Atlas {
+                    width,
+                    height,
+                    mips,
+                    normals: normal_maps.as_mut().and_then(|it| it.next()),
                 })
                 .collect();
-            (out, alpha_sum)
+            (out, sides.iter().map(|s| s.alpha).sum())
         })
         .collect();
     secs.mips += t.elapsed().as_secs_f64();

@@ -230,6 +230,83 @@ pub fn compose(images: &[&Image], packing: &Packing, layout: &Layout) -> Vec<Ima
     atlases
 }
 
+/// One side's allocation as an image: its texels with the edges extruded into the gutter
+/// and the alignment padding, exactly what [`compose`] writes at its place.
+pub fn allocation_image(img: &Image, layout: &Layout) -> Image {
+    let (g, a) = (layout.gutter, layout.align);
+    let aw = (img.width + 2 * g).div_ceil(a) * a;
+    let ah = (img.height + 2 * g).div_ceil(a) * a;
+    let mut texels = Vec::with_capacity((aw * ah) as usize);
+    for y in 0..ah {
+        let sy = (y as i64 - g as i64).clamp(0, img.height as i64 - 1) as u32;
+        let row = &img.texels[(sy * img.width) as usize..][..img.width as usize];
+        for x in 0..aw {
+            texels.push(row[(x as i64 - g as i64).clamp(0, img.width as i64 - 1) as usize]);
+        }
+    }
+    Image {
+        width: aw,
+        height: ah,
+        texels,
+    }
+}
+
+/// The encoded MIP chain (`levels` levels) of one side's allocation: colour
+/// (`SrgbPremultiplied`) or, with `normals`, a normal map. Because allocations are aligned
+/// to `2^(levels−1)` texels, level k of an atlas restricted to an allocation is level k of
+/// the allocation alone, so the atlas's chain can be built per side, in parallel and without
+/// the full-size float atlas ([`assemble_levels`]; same bytes as [`compose`] + [`mip_chain`],
+/// tested).
+pub fn side_chain(img: &Image, layout: &Layout, levels: u32, normals: bool) -> Vec<Vec<u8>> {
+    assert!(
+        layout.align >= 1 << (levels.max(1) - 1),
+        "allocations must be aligned to 2^(levels-1)"
+    );
+    let a = allocation_image(img, layout);
+    if normals {
+        normal_chain(a, levels)
+    } else {
+        mip_chain(a, levels)
+    }
+}
+
+/// Every atlas's encoded levels from the sides' chains ([`side_chain`], in packing order)
+/// and their content sizes; texels outside every allocation are `empty`.
+pub fn assemble_levels(
+    chains: &[&[Vec<u8>]],
+    sizes: &[(u32, u32)],
+    packing: &Packing,
+    layout: &Layout,
+    levels: u32,
+    empty: [u8; 4],
+) -> Vec<Vec<Vec<u8>>> {
+    let mut out: Vec<Vec<Vec<u8>>> = packing
+        .sizes
+        .iter()
+        .map(|&(w, h)| {
+            (0..mip_count(w, h, levels))
+                .map(|k| empty.repeat(((w >> k).max(1) * (h >> k).max(1)) as usize))
+                .collect()
+        })
+        .collect();
+    let (g, a) = (layout.gutter, layout.align);
+    for ((chain, &(w, h)), p) in chains.iter().zip(sizes).zip(&packing.places) {
+        let (aw, ah) = ((w + 2 * g).div_ceil(a) * a, (h + 2 * g).div_ceil(a) * a);
+        let (x0, y0) = (p.x - g, p.y - g);
+        let atlas_w = packing.sizes[p.atlas as usize].0;
+        for (k, dst) in out[p.atlas as usize].iter_mut().enumerate() {
+            let (lw, lh, row) = (aw >> k, ah >> k, ((atlas_w >> k).max(1) * 4) as usize);
+            let src = &chain[k];
+            for yy in 0..lh as usize {
+                let d = ((y0 >> k) as usize + yy) * row + (x0 >> k) as usize * 4;
+                let n = lw as usize * 4;
+                dst[d..d + n].copy_from_slice(&src[yy * n..(yy + 1) * n]);
+            }
+        }
+    }
+    out
+}
+
 /// Next MIP level: 2×2 box filter of premultiplied colour (floor halving, clamped at 1).
 pub fn downsample(img: &Image) -> Image {
     let (w, h) = ((img.width / 2).max(1), (img.height / 2).max(1));

@@ -383,7 +383,7 @@ pub fn bake(
         .flat_map(|(l, lv)| (0..lv.boards.len()).map(move |b| (l, b)))
         .collect();
     let done = std::sync::atomic::AtomicUsize::new(0);
-    let images: Vec<bake::Baked> = jobs
+    let images: Vec<assemble::Sides> = jobs
         .par_iter()
         .map(|&(l, b)| {
             let (r, w, h) = per_level[l].2[b];
@@ -404,6 +404,8 @@ pub fn bake(
                 &opts.shading,
                 opts.normal_map,
             );
+            // Its MIP chains now, while the floats are at hand (`assemble.rs`).
+            let out = assemble::Sides::new(out, &per_level[l].1, opts.mip_levels);
             let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
             progress(Stage::Render, n as f32 / jobs.len() as f32);
             out
