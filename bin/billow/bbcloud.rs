@@ -10,7 +10,8 @@ use billow::bbcloud::{
     bake, straight, BbcloudError, BbcloudOptions, BbcloudStats, Shading, Stage, ViewDirs,
     ViewPreference,
 };
-use billow::export::{cloud_glb_bytes, GltfAlpha, GltfOptions};
+use billow::export::gltf::cloud_glb_bytes_with;
+use billow::export::{GltfAlpha, GltfOptions};
 use billow::import::{import, ImportOptions};
 use billow::provenance::{source_info, tool_version};
 use glam::Vec3;
@@ -300,7 +301,23 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     bar.finish_and_clear();
 
     // Everything is encoded before anything is written, so a failure leaves no output.
+    // The atlas PNGs are encoded once for both the .glb and the --atlas dump.
     let export_start = Instant::now();
+    let pngs = if args.atlas.is_some() || args.gltf.is_some() {
+        let place = args
+            .atlas
+            .as_ref()
+            .or(args.gltf.as_ref())
+            .expect("one of them");
+        straight::atlas_pngs(&asset).map_err(|e| {
+            CliError::new(
+                Code::Internal,
+                format!("{}: cannot encode PNG: {e}", place.display()),
+            )
+        })?
+    } else {
+        Vec::new()
+    };
     let glb = match &args.gltf {
         None => None,
         Some(path) => {
@@ -310,19 +327,11 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
                     GltfAlphaArg::Blend => GltfAlpha::Blend,
                 },
             };
-            let bytes = cloud_glb_bytes(&asset, &opts)
+            let png_bytes: Vec<Vec<u8>> = pngs.iter().map(|(_, b)| b.clone()).collect();
+            let bytes = cloud_glb_bytes_with(&asset, &opts, Some(&png_bytes))
                 .map_err(|e| CliError::new(Code::Internal, format!("{}: {e}", path.display())))?;
             Some((path, bytes))
         }
-    };
-    let pngs = match &args.atlas {
-        None => Vec::new(),
-        Some(dir) => straight::atlas_pngs(&asset).map_err(|e| {
-            CliError::new(
-                Code::Internal,
-                format!("{}: cannot encode PNG: {e}", dir.display()),
-            )
-        })?,
     };
     let seconds_export = export_start.elapsed().as_secs_f64();
 

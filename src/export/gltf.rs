@@ -268,10 +268,24 @@ fn trunk_mesh(
 
 /// The `.glb` bytes of `asset` (validated first).
 pub fn cloud_glb_bytes(asset: &CloudAsset, opts: &GltfOptions) -> Result<Vec<u8>, GltfError> {
+    cloud_glb_bytes_with(asset, opts, None)
+}
+
+/// [`cloud_glb_bytes`] with the atlases' level-0 PNGs already encoded
+/// ([`straight::atlas_pngs`], in atlas order), so a caller that also dumps them encodes
+/// them once.
+pub fn cloud_glb_bytes_with(
+    asset: &CloudAsset,
+    opts: &GltfOptions,
+    atlas_pngs: Option<&[Vec<u8>]>,
+) -> Result<Vec<u8>, GltfError> {
     let encode = |message: String| GltfError::Encode {
         path: PathBuf::new(),
         message,
     };
+    if atlas_pngs.is_some_and(|p| p.len() != asset.atlases.len()) {
+        return Err(encode("one PNG per atlas expected".into()));
+    }
     asset.validate().map_err(|source| GltfError::InvalidAsset {
         path: PathBuf::new(),
         source,
@@ -299,14 +313,19 @@ pub fn cloud_glb_bytes(asset: &CloudAsset, opts: &GltfOptions) -> Result<Vec<u8>
     };
     let clamp = sampler(bin.root, [1, 1]);
     // Atlases: one texture each, and a front and a back material.
-    let pngs: Vec<Vec<u8>> = {
-        use rayon::prelude::*;
-        asset
-            .atlases
-            .par_iter()
-            .map(straight::atlas_png)
-            .collect::<Result<_, _>>()
-            .map_err(encode)?
+    let own: Vec<Vec<u8>>;
+    let pngs: &[Vec<u8>] = match atlas_pngs {
+        Some(p) => p,
+        None => {
+            use rayon::prelude::*;
+            own = asset
+                .atlases
+                .par_iter()
+                .map(straight::atlas_png)
+                .collect::<Result<_, _>>()
+                .map_err(encode)?;
+            &own
+        }
     };
     let normal_pngs: Vec<Vec<u8>> = if has_normals {
         use rayon::prelude::*;
