@@ -18,7 +18,7 @@ PRUNED  := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.pruned.billow,$(MESHES))
 CLOUDS  := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.cloud.billow,$(MESHES))
 BATCH_RES ?= 128
 
-.PHONY: all build demo test lint fmt batch clean fixtures accuracy accuracy-emptyspace bench gallery bench-view
+.PHONY: all build demo test lint fmt batch clean fixtures accuracy accuracy-emptyspace bench bench-bbcloud gallery bench-view
 
 all: build
 
@@ -156,3 +156,11 @@ bench: build
 	python3 benches/voxelize_bench.py --billow $(BILLOW) --floor $(BENCH_DIR)/raster_floor \
 		--mesh $(BENCH_DIR)/tree.obj --res "$(BENCH_RES)" --runs $(BENCH_RUNS) \
 		--notes benches/voxelize_bench_notes.md --out docs/benchmarks.md
+
+## Benchmark: `billow bbcloud` on the oak (N = 500, ε = 0.04, defaults and a few options),
+## medians of BBCLOUD_RUNS runs: wall and CPU time, billboards and atlas fill per LOD, stage
+## times; writes docs/bbcloud_bench.md. Needs python3.
+BBCLOUD_RUNS ?= 7
+bench-bbcloud: build
+	python3 benches/bbcloud_bench.py --billow $(BILLOW) --mesh $(SAMPLE) --runs $(BBCLOUD_RUNS) \
+		--out docs/bbcloud_bench.md

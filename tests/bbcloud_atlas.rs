@@ -99,7 +99,7 @@ fn mips_have_no_dark_fringes_and_gutters_extrude() {
     let get = |x: u32, y: u32| at.texels[(y * at.width + x) as usize];
     assert_eq!(get(pl.x - 1, pl.y + 2), green * 0.5);
     assert_eq!(get(pl.x - 2, pl.y - 2), Vec4::ZERO);
-    let mips = mip_chain(at.clone());
+    let mips = mip_chain(at.clone(), 32);
     assert_eq!(
         mips.len() as u32,
         32 - at.width.max(at.height).leading_zeros()

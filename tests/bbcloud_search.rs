@@ -1,19 +1,22 @@
-//! Algorithm 1 (plane search) properties and whole-bake determinism.
+//! Algorithm 1 (plane search) properties, the accelerated scan against the plain one, and
+//! whole-bake determinism.
 
+mod bbcloud_common;
+
+use bbcloud_common::{leafy_scene, oak_leaves};
 use billow::bbcloud::plane_search::{search, Element, SearchParams};
 use billow::bbcloud::{bake, BbcloudOptions};
 use billow::rng::Pcg32;
-use billow::scene::{Aabb, AlphaMode, Material, Scene, Triangle, Vertex};
+use billow::scene::Scene;
 use billow_format::CloudAsset;
-use glam::{Vec2, Vec3, Vec4};
+use glam::{Vec2, Vec3};
 
 fn params(eps: f32, samples: u32, seed: u64) -> SearchParams {
     SearchParams {
         epsilon: eps,
         samples,
         seed,
-        stream: 0,
-        max_extent: None,
+        ..SearchParams::default()
     }
 }
 
@@ -115,7 +118,7 @@ fn coplanar_groups_land_on_one_billboard_and_far_ones_never() {
             let b = f.members.iter().any(|&m| (40..80).contains(&m));
             assert!(!(a && b), "groups 2.5 ε apart share a billboard");
         }
-        assert_eq!(stats.degenerate_redraws + stats.fallback_planes, 0);
+        assert_eq!(stats.degenerate_seeds + stats.fallback_planes, 0);
     }
 }
 
@@ -161,98 +164,24 @@ fn degenerate_seeds_never_give_nan_planes() {
     elems.extend(group(&mut rng, 10, Vec3::ZERO, Vec3::X, Vec3::Y, 0.3, 0.0));
     let (found, stats) = search(&elems, &params(0.01, 64, 1), &|_, _| {});
     check_partition(elems.len(), &found);
-    assert!(stats.degenerate_redraws > 0, "{stats:?}");
+    // All 24 degenerate elements are skipped as seeds (counted), never drawn.
+    assert_eq!(stats.degenerate_seeds, 24, "{stats:?}");
+    for f in &found {
+        assert!(
+            f.seed >= 24 || stats.fallback_planes > 0,
+            "degenerate seed {f:?}"
+        );
+    }
     // Only degenerate elements: every plane is a fallback, none is NaN.
     let only: Vec<Element> = elems[..24].to_vec();
     let (found, stats) = search(&only, &params(0.01, 16, 2), &|_, _| {});
     check_partition(only.len(), &found);
+    assert_eq!(stats.candidates, 0, "{stats:?}");
+    assert_eq!(stats.fallback_planes as usize, found.len(), "{stats:?}");
     assert!(
-        stats.fallback_planes > 0 && stats.skipped_candidates > 0,
-        "{stats:?}"
+        found.len() < only.len(),
+        "fallback planes absorb coplanar degenerates"
     );
-}
-
-/// Leaf cards (MASK) scattered in a sphere plus a few opaque trunk triangles.
-pub fn leafy_scene(leaves: usize) -> Scene {
-    let mut rng = Pcg32::seeded(42, 7);
-    let vtx = |p: Vec3, n: Vec3, uv: Vec2| Vertex {
-        position: p,
-        normal: n,
-        uv,
-        color: Vec4::ONE,
-    };
-    let mut triangles = Vec::new();
-    for i in 0..leaves {
-        let c = loop {
-            let c = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0;
-            if c.length() < 1.0 {
-                break c + Vec3::Y * 2.0;
-            }
-        };
-        let a = Vec3::new(
-            rng.next_f32() - 0.5,
-            rng.next_f32() - 0.5,
-            rng.next_f32() - 0.5,
-        )
-        .normalize_or(Vec3::X);
-        let b = a.any_orthonormal_vector();
-        let n = a.cross(b);
-        let s = 0.15;
-        let q = [c, c + a * s, c + (a + b) * s, c + b * s];
-        let uv = [Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y];
-        for t in [[0, 1, 2], [0, 2, 3]] {
-            triangles.push(Triangle {
-                v: t.map(|k| vtx(q[k], n, uv[k])),
-                material: 1,
-                mesh: (i % 2) as u32,
-            });
-        }
-    }
-    for k in 0..6 {
-        let a = k as f32 * 1.047;
-        let (p, q) = (
-            Vec3::new(a.cos(), 0.0, a.sin()) * 0.1,
-            Vec3::new((a + 1.047).cos(), 0.0, (a + 1.047).sin()) * 0.1,
-        );
-        let n = (p + q).normalize();
-        triangles.push(Triangle {
-            v: [
-                vtx(p, n, Vec2::ZERO),
-                vtx(q, n, Vec2::X),
-                vtx(q + Vec3::Y * 2.0, n, Vec2::ONE),
-            ],
-            material: 0,
-            mesh: 0,
-        });
-    }
-    let mut bounds = Aabb::EMPTY;
-    triangles
-        .iter()
-        .flat_map(|t| t.v.iter())
-        .for_each(|v| bounds.grow(v.position));
-    let leaf = Material {
-        name: "leaves".into(),
-        base_color_factor: Vec4::new(0.2, 0.6, 0.1, 1.0),
-        alpha_mode: AlphaMode::Mask { cutoff: 0.5 },
-        double_sided: true,
-        ..Material::default()
-    };
-    Scene {
-        triangles,
-        materials: vec![
-            Material {
-                name: "bark".into(),
-                ..Material::default()
-            },
-            leaf,
-        ],
-        textures: vec![],
-        meshes: vec![],
-        texture_report: vec![],
-        warnings: vec![],
-        dropped_triangles: 0,
-        bounds,
-    }
 }
 
 fn small_opts(seed: u64) -> BbcloudOptions {
@@ -331,58 +260,6 @@ fn three_groups(seed: u64, n: usize, eps: f32) -> Vec<Element> {
     elems
 }
 
-/// Which elements share a billboard, as sorted sets of `ids[member]`.
-fn partition(found: &[billow::bbcloud::Found], ids: &[usize]) -> Vec<Vec<usize>> {
-    let mut p: Vec<Vec<usize>> = found
-        .iter()
-        .map(|f| {
-            let mut s: Vec<usize> = f.members.iter().map(|&m| ids[m as usize]).collect();
-            s.sort_unstable();
-            s
-        })
-        .collect();
-    p.sort();
-    p
-}
-
-/// "Removing one triangle's leaves changes nothing else for the same seed." The search is
-/// global and random (one PCG32 stream drawing among the remaining elements), so removing
-/// a leaf triangle shifts every later draw and the planes are not bit-identical; what
-/// must not change is the cloud's structure elsewhere: which triangles share a billboard.
-/// Removing any one triangle of a group leaves every billboard of the other groups with
-/// exactly the same members, and its own group on one billboard minus that triangle.
-#[test]
-fn removing_one_leaf_changes_nothing_else() {
-    let eps = 0.02;
-    for seed in 0..3u64 {
-        let elems = three_groups(seed, 30, eps);
-        let all: Vec<usize> = (0..elems.len()).collect();
-        let (found, _) = search(&elems, &params(eps, 300, seed), &|_, _| {});
-        let before = partition(&found, &all);
-        for removed in [0usize, 31, 89] {
-            let ids: Vec<usize> = all.iter().copied().filter(|&i| i != removed).collect();
-            let fewer: Vec<Element> = ids.iter().map(|&i| elems[i]).collect();
-            let (f2, _) = search(&fewer, &params(eps, 300, seed), &|_, _| {});
-            check_partition(fewer.len(), &f2);
-            check_slab(&fewer, &f2, eps);
-            let expect: Vec<Vec<usize>> = {
-                let mut e: Vec<Vec<usize>> = before
-                    .iter()
-                    .map(|s| s.iter().copied().filter(|&i| i != removed).collect())
-                    .filter(|s: &Vec<usize>| !s.is_empty())
-                    .collect();
-                e.sort();
-                e
-            };
-            assert_eq!(
-                partition(&f2, &ids),
-                expect,
-                "seed {seed}, removed {removed}"
-            );
-        }
-    }
-}
-
 /// §5's extent limit: every billboard's members lie within `r` of one seed centroid, so
 /// any two of their vertices are at most 2r apart; the cloud is still a partition within
 /// the slab, and a limit smaller than a group splits it.
@@ -417,4 +294,65 @@ fn extent_limit_bounds_billboards() {
         lim.len(),
         free.len()
     );
+}
+
+/// The acceleration structure (runs of elements culled by their boxes) must give the same
+/// cloud as the plain scan for the same seed: on the oak's leaves (level 0), on the quads of
+/// that cloud (a LOD level), with the extent limit and with a view preference.
+#[test]
+fn accelerated_scan_gives_the_plain_scan_cloud() {
+    let (leaves, r) = oak_leaves();
+    assert_eq!(leaves.len(), 10_640);
+    let run = |elems: &[Element], p: &SearchParams| {
+        let fast = search(elems, p, &|_, _| {});
+        let plain = search(
+            elems,
+            &SearchParams {
+                accelerate: false,
+                ..p.clone()
+            },
+            &|_, _| {},
+        );
+        assert!(fast == plain, "accelerated and plain scans differ");
+        fast.0
+    };
+    let p0 = params(0.04 * r, 60, 11);
+    let level0 = run(&leaves, &p0);
+    check_partition(leaves.len(), &level0);
+    check_slab(&leaves, &level0, 0.04 * r);
+    // Quads: each billboard's members' bounding rectangle in its plane, as the LOD chain
+    // feeds them (the rectangle itself does not matter here, only that they are quads).
+    let quads: Vec<Element> = level0
+        .iter()
+        .map(|f| {
+            let pts: Vec<Vec3> = f
+                .members
+                .iter()
+                .flat_map(|&m| leaves[m as usize].verts[..3].to_vec())
+                .collect();
+            Element::quad(billow::bbcloud::rect::trim(&f.plane, &pts).corners())
+        })
+        .collect();
+    let p1 = SearchParams {
+        stream: 1,
+        ..params(0.08 * r, 60, 11)
+    };
+    run(&quads, &p1);
+    let limited = SearchParams {
+        max_extent: Some(0.3 * r),
+        ..params(0.04 * r, 40, 12)
+    };
+    let lim = run(&leaves, &limited);
+    assert!(
+        lim.len() > level0.len(),
+        "the extent limit splits billboards"
+    );
+    let view = SearchParams {
+        view: Some(billow::bbcloud::ViewPreference {
+            dirs: billow::bbcloud::ViewDirs::Horizontal { up: Vec3::Y },
+            strength: 0.7,
+        }),
+        ..params(0.04 * r, 40, 13)
+    };
+    run(&leaves, &view);
 }

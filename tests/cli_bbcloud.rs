@@ -177,6 +177,15 @@ fn bad_parameters_are_one_line_errors_and_write_nothing() {
         (&["--light", "0,0,0"], 8, "--light"),
         (&["--foliage", "no-such-material"], 8, "no-such-material"),
         (&["--max-extent", "0"], 8, "extent"),
+        (&["--mip-levels", "6"], 8, "mip levels"),
+        (&["--up", "0,0,0"], 8, "--up"),
+        (&["--up", "sideways"], 8, "--up"),
+        (&["--view-dirs", "sideways"], 8, "--view-dirs"),
+        (
+            &["--view-dirs", "horizontal", "--view-strength", "2"],
+            8,
+            "--view-strength",
+        ),
     ];
     for (extra, code, needle) in cases {
         let oak = oak();
@@ -222,4 +231,95 @@ fn unwritable_outputs_fail_cleanly() {
     assert!(r.error_line().unwrap().contains("afile"));
     assert_eq!(files(d), ["afile"]);
     assert_eq!(std::fs::read(d.join("afile")).unwrap(), b"keep");
+    // --atlas DIR with an unwritable --gltf: the atlas PNGs are not left behind either, nor
+    // the folder created for them.
+    let r = bake(
+        d,
+        "x.billow",
+        "1",
+        "2",
+        &["--atlas", "atl/deep", "--gltf", "no/such/dir/x.glb"],
+    );
+    assert_eq!(r.code, Some(7), "{}", r.stderr);
+    assert!(r.error_line().unwrap().contains("x.glb"));
+    assert_eq!(files(d), ["afile"], "left {:?}", files(d));
+    // An existing atlas folder keeps exactly what it had.
+    std::fs::create_dir(d.join("atl")).unwrap();
+    std::fs::write(d.join("atl/mine.txt"), b"mine").unwrap();
+    let r = bake(
+        d,
+        "x.billow",
+        "1",
+        "2",
+        &["--atlas", "atl", "--gltf", "no/such/dir/x.glb"],
+    );
+    assert_eq!(r.code, Some(7), "{}", r.stderr);
+    assert_eq!(files(&d.join("atl")), ["mine.txt"]);
+    assert_eq!(files(d), ["afile", "atl"]);
+    // The .billow itself unwritable (its folder is a file): nothing else is written.
+    let r = bake(
+        d,
+        "afile/x.billow",
+        "1",
+        "2",
+        &["--atlas", "atl", "--gltf", "x.glb"],
+    );
+    assert_eq!(r.code, Some(7), "{}", r.stderr);
+    assert_eq!(files(d), ["afile", "atl"]);
+    assert_eq!(files(&d.join("atl")), ["mine.txt"]);
+}
+
+/// The options of Lacewell §5 and the extras: view preference, up axis, normal maps, MIP
+/// levels, foliage by name; recorded in the header and the summary.
+#[test]
+fn extra_options_are_applied_and_recorded() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let r = bake(
+        d,
+        "x.billow",
+        "3",
+        "2",
+        &[
+            "--json",
+            "--up",
+            "-z",
+            "--view-dirs",
+            "+z,+x",
+            "--view-strength",
+            "0.5",
+            "--normal-map",
+            "--unlit",
+            "--mip-levels",
+            "3",
+            "--gltf",
+            "x.glb",
+        ],
+    );
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let v: serde_json::Value = serde_json::from_str(&r.stdout).unwrap();
+    assert_eq!(v["normal_map"], true);
+    assert_eq!(v["mip_levels"], 3);
+    let a = CloudAsset::from_bytes(&std::fs::read(d.join("x.billow")).unwrap()).unwrap();
+    let p = &a.header.params;
+    assert_eq!(p["up"], "0,0,-1");
+    assert_eq!(p["view_dirs"], "0,0,1;1,0,0");
+    assert_eq!(p["view_strength"], "0.5");
+    assert_eq!(p["normal_map"], "tangent");
+    assert!(a
+        .atlases
+        .iter()
+        .all(|x| x.normals.is_some() && x.mips.len() <= 3));
+    let last = a.levels[2].first_billboard as usize;
+    for b in &a.billboards[last..] {
+        assert!(b.plane[2].abs() < 1e-6, "cross normals perpendicular to -z");
+    }
+    let (doc, _, _) = gltf::import(d.join("x.glb")).expect("strict glTF import");
+    assert!(doc.materials().any(|m| m.normal_texture().is_some()));
+    // The oak's bark by name: it becomes the cloud, the leaves stay a mesh.
+    let r = bake(d, "bark.billow", "3", "2", &["--json", "--foliage", "bark"]);
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let v: serde_json::Value = serde_json::from_str(&r.stdout).unwrap();
+    assert_eq!(v["stats"]["foliage_triangles"], 3166);
+    assert_eq!(v["stats"]["kept_triangles"], 10_640);
 }

@@ -27,6 +27,7 @@ fn atlas(n: u32, levels: u32, colour: impl Fn(u32) -> [u8; 4]) -> Atlas {
                 colour(k).repeat((s * s) as usize)
             })
             .collect(),
+        normals: None,
     }
 }
 

@@ -1,11 +1,17 @@
 //! `billow bbcloud IN -o OUT.billow`: a stochastic billboard cloud (Lacewell et al. 2006)
 //! of a mesh's foliage, plus its other triangles kept as a mesh.
 
+mod staged;
+
 use std::path::PathBuf;
 use std::time::Instant;
 
-use billow::bbcloud::{bake, straight, BbcloudError, BbcloudOptions, BbcloudStats, Shading, Stage};
-use billow::export::{cloud_glb_bytes, GltfAlpha, GltfOptions};
+use billow::bbcloud::{
+    bake, straight, BbcloudError, BbcloudOptions, BbcloudStats, Shading, Stage, ViewDirs,
+    ViewPreference,
+};
+use billow::export::gltf::cloud_glb_bytes_with;
+use billow::export::{GltfAlpha, GltfOptions};
 use billow::import::{import, ImportOptions};
 use billow::provenance::{source_info, tool_version};
 use glam::Vec3;
@@ -33,8 +39,28 @@ pub struct Args {
     #[arg(long, default_value_t = 0)]
     seed: u64,
     /// Number of LOD levels; with 2 or more the last is two crossed vertical billboards.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 3)]
     lods: u32,
+    /// Up axis: +x, -x, +y, -y, +z, -z or x,y,z (the last LOD's billboards contain it;
+    /// --view-dirs horizontal is perpendicular to it). glTF is +y.
+    #[arg(long, default_value = "+y", allow_hyphen_values = true)]
+    up: String,
+    /// Prefer planes facing the expected view directions (Lacewell §5): "horizontal" (all
+    /// directions perpendicular to --up) or directions separated by ';' (x,y,z or an axis
+    /// such as +z; axes may also be separated by ',': "+z,+x").
+    #[arg(long, value_name = "horizontal|DIR;DIR...", allow_hyphen_values = true)]
+    view_dirs: Option<String>,
+    /// Strength of --view-dirs in [0, 1]: candidates rank by area·((1−s) + s·facing).
+    #[arg(long, default_value_t = 1.0, requires = "view_dirs")]
+    view_strength: f32,
+    /// Also bake a tangent-space normal map per billboard side (stored as a layer of every
+    /// atlas, exported as the glTF normalTexture). Pair with --unlit for runtime lighting.
+    #[arg(long)]
+    normal_map: bool,
+    /// MIP levels stored per atlas (1–5); allocations are aligned and padded so no stored
+    /// level mixes two billboards.
+    #[arg(long, default_value_t = 4)]
+    mip_levels: u32,
     /// Largest atlas side in texels (a power of two).
     #[arg(long, default_value_t = 2048)]
     atlas_size: u32,
@@ -94,6 +120,8 @@ struct Summary<'a> {
     atlas_fill_per_lod: Vec<f64>,
     texels: u64,
     bytes: u64,
+    mip_levels: u32,
+    normal_map: bool,
     stats: &'a BbcloudStats,
     seconds_import: f64,
     seconds_write: f64,
@@ -127,6 +155,69 @@ fn parse_light(s: &str) -> Result<Vec3, CliError> {
     Ok(l.normalize())
 }
 
+/// An axis token (`+x`, `-z`, `y`) or `x,y,z`, normalised.
+fn parse_dir(flag: &str, s: &str) -> Result<Vec3, CliError> {
+    let t = s.trim().to_ascii_lowercase();
+    let axis = |c: &str| match c {
+        "x" => Some(Vec3::X),
+        "y" => Some(Vec3::Y),
+        "z" => Some(Vec3::Z),
+        _ => None,
+    };
+    let v = if let Some(a) = t.strip_prefix('+').and_then(axis).or_else(|| axis(&t)) {
+        a
+    } else if let Some(a) = t.strip_prefix('-').and_then(axis) {
+        -a
+    } else {
+        let c: Vec<f32> = t
+            .split(',')
+            .map(|p| p.trim().parse::<f32>())
+            .collect::<Result<_, _>>()
+            .map_err(|_| bad(flag, format!("'{s}': expected ±x, ±y, ±z or x,y,z")))?;
+        match c[..] {
+            [x, y, z] => Vec3::new(x, y, z),
+            _ => return Err(bad(flag, format!("'{s}': expected ±x, ±y, ±z or x,y,z"))),
+        }
+    };
+    if !v.is_finite() || v.length() == 0.0 {
+        return Err(bad(flag, format!("'{s}': must be finite and non-zero")));
+    }
+    Ok(v.normalize() + Vec3::ZERO) // + 0: no negative zeros in the recorded header
+}
+
+fn parse_view(s: &str, up: Vec3, strength: f32) -> Result<ViewPreference, CliError> {
+    if !(0.0..=1.0).contains(&strength) {
+        return Err(bad(
+            "--view-strength",
+            format!("must be in [0, 1], got {strength}"),
+        ));
+    }
+    let dirs = if s.trim().eq_ignore_ascii_case("horizontal") {
+        ViewDirs::Horizontal { up }
+    } else {
+        let mut d = Vec::new();
+        for part in s.split(';').filter(|p| !p.trim().is_empty()) {
+            match parse_dir("--view-dirs", part) {
+                Ok(v) => d.push(v),
+                // "+z,+x": axes separated by commas.
+                Err(e) => {
+                    for a in part.split(',') {
+                        match parse_dir("--view-dirs", a) {
+                            Ok(v) => d.push(v),
+                            Err(_) => return Err(e),
+                        }
+                    }
+                }
+            }
+        }
+        if d.is_empty() || d.len() > 64 {
+            return Err(bad("--view-dirs", format!("'{s}': 1 to 64 directions")));
+        }
+        ViewDirs::Directions(d)
+    };
+    Ok(ViewPreference { dirs, strength })
+}
+
 pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let start = Instant::now();
     if !(0.0..=1.0).contains(&args.ambient) {
@@ -140,6 +231,12 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     } else {
         Some(parse_light(&args.light)?)
     };
+    let up = parse_dir("--up", &args.up)?;
+    let view = args
+        .view_dirs
+        .as_deref()
+        .map(|s| parse_view(s, up, args.view_strength))
+        .transpose()?;
     let opts = BbcloudOptions {
         epsilon: args.epsilon,
         samples: args.samples,
@@ -154,8 +251,19 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         supersample: args.supersample,
         foliage: args.foliage.clone(),
         max_extent: args.max_extent,
+        up,
+        view,
+        normal_map: args.normal_map,
+        mip_levels: args.mip_levels,
         ..BbcloudOptions::default()
     };
+    if args.normal_map && light.is_some() {
+        warn(
+            ctx,
+            "--normal-map with baked lighting: a viewer that uses the normal map lights the \
+             billboards again; bake with --unlit for runtime lighting",
+        );
+    }
     let input = args.input.display().to_string();
     let scene = import(
         &args.input,
@@ -193,7 +301,23 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     bar.finish_and_clear();
 
     // Everything is encoded before anything is written, so a failure leaves no output.
+    // The atlas PNGs are encoded once for both the .glb and the --atlas dump.
     let export_start = Instant::now();
+    let pngs = if args.atlas.is_some() || args.gltf.is_some() {
+        let place = args
+            .atlas
+            .as_ref()
+            .or(args.gltf.as_ref())
+            .expect("one of them");
+        straight::atlas_pngs(&asset).map_err(|e| {
+            CliError::new(
+                Code::Internal,
+                format!("{}: cannot encode PNG: {e}", place.display()),
+            )
+        })?
+    } else {
+        Vec::new()
+    };
     let glb = match &args.gltf {
         None => None,
         Some(path) => {
@@ -203,19 +327,11 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
                     GltfAlphaArg::Blend => GltfAlpha::Blend,
                 },
             };
-            let bytes = cloud_glb_bytes(&asset, &opts)
+            let png_bytes: Vec<Vec<u8>> = pngs.iter().map(|(_, b)| b.clone()).collect();
+            let bytes = cloud_glb_bytes_with(&asset, &opts, Some(&png_bytes))
                 .map_err(|e| CliError::new(Code::Internal, format!("{}: {e}", path.display())))?;
             Some((path, bytes))
         }
-    };
-    let pngs = match &args.atlas {
-        None => Vec::new(),
-        Some(dir) => straight::atlas_pngs(&asset).map_err(|e| {
-            CliError::new(
-                Code::Internal,
-                format!("{}: cannot encode PNG: {e}", dir.display()),
-            )
-        })?,
     };
     let seconds_export = export_start.elapsed().as_secs_f64();
 
@@ -223,12 +339,18 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let bytes = asset
         .to_bytes()
         .map_err(|e| CliError::new(Code::Internal, e))?;
-    let out_err = |e: billow_format::FormatError| {
-        CliError::new(Code::OutputIo, format!("cannot write output: {e}"))
+    // Every file goes to a temporary name first; all are renamed into place only when all
+    // are written, so a failure leaves no new file (and no new folder) behind.
+    let out_err = |p: &std::path::Path, e: std::io::Error| {
+        CliError::new(
+            Code::OutputIo,
+            format!("{}: cannot write output: {e}", p.display()),
+        )
     };
+    let mut stage = staged::Staged::default();
     let mut atlas_files = Vec::new();
     if let Some(dir) = &args.atlas {
-        std::fs::create_dir_all(dir).map_err(|e| {
+        stage.create_dir(dir).map_err(|e| {
             CliError::new(
                 Code::OutputIo,
                 format!("{}: cannot create directory: {e}", dir.display()),
@@ -236,20 +358,25 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         })?;
         for (name, png) in &pngs {
             let p = dir.join(name);
-            billow_format::write_atomic(&p, png).map_err(out_err)?;
+            stage.stage(&p, png).map_err(|e| out_err(&p, e))?;
             atlas_files.push(p.display().to_string());
         }
     }
     if let Some((path, glb)) = &glb {
-        billow_format::write_atomic(path, glb).map_err(out_err)?;
+        stage.stage(path, glb).map_err(|e| out_err(path, e))?;
     }
-    billow_format::write_atomic(&args.output, &bytes).map_err(out_err)?;
+    stage
+        .stage(&args.output, &bytes)
+        .map_err(|e| out_err(&args.output, e))?;
+    stage.commit().map_err(|(p, e)| out_err(&p, e))?;
     let seconds_write = write_start.elapsed().as_secs_f64();
 
     let summary = Summary {
         input,
         output: args.output.display().to_string(),
         seed: args.seed,
+        mip_levels: args.mip_levels,
+        normal_map: args.normal_map,
         billboards_per_lod: stats.levels.iter().map(|l| l.billboards).collect(),
         atlas_fill_per_lod: stats.levels.iter().map(|l| l.fill).collect(),
         texels: stats.levels.iter().map(|l| l.texels).sum(),

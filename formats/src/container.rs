@@ -4,7 +4,10 @@ use std::io::Write;
 use std::path::Path;
 
 use crate::error::tag_str;
-use crate::{AssetKind, FormatError, Header, FORMAT_MAJOR, FORMAT_MINOR_BASE, MAGIC, PREAMBLE_LEN};
+use crate::{
+    AssetKind, FormatError, Header, FORMAT_MAJOR, FORMAT_MINOR, FORMAT_MINOR_BASE, MAGIC,
+    PREAMBLE_LEN,
+};
 
 /// Size of a chunk header in bytes.
 pub const CHUNK_HEADER_LEN: usize = 24;
@@ -184,8 +187,29 @@ pub(crate) fn encode_with_minor(
         push_chunk(&mut out, ch.tag, ch.elem, ch.data);
     }
     push_chunk(&mut out, TAG_END, ElemType::Opaque, &[]);
-    write_preamble(&mut out, FORMAT_MAJOR, minor, header.kind.code());
+    write_preamble(
+        &mut out,
+        FORMAT_MAJOR,
+        minor.max(minor_for(chunks)),
+        header.kind.code(),
+    );
     Ok(out)
+}
+
+/// Chunk tags introduced by each minor version after 1.0 (index 0: 1.1).
+const TAGS_SINCE_MINOR: [&[&[u8; 4]]; FORMAT_MINOR as usize] =
+    [&[b"ANRM", b"VBND", b"BLEV", b"BNRM", b"BCEL"]];
+
+/// The lowest minor version that defines every chunk tag in `chunks` (SPEC §5): files that
+/// use nothing newer than 1.0 are written as 1.0, byte for byte as before.
+fn minor_for(chunks: &[ChunkRef<'_>]) -> u16 {
+    let mut minor = 0;
+    for (i, tags) in TAGS_SINCE_MINOR.iter().enumerate() {
+        if chunks.iter().any(|c| tags.contains(&&c.tag)) {
+            minor = i as u16 + 1;
+        }
+    }
+    minor
 }
 
 /// Fill in the 32-byte preamble at the start of `out` (file length = `out.len()`).

@@ -44,7 +44,9 @@ pub use volume::{
 /// Major format version: a reader refuses files with a different major.
 pub const FORMAT_MAJOR: u16 = 1;
 /// Minor format version implemented: additive changes (new chunks, new optional header
-/// fields). 1.1 added LOD bands to Volume assets (SPEC §8.6).
+/// fields). 1.1 added LOD bands to Volume assets (SPEC §8.6) and normal maps to Cloud
+/// atlases (`ANRM`, §9). A writer writes the lowest minor version whose features the
+/// file uses (SPEC §5).
 pub const FORMAT_MINOR: u16 = 1;
 /// The minor version written for files that use no 1.1 feature (SPEC §5).
 pub const FORMAT_MINOR_BASE: u16 = 0;

@@ -3,6 +3,7 @@
 //! `decodes_frozen_v1_cloud_fixture` must stay forever and never regenerate the file.
 //! To generate (only for a NEW fixture file):
 //! `cargo test -p billow-format --test cloud_format -- --ignored generate_v1_cloud_fixture`
+//! (`generate_v1_1_cloud_fixture` for the 1.1 fixture with normal maps).
 
 mod common;
 
@@ -14,6 +15,10 @@ use common::{crc, spec_chunk, split_chunks};
 
 fn fixture_path() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../fixtures/format/v1_cloud_tiny.billow")
+}
+
+fn fixture_1_1_path() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../fixtures/format/v1_1_cloud_normals.billow")
 }
 
 fn rect(atlas: u32, uv: [f32; 4]) -> AtlasRect {
@@ -114,11 +119,13 @@ fn generator_asset() -> CloudAsset {
                 width: 4,
                 height: 2,
                 mips: vec![a0, vec![10, 20, 30, 40, 50, 60, 70, 80], vec![1, 2, 3, 4]],
+                normals: None,
             },
             Atlas {
                 width: 2,
                 height: 2,
                 mips: vec![vec![255; 16], vec![128, 64, 32, 128]],
+                normals: None,
             },
         ],
         materials: vec![
@@ -408,4 +415,115 @@ fn structural_damage_is_refused() {
     for cut in (0..bytes.len()).step_by(7) {
         assert!(CloudAsset::from_bytes(&bytes[..cut]).is_err());
     }
+}
+
+/// The 1.0 generator's asset with normal maps (format 1.1): atlas 0 with a tilted normal in
+/// its first texel and flat elsewhere, atlas 1 flat.
+fn generator_asset_1_1() -> CloudAsset {
+    let mut a = generator_asset();
+    let flat = |n: usize| [128u8, 128, 255, 255].repeat(n);
+    let mut n0 = flat(8);
+    n0[..4].copy_from_slice(&[218, 128, 218, 255]);
+    a.atlases[0].normals = Some(vec![n0, flat(2), vec![200, 100, 230, 180]]);
+    a.atlases[1].normals = Some(vec![flat(4), flat(1)]);
+    a.header
+        .params
+        .insert("normal_map".to_string(), "tangent".to_string());
+    a
+}
+
+#[test]
+#[ignore = "writes the frozen 1.1 fixture; run by hand only for a new fixture"]
+fn generate_v1_1_cloud_fixture() {
+    generator_asset_1_1().write(&fixture_1_1_path()).unwrap();
+}
+
+/// FROZEN: the format 1.1 fixture with normal maps (`ANRM`), values spelled out here.
+#[test]
+fn decodes_frozen_v1_1_cloud_normals_fixture() {
+    let bytes =
+        std::fs::read(fixture_1_1_path()).expect("fixtures/format/v1_1_cloud_normals.billow");
+    assert_eq!(bytes.len(), 2112);
+    assert_eq!(crc(&bytes), FIXTURE_1_1_CRC, "fixture file changed on disk");
+    assert_eq!(
+        &bytes[8..16],
+        &[1, 0, 1, 0, 2, 0, 0, 0],
+        "version 1.1, kind Cloud"
+    );
+    let a = CloudAsset::from_bytes(&bytes).expect("decodes");
+    let n0 = a.atlases[0].normals.as_ref().expect("atlas 0 normal map");
+    assert_eq!(n0.len(), 3);
+    assert_eq!(n0[0][..8], [218, 128, 218, 255, 128, 128, 255, 255]);
+    assert_eq!(n0[1], [128, 128, 255, 255, 128, 128, 255, 255]);
+    assert_eq!(n0[2], [200, 100, 230, 180]);
+    assert_eq!(
+        a.atlases[1].normals.as_ref().unwrap()[1],
+        [128, 128, 255, 255]
+    );
+    // Everything else is the 1.0 fixture's content.
+    let mut without = a.clone();
+    without.atlases.iter_mut().for_each(|x| x.normals = None);
+    without.header.params.remove("normal_map");
+    let v1_0 = CloudAsset::from_bytes(&std::fs::read(fixture_path()).unwrap()).unwrap();
+    assert_eq!(without, v1_0);
+    let tags: Vec<String> = split_chunks(&bytes).iter().map(|c| tag_str(&c.0)).collect();
+    assert_eq!(
+        tags.join(" "),
+        "HEAD CLVL CLVF BBRD BBIX ATLS ATEX ATEX ATEX ATEX ATEX ANRM ANRM ANRM ANRM ANRM \
+         MMAT MMAI MTXI MTEX TVTX TIDX FVTX FIDX END "
+    );
+    assert_eq!(
+        a.to_bytes().unwrap(),
+        bytes,
+        "re-encoding reproduces the file"
+    );
+    assert_eq!(
+        generator_asset_1_1().to_bytes().unwrap(),
+        bytes,
+        "the writer is stable"
+    );
+    // What a 1.0 reader does: skip the unknown ANRM chunks (§5) and read the rest.
+    let mut c = from_bytes(&bytes).unwrap();
+    c.chunks.retain(|ch| &ch.tag != b"ANRM");
+    let old = CloudAsset::from_container(c).unwrap();
+    assert!(old.atlases.iter().all(|x| x.normals.is_none()));
+}
+
+/// CRC of the frozen 1.1 fixture.
+const FIXTURE_1_1_CRC: u32 = 0x2287_c5ed;
+
+#[test]
+fn normal_maps_are_all_or_nothing_and_match_the_colour_levels() {
+    let good = generator_asset_1_1();
+    assert_eq!(
+        CloudAsset::from_bytes(&good.to_bytes().unwrap()).unwrap(),
+        good
+    );
+    let no_normals = generator_asset().to_bytes().unwrap();
+    assert_eq!(&no_normals[8..12], &[1, 0, 0, 0], "no ANRM: written as 1.0");
+    let bad = |what: &str, f: &dyn Fn(&mut CloudAsset)| {
+        let mut a = generator_asset_1_1();
+        f(&mut a);
+        assert!(a.to_bytes().is_err(), "{what}");
+    };
+    bad("one atlas without", &|a| a.atlases[1].normals = None);
+    bad("a level missing", &|a| {
+        a.atlases[0].normals.as_mut().unwrap().pop();
+    });
+    bad("wrong size", &|a| {
+        a.atlases[0].normals.as_mut().unwrap()[1].push(0)
+    });
+    // On read: ANRM chunks must be one per ATEX chunk, U8.
+    let c = good.to_container().unwrap();
+    let mut fewer = c.clone();
+    let i = fewer
+        .chunks
+        .iter()
+        .position(|ch| &ch.tag == b"ANRM")
+        .unwrap();
+    fewer.chunks.remove(i);
+    assert!(CloudAsset::from_bytes(&to_bytes(&fewer).unwrap()).is_err());
+    let mut typed = c.clone();
+    typed.chunks[i].elem = ElemType::I8;
+    assert!(CloudAsset::from_bytes(&to_bytes(&typed).unwrap()).is_err());
 }

@@ -1,6 +1,10 @@
 //! Assembling the asset: per level, pack the billboard textures into atlases (with MIPs),
 //! write the billboards with their atlas rectangles and parent projections, and the foliage
 //! base mesh with each vertex's projection onto its level-0 billboard (morph target).
+//! Each side's MIP chain is built right after it is rendered (`atlas::side_chain`, its
+//! allocation alone: allocations are aligned so no stored level crosses one), so assembling
+//! an atlas is packing the sides and copying their levels into place. Normal maps, when
+//! baked, use the colour atlas's packing (same places, same gutters, same levels).
 
 use billow_format::{AtlasRect, Billboard, CloudAsset, CloudLevel, Header, Mesh};
 
@@ -13,66 +17,126 @@ use super::{BbcloudError, LevelStats, Seconds, Stage};
 use crate::scene::Scene;
 use std::time::Instant;
 
+use rayon::prelude::*;
+
 /// Density, layout and snapped (rectangle, texture width, height) per billboard, per level.
 pub type LevelLayout = (f32, Layout, Vec<(PlaneRect, u32, u32)>);
+
+/// One billboard's two sides, ready for packing: content sizes, each side's encoded MIP
+/// chain (built right after rendering, [`atlas::side_chain`]), and summed coverage.
+pub struct Sides {
+    pub sizes: [(u32, u32); 2],
+    pub colour: [Vec<Vec<u8>>; 2],
+    pub normals: Option<[Vec<Vec<u8>>; 2]>,
+    pub alpha: f64,
+}
+
+impl Sides {
+    pub fn new(b: bake::Baked, layout: &Layout, levels: u32) -> Sides {
+        let chain = |i: &bake::Image, n| atlas::side_chain(i, layout, levels, n);
+        let alpha = [&b.front, &b.back]
+            .iter()
+            .map(|i| i.texels.iter().map(|t| f64::from(t.w)).sum::<f64>())
+            .sum();
+        Sides {
+            sizes: [&b.front, &b.back].map(|i| (i.width, i.height)),
+            colour: [chain(&b.front, false), chain(&b.back, false)],
+            normals: b
+                .normals
+                .as_ref()
+                .map(|[f, k]| [chain(f, true), chain(k, true)]),
+            alpha,
+        }
+    }
+}
 
 #[allow(clippy::too_many_arguments)]
 pub fn assemble(
     scene: &Scene,
     levels: &[Level],
     per_level: &[LevelLayout],
-    images: &[(bake::Image, bake::Image)],
+    images: &[Sides],
+    mip_levels: u32,
     leaves: &[u32],
     trunk: Mesh,
     header: Header,
     secs: &mut Seconds,
     progress: &(dyn Fn(Stage, f32) + Sync),
 ) -> Result<(CloudAsset, Vec<LevelStats>), BbcloudError> {
-    // Pack, compose and MIP each level's atlases; assemble the asset.
+    // Pack each level's sides and put their chains in place (levels in parallel: they are
+    // independent), then assemble the asset in level order.
     let mut asset_levels = Vec::new();
     let mut billboards = Vec::new();
     let mut atlases = Vec::new();
     let mut stats_levels = Vec::new();
-    let mut img_off = 0;
     let first_of = |l: usize| {
         levels[..l]
             .iter()
             .map(|v| v.boards.len() as u32)
             .sum::<u32>()
     };
-    for (l, level) in levels.iter().enumerate() {
-        let t = Instant::now();
-        progress(Stage::Pack, l as f32 / levels.len() as f32);
-        let (d, layout, rects) = &per_level[l];
-        let imgs: Vec<&bake::Image> = images[img_off..img_off + level.boards.len()]
-            .iter()
-            .flat_map(|(f, b)| [f, b])
-            .collect();
-        img_off += level.boards.len();
-        let sizes: Vec<(u32, u32)> = imgs.iter().map(|i| (i.width, i.height)).collect();
-        let packing = atlas::pack(&sizes, layout).ok_or_else(|| {
-            BbcloudError::BadParameter(format!(
-                "level {l}: a billboard texture does not fit a {} atlas",
-                layout.max_size
-            ))
-        })?;
-        let composed = atlas::compose(&imgs, &packing, layout);
-        let alpha_sum: f64 = imgs
-            .iter()
-            .map(|i| i.texels.iter().map(|t| f64::from(t.w)).sum::<f64>())
-            .sum();
-        secs.pack += t.elapsed().as_secs_f64();
-        let t = Instant::now();
+    let sides_of = |l: usize| {
+        let first = first_of(l) as usize;
+        &images[first..first + levels[l].boards.len()]
+    };
+    let sizes =
+        |l: usize| -> Vec<(u32, u32)> { sides_of(l).iter().flat_map(|s| s.sizes).collect() };
+    let t = Instant::now();
+    let packings = (0..levels.len())
+        .into_par_iter()
+        .map(|l| {
+            let layout = &per_level[l].1;
+            atlas::pack(&sizes(l), layout).ok_or_else(|| {
+                BbcloudError::BadParameter(format!(
+                    "level {l}: a billboard texture does not fit a {} atlas",
+                    layout.max_size
+                ))
+            })
+        })
+        .collect::<Vec<_>>()
+        .into_iter()
+        .collect::<Result<Vec<_>, _>>()?;
+    secs.pack += t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let built: Vec<(Vec<billow_format::Atlas>, f64)> = (0..levels.len())
+        .into_par_iter()
+        .map(|l| {
+            progress(Stage::Pack, l as f32 / levels.len() as f32);
+            let (layout, packing, sides) = (&per_level[l].1, &packings[l], sides_of(l));
+            let colour: Vec<&[Vec<u8>]> = sides
+                .iter()
+                .flat_map(|s| s.colour.iter().map(Vec::as_slice))
+                .collect();
+            let place = |chains: &[&[Vec<u8>]], empty| {
+                atlas::assemble_levels(chains, &sizes(l), packing, layout, mip_levels, empty)
+            };
+            let mips = place(&colour, [0; 4]);
+            let normals: Option<Vec<&[Vec<u8>]>> = sides
+                .iter()
+                .map(|s| s.normals.as_ref().map(|n| n.iter().map(Vec::as_slice)))
+                .collect::<Option<Vec<_>>>()
+                .map(|v| v.into_iter().flatten().collect());
+            let mut normal_maps = normals.map(|n| place(&n, [128, 128, 255, 255]).into_iter());
+            let out = mips
+                .into_iter()
+                .zip(&packing.sizes)
+                .map(|(mips, &(width, height))| billow_format::Atlas {
+                    width,
+                    height,
+                    mips,
+                    normals: normal_maps.as_mut().and_then(|it| it.next()),
+                })
+                .collect();
+            (out, sides.iter().map(|s| s.alpha).sum())
+        })
+        .collect();
+    secs.mips += t.elapsed().as_secs_f64();
+    for (((l, level), (level_atlases, alpha_sum)), packing) in
+        levels.iter().enumerate().zip(built).zip(packings)
+    {
+        let (d, _, rects) = &per_level[l];
         let first_atlas = atlases.len() as u32;
-        for a in composed {
-            let (w, h) = (a.width, a.height);
-            atlases.push(billow_format::Atlas {
-                width: w,
-                height: h,
-                mips: atlas::mip_chain(a),
-            });
-        }
-        secs.mips += t.elapsed().as_secs_f64();
+        atlases.extend(level_atlases);
         let next = levels.get(l + 1);
         for (bi, b) in level.boards.iter().enumerate() {
             let (r, w, h) = rects[bi];

@@ -6,7 +6,11 @@
 //! stable sort, no hashing), so every allocation starts and ends on a multiple of 2^k and
 //! MIP levels 0..=k never mix two billboards in one texel. The gutter is filled by
 //! extruding the billboard's edge texels (clamp-to-edge), so bilinear taps just outside the
-//! billboard's UV rect read its own colour, not a neighbour's.
+//! billboard's UV rect read its own colour, not a neighbour's — at level j as long as the
+//! gutter is at least 2^(j−1) texels (half a level-j texel). The MIP chain is cut after
+//! level k (`mip_levels = k + 1`, chosen by `mod.rs` with a matching gutter), so *no* stored
+//! level mixes two billboards: what the full chain would add below that (a handful of
+//! texels per atlas) is left to the coarser LOD levels.
 //!
 //! Atlases are powers of two (the last one of a level shrunk to the smallest power-of-two
 //! rectangle that holds what is left), so every MIP level halves exactly. MIPs are box
@@ -226,6 +230,83 @@ pub fn compose(images: &[&Image], packing: &Packing, layout: &Layout) -> Vec<Ima
     atlases
 }
 
+/// One side's allocation as an image: its texels with the edges extruded into the gutter
+/// and the alignment padding, exactly what [`compose`] writes at its place.
+pub fn allocation_image(img: &Image, layout: &Layout) -> Image {
+    let (g, a) = (layout.gutter, layout.align);
+    let aw = (img.width + 2 * g).div_ceil(a) * a;
+    let ah = (img.height + 2 * g).div_ceil(a) * a;
+    let mut texels = Vec::with_capacity((aw * ah) as usize);
+    for y in 0..ah {
+        let sy = (y as i64 - g as i64).clamp(0, img.height as i64 - 1) as u32;
+        let row = &img.texels[(sy * img.width) as usize..][..img.width as usize];
+        for x in 0..aw {
+            texels.push(row[(x as i64 - g as i64).clamp(0, img.width as i64 - 1) as usize]);
+        }
+    }
+    Image {
+        width: aw,
+        height: ah,
+        texels,
+    }
+}
+
+/// The encoded MIP chain (`levels` levels) of one side's allocation: colour
+/// (`SrgbPremultiplied`) or, with `normals`, a normal map. Because allocations are aligned
+/// to `2^(levels−1)` texels, level k of an atlas restricted to an allocation is level k of
+/// the allocation alone, so the atlas's chain can be built per side, in parallel and without
+/// the full-size float atlas ([`assemble_levels`]; same bytes as [`compose`] + [`mip_chain`],
+/// tested).
+pub fn side_chain(img: &Image, layout: &Layout, levels: u32, normals: bool) -> Vec<Vec<u8>> {
+    assert!(
+        layout.align >= 1 << (levels.max(1) - 1),
+        "allocations must be aligned to 2^(levels-1)"
+    );
+    let a = allocation_image(img, layout);
+    if normals {
+        normal_chain(a, levels)
+    } else {
+        mip_chain(a, levels)
+    }
+}
+
+/// Every atlas's encoded levels from the sides' chains ([`side_chain`], in packing order)
+/// and their content sizes; texels outside every allocation are `empty`.
+pub fn assemble_levels(
+    chains: &[&[Vec<u8>]],
+    sizes: &[(u32, u32)],
+    packing: &Packing,
+    layout: &Layout,
+    levels: u32,
+    empty: [u8; 4],
+) -> Vec<Vec<Vec<u8>>> {
+    let mut out: Vec<Vec<Vec<u8>>> = packing
+        .sizes
+        .iter()
+        .map(|&(w, h)| {
+            (0..mip_count(w, h, levels))
+                .map(|k| empty.repeat(((w >> k).max(1) * (h >> k).max(1)) as usize))
+                .collect()
+        })
+        .collect();
+    let (g, a) = (layout.gutter, layout.align);
+    for ((chain, &(w, h)), p) in chains.iter().zip(sizes).zip(&packing.places) {
+        let (aw, ah) = ((w + 2 * g).div_ceil(a) * a, (h + 2 * g).div_ceil(a) * a);
+        let (x0, y0) = (p.x - g, p.y - g);
+        let atlas_w = packing.sizes[p.atlas as usize].0;
+        for (k, dst) in out[p.atlas as usize].iter_mut().enumerate() {
+            let (lw, lh, row) = (aw >> k, ah >> k, ((atlas_w >> k).max(1) * 4) as usize);
+            let src = &chain[k];
+            for yy in 0..lh as usize {
+                let d = ((y0 >> k) as usize + yy) * row + (x0 >> k) as usize * 4;
+                let n = lw as usize * 4;
+                dst[d..d + n].copy_from_slice(&src[yy * n..(yy + 1) * n]);
+            }
+        }
+    }
+    out
+}
+
 /// Next MIP level: 2×2 box filter of premultiplied colour (floor halving, clamped at 1).
 pub fn downsample(img: &Image) -> Image {
     let (w, h) = ((img.width / 2).max(1), (img.height / 2).max(1));
@@ -262,27 +343,112 @@ fn srgb_thresholds() -> &'static [f32; 255] {
     })
 }
 
+/// For bucket k of [0, 1] in steps of 1/4096: how many thresholds are ≤ k/4096.
+fn srgb_buckets() -> &'static [u8; 4097] {
+    static B: std::sync::OnceLock<[u8; 4097]> = std::sync::OnceLock::new();
+    B.get_or_init(|| {
+        let t = srgb_thresholds();
+        std::array::from_fn(|k| t.partition_point(|&x| x <= k as f32 / 4096.0) as u8)
+    })
+}
+
+/// `round(255 · oetf(c))` for c in [0, 1] (NaN: 0): the number of thresholds ≤ c, found
+/// from the bucket of c (which starts at or below c, so it never overcounts) and at most a
+/// few steps up (thresholds are at least 1/3300 apart, buckets 1/4096 wide).
+#[inline]
+pub fn encode_srgb(c: f32) -> u8 {
+    let t = srgb_thresholds();
+    let mut b = srgb_buckets()[((c * 4095.0) as usize).min(4096)] as usize;
+    while b < 255 && t[b] <= c {
+        b += 1;
+    }
+    b as u8
+}
+
 /// Encode premultiplied linear RGBA to `SrgbPremultiplied` bytes.
 pub fn encode_srgb_premultiplied(img: &Image) -> Vec<u8> {
-    let t = srgb_thresholds();
-    let enc = |c: f32| t.partition_point(|&x| x <= c) as u8;
     img.texels
         .par_iter()
         .flat_map_iter(|p| {
+            if *p == Vec4::ZERO {
+                return [0; 4]; // most of an atlas
+            }
             let a = p.w.clamp(0.0, 1.0);
-            let c = |v: f32| enc(v.clamp(0.0, a));
+            let c = |v: f32| encode_srgb(v.clamp(0.0, a));
             [c(p.x), c(p.y), c(p.z), (a * 255.0).round() as u8]
         })
         .collect()
 }
 
-/// The full MIP chain of an atlas, encoded.
-pub fn mip_chain(atlas: Image) -> Vec<Vec<u8>> {
-    let mut levels = vec![encode_srgb_premultiplied(&atlas)];
+/// Number of MIP levels of a `w × h` atlas: the full chain, cut at `cap`.
+pub fn mip_count(w: u32, h: u32, cap: u32) -> u32 {
+    (32 - w.max(h).max(1).leading_zeros()).min(cap.max(1))
+}
+
+/// The first `levels` levels (at most the full chain) of an atlas, each encoded by `enc`.
+fn chain(atlas: Image, levels: u32, enc: fn(&Image) -> Vec<u8>) -> Vec<Vec<u8>> {
+    let n = mip_count(atlas.width, atlas.height, levels);
+    let mut out = vec![enc(&atlas)];
     let mut cur = atlas;
-    while cur.width > 1 || cur.height > 1 {
+    while (out.len() as u32) < n {
         cur = downsample(&cur);
-        levels.push(encode_srgb_premultiplied(&cur));
+        out.push(enc(&cur));
     }
-    levels
+    out
+}
+
+/// The MIP chain of a colour atlas (premultiplied linear), `levels` levels at most, encoded.
+pub fn mip_chain(atlas: Image, levels: u32) -> Vec<Vec<u8>> {
+    chain(atlas, levels, encode_srgb_premultiplied)
+}
+
+/// Encode a coverage-premultiplied tangent-space normal image (SPEC §9.4): RGB = the unit
+/// mean normal · 0.5 + 0.5, A = the length of the mean normal (1 where the normals agree);
+/// texels without coverage (or with a zero mean) encode the flat normal (0, 0, 1), A = 1.
+pub fn encode_normals(img: &Image) -> Vec<u8> {
+    let q = |c: f32| ((c * 0.5 + 0.5).clamp(0.0, 1.0) * 255.0).round() as u8;
+    img.texels
+        .par_iter()
+        .flat_map_iter(|p| {
+            let (m, a) = (p.truncate(), p.w);
+            let len = if a > 0.0 { m.length() / a } else { 0.0 };
+            if !(len > 1e-6 && len.is_finite()) {
+                return [128, 128, 255, 255];
+            }
+            let n = m / (len * a);
+            [q(n.x), q(n.y), q(n.z), (len.min(1.0) * 255.0).round() as u8]
+        })
+        .collect()
+}
+
+/// The MIP chain of a normal atlas: box-filtered premultiplied normals, encoded.
+pub fn normal_chain(atlas: Image, levels: u32) -> Vec<Vec<u8>> {
+    chain(atlas, levels, encode_normals)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bucketed_srgb_encoding_is_the_threshold_count() {
+        let t = srgb_thresholds();
+        let exact = |c: f32| t.partition_point(|&x| x <= c) as u8;
+        let mut c = 0.0f32;
+        while c <= 1.0 {
+            assert_eq!(encode_srgb(c), exact(c), "{c}");
+            c = if c < 1e-3 { c + 1e-7 } else { c + 3e-6 };
+        }
+        for &x in t.iter() {
+            for v in [
+                x,
+                f32::from_bits(x.to_bits() - 1),
+                f32::from_bits(x.to_bits() + 1),
+            ] {
+                assert_eq!(encode_srgb(v), exact(v), "{v}");
+            }
+        }
+        assert_eq!(encode_srgb(1.0), 255);
+        assert_eq!(encode_srgb(f32::NAN), 0);
+    }
 }

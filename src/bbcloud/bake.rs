@@ -10,10 +10,19 @@
 //! towards the viewer of that side: `albedo · (ambient + (1 − ambient) · max(0, N·L))`.
 //! A texel's colour is the mean of its samples' premultiplied colours, its alpha their mean
 //! coverage. Work is done in bands of rows so memory stays small for large billboards.
+//!
+//! Normal maps (optional): each sample also keeps the shading normal of its nearest fragment,
+//! turned towards that side's viewer, expressed in the side's tangent frame
+//! `(T, B, N) = (U, −V, ±n)` — U and −V are the directions of increasing u and of
+//! decreasing v (image up) in the atlas, N the side's outward normal (+n front, −n back).
+//! A texel holds the coverage-weighted mean of its samples' tangent-space normals,
+//! premultiplied like colour: `(x·α, y·α, z·α, α)`; empty texels hold 0 (SPEC §9.4 says how
+//! they are encoded).
 
 use glam::{Vec2, Vec3, Vec4};
 
 use super::rect::PlaneRect;
+use super::sampler::Decoded;
 use crate::scene::{AlphaMode, Scene};
 
 /// Lighting of the bake. `light: None` bakes unlit albedo.
@@ -32,6 +41,14 @@ pub struct Image {
     pub texels: Vec<Vec4>,
 }
 
+/// The textures of one billboard: front, back, and (with normal maps) the front and back
+/// tangent-space normals, premultiplied by coverage.
+pub struct Baked {
+    pub front: Image,
+    pub back: Image,
+    pub normals: Option<[Image; 2]>,
+}
+
 /// What to render for one billboard.
 pub struct Job<'a> {
     pub rect: PlaneRect,
@@ -41,6 +58,8 @@ pub struct Job<'a> {
     pub width: u32,
     pub height: u32,
     pub triangles: &'a [u32],
+    /// The scene's textures decoded for sampling (`None`: not used by the foliage).
+    pub textures: &'a [Option<Decoded<'a>>],
 }
 
 const BAND: u32 = 16;
@@ -69,8 +88,17 @@ const EMPTY: Sample = Sample {
     b: Vec4::ZERO,
 };
 
-/// Render the front and back textures of one billboard.
-pub fn render(scene: &Scene, job: &Job<'_>, k: u32, shading: &Shading) -> (Image, Image) {
+/// The samples of one band of rows: K² per texel, the normals of the winning fragments
+/// (with normal maps), and which texels any fragment reached — the others are left empty
+/// and skipped (a billboard's rectangle is mostly gaps between leaves).
+struct Band {
+    samples: Vec<Sample>,
+    nrm: Vec<[Vec3; 2]>,
+    touched: Vec<bool>,
+}
+
+/// Render the front and back textures of one billboard (and its normal maps when `normals`).
+pub fn render(scene: &Scene, job: &Job<'_>, k: u32, shading: &Shading, normals: bool) -> Baked {
     let (w, h) = (job.width, job.height);
     let r = &job.rect;
     let to2 = |p: Vec3| {
@@ -105,20 +133,40 @@ pub fn render(scene: &Scene, job: &Job<'_>, k: u32, shading: &Shading) -> (Image
     let mut front = vec![Vec4::ZERO; (w * h) as usize];
     let mut back = vec![Vec4::ZERO; (w * h) as usize];
     let kk = (k * k) as usize;
-    let mut samples = vec![EMPTY; (w * BAND) as usize * kk];
+    let texels = if normals { (w * h) as usize } else { 0 };
+    let (mut front_n, mut back_n) = (vec![Vec4::ZERO; texels], vec![Vec4::ZERO; texels]);
+    let n_samples = (w * BAND) as usize * kk;
+    let mut band = Band {
+        samples: vec![EMPTY; n_samples],
+        nrm: vec![[Vec3::ZERO; 2]; if normals { n_samples } else { 0 }],
+        touched: vec![false; (w * BAND) as usize],
+    };
+    let tangent_front = |n: Vec3| Vec3::new(n.dot(r.u), -n.dot(r.v), n.dot(job.normal));
     let inv_k = 1.0 / k as f32;
     for y0 in (0..h).step_by(BAND as usize) {
         let y1 = (y0 + BAND).min(h);
-        samples.fill(EMPTY);
         for t in prep
             .iter()
             .filter(|t| t.tmax >= y0 as f32 && t.tmin <= y1 as f32)
         {
-            raster(scene, t, job, y0, y1, k, shading, &mut samples);
+            if normals {
+                raster::<true>(scene, t, job, y0, y1, k, shading, &mut band);
+            } else {
+                raster::<false>(scene, t, job, y0, y1, k, shading, &mut band);
+            }
         }
+        let Band {
+            samples,
+            nrm,
+            touched,
+        } = &mut band;
         for y in y0..y1 {
             for x in 0..w {
-                let base = (((y - y0) * w + x) as usize) * kk;
+                let ti = ((y - y0) * w + x) as usize;
+                if !std::mem::take(&mut touched[ti]) {
+                    continue; // no fragment: stays empty, its samples are still EMPTY
+                }
+                let base = ti * kk;
                 let (mut f, mut b) = (Vec4::ZERO, Vec4::ZERO);
                 for s in &samples[base..base + kk] {
                     f += s.f;
@@ -127,25 +175,37 @@ pub fn render(scene: &Scene, job: &Job<'_>, k: u32, shading: &Shading) -> (Image
                 let i = (y * w + x) as usize;
                 front[i] = f * inv_k * inv_k;
                 back[i] = b * inv_k * inv_k;
+                if normals {
+                    let (mut nf, mut nb) = (Vec4::ZERO, Vec4::ZERO);
+                    for (s, n) in samples[base..base + kk].iter().zip(&nrm[base..base + kk]) {
+                        // Front frame (U, −V, n); back frame (U, −V, −n).
+                        nf += (tangent_front(n[0]) * s.f.w).extend(s.f.w);
+                        let t = tangent_front(n[1]);
+                        nb += (Vec3::new(t.x, t.y, -t.z) * s.b.w).extend(s.b.w);
+                    }
+                    front_n[i] = nf * inv_k * inv_k;
+                    back_n[i] = nb * inv_k * inv_k;
+                }
+                samples[base..base + kk].fill(EMPTY);
             }
         }
     }
-    (
-        Image {
-            width: w,
-            height: h,
-            texels: front,
-        },
-        Image {
-            width: w,
-            height: h,
-            texels: back,
-        },
-    )
+    let img = |texels| Image {
+        width: w,
+        height: h,
+        texels,
+    };
+    Baked {
+        front: img(front),
+        back: img(back),
+        normals: normals.then(|| [img(front_n), img(back_n)]),
+    }
 }
 
+/// Rasterize one triangle into the band's samples; with `NORMALS`, also record each winning
+/// fragment's shading normal turned towards that side (`nrm[i] = [front, back]`).
 #[allow(clippy::too_many_arguments)]
-fn raster(
+fn raster<const NORMALS: bool>(
     scene: &Scene,
     t: &Prepared,
     job: &Job<'_>,
@@ -153,7 +213,7 @@ fn raster(
     y1: u32,
     k: u32,
     sh: &Shading,
-    out: &mut [Sample],
+    band: &mut Band,
 ) {
     let w = job.width;
     let kf = k as f32;
@@ -173,7 +233,8 @@ fn raster(
     let mat = scene.material(tri);
     let tex = mat
         .base_color_texture
-        .and_then(|i| scene.textures.get(i as usize));
+        .and_then(|i| job.textures.get(i as usize))
+        .and_then(Option::as_ref);
     let face = tri.cross().normalize_or(job.normal);
     let kk = (k * k) as usize;
     for ty in ti0..=ti1 {
@@ -189,7 +250,8 @@ fn raster(
             let z = w0 * t.z[0] + w1 * t.z[1] + w2 * t.z[2];
             let (x, i) = ((sx / k as i64) as u32, (sx % k as i64) as usize);
             let (yy, j) = ((ty / k as i64) as u32 - y0, (ty % k as i64) as usize);
-            let s = &mut out[((yy * w + x) as usize) * kk + j * k as usize + i];
+            let si = ((yy * w + x) as usize) * kk + j * k as usize + i;
+            let s = &mut band.samples[si];
             if !(z > s.fz || z < s.bz) {
                 continue;
             }
@@ -208,13 +270,21 @@ fn raster(
                 AlphaMode::Blend => albedo.w.min(1.0),
                 _ => 1.0,
             };
+            let nf = if NORMALS || sh.light.is_some() {
+                let n = lerp4(&|q| tri.v[q].normal.extend(0.0))
+                    .truncate()
+                    .normalize_or(face);
+                if n.dot(job.normal) >= 0.0 {
+                    n
+                } else {
+                    -n
+                }
+            } else {
+                Vec3::Z
+            };
             let (cf, cb) = match sh.light {
                 None => (albedo.truncate(), albedo.truncate()),
                 Some(l) => {
-                    let n = lerp4(&|q| tri.v[q].normal.extend(0.0))
-                        .truncate()
-                        .normalize_or(face);
-                    let nf = if n.dot(job.normal) >= 0.0 { n } else { -n };
                     let lit = |m: Vec3| sh.ambient + (1.0 - sh.ambient) * m.dot(l).max(0.0);
                     (albedo.truncate() * lit(nf), albedo.truncate() * lit(-nf))
                 }
@@ -222,11 +292,18 @@ fn raster(
             if z > s.fz {
                 s.fz = z;
                 s.f = (cf * alpha).extend(alpha);
+                if NORMALS {
+                    band.nrm[si][0] = nf;
+                }
             }
             if z < s.bz {
                 s.bz = z;
                 s.b = (cb * alpha).extend(alpha);
+                if NORMALS {
+                    band.nrm[si][1] = -nf;
+                }
             }
+            band.touched[(yy * w + x) as usize] = true;
         }
     }
 }

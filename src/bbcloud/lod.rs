@@ -3,8 +3,9 @@
 //! Level 0 is Algorithm 1 on the foliage triangles. Level ℓ ≥ 1 runs it again on level ℓ−1's
 //! trimmed billboards as quads, with ε doubled per level (and textures halved, see
 //! `mod.rs`). When there are two or more levels the last one is the special case: two
-//! perpendicular vertical billboards (normals +X and +Z, both containing the +Y axis)
-//! through the centre of the foliage's bounding sphere. Every billboard of a level has a
+//! perpendicular vertical billboards through the centre of the foliage's bounding sphere,
+//! "vertical" meaning that both contain the up axis ([`cross_normals`]; +Y by default, as
+//! glTF, `--up` to change it). Every billboard of a level has a
 //! parent in the next one: the billboard whose search took it, or for the last level the one
 //! of the two whose normal is closest to its own (the first on a tie). Each billboard is
 //! textured from the source triangles it stands for (those of its children, recursively),
@@ -14,6 +15,7 @@ use glam::Vec3;
 
 use super::plane_search::{search, Element, Plane, SearchParams, SearchStats};
 use super::rect::{trim, PlaneRect};
+use super::view::ViewPreference;
 use crate::scene::Scene;
 
 /// A billboard being built.
@@ -68,8 +70,21 @@ fn make_board(scene: &Scene, plane: Plane, sources: Vec<u32>, elements: u32) -> 
     }
 }
 
+/// The normals of the last level's two billboards for a unit `up` axis: `a`, the first of
+/// +X, +Y, +Z (in that order) that is at least 0.5 away from parallel to `up`, made
+/// perpendicular to `up`, and `a × up`. For up = +Y that is +X and +Z; for +Z, +X and −Y;
+/// for +X, +Y and −Z. Both planes contain the up axis through the centre.
+pub fn cross_normals(up: Vec3) -> [Vec3; 2] {
+    let a = [Vec3::X, Vec3::Y, Vec3::Z]
+        .into_iter()
+        .find(|a| a.dot(up).abs() < 0.5)
+        .unwrap_or(Vec3::X);
+    let a = (a - a.dot(up) * up).normalize();
+    [a, a.cross(up).normalize()]
+}
+
 /// Parameters of the chain.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct ChainParams {
     /// ε of level 0, world units.
     pub epsilon: f32,
@@ -78,6 +93,10 @@ pub struct ChainParams {
     pub levels: u32,
     /// Extent limit of level 0, world units (doubled per level like ε); `None`: no limit.
     pub max_extent: Option<f32>,
+    /// Preference for planes facing the expected views (every searched level).
+    pub view: Option<ViewPreference>,
+    /// Unit up axis of the last level's two vertical billboards.
+    pub up: Vec3,
 }
 
 /// Build every level's billboards (planes, trimmed rectangles, sources, parents).
@@ -94,7 +113,7 @@ pub fn build_chain(
         let eps = p.epsilon * (1u32 << l.min(30)) as f32;
         if l > 0 && l + 1 == p.levels {
             let prev = levels.last_mut().expect("previous level");
-            let normals = [Vec3::X, Vec3::Z];
+            let normals = cross_normals(p.up);
             let mut counts = [0u32; 2];
             for b in &mut prev.boards {
                 let k = usize::from(
@@ -148,6 +167,8 @@ pub fn build_chain(
             seed: p.seed,
             stream: u64::from(l),
             max_extent: p.max_extent.map(|r| r * (1u32 << l.min(30)) as f32),
+            view: p.view.clone(),
+            accelerate: true,
         };
         let (found, stats) = search(&elems, &params, &|a, t| progress(l, a, t));
         let mut boards = Vec::with_capacity(found.len());

@@ -6,6 +6,11 @@
 //! stream per level and every parallel step reduces in a fixed order, so the same inputs give
 //! the same bytes for any thread count.
 //!
+//! Atlas layout and MIPs: every atlas stores `mip_levels` (M) MIP levels and no more; each
+//! billboard side's allocation is aligned to `2^(M−1)` texels with a gutter of at least
+//! `max(gutter, 2^(M−2))` texels, so at every stored level no texel mixes two billboards and
+//! bilinear taps inside a billboard's UV rectangle read only its own allocation (`atlas.rs`).
+//!
 //! Texel density: with `texel_density: None` it is derived from the atlas budget — level ℓ
 //! gets one `(atlas_size >> ℓ)²` atlas (textures halved per level) and the largest density
 //! whose allocations fit it is found by bisection; the final cross is capped at half the
@@ -19,7 +24,10 @@ pub mod foliage;
 pub mod lod;
 pub mod plane_search;
 pub mod rect;
+pub mod sampler;
+pub mod slab;
 pub mod straight;
+pub mod view;
 
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -30,12 +38,15 @@ use rayon::prelude::*;
 
 pub use bake::Shading;
 pub use plane_search::{Element, Found, Plane, SearchParams, SearchStats};
+pub use view::{ViewDirs, ViewPreference};
 
 use crate::scene::Scene;
+use assemble::LevelLayout;
 use atlas::Layout;
 use lod::{build_chain, ChainParams, Level};
 
-/// Options of a bake. Defaults follow the paper (ε = 0.04 R, N = 500).
+/// Options of a bake. Defaults follow the paper (ε = 0.04 R, N = 500, two cloud levels and
+/// the final cross).
 #[derive(Clone, Debug, PartialEq)]
 pub struct BbcloudOptions {
     /// Slab half-width in units of the foliage's bounding-sphere radius.
@@ -54,14 +65,21 @@ pub struct BbcloudOptions {
     pub supersample: u32,
     /// Foliage material names; empty: every MASK/BLEND material.
     pub foliage: Vec<String>,
-    /// Gutter texels around each billboard side in the atlas.
+    /// Least gutter texels around each billboard side in the atlas (raised to 2^(M−2) so
+    /// bilinear taps stay inside at every stored level).
     pub gutter: u32,
-    /// Allocations are aligned to 2^k texels so MIP levels 0..=k stay separate.
-    pub mip_align_log2: u32,
+    /// M: MIP levels stored per atlas, all free of cross-billboard mixing (1..=5).
+    pub mip_levels: u32,
     /// Lacewell §5's extent limit in bounding-sphere radii (doubled per LOD): a billboard
     /// only takes triangles within this distance of its seed. `None`: unlimited (the paper's
     /// default).
     pub max_extent: Option<f32>,
+    /// Lacewell §5's preference for planes facing the expected view directions.
+    pub view: Option<ViewPreference>,
+    /// Unit up axis (the last level's two billboards contain it). +Y: glTF's.
+    pub up: Vec3,
+    /// Also bake a tangent-space normal map per billboard side (SPEC §9.4).
+    pub normal_map: bool,
 }
 
 impl Default for BbcloudOptions {
@@ -70,7 +88,7 @@ impl Default for BbcloudOptions {
             epsilon: 0.04,
             samples: 500,
             seed: 0,
-            lods: 1,
+            lods: 3,
             atlas_size: 2048,
             texel_density: None,
             shading: Shading {
@@ -80,8 +98,11 @@ impl Default for BbcloudOptions {
             supersample: 3,
             foliage: Vec::new(),
             gutter: 2,
-            mip_align_log2: 2,
+            mip_levels: 4,
             max_extent: None,
+            view: None,
+            up: Vec3::Y,
+            normal_map: false,
         }
     }
 }
@@ -177,8 +198,22 @@ fn check(opts: &BbcloudOptions) -> Result<(), BbcloudError> {
             opts.max_extent.unwrap_or(0.0)
         ));
     }
-    if !(1..=8).contains(&opts.supersample) || opts.gutter > 16 || opts.mip_align_log2 > 6 {
-        return bad("supersample must be in 1..=8, gutter ≤ 16, MIP alignment ≤ 2^6".into());
+    if !(1..=8).contains(&opts.supersample) || opts.gutter > 16 {
+        return bad("supersample must be in 1..=8 and gutter ≤ 16".into());
+    }
+    if !(1..=5).contains(&opts.mip_levels) {
+        return bad(format!(
+            "mip levels must be in 1..=5, got {}",
+            opts.mip_levels
+        ));
+    }
+    if !(opts.up.is_finite() && (opts.up.length() - 1.0).abs() < 1e-3) {
+        return bad("up axis must be a finite unit vector".into());
+    }
+    if opts.view.as_ref().is_some_and(|v| !v.is_valid()) {
+        return bad(
+            "view directions must be 1 to 64 finite unit vectors, strength in [0, 1]".into(),
+        );
     }
     if let Some(l) = opts.shading.light {
         if !(l.is_finite() && l.length() > 0.0) {
@@ -186,6 +221,16 @@ fn check(opts: &BbcloudOptions) -> Result<(), BbcloudError> {
         }
     }
     Ok(())
+}
+
+/// Gutter and alignment of the atlas allocations for `M` clean MIP levels: alignment
+/// `2^(M−1)` keeps every level-k texel (k < M) inside one allocation; a gutter of
+/// `2^(M−2)` level-0 texels is half a texel at level M−1, what a bilinear tap at the edge
+/// of the UV rectangle reaches out.
+pub fn gutter_and_align(min_gutter: u32, mip_levels: u32) -> (u32, u32) {
+    let m = mip_levels.clamp(1, 31);
+    let bilinear = if m >= 2 { 1 << (m - 2) } else { 0 };
+    (min_gutter.max(bilinear), 1 << (m - 1))
 }
 
 /// Texture size of a rectangle at `density`.
@@ -223,7 +268,7 @@ fn budget_density(level: &Level, layout: &Layout) -> f32 {
     if atlas::fits_one(&sizes(hi), layout) {
         return hi;
     }
-    for _ in 0..14 {
+    for _ in 0..10 {
         let mid = 0.5 * (lo + hi);
         if atlas::fits_one(&sizes(mid), layout) {
             lo = mid;
@@ -263,67 +308,82 @@ pub fn bake(
         seed: opts.seed,
         levels: opts.lods,
         max_extent: opts.max_extent.map(|r| r * radius.max(1e-12)),
+        view: opts.view.clone(),
+        up: opts.up.normalize(),
     };
     let levels = build_chain(scene, &leaves, centre, &chain, &|l, a, n| {
         progress(Stage::Search { level: l }, a as f32 / n.max(1) as f32)
     });
     secs.search = t.elapsed().as_secs_f64();
 
-    // Texel density and snapped rectangles per level.
+    // Texel density and snapped rectangles per level (levels in parallel).
     let t = Instant::now();
-    let mut per_level = Vec::new(); // (density, layout, snapped rects, sizes)
-    for (l, level) in levels.iter().enumerate() {
-        let mut layout = Layout {
-            max_size: opts.atlas_size,
-            gutter: opts.gutter,
-            align: 1 << opts.mip_align_log2,
-        };
-        let d = match opts.texel_density {
-            None => {
-                layout.max_size = (opts.atlas_size >> l).max(64);
-                // The cross (last level of a chain) is never denser than half the previous
-                // level: filling its atlas would give it a density above level 0's, and it
-                // would cost more to render than all of level 0.
-                let prev = per_level
-                    .last()
-                    .map_or(f32::INFINITY, |p: &(f32, _, _)| p.0);
-                let cross = l > 0 && l + 1 == levels.len();
-                let d = budget_density(level, &layout);
-                if cross {
-                    d.min(0.5 * prev)
-                } else {
-                    d
+    let (gutter, align) = gutter_and_align(opts.gutter, opts.mip_levels);
+    let mut per_level: Vec<LevelLayout> = levels
+        .par_iter()
+        .enumerate()
+        .map(|(l, level)| {
+            let mut layout = Layout {
+                max_size: opts.atlas_size,
+                gutter,
+                align,
+            };
+            let d = match opts.texel_density {
+                None => {
+                    layout.max_size = (opts.atlas_size >> l).max(64);
+                    budget_density(level, &layout)
                 }
-            }
-            Some(d0) => {
-                let side = level
-                    .boards
-                    .iter()
-                    .map(|b| b.rect.width.max(b.rect.height))
-                    .fold(1e-6f32, f32::max);
-                let cap = (opts.atlas_size - 2 * opts.gutter - layout.align) as f32 / side;
-                (d0 / (1u32 << l) as f32).min(cap)
-            }
-        };
-        let mut rects = Vec::new();
+                Some(d0) => {
+                    let side = level
+                        .boards
+                        .iter()
+                        .map(|b| b.rect.width.max(b.rect.height))
+                        .fold(1e-6f32, f32::max);
+                    let cap = (opts.atlas_size - 2 * gutter - align) as f32 / side;
+                    (d0 / (1u32 << l) as f32).min(cap)
+                }
+            };
+            (d, layout, Vec::new())
+        })
+        .collect();
+    // The cross (last level of a chain) is never denser than half the previous level:
+    // filling its atlas would give it a density above level 0's, and it would cost more to
+    // render than all of level 0.
+    if opts.texel_density.is_none() && per_level.len() > 1 {
+        let n = per_level.len();
+        per_level[n - 1].0 = per_level[n - 1].0.min(0.5 * per_level[n - 2].0);
+    }
+    for (level, (d, _, rects)) in levels.iter().zip(per_level.iter_mut()) {
         for b in &level.boards {
-            let (w, h) = tex_size(&b.rect, d);
+            let (w, h) = tex_size(&b.rect, *d);
             let mut r = b.rect;
-            (r.width, r.height) = (w as f32 / d, h as f32 / d);
+            (r.width, r.height) = (w as f32 / *d, h as f32 / *d);
             rects.push((r, w, h));
         }
-        per_level.push((d, layout, rects));
     }
     secs.trim_and_density = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
+    let mut used = vec![false; scene.textures.len()];
+    for &t in &leaves {
+        let m = scene.material(&scene.triangles[t as usize]);
+        if let Some(u) = m.base_color_texture.and_then(|i| used.get_mut(i as usize)) {
+            *u = true;
+        }
+    }
+    let textures: Vec<Option<sampler::Decoded>> = scene
+        .textures
+        .par_iter()
+        .zip(&used)
+        .map(|(t, &u)| u.then(|| sampler::Decoded::new(t)))
+        .collect();
     let jobs: Vec<(usize, usize)> = levels
         .iter()
         .enumerate()
         .flat_map(|(l, lv)| (0..lv.boards.len()).map(move |b| (l, b)))
         .collect();
     let done = std::sync::atomic::AtomicUsize::new(0);
-    let images: Vec<(bake::Image, bake::Image)> = jobs
+    let images: Vec<assemble::Sides> = jobs
         .par_iter()
         .map(|&(l, b)| {
             let (r, w, h) = per_level[l].2[b];
@@ -335,8 +395,17 @@ pub fn bake(
                 width: w,
                 height: h,
                 triangles: &board.sources,
+                textures: &textures,
             };
-            let out = bake::render(scene, &job, opts.supersample, &opts.shading);
+            let out = bake::render(
+                scene,
+                &job,
+                opts.supersample,
+                &opts.shading,
+                opts.normal_map,
+            );
+            // Its MIP chains now, while the floats are at hand (`assemble.rs`).
+            let out = assemble::Sides::new(out, &per_level[l].1, opts.mip_levels);
             let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
             progress(Stage::Render, n as f32 / jobs.len() as f32);
             out
@@ -358,7 +427,16 @@ pub fn bake(
         volume: None,
     };
     let (asset, stats_levels) = assemble::assemble(
-        scene, &levels, &per_level, &images, &leaves, trunk, header, &mut secs, progress,
+        scene,
+        &levels,
+        &per_level,
+        &images,
+        opts.mip_levels,
+        &leaves,
+        trunk,
+        header,
+        &mut secs,
+        progress,
     )?;
 
     let stats = BbcloudStats {
@@ -399,10 +477,20 @@ pub fn params(o: &BbcloudOptions) -> BTreeMap<String, String> {
             o.foliage.join(",")
         },
     );
-    put("gutter", o.gutter.to_string());
+    let (gutter, align) = gutter_and_align(o.gutter, o.mip_levels);
+    put("gutter", gutter.to_string());
+    put("mip_levels", o.mip_levels.to_string());
+    put("up", format!("{},{},{}", o.up.x, o.up.y, o.up.z));
+    if let Some(v) = &o.view {
+        put("view_dirs", v.describe());
+        put("view_strength", v.strength.to_string());
+    }
+    if o.normal_map {
+        put("normal_map", "tangent".into());
+    }
     if let Some(r) = o.max_extent {
         put("max_extent", r.to_string());
     }
-    put("mip_align", (1u32 << o.mip_align_log2).to_string());
+    put("mip_align", align.to_string());
     p
 }

@@ -14,7 +14,7 @@
 //! (`baseColorTexture`) expect.
 
 use billow_format::Atlas;
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
 /// sRGB byte → linear.
@@ -38,23 +38,66 @@ fn mip_dims(a: &Atlas, k: usize) -> (usize, usize) {
     (d(a.width), d(a.height))
 }
 
+/// One pyramid level: size and straight colour per texel (`None` where transparent).
+type Level = ((usize, usize), Vec<Option<Vec3>>);
+
 /// The straight colour of every texel of MIP `level`, transparent texels filled from the
-/// coarser levels (pull-push). Colours linear.
+/// coarser levels (pull-push). Colours linear. The asset stores a capped chain (SPEC §9.4);
+/// for the pull the pyramid is continued below its last stored level, down to 1×1, by the
+/// same premultiplied box filter (those levels are only used here, never exported).
 pub fn dilated_colour(atlas: &Atlas, level: usize) -> Vec<Vec3> {
     let last = atlas.mips.len().saturating_sub(1);
     let level = level.min(last);
-    // Coarsest first: a texel with no coverage anywhere is mid grey (never seen).
+    // Straight colour per level, finest first: stored levels, then the continuation.
+    let mut pyramid: Vec<Level> = (level..=last)
+        .map(|k| {
+            let straight = atlas.mips[k]
+                .par_chunks_exact(4)
+                .map(unpremultiply)
+                .collect();
+            (mip_dims(atlas, k), straight)
+        })
+        .collect();
+    let l = lut();
+    let (mut w, mut h) = mip_dims(atlas, last);
+    let mut pm: Vec<Vec4> = atlas.mips[last]
+        .chunks_exact(4)
+        .map(|p| {
+            Vec4::new(
+                l[p[0] as usize],
+                l[p[1] as usize],
+                l[p[2] as usize],
+                f32::from(p[3]) / 255.0,
+            )
+        })
+        .collect();
+    while w > 1 || h > 1 {
+        let (w2, h2) = ((w / 2).max(1), (h / 2).max(1));
+        let get = |x: usize, y: usize| pm[y.min(h - 1) * w + x.min(w - 1)];
+        pm = (0..w2 * h2)
+            .map(|i| {
+                let (x, y) = (2 * (i % w2), 2 * (i / w2));
+                0.25 * (get(x, y) + get(x + 1, y) + get(x, y + 1) + get(x + 1, y + 1))
+            })
+            .collect();
+        (w, h) = (w2, h2);
+        let straight = pm
+            .iter()
+            .map(|p| (p.w > 0.0).then(|| (p.truncate() / p.w).clamp(Vec3::ZERO, Vec3::ONE)))
+            .collect();
+        pyramid.push(((w, h), straight));
+    }
+    // Push, coarsest first: a texel with no coverage anywhere is mid grey (never seen).
     let mut fill: Vec<Vec3> = Vec::new();
     let mut fill_dims = (1usize, 1usize);
-    for k in (level..=last).rev() {
-        let (w, h) = mip_dims(atlas, k);
-        let texels = &atlas.mips[k];
+    for ((w, h), straight) in pyramid.into_iter().rev() {
         let coarse = &fill;
         let (cw, ch) = fill_dims;
-        let next: Vec<Vec3> = (0..w * h)
+        let next: Vec<Vec3> = straight
             .into_par_iter()
-            .map(|i| {
-                unpremultiply(&texels[4 * i..4 * i + 4]).unwrap_or_else(|| {
+            .enumerate()
+            .map(|(i, c)| {
+                c.unwrap_or_else(|| {
                     if coarse.is_empty() {
                         Vec3::splat(0.5)
                     } else {
@@ -76,7 +119,7 @@ pub fn straight_rgba8(atlas: &Atlas, level: usize) -> Vec<u8> {
     let level = level.min(atlas.mips.len().saturating_sub(1));
     let colour = dilated_colour(atlas, level);
     let alpha = &atlas.mips[level];
-    let enc = |c: f32| (crate::export::srgb_oetf(c.clamp(0.0, 1.0)) * 255.0).round() as u8;
+    let enc = |c: f32| super::atlas::encode_srgb(c.clamp(0.0, 1.0));
     colour
         .par_iter()
         .enumerate()
@@ -88,7 +131,7 @@ pub fn straight_rgba8(atlas: &Atlas, level: usize) -> Vec<u8> {
 /// naive un-premultiply gives (for comparison in tests and docs).
 pub fn straight_rgba8_undilated(atlas: &Atlas, level: usize) -> Vec<u8> {
     let level = level.min(atlas.mips.len().saturating_sub(1));
-    let enc = |c: f32| (crate::export::srgb_oetf(c.clamp(0.0, 1.0)) * 255.0).round() as u8;
+    let enc = |c: f32| super::atlas::encode_srgb(c.clamp(0.0, 1.0));
     atlas.mips[level]
         .chunks_exact(4)
         .flat_map(|p| {
@@ -107,6 +150,20 @@ pub fn encode_png(width: u32, height: u32, rgba: &[u8]) -> Result<Vec<u8>, Strin
         width,
         height,
         image::ExtendedColorType::Rgba8,
+    )
+    .map_err(|e| e.to_string())?;
+    Ok(out)
+}
+
+/// Encode RGB8 as PNG (8-bit, no colour-space conversion: used for normal maps).
+pub fn encode_png_rgb(width: u32, height: u32, rgb: &[u8]) -> Result<Vec<u8>, String> {
+    let mut out = Vec::new();
+    image::ImageEncoder::write_image(
+        image::codecs::png::PngEncoder::new(&mut out),
+        rgb,
+        width,
+        height,
+        image::ExtendedColorType::Rgb8,
     )
     .map_err(|e| e.to_string())?;
     Ok(out)

@@ -18,6 +18,13 @@
 //! - **Atlases**: level 0 of each atlas as an 8-bit PNG with **straight** alpha (what glTF
 //!   specifies), colour dilated into transparent texels so viewer-made MIPs have no dark
 //!   fringes ([`crate::bbcloud::straight`]); sampler linear / linear-mipmap-linear, clamp.
+//! - **Normal maps** (assets baked with `--normal-map`): each atlas's normal map (level 0,
+//!   RGB PNG, linear) is the materials' `normalTexture`; every quad vertex carries a
+//!   `TANGENT` = (U, w) with U the billboard's u direction and w = −1 on the front quad,
+//!   +1 on the back quad, so glTF's bitangent `cross(N, T)·w` is −V (image up) on both
+//!   sides — the tangent frame the normals were baked in (SPEC §9.4). Those materials are
+//!   lit (no `KHR_materials_unlit`): a normal map only matters to a viewer that lights the
+//!   billboards, so such assets are best baked `--unlit` (albedo).
 //! - **Morph**: each LOD mesh has one morph target (`extras.targetNames = ["parent"]`,
 //!   weight 0): the displacement of each corner to its projection onto the parent
 //!   billboard in the next level, so a renderer can morph between levels (Lacewell §3).
@@ -35,6 +42,9 @@ use json::validation::{Checked::Valid, USize64};
 use json::Index;
 
 use crate::bbcloud::straight;
+
+mod build;
+use build::{extras, material, sampler, Bin};
 
 /// How billboard coverage is turned into visibility by a viewer.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -91,210 +101,21 @@ pub fn write_cloud_glb(
     billow_format::write_atomic(path, &bytes).map_err(GltfError::Write)
 }
 
-/// Binary chunk under construction: 4-byte aligned views.
-struct Bin<'a> {
-    root: &'a mut json::Root,
-    data: Vec<u8>,
-}
-
-impl Bin<'_> {
-    fn view(
-        &mut self,
-        bytes: &[u8],
-        target: Option<json::buffer::Target>,
-    ) -> Index<json::buffer::View> {
-        while !self.data.len().is_multiple_of(4) {
-            self.data.push(0);
-        }
-        let offset = self.data.len();
-        self.data.extend_from_slice(bytes);
-        self.root.push(json::buffer::View {
-            buffer: Index::new(0),
-            byte_length: USize64(bytes.len() as u64),
-            byte_offset: Some(USize64(offset as u64)),
-            byte_stride: None,
-            name: None,
-            target: target.map(Valid),
-            extensions: None,
-            extras: None,
-        })
-    }
-
-    /// A float accessor of `N`-vectors (with min/max when `bounds`).
-    fn floats<const N: usize>(&mut self, v: &[[f32; N]], bounds: bool) -> Index<json::Accessor> {
-        let bytes: Vec<u8> = v.iter().flatten().flat_map(|f| f.to_le_bytes()).collect();
-        let view = self.view(&bytes, Some(json::buffer::Target::ArrayBuffer));
-        let (min, max) = if bounds && !v.is_empty() {
-            let mut lo = [f32::INFINITY; N];
-            let mut hi = [f32::NEG_INFINITY; N];
-            for p in v {
-                for k in 0..N {
-                    lo[k] = lo[k].min(p[k]);
-                    hi[k] = hi[k].max(p[k]);
-                }
-            }
-            (
-                Some(serde_json::json!(lo.to_vec())),
-                Some(serde_json::json!(hi.to_vec())),
-            )
-        } else {
-            (None, None)
-        };
-        let type_ = match N {
-            2 => json::accessor::Type::Vec2,
-            3 => json::accessor::Type::Vec3,
-            _ => json::accessor::Type::Vec4,
-        };
-        self.accessor(
-            view,
-            v.len(),
-            json::accessor::ComponentType::F32,
-            type_,
-            min,
-            max,
-        )
-    }
-
-    fn indices(&mut self, idx: &[u32]) -> Index<json::Accessor> {
-        let bytes: Vec<u8> = idx.iter().flat_map(|i| i.to_le_bytes()).collect();
-        let view = self.view(&bytes, Some(json::buffer::Target::ElementArrayBuffer));
-        self.accessor(
-            view,
-            idx.len(),
-            json::accessor::ComponentType::U32,
-            json::accessor::Type::Scalar,
-            None,
-            None,
-        )
-    }
-
-    fn accessor(
-        &mut self,
-        view: Index<json::buffer::View>,
-        count: usize,
-        ct: json::accessor::ComponentType,
-        type_: json::accessor::Type,
-        min: Option<serde_json::Value>,
-        max: Option<serde_json::Value>,
-    ) -> Index<json::Accessor> {
-        self.root.push(json::Accessor {
-            buffer_view: Some(view),
-            byte_offset: None,
-            count: USize64(count as u64),
-            component_type: Valid(json::accessor::GenericComponentType(ct)),
-            extensions: None,
-            extras: None,
-            type_: Valid(type_),
-            min,
-            max,
-            name: None,
-            normalized: false,
-            sparse: None,
-        })
-    }
-
-    fn png_texture(
-        &mut self,
-        png: &[u8],
-        name: String,
-        sampler: Index<json::texture::Sampler>,
-    ) -> Index<json::Texture> {
-        let view = self.view(png, None);
-        let image = self.root.push(json::Image {
-            buffer_view: Some(view),
-            mime_type: Some(json::image::MimeType("image/png".into())),
-            name: Some(name.clone()),
-            uri: None,
-            extensions: None,
-            extras: None,
-        });
-        self.root.push(json::Texture {
-            name: Some(name),
-            sampler: Some(sampler),
-            source: image,
-            extensions: None,
-            extras: None,
-        })
-    }
-}
-
-fn extras(v: serde_json::Value) -> json::Extras {
-    serde_json::value::to_raw_value(&v).ok()
-}
-
-fn sampler(root: &mut json::Root, wrap: [u32; 2]) -> Index<json::texture::Sampler> {
-    use json::texture::{MagFilter, MinFilter, WrappingMode};
-    let w = |m: u32| {
-        Valid(match m {
-            1 => WrappingMode::ClampToEdge,
-            2 => WrappingMode::MirroredRepeat,
-            _ => WrappingMode::Repeat,
-        })
-    };
-    root.push(json::texture::Sampler {
-        mag_filter: Some(Valid(MagFilter::Linear)),
-        min_filter: Some(Valid(MinFilter::LinearMipmapLinear)),
-        name: None,
-        wrap_s: w(wrap[0]),
-        wrap_t: w(wrap[1]),
-        extensions: None,
-        extras: None,
-    })
-}
-
-#[allow(clippy::too_many_arguments)]
-fn material(
-    root: &mut json::Root,
-    name: String,
-    colour: [f32; 4],
-    texture: Option<Index<json::Texture>>,
-    alpha: (json::material::AlphaMode, f32),
-    double_sided: bool,
-    unlit: bool,
-) -> Index<json::Material> {
-    let mode = alpha.0;
-    root.push(json::Material {
-        alpha_cutoff: (mode == json::material::AlphaMode::Mask)
-            .then_some(json::material::AlphaCutoff(alpha.1)),
-        alpha_mode: Valid(mode),
-        double_sided,
-        name: Some(name),
-        pbr_metallic_roughness: json::material::PbrMetallicRoughness {
-            base_color_factor: json::material::PbrBaseColorFactor(colour),
-            base_color_texture: texture.map(|index| json::texture::Info {
-                index,
-                tex_coord: 0,
-                extensions: None,
-                extras: None,
-            }),
-            metallic_factor: json::material::StrengthFactor(0.0),
-            roughness_factor: json::material::StrengthFactor(1.0),
-            metallic_roughness_texture: None,
-            extensions: None,
-            extras: None,
-        },
-        extensions: unlit.then(|| json::extensions::material::Material {
-            unlit: Some(json::extensions::material::Unlit {}),
-            ..Default::default()
-        }),
-        ..Default::default()
-    })
-}
-
 fn primitive(
     bin: &mut Bin<'_>,
-    pos: &[[f32; 3]],
-    nrm: &[[f32; 3]],
-    uv: &[[f32; 2]],
-    idx: &[u32],
-    morph: Option<&[[f32; 3]]>,
+    q: &Quads,
+    tangents: bool,
     material: Index<json::Material>,
 ) -> json::mesh::Primitive {
     use json::mesh::Semantic;
     let mut attributes = BTreeMap::new();
-    attributes.insert(Valid(Semantic::Positions), bin.floats(pos, true));
-    attributes.insert(Valid(Semantic::Normals), bin.floats(nrm, false));
-    attributes.insert(Valid(Semantic::TexCoords(0)), bin.floats(uv, false));
+    attributes.insert(Valid(Semantic::Positions), bin.floats(&q.pos, true));
+    attributes.insert(Valid(Semantic::Normals), bin.floats(&q.nrm, false));
+    if tangents {
+        attributes.insert(Valid(Semantic::Tangents), bin.floats(&q.tan, false));
+    }
+    attributes.insert(Valid(Semantic::TexCoords(0)), bin.floats(&q.uv, false));
+    let (idx, morph) = (&q.idx, Some(&q.morph));
     let targets = morph.map(|d| {
         vec![json::mesh::MorphTarget {
             positions: Some(bin.floats(d, true)),
@@ -318,18 +139,28 @@ fn primitive(
 struct Quads {
     pos: Vec<[f32; 3]>,
     nrm: Vec<[f32; 3]>,
+    tan: Vec<[f32; 4]>,
     uv: Vec<[f32; 2]>,
     morph: Vec<[f32; 3]>,
     idx: Vec<u32>,
 }
 
 impl Quads {
-    /// One quad: corners in order (counter-clockwise as seen from the side it faces).
-    fn push(&mut self, c: [[f32; 3]; 4], pc: [[f32; 3]; 4], n: [f32; 3], uv: [[f32; 2]; 4]) {
+    /// One quad: corners in order (counter-clockwise as seen from the side it faces), its
+    /// normal and tangent (xyz, w).
+    fn push(
+        &mut self,
+        c: [[f32; 3]; 4],
+        pc: [[f32; 3]; 4],
+        n: [f32; 3],
+        t: [f32; 4],
+        uv: [[f32; 2]; 4],
+    ) {
         let base = self.pos.len() as u32;
         for k in 0..4 {
             self.pos.push(c[k]);
             self.nrm.push(n);
+            self.tan.push(t);
             self.uv.push(uv[k]);
             self.morph
                 .push([pc[k][0] - c[k][0], pc[k][1] - c[k][1], pc[k][2] - c[k][2]]);
@@ -337,6 +168,16 @@ impl Quads {
         self.idx
             .extend([0, 1, 2, 0, 2, 3].iter().map(|&i| base + i));
     }
+}
+
+/// The unit u direction of a billboard (corner 0 → corner 1), made exactly perpendicular to
+/// its normal; any perpendicular unit vector for a zero-width billboard.
+fn tangent(c: &[[f32; 3]; 4], n: glam::Vec3) -> glam::Vec3 {
+    let n = n.normalize_or(glam::Vec3::Z);
+    let e = glam::Vec3::from(c[1]) - glam::Vec3::from(c[0]);
+    let e = e - e.dot(n) * n;
+    e.try_normalize()
+        .unwrap_or_else(|| n.any_orthonormal_vector())
 }
 
 /// The kept mesh as one glTF mesh (one primitive per material, shared vertex streams).
@@ -427,20 +268,39 @@ fn trunk_mesh(
 
 /// The `.glb` bytes of `asset` (validated first).
 pub fn cloud_glb_bytes(asset: &CloudAsset, opts: &GltfOptions) -> Result<Vec<u8>, GltfError> {
+    cloud_glb_bytes_with(asset, opts, None)
+}
+
+/// [`cloud_glb_bytes`] with the atlases' level-0 PNGs already encoded
+/// ([`straight::atlas_pngs`], in atlas order), so a caller that also dumps them encodes
+/// them once.
+pub fn cloud_glb_bytes_with(
+    asset: &CloudAsset,
+    opts: &GltfOptions,
+    atlas_pngs: Option<&[Vec<u8>]>,
+) -> Result<Vec<u8>, GltfError> {
     let encode = |message: String| GltfError::Encode {
         path: PathBuf::new(),
         message,
     };
+    if atlas_pngs.is_some_and(|p| p.len() != asset.atlases.len()) {
+        return Err(encode("one PNG per atlas expected".into()));
+    }
     asset.validate().map_err(|source| GltfError::InvalidAsset {
         path: PathBuf::new(),
         source,
     })?;
+    let has_normals = asset.atlases.iter().all(|a| a.normals.is_some());
     let mut root = json::Root {
         asset: json::Asset {
             generator: Some(asset.header.tool.clone()),
             ..Default::default()
         },
-        extensions_used: vec!["KHR_materials_unlit".into()],
+        extensions_used: if has_normals {
+            Vec::new()
+        } else {
+            vec!["KHR_materials_unlit".into()]
+        },
         ..Default::default()
     };
     let mut bin = Bin {
@@ -453,30 +313,64 @@ pub fn cloud_glb_bytes(asset: &CloudAsset, opts: &GltfOptions) -> Result<Vec<u8>
     };
     let clamp = sampler(bin.root, [1, 1]);
     // Atlases: one texture each, and a front and a back material.
-    let pngs: Vec<Vec<u8>> = {
+    let own: Vec<Vec<u8>>;
+    let pngs: &[Vec<u8>] = match atlas_pngs {
+        Some(p) => p,
+        None => {
+            use rayon::prelude::*;
+            own = asset
+                .atlases
+                .par_iter()
+                .map(straight::atlas_png)
+                .collect::<Result<_, _>>()
+                .map_err(encode)?;
+            &own
+        }
+    };
+    let normal_pngs: Vec<Vec<u8>> = if has_normals {
         use rayon::prelude::*;
         asset
             .atlases
             .par_iter()
-            .map(straight::atlas_png)
+            .map(|a| {
+                let n = &a.normals.as_ref().expect("checked")[0];
+                let rgb: Vec<u8> = n.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
+                straight::encode_png_rgb(a.width, a.height, &rgb)
+            })
             .collect::<Result<_, _>>()
             .map_err(encode)?
+    } else {
+        Vec::new()
     };
     let mut atlas_mats = Vec::new();
     for (l, lv) in asset.levels.iter().enumerate() {
         for k in 0..lv.atlas_count as usize {
             let a = lv.first_atlas as usize + k;
             let tex = bin.png_texture(&pngs[a], format!("lod{l}/atlas{k}"), clamp);
+            let ntex = normal_pngs
+                .get(a)
+                .map(|png| bin.png_texture(png, format!("lod{l}/atlas{k}/normal"), clamp));
             let side = |bin: &mut Bin<'_>, s: &str| {
-                material(
+                let m = material(
                     bin.root,
                     format!("lod{l}/atlas{k}/{s}"),
                     [1.0; 4],
                     Some(tex),
                     alpha,
                     false,
-                    true,
-                )
+                    !has_normals,
+                );
+                if let Some(index) = ntex {
+                    bin.root.materials[m.value()].normal_texture =
+                        Some(json::material::NormalTexture {
+                            index,
+                            scale: 1.0,
+                            tex_coord: 0,
+                            extensions: None,
+                            extras: None,
+                        });
+                }
+                m
             };
             atlas_mats.push([side(&mut bin, "front"), side(&mut bin, "back")]);
         }
@@ -496,10 +390,11 @@ pub fn cloud_glb_bytes(asset: &CloudAsset, opts: &GltfOptions) -> Result<Vec<u8>
                 [[u0, v0], [u1, v0], [u1, v1], [u0, v1]]
             };
             let f = uv(&b.front);
+            let u = tangent(&b.corners, glam::Vec3::from(n));
             groups
                 .entry((b.front.atlas, 0))
                 .or_default()
-                .push(c, pc, n, f);
+                .push(c, pc, n, [u.x, u.y, u.z, -1.0], f);
             // Back: reversed order (0, 3, 2, 1) faces −n; same UV per corner.
             let bk = uv(&b.back);
             let r = [0, 3, 2, 1];
@@ -507,21 +402,14 @@ pub fn cloud_glb_bytes(asset: &CloudAsset, opts: &GltfOptions) -> Result<Vec<u8>
                 r.map(|i| c[i]),
                 r.map(|i| pc[i]),
                 [-n[0], -n[1], -n[2]],
+                [u.x, u.y, u.z, 1.0],
                 r.map(|i| bk[i]),
             );
         }
         let mut prims = Vec::new();
         for ((a, side), q) in &groups {
             let mat = atlas_mats[*a as usize][*side];
-            prims.push(primitive(
-                &mut bin,
-                &q.pos,
-                &q.nrm,
-                &q.uv,
-                &q.idx,
-                Some(&q.morph),
-                mat,
-            ));
+            prims.push(primitive(&mut bin, q, has_normals, mat));
         }
         let mesh = bin.root.push(json::Mesh {
             extensions: None,

@@ -131,10 +131,17 @@ fn preserve_coverage(level: &mut [u8], cutoff: f32, target: f64) {
     }
 }
 
-/// Uploads `t` as an `Rgba8UnormSrgb` texture with a full MIP chain (the stored MIPs
-/// first, then computed ones).
+/// Uploads `t` as an `Rgba8UnormSrgb` texture: with its stored MIP chain when it brings
+/// one (premultiplied atlases cap their chain where coarser levels would mix
+/// neighbouring billboards, SPEC §9.4: sampling clamps to the last stored level), else
+/// a full computed chain.
 pub fn upload_rgba8_mips(gpu: &Gpu, t: &TextureData, label: &str) -> wgpu::Texture {
-    let levels = 32 - t.width.max(t.height).max(1).leading_zeros();
+    let full = 32 - t.width.max(t.height).max(1).leading_zeros();
+    let levels = if t.mips.is_empty() {
+        full
+    } else {
+        (1 + t.mips.len() as u32).min(full)
+    };
     let tex = gpu.device.create_texture(&wgpu::TextureDescriptor {
         label: Some(label),
         size: wgpu::Extent3d {

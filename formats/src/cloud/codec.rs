@@ -1,6 +1,7 @@
 //! Encoding and decoding of the Cloud chunks (SPEC.md §9). Counts come from chunk lengths,
 //! which the container has already checked against the file size.
 
+use std::borrow::Cow;
 use std::path::Path;
 
 use super::{
@@ -53,8 +54,9 @@ const LAYOUT: [(&[u8; 4], ElemType, usize); 13] = [
 ];
 
 impl CloudAsset {
-    fn payloads(&self) -> Vec<([u8; 4], ElemType, Vec<u8>)> {
-        let mut c: Vec<([u8; 4], ElemType, Vec<u8>)> = Vec::new();
+    /// Every chunk in writing order; the large texel payloads are borrowed, not copied.
+    fn payloads(&self) -> Vec<([u8; 4], ElemType, Cow<'_, [u8]>)> {
+        let mut c: Vec<([u8; 4], ElemType, Cow<'_, [u8]>)> = Vec::new();
         let mut push = |tag: &[u8; 4], elem, data| c.push((*tag, elem, data));
         let (mut lv, mut lf) = (Vec::new(), Vec::new());
         for l in &self.levels {
@@ -69,8 +71,8 @@ impl CloudAsset {
             );
             put_f32(&mut lf, &[l.epsilon, l.texel_density]);
         }
-        push(b"CLVL", ElemType::U32, lv);
-        push(b"CLVF", ElemType::F32, lf);
+        push(b"CLVL", ElemType::U32, Cow::Owned(lv));
+        push(b"CLVF", ElemType::F32, Cow::Owned(lf));
         let (mut bf, mut bi) = (Vec::new(), Vec::new());
         for b in &self.billboards {
             put_f32(&mut bf, &b.plane);
@@ -90,15 +92,18 @@ impl CloudAsset {
                 ],
             );
         }
-        push(b"BBRD", ElemType::F32, bf);
-        push(b"BBIX", ElemType::U32, bi);
+        push(b"BBRD", ElemType::F32, Cow::Owned(bf));
+        push(b"BBIX", ElemType::U32, Cow::Owned(bi));
         let mut al = Vec::new();
         for a in &self.atlases {
             put_u32(&mut al, &[a.width, a.height, a.mips.len() as u32, 0]);
         }
-        push(b"ATLS", ElemType::U32, al);
+        push(b"ATLS", ElemType::U32, Cow::Owned(al));
         for m in self.atlases.iter().flat_map(|a| &a.mips) {
-            push(b"ATEX", ElemType::U8, m.clone());
+            push(b"ATEX", ElemType::U8, Cow::Borrowed(m));
+        }
+        for m in self.atlases.iter().flat_map(|a| a.normals.iter().flatten()) {
+            push(b"ANRM", ElemType::U8, Cow::Borrowed(m));
         }
         let (mut mf, mut mi) = (Vec::new(), Vec::new());
         for m in &self.materials {
@@ -107,15 +112,15 @@ impl CloudAsset {
             let t = m.texture.unwrap_or(NO_INDEX);
             put_u32(&mut mi, &[t, m.alpha_mode, u32::from(m.double_sided), 0]);
         }
-        push(b"MMAT", ElemType::F32, mf);
-        push(b"MMAI", ElemType::U32, mi);
+        push(b"MMAT", ElemType::F32, Cow::Owned(mf));
+        push(b"MMAI", ElemType::U32, Cow::Owned(mi));
         let mut ti = Vec::new();
         for t in &self.textures {
             put_u32(&mut ti, &[t.width, t.height, t.wrap[0], t.wrap[1]]);
         }
-        push(b"MTXI", ElemType::U32, ti);
+        push(b"MTXI", ElemType::U32, Cow::Owned(ti));
         for t in &self.textures {
-            push(b"MTEX", ElemType::U8, t.texels.clone());
+            push(b"MTEX", ElemType::U8, Cow::Borrowed(&t.texels));
         }
         for (m, vt, it) in [
             (&self.trunk, b"TVTX", b"TIDX"),
@@ -137,8 +142,8 @@ impl CloudAsset {
                     put_u32(&mut i, &[b]);
                 }
             }
-            push(vt, ElemType::F32, v);
-            push(it, ElemType::U32, i);
+            push(vt, ElemType::F32, Cow::Owned(v));
+            push(it, ElemType::U32, Cow::Owned(i));
         }
         c
     }
@@ -147,7 +152,11 @@ impl CloudAsset {
     pub fn to_container(&self) -> Result<Container, CloudError> {
         self.validate()?;
         let chunks = self.payloads().into_iter();
-        let chunks = chunks.map(|(tag, elem, data)| crate::Chunk { tag, elem, data });
+        let chunks = chunks.map(|(tag, elem, data)| crate::Chunk {
+            tag,
+            elem,
+            data: data.into_owned(),
+        });
         Ok(Container {
             header: self.header.clone(),
             chunks: chunks.collect(),
@@ -176,14 +185,20 @@ impl CloudAsset {
             return bad(format!("asset kind is {:?}, not Cloud", header.kind));
         }
         let mut single: [Option<Vec<u8>>; 12] = Default::default();
-        let (mut atex, mut mtex) = (Vec::new(), Vec::new());
+        let (mut atex, mut mtex, mut anrm) = (Vec::new(), Vec::new(), Vec::new());
         for ch in chunks {
             let Some(k) = LAYOUT.iter().position(|(t, _, _)| **t == ch.tag) else {
-                if &ch.tag == b"MTEX" {
-                    if ch.elem != ElemType::U8 {
-                        return bad("MTEX chunk must have element type U8");
+                for (tag, list) in [(b"MTEX", &mut mtex), (b"ANRM", &mut anrm)] {
+                    if &ch.tag == tag {
+                        if ch.elem != ElemType::U8 {
+                            return bad(format!(
+                                "{} chunk must have element type U8",
+                                crate::tag_str(tag)
+                            ));
+                        }
+                        list.push(ch.data);
+                        break;
                     }
-                    mtex.push(ch.data);
                 }
                 continue; // unknown chunk of a newer minor version
             };
@@ -253,6 +268,14 @@ impl CloudAsset {
                 elements: i[3],
             });
         let al = u32s(&take(4)?);
+        if !anrm.is_empty() && anrm.len() != atex.len() {
+            return bad(format!(
+                "{} ANRM chunks for {} ATEX chunks (must be none or one each)",
+                anrm.len(),
+                atex.len()
+            ));
+        }
+        let mut anrm = (!anrm.is_empty()).then(|| anrm.into_iter());
         let mut atex = atex.into_iter();
         let mut atlases = Vec::with_capacity(al.len() / 4);
         for (i, a) in al.chunks_exact(4).enumerate() {
@@ -263,10 +286,14 @@ impl CloudAsset {
             if mips.len() != a[2] as usize {
                 return bad(format!("atlas {i}: fewer ATEX chunks than its MIP count"));
             }
+            let normals = anrm
+                .as_mut()
+                .map(|n| n.by_ref().take(a[2] as usize).collect());
             atlases.push(Atlas {
                 width: a[0],
                 height: a[1],
                 mips,
+                normals,
             });
         }
         if atex.next().is_some() {

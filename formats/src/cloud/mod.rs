@@ -4,6 +4,7 @@
 //! - `CLVL` U32 ×4 per LOD level, `CLVF` F32 ×2 per level;
 //! - `BBRD` F32 ×36 per billboard, `BBIX` U32 ×4 per billboard;
 //! - `ATLS` U32 ×4 per atlas, then `ATEX` U8 × (sum of the atlases' MIP counts), atlas-major;
+//! - optionally (format 1.1) `ANRM` U8, one per `ATEX`, in the same order: normal maps;
 //! - `MMAT` F32 ×8 and `MMAI` U32 ×4 per material; `MTXI` U32 ×4 per texture, `MTEX` U8 × textures;
 //! - `TVTX` F32 ×8 per vertex, `TIDX` U32 ×4 per triangle (the kept, non-foliage mesh);
 //! - `FVTX` F32 ×11 per vertex, `FIDX` U32 ×5 per triangle (the foliage base mesh + morph targets).
@@ -76,6 +77,10 @@ pub struct Atlas {
     pub width: u32,
     pub height: u32,
     pub mips: Vec<Vec<u8>>,
+    /// The normal map of the same layout (format 1.1, SPEC §9.4): one RGBA8 level per colour
+    /// level, RGB the tangent-space unit normal · 0.5 + 0.5, A the mean normal's length.
+    /// Either every atlas of an asset has one or none has.
+    pub normals: Option<Vec<Vec<u8>>>,
 }
 
 /// Material of a mesh triangle. `alpha_mode`: 0 opaque, 1 mask (with `alpha_cutoff`), 2 blend.
@@ -184,6 +189,18 @@ impl CloudAsset {
                 if lv.len() as u64 != mip_len(at.width, at.height, k as u32) {
                     return bad(format!("atlas {i} MIP {k} is {} bytes", lv.len()));
                 }
+            }
+            if let Some(n) = &at.normals {
+                if n.len() != at.mips.len()
+                    || n.iter().zip(&at.mips).any(|(a, b)| a.len() != b.len())
+                {
+                    return bad(format!(
+                        "atlas {i}: its normal map does not match its colour levels"
+                    ));
+                }
+            }
+            if at.normals.is_some() != self.atlases[0].normals.is_some() {
+                return bad("either every atlas has a normal map or none has");
             }
         }
         for (li, l) in self.levels.iter().enumerate() {
