@@ -31,9 +31,18 @@ pub fn srgb_to_linear_lut() -> &'static [f32; 256] {
     })
 }
 
-/// Maps an integer texel coordinate into `0..n` according to `wrap`.
-fn wrap_index(i: i64, n: u32, wrap: Wrap) -> usize {
-    let n = n as i64;
+/// Maps an integer texel coordinate into `0..n` according to `wrap`. The in-range case
+/// and power-of-two repeat (a mask) are answered first; the value is the same either way.
+/// Shared by the generic sampler and the fast ones of the bakers.
+#[inline(always)]
+pub(crate) fn wrap_index(i: i64, n: u32, wrap: Wrap) -> usize {
+    let n = i64::from(n);
+    if (0..n).contains(&i) {
+        return i as usize;
+    }
+    if wrap == Wrap::Repeat && (n as u64).is_power_of_two() {
+        return (i & (n - 1)) as usize;
+    }
     let j = match wrap {
         Wrap::Repeat => i.rem_euclid(n),
         Wrap::ClampToEdge => i.clamp(0, n - 1),
@@ -49,8 +58,25 @@ fn wrap_index(i: i64, n: u32, wrap: Wrap) -> usize {
     j as usize
 }
 
+/// `x.floor()` without a libm call (x86-64's baseline has no rounding instruction): the
+/// truncation corrected downwards, exact for |x| < 2⁵²; larger values are integers already.
+#[inline(always)]
+pub(crate) fn floor_fast(x: f64) -> f64 {
+    if x.abs() < 4_503_599_627_370_496.0 {
+        let t = x as i64 as f64;
+        if t > x {
+            t - 1.0
+        } else {
+            t
+        }
+    } else {
+        x.floor()
+    }
+}
+
 /// Finite or zero: a NaN/Inf coordinate samples texel (0, 0) instead of misbehaving.
-fn finite_or_zero(x: f32) -> f32 {
+#[inline(always)]
+pub(crate) fn finite_or_zero(x: f32) -> f32 {
     if x.is_finite() {
         x
     } else {
@@ -97,17 +123,26 @@ impl Texture {
                 fx * fy,
             ),
         ];
-        let mut premul = Vec3::ZERO;
-        let mut plain = Vec3::ZERO;
-        let mut alpha = 0.0;
-        for (c, w) in taps {
-            premul += c.truncate() * (c.w * w);
-            plain += c.truncate() * w;
-            alpha += c.w * w;
-        }
-        let rgb = if alpha > 1e-6 { premul / alpha } else { plain };
-        rgb.extend(alpha.clamp(0.0, 1.0))
+        filter_taps(taps)
     }
+}
+
+/// The alpha-weighted bilinear filter of four decoded taps `(linear straight RGBA,
+/// weight)`: colour weighted by alpha and divided back (plain weights where all is
+/// transparent), alpha clamped to [0, 1]. In tap order, so every sampler that calls it
+/// gives the same bits.
+#[inline(always)]
+pub(crate) fn filter_taps(taps: [(Vec4, f32); 4]) -> Vec4 {
+    let mut premul = Vec3::ZERO;
+    let mut plain = Vec3::ZERO;
+    let mut alpha = 0.0;
+    for (c, w) in taps {
+        premul += c.truncate() * (c.w * w);
+        plain += c.truncate() * w;
+        alpha += c.w * w;
+    }
+    let rgb = if alpha > 1e-6 { premul / alpha } else { plain };
+    rgb.extend(alpha.clamp(0.0, 1.0))
 }
 
 #[cfg(test)]

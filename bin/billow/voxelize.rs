@@ -248,18 +248,24 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     };
     let input = args.input.display().to_string();
 
-    let scene = import(
-        &args.input,
-        &ImportOptions {
-            strict: args.strict,
-        },
-    )
-    .map_err(|e| CliError::new(import_code(&e), &e))?;
+    // The input's checksum (provenance) is computed beside the import, which is mostly
+    // single-threaded; an import error is still the one reported first.
+    let (scene, source) = std::thread::scope(|scope| {
+        let source = scope.spawn(|| source_info(&args.input));
+        let scene = import(
+            &args.input,
+            &ImportOptions {
+                strict: args.strict,
+            },
+        );
+        (scene, source.join().expect("checksum thread panicked"))
+    });
+    let scene = scene.map_err(|e| CliError::new(import_code(&e), &e))?;
     for w in &scene.warnings {
         warn(ctx, &format!("{input}: {}", w.message));
     }
-    let source = source_info(&args.input)
-        .map_err(|e| CliError::new(Code::InputIo, format!("{input}: cannot read: {e}")))?;
+    let source =
+        source.map_err(|e| CliError::new(Code::InputIo, format!("{input}: cannot read: {e}")))?;
     let import_s = start.elapsed().as_secs_f64();
 
     let bar = progress(ctx, 1000, "voxelize");
@@ -283,11 +289,16 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let params = bake_params(&volume, &opts, &BTreeMap::new());
     let asset = volume.into_asset(&tool_version(), Some(source), params);
     let write_start = Instant::now();
-    let bytes = asset
-        .to_bytes()
-        .map_err(|e| CliError::new(Code::Internal, e))?;
-    billow_format::write_atomic(&args.output, &bytes)
-        .map_err(|e| CliError::new(Code::OutputIo, format!("cannot write output: {e}")))?;
+    // Streamed from the texel data (no file-sized copy in memory).
+    asset.write(&args.output).map_err(|e| match e {
+        billow_format::FormatError::Io { .. } => {
+            CliError::new(Code::OutputIo, format!("cannot write output: {e}"))
+        }
+        e => CliError::new(Code::Internal, e),
+    })?;
+    let bytes = std::fs::metadata(&args.output)
+        .map_err(|e| CliError::new(Code::OutputIo, format!("cannot write output: {e}")))?
+        .len();
     if let Some(path) = &args.ktx2 {
         write_ktx2(&asset, path).map_err(|e| CliError::new(export_code(&e), e))?;
     }
@@ -308,7 +319,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         triangles: stats.triangles,
         non_empty_voxels: stats.non_empty_voxels,
         fragments: stats.fragments,
-        bytes: bytes.len() as u64,
+        bytes,
         peak_memory_bytes: peak_rss_bytes(),
         seconds: Seconds {
             import: import_s,
@@ -333,7 +344,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             dims[2],
             mip_count,
             stats.non_empty_voxels,
-            bytes.len() as f64 / (1 << 20) as f64,
+            bytes as f64 / (1 << 20) as f64,
             summary.seconds.total
         );
     }

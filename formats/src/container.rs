@@ -107,7 +107,8 @@ fn pad8(n: usize) -> usize {
     (8 - n % 8) % 8
 }
 
-fn push_chunk(out: &mut Vec<u8>, tag: [u8; 4], elem: ElemType, data: &[u8]) {
+/// A chunk's header (with its CRC over header and payload).
+fn chunk_head(tag: [u8; 4], elem: ElemType, data: &[u8]) -> [u8; CHUNK_HEADER_LEN] {
     let mut head = [0u8; CHUNK_HEADER_LEN];
     head[0..4].copy_from_slice(&tag);
     head[4..8].copy_from_slice(&elem.code().to_le_bytes());
@@ -115,7 +116,11 @@ fn push_chunk(out: &mut Vec<u8>, tag: [u8; 4], elem: ElemType, data: &[u8]) {
     // head[16..20]: reserved, zero.
     let c = crc(&[&head[..20], data]);
     head[20..24].copy_from_slice(&c.to_le_bytes());
-    out.extend_from_slice(&head);
+    head
+}
+
+fn push_chunk(out: &mut Vec<u8>, tag: [u8; 4], elem: ElemType, data: &[u8]) {
+    out.extend_from_slice(&chunk_head(tag, elem, data));
     out.extend_from_slice(data);
     out.resize(out.len() + pad8(data.len()), 0);
 }
@@ -153,6 +158,71 @@ pub(crate) fn encode_with_minor(
     chunks: &[ChunkRef<'_>],
     minor: u16,
 ) -> Result<Vec<u8>, FormatError> {
+    let (ron, total) = check_chunks(header, chunks)?;
+    let mut out = Vec::with_capacity(total);
+    out.resize(PREAMBLE_LEN, 0);
+    push_chunk(&mut out, TAG_HEAD, ElemType::Opaque, ron.as_bytes());
+    for ch in chunks {
+        push_chunk(&mut out, ch.tag, ch.elem, ch.data);
+    }
+    push_chunk(&mut out, TAG_END, ElemType::Opaque, &[]);
+    write_preamble(
+        &mut out,
+        FORMAT_MAJOR,
+        minor.max(minor_for(chunks)),
+        header.kind.code(),
+    );
+    Ok(out)
+}
+
+/// [`encode_with_minor`] written straight to `path` with [`write_atomic_parts`]: the same
+/// bytes, without assembling the file in memory first (the payloads are written from
+/// where they are).
+pub(crate) fn write_with_minor(
+    path: &Path,
+    header: &Header,
+    chunks: &[ChunkRef<'_>],
+    minor: u16,
+) -> Result<(), FormatError> {
+    let (ron, _) = check_chunks(header, chunks)?;
+    // The bytes between the payloads: gap 0 is the preamble, HEAD and the first chunk's
+    // header; gap i the padding of payload i - 1 and chunk i's header; the last gap the
+    // last padding and END.
+    let mut gaps: Vec<Vec<u8>> = Vec::with_capacity(chunks.len() + 1);
+    let mut first = vec![0u8; PREAMBLE_LEN];
+    push_chunk(&mut first, TAG_HEAD, ElemType::Opaque, ron.as_bytes());
+    gaps.push(first);
+    for ch in chunks {
+        let gap = gaps.last_mut().expect("gap 0");
+        gap.extend_from_slice(&chunk_head(ch.tag, ch.elem, ch.data));
+        gaps.push(vec![0u8; pad8(ch.data.len())]);
+    }
+    push_chunk(
+        gaps.last_mut().expect("gap 0"),
+        TAG_END,
+        ElemType::Opaque,
+        &[],
+    );
+    let total = gaps.iter().map(|g| g.len()).sum::<usize>()
+        + chunks.iter().map(|c| c.data.len()).sum::<usize>();
+    write_preamble_len(
+        &mut gaps[0],
+        total as u64,
+        FORMAT_MAJOR,
+        minor.max(minor_for(chunks)),
+        header.kind.code(),
+    );
+    let mut parts: Vec<&[u8]> = Vec::with_capacity(2 * chunks.len() + 1);
+    parts.push(&gaps[0]);
+    for (ch, gap) in chunks.iter().zip(&gaps[1..]) {
+        parts.push(ch.data);
+        parts.push(gap);
+    }
+    write_atomic_parts(path, &parts)
+}
+
+/// Validates the header and chunks; the header's RON and an upper bound of the file's length.
+fn check_chunks(header: &Header, chunks: &[ChunkRef<'_>]) -> Result<(String, usize), FormatError> {
     header.validate()?;
     let ron = header.to_ron()?;
     let mut total = PREAMBLE_LEN + 2 * CHUNK_HEADER_LEN + ron.len() + 8;
@@ -180,20 +250,7 @@ pub(crate) fn encode_with_minor(
         }
         total += CHUNK_HEADER_LEN + ch.data.len() + pad8(ch.data.len());
     }
-    let mut out = Vec::with_capacity(total);
-    out.resize(PREAMBLE_LEN, 0);
-    push_chunk(&mut out, TAG_HEAD, ElemType::Opaque, ron.as_bytes());
-    for ch in chunks {
-        push_chunk(&mut out, ch.tag, ch.elem, ch.data);
-    }
-    push_chunk(&mut out, TAG_END, ElemType::Opaque, &[]);
-    write_preamble(
-        &mut out,
-        FORMAT_MAJOR,
-        minor.max(minor_for(chunks)),
-        header.kind.code(),
-    );
-    Ok(out)
+    Ok((ron, total))
 }
 
 /// Chunk tags introduced by each minor version after 1.0 (index 0: 1.1).
@@ -215,6 +272,11 @@ fn minor_for(chunks: &[ChunkRef<'_>]) -> u16 {
 /// Fill in the 32-byte preamble at the start of `out` (file length = `out.len()`).
 pub(crate) fn write_preamble(out: &mut [u8], major: u16, minor: u16, kind: u32) {
     let len = out.len() as u64;
+    write_preamble_len(out, len, major, minor, kind);
+}
+
+/// [`write_preamble`] for a file of `len` bytes whose start is `out`.
+fn write_preamble_len(out: &mut [u8], len: u64, major: u16, minor: u16, kind: u32) {
     let p = &mut out[..PREAMBLE_LEN];
     p[0..8].copy_from_slice(&MAGIC);
     p[8..10].copy_from_slice(&major.to_le_bytes());
@@ -464,6 +526,11 @@ pub fn from_bytes(bytes: &[u8]) -> Result<Container, FormatError> {
 /// is written, fsynced and renamed over `path`. On error the temporary file is
 /// removed and an existing `path` is untouched.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FormatError> {
+    write_atomic_parts(path, &[bytes])
+}
+
+/// [`write_atomic`] of the concatenation of `parts`.
+pub fn write_atomic_parts(path: &Path, parts: &[&[u8]]) -> Result<(), FormatError> {
     let io = |source: std::io::Error| FormatError::Io {
         path: path.to_path_buf(),
         source,
@@ -486,7 +553,9 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FormatError> {
         builder.permissions(std::fs::Permissions::from_mode(0o666));
     }
     let mut tmp = builder.tempfile_in(dir).map_err(io)?;
-    tmp.write_all(bytes).map_err(io)?;
+    for p in parts {
+        tmp.write_all(p).map_err(io)?;
+    }
     tmp.as_file().sync_all().map_err(io)?;
     tmp.persist(path).map_err(|e| io(e.error))?;
     // Make the rename itself durable; best effort (not possible on every platform).

@@ -11,10 +11,10 @@ use std::path::Path;
 
 use crate::bands::{band_table, prism_bytes, validate_bands, LodBand, RawBands};
 use crate::bands::{TAG_BCEL, TAG_BLEV, TAG_BNRM, TAG_VBND};
-use crate::container::{encode_with_minor, ChunkRef};
+use crate::container::{encode_with_minor, write_with_minor, ChunkRef};
 use crate::{
-    from_bytes, write_atomic, AssetKind, Chunk, Container, ElemType, FormatError, Header,
-    NormalEncoding, TexelFormat, VolumeHeader,
+    from_bytes, AssetKind, Chunk, Container, ElemType, FormatError, Header, NormalEncoding,
+    TexelFormat, VolumeHeader,
 };
 
 /// Tag of a colour MIP level chunk (one per level, in level order).
@@ -346,10 +346,12 @@ impl VolumeAsset {
         Self::from_bytes(&bytes).map_err(|e| e.in_file(path))
     }
 
-    /// Encode and write atomically (see [`write_atomic`]).
+    /// Encode and write atomically (see [`crate::write_atomic`]): the bytes of
+    /// [`VolumeAsset::to_bytes`], written from the texel data where it is, without
+    /// assembling the file in memory first.
     pub fn write(&self, path: &Path) -> Result<(), FormatError> {
-        let bytes = self.to_bytes()?;
-        write_atomic(path, &bytes)
+        let minor = if self.bands.is_empty() { 0 } else { 1 };
+        self.with_chunks(|refs| write_with_minor(path, &self.header, refs, minor))?
     }
 }
 

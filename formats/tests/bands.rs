@@ -83,6 +83,10 @@ fn banded_assets_round_trip_as_format_1_1() {
     assert_eq!(back, a);
     assert_eq!(back.max_lod(), 2);
     assert_eq!(back.to_bytes().unwrap(), bytes);
+    // Written straight to a file: the same bytes.
+    let dir = tempfile::tempdir().unwrap();
+    a.write(&dir.path().join("a.billow")).unwrap();
+    assert_eq!(std::fs::read(dir.path().join("a.billow")).unwrap(), bytes);
     // The same asset without bands is a 1.0 file.
     let plain = VolumeAsset {
         bands: Vec::new(),

@@ -124,6 +124,15 @@ proptest! {
         prop_assert_eq!(bits(&back), bits(&asset));
         prop_assert_eq!(back.to_bytes().unwrap(), bytes);
     }
+
+    /// `write` streams the payloads to the file: the same bytes as `to_bytes`.
+    #[test]
+    fn write_gives_the_encoded_bytes(asset in volume_asset()) {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a.billow");
+        asset.write(&path).unwrap();
+        prop_assert_eq!(std::fs::read(&path).unwrap(), asset.to_bytes().unwrap());
+    }
 }
 
 #[test]

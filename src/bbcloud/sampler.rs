@@ -9,10 +9,12 @@
 //! with the same table; the arithmetic is the generic sampler's, in the same order, so the
 //! results are identical.
 
-use glam::{Vec2, Vec3, Vec4};
+use glam::{Vec2, Vec4};
 
 use crate::scene::{Texture, Wrap};
-use crate::texture::srgb_to_linear_lut;
+use crate::texture::{
+    filter_taps, finite_or_zero, floor_fast as floor, srgb_to_linear_lut, wrap_index as wrap,
+};
 
 /// A texture prepared for sampling.
 pub struct Decoded<'a> {
@@ -21,51 +23,6 @@ pub struct Decoded<'a> {
     wrap: [Wrap; 2],
     texels: &'a [[u8; 4]],
     lut: &'static [f32; 256],
-}
-
-fn finite_or_zero(x: f32) -> f32 {
-    if x.is_finite() {
-        x
-    } else {
-        0.0
-    }
-}
-
-/// `x.floor()` without a libm call (x86-64's baseline has no rounding instruction): the
-/// truncation corrected downwards, exact for |x| < 2⁵²; larger values are integers already.
-#[inline(always)]
-fn floor(x: f64) -> f64 {
-    if x.abs() < 4_503_599_627_370_496.0 {
-        let t = x as i64 as f64;
-        if t > x {
-            t - 1.0
-        } else {
-            t
-        }
-    } else {
-        x.floor()
-    }
-}
-
-/// Same mapping as the generic sampler's wrap.
-#[inline(always)]
-fn wrap(i: i64, n: u32, w: Wrap) -> usize {
-    if w == Wrap::Repeat && n.is_power_of_two() {
-        return (i & (i64::from(n) - 1)) as usize;
-    }
-    let n = i64::from(n);
-    (match w {
-        Wrap::Repeat => i.rem_euclid(n),
-        Wrap::ClampToEdge => i.clamp(0, n - 1),
-        Wrap::MirroredRepeat => {
-            let k = i.rem_euclid(2 * n);
-            if k >= n {
-                2 * n - 1 - k
-            } else {
-                k
-            }
-        }
-    }) as usize
 }
 
 impl<'a> Decoded<'a> {
@@ -114,16 +71,7 @@ impl<'a> Decoded<'a> {
             (t(0, 1), (1.0 - fx) * fy),
             (t(1, 1), fx * fy),
         ];
-        let mut premul = Vec3::ZERO;
-        let mut plain = Vec3::ZERO;
-        let mut alpha = 0.0;
-        for (c, w) in taps {
-            premul += c.truncate() * (c.w * w);
-            plain += c.truncate() * w;
-            alpha += c.w * w;
-        }
-        let rgb = if alpha > 1e-6 { premul / alpha } else { plain };
-        rgb.extend(alpha.clamp(0.0, 1.0))
+        filter_taps(taps)
     }
 }
 

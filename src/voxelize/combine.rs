@@ -320,7 +320,7 @@ pub(crate) fn combine_level0(
     // (start of each plane's run, (index in the plane, index in `vox`)).
     type Table = (Vec<usize>, Vec<(u32, u32)>);
     let by_plane: Vec<Option<Table>> = dirs
-        .iter()
+        .par_iter()
         .map(|s| {
             if s.dir.image_axes()[1] == 2 {
                 return None;
@@ -350,25 +350,31 @@ pub(crate) fn combine_level0(
     let enc = super::quantize::Encoder::get();
     let mut out = vec![0u8; plane * dims[2] * 4];
     let mut out_n = normals.then(|| vec![0u8; plane * dims[2] * 4]);
-    // Per thread, the plane accumulators (left zeroed after each plane).
-    type Bufs = (Vec<f32>, Vec<[f32; 4]>);
+    // Per thread, the plane accumulators (left zeroed after each plane)
+    // and the plane indices folded into (a voxel is listed when it is first folded into,
+    // possibly more than once if a fold leaves it zero, which is harmless).
+    type Bufs = (Vec<f32>, Vec<[f32; 4]>, Vec<u32>);
     let init = || -> Bufs {
         (
             vec![0.0f32; plane * w],
             vec![[0.0f32; 4]; plane * normals as usize],
+            Vec::new(),
         )
     };
-    let work = |(acc, nacc): &mut Bufs, z: usize, o: &mut [u8], on: Option<&mut [u8]>| {
-        let mut any = false;
+    let work = |(acc, nacc, list): &mut Bufs, z: usize, o: &mut [u8], mut on: Option<&mut [u8]>| {
+        list.clear();
         for (s, table) in dirs.iter().zip(&by_plane) {
             let mut fold = |i: usize, k: usize| {
                 let v = &s.vox[k];
-                Accum::fold_one(preset, &mut acc[i * w..i * w + w], v.rgba);
+                let a = &mut acc[i * w..i * w + w];
+                if a[..4] == [0.0; 4] {
+                    list.push(i as u32);
+                }
+                Accum::fold_one(preset, a, v.rgba);
                 if let Some(n) = s.nrm.as_ref() {
                     let (n, a) = (n[k], &mut nacc[i]);
                     *a = [a[0] + n[0], a[1] + n[1], a[2] + n[2], a[3] + v.rgba[3]];
                 }
-                any = true;
             };
             match table {
                 None => {
@@ -384,32 +390,29 @@ pub(crate) fn combine_level0(
                 }
             }
         }
-        if !any {
-            return;
-        }
-        for (o, a) in o.chunks_exact_mut(4).zip(acc.chunks_exact_mut(w)) {
-            if a[..4] == [0.0; 4] {
-                a.fill(0.0);
-                continue;
+        // Only the voxels folded into are finished (and left zeroed); the others stay 0.
+        for &i in list.iter() {
+            let i = i as usize;
+            let a = &mut acc[i * w..i * w + w];
+            if a[..4] != [0.0; 4] {
+                let v = match preset {
+                    Preset::Mean => Vec4::from_slice(a) / 6.0,
+                    Preset::Max => Vec4::from_slice(a),
+                    Preset::Min if a[4] < 6.0 => Vec4::ZERO,
+                    Preset::Min => Vec4::from_slice(a),
+                    Preset::Opaque => opaque_colour(Vec3::from_slice(a), a[3], a[4]),
+                };
+                o[4 * i..4 * i + 4].copy_from_slice(&enc.rgba8(clamp_premultiplied(v)));
             }
-            let v = match preset {
-                Preset::Mean => Vec4::from_slice(a) / 6.0,
-                Preset::Max => Vec4::from_slice(a),
-                Preset::Min if a[4] < 6.0 => Vec4::ZERO,
-                Preset::Min => Vec4::from_slice(a),
-                Preset::Opaque => opaque_colour(Vec3::from_slice(a), a[3], a[4]),
-            };
             a.fill(0.0);
-            o.copy_from_slice(&enc.rgba8(clamp_premultiplied(v)));
-        }
-        if let Some(on) = on {
-            for (o, a) in on.chunks_exact_mut(4).zip(nacc.iter_mut()) {
+            if let Some(on) = on.as_deref_mut() {
+                let a = &mut nacc[i];
                 if *a == [0.0; 4] {
                     continue;
                 }
                 let n = average_normal(Vec3::new(a[0], a[1], a[2]), a[3]);
                 *a = [0.0; 4];
-                o.copy_from_slice(&encode_normal(n));
+                on[4 * i..4 * i + 4].copy_from_slice(&encode_normal(n));
             }
         }
     };

@@ -36,7 +36,9 @@ pub mod cells;
 pub mod combine;
 pub mod dense;
 pub mod expr;
+mod fragments;
 pub mod grid;
+mod lanes;
 pub mod mip;
 pub mod quantize;
 pub(crate) mod shade;
@@ -435,6 +437,7 @@ pub fn slice_stack(
     let (grid, _) = check(scene, opts)?;
     let shader = shade::Shader::new(scene);
     let mut s = slices::rasterize(
+        &mut Default::default(),
         scene,
         &shader,
         &grid,
@@ -541,6 +544,7 @@ pub fn voxelize(
     times.bake += t.elapsed().as_secs_f64();
     let k = opts.supersample;
     fn raster(
+        bufs: &mut slices::SetupBufs,
         ctx: (&Scene, &shade::Shader, &GridSpec, u32, bool),
         dir: Dir,
         times: &mut StageTimes,
@@ -550,7 +554,7 @@ pub fn voxelize(
         let (scene, shader, grid, k, normals) = ctx;
         let t = Instant::now();
         let d = dir.index() as f32;
-        let mut s = slices::rasterize(scene, shader, grid, dir, k, normals, &mut |x| {
+        let mut s = slices::rasterize(bufs, scene, shader, grid, dir, k, normals, &mut |x| {
             progress(Stage::Rasterize, (d + x) / 6.0)
         });
         times.rasterize += t.elapsed().as_secs_f64();
@@ -562,6 +566,7 @@ pub fn voxelize(
         s
     }
     let ctx = (scene, &shader, &grid, k, opts.normals);
+    let mut bufs = slices::SetupBufs::default();
     let levels: Vec<Vec<u8>> = match &opts.combine {
         CombineFn::Preset(p) => {
             // Level 0 is combined at the end from the six sparse stacks, plane by plane;
@@ -572,7 +577,7 @@ pub fn voxelize(
             nacc = opts.normals.then(|| toksvig::NormalAccum::new(&coarse));
             let mut zero = Vec::with_capacity(6);
             for dir in Dir::ALL {
-                let s = raster(ctx, dir, &mut times, baker.as_mut(), progress);
+                let s = raster(&mut bufs, ctx, dir, &mut times, baker.as_mut(), progress);
                 fragments += s.fragments;
                 let mut fold_secs = 0.0;
                 pyramid::<[f32; 4]>(&s, mips, &mut times.mip, |level, data| {
@@ -589,6 +594,7 @@ pub fn voxelize(
                 times.combine += fold_secs;
                 progress(Stage::Combine, (dir.index() + 1) as f32 / 6.0);
             }
+            drop(std::mem::take(&mut bufs)); // before the level-0 combine's peak
             let t = Instant::now();
             let (level0, normals0) = combine::combine_level0(*p, &zero, opts.normals);
             drop(zero);
@@ -604,7 +610,7 @@ pub fn voxelize(
             let mut pyrs: Vec<Vec<Option<Grid3<[f16; 4]>>>> = Vec::with_capacity(6);
             for dir in Dir::ALL {
                 // Stored in f16 (the arithmetic stays f32/f64).
-                let s = raster(ctx, dir, &mut times, baker.as_mut(), progress);
+                let s = raster(&mut bufs, ctx, dir, &mut times, baker.as_mut(), progress);
                 fragments += s.fragments;
                 let mut levels = Vec::with_capacity(mips as usize);
                 pyramid::<[f16; 4]>(&s, mips, &mut times.mip, |level, data| match data {
@@ -624,6 +630,7 @@ pub fn voxelize(
                 pyrs.push(levels);
                 progress(Stage::Mip, (dir.index() + 1) as f32 / 6.0);
             }
+            drop(std::mem::take(&mut bufs));
             let t = Instant::now();
             let mut out = Vec::with_capacity(mips as usize);
             for l in 0..mips as usize {

@@ -12,13 +12,15 @@
 
 use glam::{Vec2, Vec3, Vec4};
 
-use crate::scene::{AlphaMode, Material, Scene, Texture, Wrap};
-use crate::texture::srgb_to_linear_lut;
+use crate::scene::{AlphaMode, Material, Scene, Texture};
+use crate::texture::{finite_or_zero, floor_fast as floor, srgb_to_linear_lut, wrap_index as wrap};
 
 /// Validated view of a scene's materials and textures.
 pub(crate) struct Shader<'a> {
     materials: &'a [Material],
     textures: &'a [Texture],
+    /// sRGB byte → linear ([`srgb_to_linear_lut`], fetched once).
+    lut: &'static [f32; 256],
 }
 
 /// Checks every index and size the voxelizer relies on.
@@ -61,6 +63,7 @@ impl<'a> Shader<'a> {
         Shader {
             materials: &scene.materials,
             textures: &scene.textures,
+            lut: srgb_to_linear_lut(),
         }
     }
 
@@ -74,12 +77,11 @@ impl<'a> Shader<'a> {
     ///
     /// `c = factor × vertex_color × texture.sample_bilinear(uv)` (bit for bit), but
     /// faster: the four texels are fetched once (two wraps per axis instead of eight).
-    #[inline]
+    #[inline(always)]
     pub(crate) fn shade_tested(&self, m: &Material, uv: Vec2, vertex_color: Vec4) -> Option<Vec4> {
         let mut c = m.base_color_factor * vertex_color;
         if let Some(t) = m.base_color_texture {
-            let taps = Taps::new(&self.textures[t as usize], uv);
-            c *= taps.colour(taps.alpha());
+            c *= Taps::new(&self.textures[t as usize], uv).filtered(self.lut);
         }
         let rgb = c.truncate().clamp(Vec3::ZERO, Vec3::ONE);
         let a = match m.alpha_mode {
@@ -130,58 +132,65 @@ struct Taps {
     weights: [f32; 4],
 }
 
-fn finite_or_zero(x: f32) -> f32 {
-    if x.is_finite() {
-        x
-    } else {
-        0.0
+/// `a as f32 / 255.0` for every byte (the same values, without the division).
+const ALPHA: [f32; 256] = {
+    let mut t = [0.0f32; 256];
+    let mut i = 0;
+    while i < 256 {
+        t[i] = i as f32 / 255.0;
+        i += 1;
     }
-}
-
-/// `x.floor()` without the libm call in the common range (same value).
-#[inline]
-fn floor(x: f64) -> f64 {
-    if x.abs() < 4.0e15 {
-        let t = x as i64 as f64;
-        if t > x {
-            t - 1.0
-        } else {
-            t
-        }
-    } else {
-        x.floor()
-    }
-}
-
-/// `wrap_index` of `crate::texture`, with the in-range case first.
-#[inline]
-fn wrap(i: i64, n: u32, mode: Wrap) -> usize {
-    let n = n as i64;
-    if (0..n).contains(&i) {
-        return i as usize;
-    }
-    (match mode {
-        Wrap::Repeat => i.rem_euclid(n),
-        Wrap::ClampToEdge => i.clamp(0, n - 1),
-        Wrap::MirroredRepeat => {
-            let k = i.rem_euclid(2 * n);
-            if k >= n {
-                2 * n - 1 - k
-            } else {
-                k
-            }
-        }
-    }) as usize
-}
+    t
+};
 
 impl Taps {
-    #[inline]
+    #[inline(always)]
     fn new(t: &Texture, uv: Vec2) -> Self {
         let x = finite_or_zero(uv.x) as f64 * t.width as f64 - 0.5;
         let y = finite_or_zero(uv.y) as f64 * t.height as f64 - 0.5;
+        if x.abs() < 4.0e15 && y.abs() < 4.0e15 {
+            // `floor` of both, as integers and floats (exact in this range).
+            let (mut xi, mut yi) = (x as i64, y as i64);
+            let (mut x0, mut y0) = (xi as f64, yi as f64);
+            if x0 > x {
+                x0 -= 1.0;
+                xi -= 1;
+            }
+            if y0 > y {
+                y0 -= 1.0;
+                yi -= 1;
+            }
+            let (fx, fy) = ((x - x0) as f32, (y - y0) as f32);
+            let w = t.width as usize;
+            // All four taps inside the texture: no wrapping.
+            if (xi as u64) < t.width as u64 - 1 && (yi as u64) < t.height as u64 - 1 {
+                let base = yi as usize * w + xi as usize;
+                let r = &t.texels[base..base + w + 2];
+                return Taps {
+                    texels: [r[0], r[1], r[w], r[w + 1]],
+                    weights: Self::weights(fx, fy),
+                };
+            }
+            return Self::wrapped(t, xi, yi, fx, fy);
+        }
         let (x0, y0) = (floor(x), floor(y));
         let (fx, fy) = ((x - x0) as f32, (y - y0) as f32);
-        let (x0, y0) = (x0 as i64, y0 as i64);
+        Self::wrapped(t, x0 as i64, y0 as i64, fx, fy)
+    }
+
+    #[inline]
+    fn weights(fx: f32, fy: f32) -> [f32; 4] {
+        [
+            (1.0 - fx) * (1.0 - fy),
+            fx * (1.0 - fy),
+            (1.0 - fx) * fy,
+            fx * fy,
+        ]
+    }
+
+    /// The taps at texel `(x0, y0)` and the next ones, wrapped.
+    #[inline(never)]
+    fn wrapped(t: &Texture, x0: i64, y0: i64, fx: f32, fy: f32) -> Self {
         let (xa, xb) = (
             wrap(x0, t.width, t.wrap_u),
             wrap(x0.saturating_add(1), t.width, t.wrap_u),
@@ -194,12 +203,7 @@ impl Taps {
         let at = |x: usize, y: usize| t.texels[y * w + x];
         Taps {
             texels: [at(xa, ya), at(xb, ya), at(xa, yb), at(xb, yb)],
-            weights: [
-                (1.0 - fx) * (1.0 - fy),
-                fx * (1.0 - fy),
-                (1.0 - fx) * fy,
-                fx * fy,
-            ],
+            weights: Self::weights(fx, fy),
         }
     }
 
@@ -220,7 +224,7 @@ impl Taps {
             wrap(y0.saturating_add(1), t.height, t.wrap_v),
         );
         let w = t.width as usize;
-        let at = |x: usize, y: usize| t.texels[y * w + x][3] as f32 / 255.0;
+        let at = |x: usize, y: usize| ALPHA[t.texels[y * w + x][3] as usize];
         let mut alpha = 0.0f32;
         alpha += at(xa, ya) * ((1.0 - fx) * (1.0 - fy));
         alpha += at(xb, ya) * (fx * (1.0 - fy));
@@ -234,24 +238,86 @@ impl Taps {
     fn alpha(&self) -> f32 {
         let mut alpha = 0.0f32;
         for (p, w) in self.texels.iter().zip(self.weights) {
-            alpha += p[3] as f32 / 255.0 * w;
+            alpha += ALPHA[p[3] as usize] * w;
         }
         alpha
     }
 
-    /// The filtered linear straight RGBA, given [`Taps::alpha`].
-    #[inline]
-    fn colour(&self, alpha: f32) -> Vec4 {
-        let lut = srgb_to_linear_lut();
-        let mut premul = Vec3::ZERO;
-        let mut plain = Vec3::ZERO;
+    /// The filtered linear straight RGBA: [`Texture::sample_bilinear`] bit for bit (every
+    /// lane of the two sums is the scalar sum of the same terms in the same order, with
+    /// alpha in the last lane of the plain sum).
+    #[inline(always)]
+    fn filtered(&self, lut: &[f32; 256]) -> Vec4 {
+        let mut premul = Vec4::ZERO;
+        let mut plain = Vec4::ZERO;
         for (p, w) in self.texels.iter().zip(self.weights) {
-            let c = Vec3::new(lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize]);
-            let a = p[3] as f32 / 255.0;
+            let a = ALPHA[p[3] as usize];
+            let c = Vec4::new(
+                lut[p[0] as usize],
+                lut[p[1] as usize],
+                lut[p[2] as usize],
+                a,
+            );
             premul += c * (a * w);
             plain += c * w;
         }
+        let alpha = plain.w;
         let rgb = if alpha > 1e-6 { premul / alpha } else { plain };
-        rgb.extend(alpha.clamp(0.0, 1.0))
+        rgb.truncate().extend(alpha.clamp(0.0, 1.0))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::Wrap;
+
+    /// The one-pass filter and the alpha-only test are `Texture::sample_bilinear` bit for
+    /// bit: random textures with transparent texels, every wrap mode, UVs in and out of
+    /// [0, 1].
+    #[test]
+    fn taps_match_sample_bilinear_bit_for_bit() {
+        let mut x = 0x9e37_79b9u32;
+        let mut next = move || {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            x
+        };
+        for (wi, wrap) in [Wrap::Repeat, Wrap::ClampToEdge, Wrap::MirroredRepeat]
+            .into_iter()
+            .enumerate()
+        {
+            let (w, h) = (5 + wi as u32 * 3, 7);
+            let texels = (0..w * h)
+                .map(|_| {
+                    let v = next().to_le_bytes();
+                    [v[0], v[1], v[2], if v[3] < 80 { 0 } else { v[3] }]
+                })
+                .collect();
+            let t = Texture {
+                name: "t".into(),
+                width: w,
+                height: h,
+                texels,
+                wrap_u: wrap,
+                wrap_v: wrap,
+            };
+            for _ in 0..20_000 {
+                let f = |v: u32| (v % 40_000) as f32 / 10_000.0 - 1.5;
+                let uv = Vec2::new(f(next()), f(next()));
+                let want = t.sample_bilinear(uv);
+                let taps = Taps::new(&t, uv);
+                assert_eq!(
+                    taps.filtered(srgb_to_linear_lut())
+                        .to_array()
+                        .map(f32::to_bits),
+                    want.to_array().map(f32::to_bits),
+                    "{uv}"
+                );
+                assert_eq!(taps.alpha().clamp(0.0, 1.0).to_bits(), want.w.to_bits());
+                assert_eq!(Taps::alpha_only(&t, uv).to_bits(), taps.alpha().to_bits());
+            }
+        }
     }
 }
