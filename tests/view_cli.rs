@@ -53,6 +53,102 @@ fn print_passes_lists_only_what_the_content_needs() {
     assert_eq!(passes(&s), ["resolve"]);
 }
 
+/// `--print-passes` of a scene written from `text` into a temp dir with a copy of the oak.
+fn scene_passes(text: &str) -> Vec<String> {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(scenes().join("oak32.billow"), dir.path().join("oak.billow")).unwrap();
+    let s = dir.path().join("s.ron");
+    std::fs::write(&s, text).unwrap();
+    passes(&s)
+}
+
+fn particles(kinds: &[&str]) -> String {
+    let sys: Vec<String> = kinds
+        .iter()
+        .map(|k| {
+            format!(
+                "(kind: {k}, emitter: (position: (0.0, 1.0, 0.0), count: 8, \
+                 radius: (0.5, 1.0), lifetime: (2.0, 3.0)))"
+            )
+        })
+        .collect();
+    format!("particles: [{}]", sys.join(", "))
+}
+
+#[test]
+fn print_passes_bakes_and_runs_only_the_effects_a_scene_calls_for() {
+    // The paper's explosion: every particle bake (dust and smoke scatter, fire glows),
+    // animated cells for the swaying oak, shimmer asked for, no motion blur, no shadows.
+    assert_eq!(
+        passes(&scenes().join("explosion.ron")),
+        [
+            "bake:detail-noise",
+            "bake:phase-lut",
+            "bake:blackbody-lut",
+            "animate:cells",
+            "mesh",
+            "volume",
+            "particles",
+            "shimmer",
+            "composite",
+            "resolve"
+        ]
+    );
+    // Smoke alone: no black-body table, no shimmer, no mesh or volume pass.
+    assert_eq!(
+        scene_passes(&format!("({})", particles(&["Smoke"]))),
+        [
+            "bake:detail-noise",
+            "bake:phase-lut",
+            "particles",
+            "composite",
+            "resolve"
+        ]
+    );
+    // Fire alone: the black-body table but no phase table (fire does not scatter).
+    assert_eq!(
+        scene_passes(&format!("({})", particles(&["Fire"]))),
+        [
+            "bake:detail-noise",
+            "bake:blackbody-lut",
+            "particles",
+            "composite",
+            "resolve"
+        ]
+    );
+    // Motion blur and shimmer only when the layer asks for them, in that order.
+    assert_eq!(
+        scene_passes(&format!(
+            "({}, particle_layer: (resolution: Half, shimmer: Some(2.0), \
+             motion_blur: Some((shutter: 0.05, samples: 4))))",
+            particles(&["Dust", "Fire"])
+        )),
+        [
+            "bake:detail-noise",
+            "bake:phase-lut",
+            "bake:blackbody-lut",
+            "particles",
+            "motion-blur",
+            "shimmer",
+            "composite",
+            "resolve"
+        ]
+    );
+    // A layer description without particles builds nothing for them.
+    assert_eq!(
+        scene_passes("(volumes: [(asset: \"oak.billow\")], particle_layer: (shimmer: Some(2.0)))"),
+        ["volume", "resolve"]
+    );
+    // Cells are animated only for a volume that asks for it.
+    assert_eq!(
+        scene_passes(
+            "(volumes: [(asset: \"oak.billow\", \
+             animation: Some((amplitude: 0.05, frequency: 0.5)))])"
+        ),
+        ["animate:cells", "volume", "resolve"]
+    );
+}
+
 /// Writes `text` as a scene next to a copy of the oak asset; returns the one error line.
 fn scene_error(text: &str) -> (String, Option<i32>) {
     let dir = tempfile::tempdir().unwrap();
@@ -74,6 +170,15 @@ fn bad_scene_files_give_one_line_naming_file_and_field() {
         // unknown field
         ("(volumes: [(asset: \"oak.billow\", colour: 3)])", "colour"),
         ("(shadow: true)", "shadow"),
+        // missing field: the path to the struct that lacks it, and the field
+        (
+            "(volumes: [(instances: [])])",
+            "volumes[0]: Unexpected missing field named `asset`",
+        ),
+        (
+            "(volumes: [(asset: \"oak.billow\")], particles: [(kind: Dust, emitter: (count: 4))])",
+            "particles[0].emitter",
+        ),
         // missing asset
         (
             "(volumes: [(asset: \"missing.billow\")])",

@@ -60,6 +60,18 @@ pub struct Args {
     /// Shadows on or off, overriding the scene's `shadows`.
     #[arg(long, value_name = "on|off")]
     shadows: Option<String>,
+    /// Resolution of the particle layer, overriding the scene's `particle_layer`:
+    /// full, half, quarter or eighth of the frame.
+    #[arg(long, value_name = "FRACTION")]
+    particle_layer: Option<String>,
+    /// Draw every particle system as spherical billboards or as flat (planar) ones,
+    /// overriding each system's `mode`.
+    #[arg(long, value_name = "spherical|planar")]
+    particle_mode: Option<String>,
+    /// Scene time in seconds (particle animation, animated cells); the window plays
+    /// from here.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    time: f32,
     /// Choose cloud LODs as if every instance were this far from the eye (inspection).
     #[arg(long, value_name = "DISTANCE")]
     lod_distance: Option<f32>,
@@ -143,6 +155,45 @@ fn parse_spacing(s: &str) -> Result<Spacing, CliError> {
     }
 }
 
+/// `--particle-layer` and `--particle-mode` over the scene's own settings.
+fn override_particles(
+    scene: &mut billow_view::scene::SceneFile,
+    args: &Args,
+) -> Result<(), CliError> {
+    use billow_view::particle_pass::LayerResolution as R;
+    use billow_view::particles::BillboardMode as M;
+    if let Some(f) = args.particle_layer.as_deref() {
+        scene.particle_layer.resolution = match f {
+            "full" | "1" => R::Full,
+            "half" | "1/2" => R::Half,
+            "quarter" | "1/4" => R::Quarter,
+            "eighth" | "1/8" => R::Eighth,
+            o => {
+                return Err(bad(
+                    "--particle-layer",
+                    format!("'{o}': expected full, half, quarter or eighth"),
+                ))
+            }
+        };
+    }
+    if let Some(m) = args.particle_mode.as_deref() {
+        let mode = match m {
+            "spherical" => M::Spherical,
+            "planar" => M::Planar,
+            o => {
+                return Err(bad(
+                    "--particle-mode",
+                    format!("'{o}': expected spherical or planar"),
+                ))
+            }
+        };
+        for p in &mut scene.particles {
+            p.mode = mode;
+        }
+    }
+    Ok(())
+}
+
 fn view_code(e: &ViewError) -> Code {
     match e {
         ViewError::NoAdapter(_) => Code::Unsupported,
@@ -164,6 +215,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         Some("off") => scene.shadows = false,
         Some(o) => return Err(bad("--shadows", format!("'{o}': expected on or off"))),
     }
+    override_particles(&mut scene, &args)?;
     let content = load_content(&scene)?;
     let passes = content.passes();
     if args.print_passes {
@@ -186,6 +238,9 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         if !(d > 0.0 && d.is_finite()) {
             return Err(bad("--lod-distance", format!("{d}: must be > 0")));
         }
+    }
+    if !args.time.is_finite() {
+        return Err(bad("--time", "must be finite"));
     }
     if args.frames == Some(0) {
         return Err(bad("--frames", "must be at least 1"));
@@ -313,6 +368,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let mut r = content.build(gpu, params, fov).map_err(view_err)?;
     r.lod_distance_override = args.lod_distance;
     r.set_wireframe(args.wireframe);
+    r.time = args.time;
     let target = billow_view::target::Target::new(&r.gpu, width, height);
     let mut stats = FrameStats::default();
     let (mut total, mut min, mut first) = (0.0f64, f64::INFINITY, None);
@@ -393,6 +449,7 @@ fn run_window(
 ) -> Result<(), CliError> {
     let lod = args.lod_distance;
     let wire = args.wireframe;
+    let t0 = args.time;
     let mut first = true;
     let opts = billow_view::window::WindowOptions {
         title: format!("billow view {}", args.target.display()),
@@ -401,12 +458,13 @@ fn run_window(
         orbit: billow_view::window::Orbit::from_eye(eye, target, fov),
         background,
         max_frames: args.frames.map(u64::from),
-        animate: Some(Box::new(move |_t, r: &mut billow_view::Renderer| {
+        animate: Some(Box::new(move |t, r: &mut billow_view::Renderer| {
             if first {
                 r.lod_distance_override = lod;
                 r.set_wireframe(wire);
                 first = false;
             }
+            r.time = t0 + t;
         })),
     };
     let stats = billow_view::window::run(content, opts).map_err(view_err)?;

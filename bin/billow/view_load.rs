@@ -5,7 +5,7 @@ use std::path::Path;
 use billow::import::{import, ImportOptions};
 use billow::scene::{AlphaMode, Scene};
 use billow_format::{read_file, AssetKind, CloudAsset, VolumeAsset};
-use billow_view::content::{CloudContent, Content};
+use billow_view::content::{CloudContent, Content, VolumeContent};
 use billow_view::mesh_pass::{MeshData, MeshMaterial, MeshVertex};
 use billow_view::scene::{CloudDesc, MeshDesc, SceneFile, Transform, VolumeDesc};
 use billow_view::texture::TextureData;
@@ -54,6 +54,7 @@ pub fn load_scene(target: &Path) -> Result<SceneFile, CliError> {
             _ => s.volumes.push(VolumeDesc {
                 asset: target.to_path_buf(),
                 instances: vec![Transform::default()],
+                animation: None,
             }),
         }
     } else {
@@ -110,12 +111,17 @@ pub fn load_content(scene: &SceneFile) -> Result<Content, CliError> {
         light_dir: Vec3::from(scene.light.direction),
         ambient: scene.light.ambient,
         shadows: scene.shadows,
+        particles: scene.particles.clone(),
+        particle_layer: scene.particle_layer,
         ..Default::default()
     };
     for v in &scene.volumes {
         let asset = VolumeAsset::read(&v.asset).map_err(|e| CliError::new(format_code(&e), e))?;
-        c.volumes
-            .push((asset, v.instances.iter().map(|t| t.matrix()).collect()));
+        c.volumes.push(VolumeContent {
+            asset,
+            instances: v.instances.iter().map(|t| t.matrix()).collect(),
+            animation: v.animation,
+        });
     }
     for d in &scene.clouds {
         let asset = CloudAsset::read(&d.asset).map_err(|e| {

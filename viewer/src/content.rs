@@ -6,7 +6,10 @@
 use billow_format::{CloudAsset, VolumeAsset};
 use glam::{Mat4, Vec3};
 
+use crate::animate::Sway;
 use crate::mesh_pass::MeshData;
+use crate::particle_pass::{ParticleLayerDesc, ParticleNeeds};
+use crate::particles::ParticleSystemDesc;
 use crate::{Gpu, Renderer, SliceParams, ViewError};
 
 /// A cloud asset and how it is placed.
@@ -25,13 +28,33 @@ pub struct Needs {
     pub clouds: bool,
     pub volumes: bool,
     pub shadows: bool,
+    /// Some volume deforms its cells over time.
+    pub animated: bool,
+    pub particles: ParticleNeeds,
 }
 
-/// The passes of a frame with `n`, in order: `shadow` only with shadows on and something
-/// to cast, `mesh` only with meshes (a ground, cloud trunks), `cloud` only with clouds,
-/// `volume` only with volumes, then `resolve`.
+/// The work of a frame with `n`, in order. First what is computed once at load, prefixed
+/// `bake:` (the detail noise with any particles, the phase LUT only with dust or smoke,
+/// the black-body LUT only with fire), then per frame: `animate:cells` only with animated
+/// volumes, `shadow` only with shadows on and something to cast, `mesh` only with meshes
+/// (a ground, cloud trunks), `cloud` only with clouds, `volume` only with volumes,
+/// `particles` (+ `motion-blur`, `shimmer` when asked for) and `composite` only with
+/// particles, then `resolve`.
 pub fn pass_list(n: Needs) -> Vec<&'static str> {
     let mut p = Vec::new();
+    let pn = n.particles;
+    if pn.any {
+        p.push("bake:detail-noise");
+    }
+    if pn.scattering {
+        p.push("bake:phase-lut");
+    }
+    if pn.fire {
+        p.push("bake:blackbody-lut");
+    }
+    if n.animated {
+        p.push("animate:cells");
+    }
     if n.shadows && (n.meshes || n.clouds || n.volumes) {
         p.push("shadow");
     }
@@ -44,13 +67,31 @@ pub fn pass_list(n: Needs) -> Vec<&'static str> {
     if n.volumes {
         p.push("volume");
     }
+    if pn.any {
+        p.push("particles");
+        if pn.motion_blur {
+            p.push("motion-blur");
+        }
+        if pn.shimmer {
+            p.push("shimmer");
+        }
+        p.push("composite");
+    }
     p.push("resolve");
     p
 }
 
+/// A volume asset, its instances and its cell animation.
+#[derive(Clone, Debug)]
+pub struct VolumeContent {
+    pub asset: VolumeAsset,
+    pub instances: Vec<Mat4>,
+    pub animation: Option<Sway>,
+}
+
 #[derive(Clone, Debug)]
 pub struct Content {
-    pub volumes: Vec<(VolumeAsset, Vec<Mat4>)>,
+    pub volumes: Vec<VolumeContent>,
     pub clouds: Vec<CloudContent>,
     /// World-space opaque meshes (the ground included).
     pub meshes: Vec<MeshData>,
@@ -58,6 +99,8 @@ pub struct Content {
     pub light_dir: Vec3,
     pub ambient: f32,
     pub shadows: bool,
+    pub particles: Vec<ParticleSystemDesc>,
+    pub particle_layer: ParticleLayerDesc,
 }
 
 impl Default for Content {
@@ -69,6 +112,8 @@ impl Default for Content {
             light_dir: Vec3::new(0.3, 1.0, 0.5),
             ambient: 0.3,
             shadows: false,
+            particles: Vec::new(),
+            particle_layer: ParticleLayerDesc::default(),
         }
     }
 }
@@ -84,6 +129,8 @@ impl Content {
             clouds: !self.clouds.is_empty(),
             volumes: !self.volumes.is_empty(),
             shadows: self.shadows,
+            animated: self.volumes.iter().any(|v| v.animation.is_some()),
+            particles: ParticleNeeds::of(&self.particles, &self.particle_layer),
         }
     }
 
@@ -107,9 +154,9 @@ impl Content {
                 hi = hi.max(p);
             }
         };
-        for (a, inst) in &self.volumes {
-            for m in inst {
-                grow_box(a.header.bounds.min, a.header.bounds.max, m);
+        for v in &self.volumes {
+            for m in &v.instances {
+                grow_box(v.asset.header.bounds.min, v.asset.header.bounds.max, m);
             }
         }
         for c in &self.clouds {
@@ -122,6 +169,13 @@ impl Content {
                 lo = lo.min(Vec3::from(v.pos));
                 hi = hi.max(Vec3::from(v.pos));
             }
+        }
+        for s in &self.particles {
+            let e = &s.emitter;
+            let reach = e.spread + e.radius.1 + e.rise.abs();
+            let c = Vec3::from(e.position);
+            lo = lo.min(c - Vec3::splat(reach));
+            hi = hi.max(c + Vec3::splat(reach));
         }
         (lo.x <= hi.x).then_some((lo, hi))
     }
@@ -145,8 +199,11 @@ impl Content {
                 fov_y,
             )?;
         }
-        for (a, inst) in &self.volumes {
-            r.add_volume(a, inst.clone())?;
+        for v in &self.volumes {
+            r.add_animated_volume(&v.asset, v.instances.clone(), v.animation)?;
+        }
+        if !self.particles.is_empty() {
+            r.set_particles(self.particles.clone(), self.particle_layer)?;
         }
         Ok(r)
     }

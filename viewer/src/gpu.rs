@@ -65,6 +65,44 @@ impl Gpu {
         )
     }
 
+    /// A material's bind group: a uniform buffer made from `uniform` (binding 0), a texture
+    /// (binding 1) and a sampler (binding 2), the layout the mesh and cloud pipelines share.
+    pub fn material_bind_group(
+        &self,
+        label: &str,
+        layout: &wgpu::BindGroupLayout,
+        uniform: &[u8],
+        view: &wgpu::TextureView,
+        sampler: &wgpu::Sampler,
+    ) -> wgpu::BindGroup {
+        use wgpu::util::DeviceExt;
+        let buf = self
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: uniform,
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+        self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(label),
+            layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: buf.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::Sampler(sampler),
+                },
+            ],
+        })
+    }
+
     /// Blocks until the queue is idle.
     pub fn wait(&self) -> Result<(), ViewError> {
         self.device

@@ -22,6 +22,8 @@ pub mod gpu;
 pub mod lines;
 pub mod mesh_pass;
 pub mod overlay;
+pub mod particle_layer;
+pub mod particle_pass;
 pub mod particles;
 pub mod prism_plane_gpu;
 pub mod render;

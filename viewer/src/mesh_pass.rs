@@ -330,32 +330,14 @@ impl MeshPass {
                 0.0,
             ],
         };
-        let buf = gpu
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("mesh material"),
-                contents: bytemuck::bytes_of(&u),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
         let view = m.texture.map_or(&self.white, |i| &views[i as usize]);
-        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("mesh material"),
-            layout: &self.material_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: buf.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: wgpu::BindingResource::Sampler(&self.sampler),
-                },
-            ],
-        })
+        gpu.material_bind_group(
+            "mesh material",
+            &self.material_layout,
+            bytemuck::bytes_of(&u),
+            view,
+            &self.sampler,
+        )
     }
 
     /// The frame bind group of `frame` (the camera's, or the light's for the shadow map).

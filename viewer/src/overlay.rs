@@ -69,7 +69,13 @@ impl Resolve {
         let device = &gpu.device;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("resolve.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("shaders/resolve.wgsl").into()),
+            source: wgpu::ShaderSource::Wgsl(
+                concat!(
+                    include_str!("shaders/fullscreen.wgsl"),
+                    include_str!("shaders/resolve.wgsl")
+                )
+                .into(),
+            ),
         });
         let fs = wgpu::ShaderStages::VERTEX_FRAGMENT;
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {

@@ -48,6 +48,8 @@ pub struct FrameStats {
     pub shadow_slices: usize,
     /// Billboard quads (sides) drawn.
     pub cloud_quads: usize,
+    /// Particles drawn (at the frame's time).
+    pub particles: usize,
 }
 
 /// One texture of a volume asset and the cells that sample it: band 0 is the base, the
@@ -108,6 +110,11 @@ pub struct Renderer {
     /// Volume textures bound at once (clamped to the device's limit when the volume
     /// pass is built, on the first volume added); tests lower it to exercise batches.
     pub texture_batch: usize,
+    particle_pass: Option<crate::particle_pass::ParticlePass>,
+    particles: Vec<crate::particles::ParticleSystemDesc>,
+    particle_layer: crate::particle_pass::ParticleLayerDesc,
+    /// The particle layer's targets, for the last frame size (made on first use).
+    layer_targets: std::cell::RefCell<Option<crate::particle_pass::LayerTargets>>,
 }
 
 impl Renderer {
@@ -133,7 +140,35 @@ impl Renderer {
             lines: None,
             time: 0.0,
             texture_batch: crate::volume_pass::MAX_TEXTURES_PER_BATCH,
+            particle_pass: None,
+            particles: Vec::new(),
+            particle_layer: Default::default(),
+            layer_targets: std::cell::RefCell::new(None),
         }
+    }
+
+    /// Sets the particle systems (spherical billboards) and how their layer is made; the
+    /// LUTs, noise, targets and passes they need are built now, and only those.
+    pub fn set_particles(
+        &mut self,
+        systems: Vec<crate::particles::ParticleSystemDesc>,
+        layer: crate::particle_pass::ParticleLayerDesc,
+    ) -> Result<(), ViewError> {
+        for (i, s) in systems.iter().enumerate() {
+            s.validate()
+                .map_err(|e| ViewError::InvalidParam(format!("particles[{i}].{e}")))?;
+        }
+        layer
+            .validate()
+            .map_err(|e| ViewError::InvalidParam(format!("particle_layer.{e}")))?;
+        let needs = crate::particle_pass::ParticleNeeds::of(&systems, &layer);
+        self.particle_pass = needs
+            .any
+            .then(|| crate::particle_pass::ParticlePass::new(&self.gpu, needs));
+        self.particles = systems;
+        self.particle_layer = layer;
+        *self.layer_targets.borrow_mut() = None;
+        Ok(())
     }
 
     /// Draws the edges of every volume cell over the frame (on) or not (off).
@@ -315,6 +350,11 @@ impl Renderer {
             clouds: !self.clouds.is_empty(),
             volumes: !self.volumes.is_empty(),
             shadows: self.shadow_map.is_some(),
+            animated: self.volumes.iter().any(|v| v.animation.is_some()),
+            particles: self
+                .particle_pass
+                .as_ref()
+                .map_or(Default::default(), |p| p.needs),
         })
     }
 
@@ -458,11 +498,28 @@ impl Renderer {
                 p.frame(&self.gpu, &cloud_draws, camera.view),
             )
         });
+        // With particles the opaque + volume image goes to the layer's scene target and
+        // the composite writes the frame.
+        if let Some(pp) = &self.particle_pass {
+            let mut lt = self.layer_targets.borrow_mut();
+            let div = self.particle_layer.resolution.divisor();
+            if lt
+                .as_ref()
+                .is_none_or(|t| t.size != (target.width, target.height))
+            {
+                *lt = Some(pp.targets(&self.gpu, target.width, target.height, div));
+            }
+        }
+        let layer_targets = self.layer_targets.borrow();
+        let scene_view = match (&self.particle_pass, layer_targets.as_ref()) {
+            (Some(_), Some(t)) => &t.scene,
+            _ => &target.color_view,
+        };
         {
             let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("frame"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &target.color_view,
+                    view: scene_view,
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations {
@@ -493,6 +550,22 @@ impl Renderer {
                 let pts = self.cell_edges();
                 stats.draw_calls += lines.draw(&self.gpu, &mut rp, vp, &pts, [1.0, 0.85, 0.1, 1.0]);
             }
+        }
+        if let (Some(pp), Some(t)) = (&self.particle_pass, layer_targets.as_ref()) {
+            let (n, draws) = pp.render(
+                &self.gpu,
+                &mut enc,
+                &self.particles,
+                &self.particle_layer,
+                camera,
+                (self.light_dir, self.ambient),
+                self.time,
+                &target.depth_view,
+                t,
+                &target.color_view,
+            );
+            stats.particles = n;
+            stats.draw_calls += draws;
         }
         self.gpu.queue.submit([enc.finish()]);
         Ok(stats)

@@ -36,6 +36,12 @@ pub struct SceneFile {
     /// volume slices receive.
     #[serde(default)]
     pub shadows: bool,
+    /// Particle systems (spherical billboards; `crate::particles`).
+    #[serde(default)]
+    pub particles: Vec<crate::particles::ParticleSystemDesc>,
+    /// How the particle layer is made (resolution fraction, shimmer, motion blur).
+    #[serde(default)]
+    pub particle_layer: crate::particle_pass::ParticleLayerDesc,
 }
 
 #[derive(Clone, Debug, Deserialize, PartialEq)]
@@ -92,6 +98,9 @@ pub struct VolumeDesc {
     /// Default: one instance at the origin.
     #[serde(default = "one_instance")]
     pub instances: Vec<Transform>,
+    /// Cells deformed over time (wind sway by height, `crate::animate`).
+    #[serde(default)]
+    pub animation: Option<crate::animate::Sway>,
 }
 
 fn one_instance() -> Vec<Transform> {
@@ -227,12 +236,26 @@ impl SceneFile {
         Ok(scene)
     }
 
-    /// Parses and validates RON text; the error names the field (and line:column for
-    /// syntax errors and unknown fields).
+    /// Parses and validates RON text; the error gives the line:column and the path of the
+    /// field it is about (`volumes[0].asset`), for syntax errors, unknown and missing fields.
     pub fn parse(text: &str) -> Result<SceneFile, String> {
-        let scene: SceneFile = ron::Options::default()
-            .from_str(text)
-            .map_err(|e| format!("{}:{}: {}", e.span.start.line, e.span.start.col, e.code))?;
+        // "line:col: [path: ]message"; `?` in a path stands for a segment the error came
+        // before (a syntax error) and is left out.
+        let located = |e: ron::error::SpannedError, path: &str| {
+            let path = path.trim_end_matches(".?").trim_end_matches('?');
+            let (line, col) = (e.span.start.line, e.span.start.col);
+            match path {
+                "" | "." => format!("{line}:{col}: {}", e.code),
+                p => format!("{line}:{col}: {p}: {}", e.code),
+            }
+        };
+        let mut de = ron::Deserializer::from_str_with_options(text, &ron::Options::default())
+            .map_err(|e| located(e, ""))?;
+        let scene: SceneFile = serde_path_to_error::deserialize(&mut de).map_err(|e| {
+            let path = e.path().to_string();
+            located(de.span_error(e.into_inner()), &path)
+        })?;
+        de.end().map_err(|e| located(de.span_error(e), ""))?;
         scene.validate()?;
         Ok(scene)
     }
@@ -287,7 +310,17 @@ impl SceneFile {
             for (k, t) in v.instances.iter().enumerate() {
                 check_t(t, format!("volumes[{i}].instances[{k}]"))?;
             }
+            if let Some(a) = &v.animation {
+                a.validate()
+                    .map_err(|e| format!("volumes[{i}].animation.{e}"))?;
+            }
         }
+        for (i, p) in self.particles.iter().enumerate() {
+            p.validate().map_err(|e| format!("particles[{i}].{e}"))?;
+        }
+        self.particle_layer
+            .validate()
+            .map_err(|e| format!("particle_layer.{e}"))?;
         for (i, c) in self.clouds.iter().enumerate() {
             if c.instances.is_empty() {
                 return Err(format!(

@@ -47,9 +47,10 @@ impl Target {
                 | wgpu::TextureUsages::TEXTURE_BINDING,
             "colour",
         );
+        // Sampled by the particle pass (spherical billboards clip against it).
         let depth = make(
             DEPTH_FORMAT,
-            wgpu::TextureUsages::RENDER_ATTACHMENT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
             "depth",
         );
         Target {

@@ -14,19 +14,7 @@ struct Resolve {
 @group(0) @binding(1) var src: texture_2d<f32>;
 @group(0) @binding(2) var smp: sampler;
 
-struct VOut {
-    @builtin(position) clip: vec4<f32>,
-    @location(0) uv: vec2<f32>,
-}
-
-@vertex
-fn vs_full(@builtin(vertex_index) i: u32) -> VOut {
-    let p = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
-    var o: VOut;
-    o.clip = vec4<f32>(p * 2.0 - 1.0, 0.0, 1.0);
-    o.uv = vec2<f32>(p.x, 1.0 - p.y);
-    return o;
-}
+// VOut and vs_full: fullscreen.wgsl, prepended.
 
 @vertex
 fn vs_rect(@builtin(vertex_index) i: u32) -> VOut {

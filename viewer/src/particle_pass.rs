@@ -1,0 +1,640 @@
+//! The particle layer (Umenhoffer et al. §2–4): spherical billboards rendered into their
+//! own Rgba16Float target at a fraction of the resolution, optionally averaged over a
+//! shutter interval (motion blur), a heat-shimmer offset target for fire, then composited
+//! over the opaque + volume image.
+//!
+//! Only what the scene's particles need is built ([`ParticleNeeds`]): the phase LUT only
+//! with dust or smoke, the black-body LUT only with fire, the shimmer pipeline and target
+//! only with `shimmer`, the accumulation pipeline and target only with motion blur; the
+//! detail noise with any particles. Missing LUTs are 1×1 stand-ins never sampled.
+//!
+//! Order against the rest: the layer is composited after the volume slices, so particles
+//! are drawn over volumetric billboards wherever they overlap on screen — a particle
+//! behind a semi-transparent volume is not dimmed by it. Opaque meshes and clouds do hide
+//! particles: the particle shader clips each ray at the scene depth.
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use wgpu::util::DeviceExt;
+
+use crate::particle_layer::Bakes;
+pub use crate::particle_layer::{LayerResolution, MotionBlur, ParticleLayerDesc, ParticleNeeds};
+use crate::particles::{particles_at, BillboardMode, ParticleKind, ParticleSystemDesc};
+use crate::target::COLOR_FORMAT;
+use crate::{Gpu, ViewCamera};
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+struct PFrame {
+    proj: [[f32; 4]; 4],
+    light: [f32; 4],
+    light_colour: [f32; 4],
+    screen: [f32; 4],
+    clip: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+struct GpuParticle {
+    centre: [f32; 4],
+    params: [f32; 4],
+    fire: [f32; 4],
+    detail: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+struct Comp {
+    flags: [f32; 4],
+}
+
+/// The layer's targets for one frame size.
+pub struct LayerTargets {
+    pub size: (u32, u32),
+    pub layer_size: (u32, u32),
+    /// The opaque + volume image the main passes render into.
+    pub scene: wgpu::TextureView,
+    pub layer: wgpu::TextureView,
+    sub: Option<wgpu::TextureView>,
+    shimmer: Option<wgpu::TextureView>,
+}
+
+pub struct ParticlePass {
+    pub needs: ParticleNeeds,
+    draw: wgpu::RenderPipeline,
+    shimmer: Option<wgpu::RenderPipeline>,
+    accumulate: Option<wgpu::RenderPipeline>,
+    composite: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    comp_layout: wgpu::BindGroupLayout,
+    detail: wgpu::TextureView,
+    phase: wgpu::TextureView,
+    blackbody: wgpu::TextureView,
+    dummy: wgpu::TextureView,
+    smp_repeat: wgpu::Sampler,
+    smp_clamp: wgpu::Sampler,
+}
+
+impl ParticlePass {
+    pub fn new(gpu: &Gpu, needs: ParticleNeeds) -> ParticlePass {
+        let device = &gpu.device;
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("particles.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("shaders/particles.wgsl").into()),
+        });
+        let comp_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("composite.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(
+                concat!(
+                    include_str!("shaders/fullscreen.wgsl"),
+                    include_str!("shaders/composite.wgsl")
+                )
+                .into(),
+            ),
+        });
+        let e = |binding, visibility, ty| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility,
+            ty,
+            count: None,
+        };
+        let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
+        let fs = wgpu::ShaderStages::FRAGMENT;
+        let tex = |dim| wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: true },
+            view_dimension: dim,
+            multisampled: false,
+        };
+        let uniform = wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        };
+        let filtering = wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering);
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("particles"),
+            entries: &[
+                e(0, vf, uniform),
+                e(
+                    1,
+                    vf,
+                    wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { read_only: true },
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                ),
+                e(
+                    2,
+                    fs,
+                    wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Depth,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                ),
+                e(3, fs, tex(wgpu::TextureViewDimension::D3)),
+                e(4, fs, tex(wgpu::TextureViewDimension::D2)),
+                e(5, fs, tex(wgpu::TextureViewDimension::D2)),
+                e(6, fs, filtering),
+                e(7, fs, filtering),
+            ],
+        });
+        let comp_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("composite"),
+            entries: &[
+                e(0, fs, uniform),
+                e(1, fs, tex(wgpu::TextureViewDimension::D2)),
+                e(2, fs, tex(wgpu::TextureViewDimension::D2)),
+                e(3, fs, tex(wgpu::TextureViewDimension::D2)),
+                e(4, fs, filtering),
+            ],
+        });
+        let pipeline = |module: &wgpu::ShaderModule,
+                        layout: &wgpu::BindGroupLayout,
+                        vs: &str,
+                        fs_entry: &str,
+                        format: wgpu::TextureFormat,
+                        blend: wgpu::BlendState| {
+            let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(fs_entry),
+                bind_group_layouts: &[Some(layout)],
+                immediate_size: 0,
+            });
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(fs_entry),
+                layout: Some(&pl),
+                vertex: wgpu::VertexState {
+                    module,
+                    entry_point: Some(vs),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: wgpu::PrimitiveState {
+                    cull_mode: None,
+                    ..Default::default()
+                },
+                depth_stencil: None,
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module,
+                    entry_point: Some(fs_entry),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format,
+                        blend: Some(blend),
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let add = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::One,
+            dst_factor: wgpu::BlendFactor::One,
+            operation: wgpu::BlendOperation::Add,
+        };
+        let weighted = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::Constant,
+            dst_factor: wgpu::BlendFactor::One,
+            operation: wgpu::BlendOperation::Add,
+        };
+        let draw = pipeline(
+            &module,
+            &layout,
+            "vs_main",
+            "fs_main",
+            COLOR_FORMAT,
+            wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING,
+        );
+        let shimmer = needs.shimmer.then(|| {
+            pipeline(
+                &module,
+                &layout,
+                "vs_main",
+                "fs_shimmer",
+                wgpu::TextureFormat::Rg16Float,
+                wgpu::BlendState {
+                    color: add,
+                    alpha: add,
+                },
+            )
+        });
+        let accumulate = needs.motion_blur.then(|| {
+            pipeline(
+                &comp_module,
+                &comp_layout,
+                "vs_full",
+                "fs_accumulate",
+                COLOR_FORMAT,
+                wgpu::BlendState {
+                    color: weighted,
+                    alpha: weighted,
+                },
+            )
+        });
+        let composite = pipeline(
+            &comp_module,
+            &comp_layout,
+            "vs_full",
+            "fs_composite",
+            COLOR_FORMAT,
+            wgpu::BlendState::REPLACE,
+        );
+        let Bakes {
+            detail,
+            phase,
+            blackbody,
+            dummy,
+        } = Bakes::new(gpu, needs);
+        let sampler = |mode| {
+            device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("particles"),
+                address_mode_u: mode,
+                address_mode_v: mode,
+                address_mode_w: mode,
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                ..Default::default()
+            })
+        };
+        ParticlePass {
+            needs,
+            draw,
+            shimmer,
+            accumulate,
+            composite,
+            layout,
+            comp_layout,
+            detail,
+            phase,
+            blackbody,
+            dummy,
+            smp_repeat: sampler(wgpu::AddressMode::Repeat),
+            smp_clamp: sampler(wgpu::AddressMode::ClampToEdge),
+        }
+    }
+
+    /// What was baked for the scene (for `--print-passes`).
+    pub fn baked(&self) -> Vec<&'static str> {
+        let mut b = vec!["bake:detail-noise"];
+        if self.needs.scattering {
+            b.push("bake:phase-lut");
+        }
+        if self.needs.fire {
+            b.push("bake:blackbody-lut");
+        }
+        b
+    }
+
+    /// Targets for a `w`×`h` frame with the layer at `1/div` of it.
+    pub fn targets(&self, gpu: &Gpu, w: u32, h: u32, div: u32) -> LayerTargets {
+        let (lw, lh) = (w.div_ceil(div).max(1), h.div_ceil(div).max(1));
+        let make = |w, h, format, label| {
+            gpu.device
+                .create_texture(&wgpu::TextureDescriptor {
+                    label: Some(label),
+                    size: wgpu::Extent3d {
+                        width: w,
+                        height: h,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                        | wgpu::TextureUsages::TEXTURE_BINDING,
+                    view_formats: &[],
+                })
+                .create_view(&Default::default())
+        };
+        LayerTargets {
+            size: (w, h),
+            layer_size: (lw, lh),
+            scene: make(w, h, COLOR_FORMAT, "scene (opaque + volumes)"),
+            layer: make(lw, lh, COLOR_FORMAT, "particle layer"),
+            sub: self
+                .needs
+                .motion_blur
+                .then(|| make(lw, lh, COLOR_FORMAT, "particle time sample")),
+            shimmer: self
+                .needs
+                .shimmer
+                .then(|| make(lw, lh, wgpu::TextureFormat::Rg16Float, "shimmer offsets")),
+        }
+    }
+
+    /// The particles of `systems` at time `t`, view space, sorted back to front (systems
+    /// by their mean depth, particles within a system by theirs).
+    fn instances(systems: &[ParticleSystemDesc], camera: &ViewCamera, t: f32) -> Vec<GpuParticle> {
+        let mut groups: Vec<(f32, Vec<(f32, GpuParticle)>)> = Vec::new();
+        for s in systems {
+            let kind = match s.kind {
+                ParticleKind::Dust => 0.0,
+                ParticleKind::Smoke => 1.0,
+                ParticleKind::Fire => 2.0,
+            };
+            let planar = f32::from(u8::from(s.mode == BillboardMode::Planar));
+            let mut v: Vec<(f32, GpuParticle)> = particles_at(s, t)
+                .into_iter()
+                .map(|p| {
+                    let c = camera.to_view(p.centre);
+                    (
+                        c.z,
+                        GpuParticle {
+                            centre: [c.x, c.y, c.z, p.radius],
+                            params: [p.density, s.albedo(), s.g(), kind],
+                            fire: [p.t0, p.t1, s.emission, s.detail],
+                            detail: [
+                                p.detail_offset.x,
+                                p.detail_offset.y,
+                                p.detail_offset.z,
+                                planar,
+                            ],
+                        },
+                    )
+                })
+                .collect();
+            if v.is_empty() {
+                continue;
+            }
+            // Most negative view z (farthest) first; ties keep emission order.
+            v.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let mean = v.iter().map(|x| x.0).sum::<f32>() / v.len() as f32;
+            groups.push((mean, v));
+        }
+        groups.sort_by(|a, b| a.0.total_cmp(&b.0));
+        groups.into_iter().flat_map(|g| g.1).map(|x| x.1).collect()
+    }
+
+    /// Renders the layer (and shimmer) for `camera` at time `t` and composites it over
+    /// `targets.scene` into `out`. Returns (particles drawn at `t`, draw calls).
+    #[allow(clippy::too_many_arguments)]
+    pub fn render(
+        &self,
+        gpu: &Gpu,
+        enc: &mut wgpu::CommandEncoder,
+        systems: &[ParticleSystemDesc],
+        layer_desc: &ParticleLayerDesc,
+        camera: &ViewCamera,
+        light: (Vec3, f32),
+        t: f32,
+        depth: &wgpu::TextureView,
+        targets: &LayerTargets,
+        out: &wgpu::TextureView,
+    ) -> (usize, usize) {
+        let (lw, lh) = targets.layer_size;
+        let l = camera.view.transform_vector3(light.0).normalize_or(Vec3::Y);
+        let frame = PFrame {
+            proj: camera.projection().to_cols_array_2d(),
+            light: [l.x, l.y, l.z, light.1],
+            light_colour: [1.0 - light.1, 1.0 - light.1, 1.0 - light.1, 0.0],
+            screen: [
+                lw as f32,
+                lh as f32,
+                targets.size.0 as f32,
+                targets.size.1 as f32,
+            ],
+            clip: [
+                camera.near,
+                camera.far,
+                t,
+                layer_desc.shimmer.unwrap_or(0.0),
+            ],
+        };
+        let times: Vec<f32> = match layer_desc.motion_blur {
+            Some(m) if self.accumulate.is_some() => (0..m.samples)
+                .map(|k| t - m.shutter * k as f32 / (m.samples - 1) as f32)
+                .collect(),
+            _ => vec![t],
+        };
+        let mut draws = 0;
+        let mut drawn_now = 0;
+        for (k, &tk) in times.iter().enumerate() {
+            let parts = Self::instances(systems, camera, tk);
+            if k == 0 {
+                drawn_now = parts.len();
+            }
+            let bind = self.bind(
+                gpu,
+                &PFrame {
+                    clip: [frame.clip[0], frame.clip[1], tk, frame.clip[3]],
+                    ..frame
+                },
+                &parts,
+                depth,
+            );
+            let into = if times.len() > 1 {
+                targets.sub.as_ref().expect("motion blur target")
+            } else {
+                &targets.layer
+            };
+            draws += self.pass(enc, &self.draw, &bind, parts.len(), into);
+            if times.len() > 1 {
+                // Add this sample into the layer with weight 1/N.
+                let u = Comp { flags: [0.0; 4] };
+                let cb = self.comp_bind(gpu, &u, into, into, &self.dummy);
+                let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("motion blur"),
+                    color_attachments: &[Some(attachment(&targets.layer, k == 0))],
+                    depth_stencil_attachment: None,
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                rp.set_pipeline(self.accumulate.as_ref().expect("motion blur pipeline"));
+                let w = 1.0 / times.len() as f64;
+                rp.set_blend_constant(wgpu::Color {
+                    r: w,
+                    g: w,
+                    b: w,
+                    a: w,
+                });
+                rp.set_bind_group(0, &cb, &[]);
+                rp.draw(0..3, 0..1);
+                draws += 1;
+            }
+            if k == 0 {
+                if let (Some(p), Some(target)) = (&self.shimmer, &targets.shimmer) {
+                    draws += self.pass(enc, p, &bind, parts.len(), target);
+                }
+            }
+        }
+        let u = Comp {
+            flags: [
+                f32::from(u8::from(targets.shimmer.is_some())),
+                1.0 / lw as f32,
+                1.0 / lh as f32,
+                0.0,
+            ],
+        };
+        let cb = self.comp_bind(
+            gpu,
+            &u,
+            &targets.scene,
+            &targets.layer,
+            targets.shimmer.as_ref().unwrap_or(&self.dummy),
+        );
+        let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("composite"),
+            color_attachments: &[Some(attachment(out, true))],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        rp.set_pipeline(&self.composite);
+        rp.set_bind_group(0, &cb, &[]);
+        rp.draw(0..3, 0..1);
+        (drawn_now, draws + 1)
+    }
+
+    /// One particle draw into `into` (cleared).
+    fn pass(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        pipeline: &wgpu::RenderPipeline,
+        bind: &wgpu::BindGroup,
+        count: usize,
+        into: &wgpu::TextureView,
+    ) -> usize {
+        let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("particles"),
+            color_attachments: &[Some(attachment(into, true))],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        if count == 0 {
+            return 0;
+        }
+        rp.set_pipeline(pipeline);
+        rp.set_bind_group(0, bind, &[]);
+        rp.draw(0..6, 0..count as u32);
+        1
+    }
+
+    fn bind(
+        &self,
+        gpu: &Gpu,
+        frame: &PFrame,
+        parts: &[GpuParticle],
+        depth: &wgpu::TextureView,
+    ) -> wgpu::BindGroup {
+        let mk = |label, contents: &[u8], usage| {
+            gpu.device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    contents,
+                    usage,
+                })
+        };
+        let fb = mk(
+            "particle frame",
+            bytemuck::bytes_of(frame),
+            wgpu::BufferUsages::UNIFORM,
+        );
+        let one = [GpuParticle::default()];
+        let data: &[GpuParticle] = if parts.is_empty() { &one } else { parts };
+        let pb = mk(
+            "particles",
+            bytemuck::cast_slice(data),
+            wgpu::BufferUsages::STORAGE,
+        );
+        let entries = [
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: fb.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: pb.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: wgpu::BindingResource::TextureView(depth),
+            },
+            wgpu::BindGroupEntry {
+                binding: 3,
+                resource: wgpu::BindingResource::TextureView(&self.detail),
+            },
+            wgpu::BindGroupEntry {
+                binding: 4,
+                resource: wgpu::BindingResource::TextureView(&self.phase),
+            },
+            wgpu::BindGroupEntry {
+                binding: 5,
+                resource: wgpu::BindingResource::TextureView(&self.blackbody),
+            },
+            wgpu::BindGroupEntry {
+                binding: 6,
+                resource: wgpu::BindingResource::Sampler(&self.smp_repeat),
+            },
+            wgpu::BindGroupEntry {
+                binding: 7,
+                resource: wgpu::BindingResource::Sampler(&self.smp_clamp),
+            },
+        ];
+        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("particles"),
+            layout: &self.layout,
+            entries: &entries,
+        })
+    }
+
+    fn comp_bind(
+        &self,
+        gpu: &Gpu,
+        u: &Comp,
+        scene: &wgpu::TextureView,
+        layer: &wgpu::TextureView,
+        shimmer: &wgpu::TextureView,
+    ) -> wgpu::BindGroup {
+        let ub = gpu
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("composite"),
+                contents: bytemuck::bytes_of(u),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+        let views = [scene, layer, shimmer];
+        let mut entries = vec![wgpu::BindGroupEntry {
+            binding: 0,
+            resource: ub.as_entire_binding(),
+        }];
+        for (i, v) in views.iter().enumerate() {
+            entries.push(wgpu::BindGroupEntry {
+                binding: i as u32 + 1,
+                resource: wgpu::BindingResource::TextureView(v),
+            });
+        }
+        entries.push(wgpu::BindGroupEntry {
+            binding: 4,
+            resource: wgpu::BindingResource::Sampler(&self.smp_clamp),
+        });
+        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("composite"),
+            layout: &self.comp_layout,
+            entries: &entries,
+        })
+    }
+}
+
+fn attachment(view: &wgpu::TextureView, clear: bool) -> wgpu::RenderPassColorAttachment<'_> {
+    wgpu::RenderPassColorAttachment {
+        view,
+        depth_slice: None,
+        resolve_target: None,
+        ops: wgpu::Operations {
+            load: if clear {
+                wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)
+            } else {
+                wgpu::LoadOp::Load
+            },
+            store: wgpu::StoreOp::Store,
+        },
+    }
+}
