@@ -1,7 +1,9 @@
 //! The `billow` command line: argument parsing, progress, messages and exit codes.
 //! All the work happens in the `billow` library; this binary only talks to the user.
 
+mod alloc;
 mod bbcloud;
+mod compare;
 mod emptyspace;
 mod eval;
 mod exit;
@@ -18,6 +20,9 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 use crate::exit::CliError;
+
+#[global_allocator]
+static ALLOC: alloc::Allocator = alloc::Allocator;
 
 /// billow bakes meshes into image-based level-of-detail assets.
 #[derive(Parser, Debug)]
@@ -44,6 +49,8 @@ enum Command {
     Bbcloud(bbcloud::Args),
     /// Compare a volume asset with its source mesh: reference vs asset renders, errors and timings per view.
     Eval(eval::Args),
+    /// Compare two images (e.g. screenshots): RMSE/PSNR, alpha coverage, SSIM, FLIP; --diff writes a heatmap.
+    Compare(compare::Args),
     /// View a scene (.ron), volume asset or mesh with the GPU viewer; --headless --screenshot renders a PNG.
     View(view::Args),
     /// Remove a volume's empty space: kd-tree boxes packed with aprons into a smaller atlas.
@@ -65,6 +72,7 @@ fn main() -> ExitCode {
         Command::Shell(a) => shell::run(a, &ctx),
         Command::Bbcloud(a) => bbcloud::run(a, &ctx),
         Command::Eval(a) => eval::run(a, &ctx),
+        Command::Compare(a) => compare::run(a, &ctx),
         Command::View(a) => view::run(a, &ctx),
         Command::Emptyspace(a) => emptyspace::run(a, &ctx),
     };
