@@ -18,7 +18,7 @@ PRUNED  := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.pruned.billow,$(MESHES))
 CLOUDS  := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.cloud.billow,$(MESHES))
 BATCH_RES ?= 128
 
-.PHONY: all build demo test lint fmt batch clean fixtures accuracy accuracy-emptyspace bench bench-bbcloud gallery bench-view
+.PHONY: all build demo test lint fmt batch clean fixtures accuracy accuracy-emptyspace bench bench-bbcloud gallery bench-view bench-particles check-gltf check-ktx2
 
 all: build
 
@@ -143,6 +143,13 @@ gallery: build
 bench-view: build
 	python3 benches/view_bench.py --billow $(BILLOW) --scenes $(GALLERY) --out docs/performance.md
 
+## Particle layer at full, 1/2, 1/4, 1/8 resolution on the explosion scene: frame times into
+## docs/performance.md, image error against full into docs/accuracy.md (only the
+## particle-layer sections), and the explosion pictures of docs/gallery.md. Needs python3.
+bench-particles: build
+	python3 benches/particle_layer_bench.py --billow $(BILLOW) --scene fixtures/scenes/explosion.ron \
+		--pictures docs/gallery
+
 ## Benchmark: `billow voxelize` vs. the raster floor on the 200k-triangle tree, side by side,
 ## medians of BENCH_RUNS runs at each of BENCH_RES; writes docs/benchmarks.md. Needs python3 and cc.
 BENCH_SRC  ?= /work/shared/bench
@@ -164,3 +171,31 @@ BBCLOUD_RUNS ?= 7
 bench-bbcloud: build
 	python3 benches/bbcloud_bench.py --billow $(BILLOW) --mesh $(SAMPLE) --runs $(BBCLOUD_RUNS) \
 		--out docs/bbcloud_bench.md
+
+## The glTF exports checked by the Khronos glTF-Validator (needs Node.js and npm; the
+## validator is installed under $(OUT)/gltf-validator): the oak's cloud as `make demo` bakes
+## it, with normal maps and unlit, and with one LOD.
+GLTF_VALIDATOR ?= 2.0.0-dev.3.10
+check-gltf: build
+	@mkdir -p $(OUT)/gltf-validator
+	cd $(OUT)/gltf-validator && { [ -d node_modules/gltf-validator ] || \
+		npm install --no-save --no-package-lock --silent gltf-validator@$(GLTF_VALIDATOR); }
+	$(BILLOW) bbcloud $(SAMPLE) -o $(OUT)/gltf-validator/oak.billow --lods 3 --gltf $(OUT)/gltf-validator/oak.glb -q
+	$(BILLOW) bbcloud $(SAMPLE) -o $(OUT)/gltf-validator/oak_nm.billow --lods 4 --normal-map --unlit \
+		--gltf $(OUT)/gltf-validator/oak_nm.glb -q
+	$(BILLOW) bbcloud $(SAMPLE) -o $(OUT)/gltf-validator/oak_1.billow --lods 1 \
+		--gltf $(OUT)/gltf-validator/oak_1.glb -q
+	NODE_PATH=$(OUT)/gltf-validator/node_modules node tests/gltf_validator/validate.js \
+		$(OUT)/gltf-validator/oak.glb $(OUT)/gltf-validator/oak_nm.glb $(OUT)/gltf-validator/oak_1.glb
+
+## The KTX2 exports read back by ktx-parse (the KTX2 reader three.js and glTF-Transform use;
+## needs Node.js and npm, installed under $(OUT)/ktx-parse): header, DFD premultiplied flag,
+## level sizes of the full MIP chain, on a cubic-ish and an odd non-cubic volume.
+KTX_PARSE ?= 2.0.0
+check-ktx2: build
+	@mkdir -p $(OUT)/ktx-parse
+	cd $(OUT)/ktx-parse && { [ -d node_modules/ktx-parse ] || \
+		npm install --no-save --no-package-lock --silent ktx-parse@$(KTX_PARSE); }
+	$(BILLOW) voxelize $(SAMPLE) -o $(OUT)/ktx-parse/oak.billow --res 128 --align 8 --ktx2 $(OUT)/ktx-parse/oak.ktx2 -q
+	$(BILLOW) voxelize $(SAMPLE) -o $(OUT)/ktx-parse/odd.billow --res 45x17x30 --ktx2 $(OUT)/ktx-parse/odd.ktx2 -q
+	node tests/ktx2_reader/check.mjs $(OUT)/ktx-parse/node_modules $(OUT)/ktx-parse/oak.ktx2 $(OUT)/ktx-parse/odd.ktx2
