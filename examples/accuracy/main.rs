@@ -89,7 +89,8 @@ fn main() {
             .expect("write plot");
         extra.push_str(&cloud::section(c));
     }
-    extra.push_str(&emptyspace_block(&out));
+    extra.push_str(&kept_block(&out, ES_BEGIN, ES_END));
+    extra.push_str(&kept_block(&out, PL_BEGIN, PL_END));
     // Relative paths in the report assume the plots sit next to it in `accuracy/`.
     let text = report::report(
         &reports,
@@ -110,15 +111,19 @@ fn main() {
 const ES_BEGIN: &str = "<!-- emptyspace-sweep:begin -->";
 const ES_END: &str = "<!-- emptyspace-sweep:end -->";
 
-/// The emptyspace sweep's block of the existing report at `path`, markers included, kept
-/// byte for byte; empty markers when the report or the markers are absent.
-fn emptyspace_block(path: &Path) -> String {
+const PL_BEGIN: &str = "<!-- particle-layer:begin -->";
+const PL_END: &str = "<!-- particle-layer:end -->";
+
+/// The block between `begin` and `end` of the existing report at `path` (written by
+/// another generator: the emptyspace sweep, the particle-layer bench), markers included,
+/// kept byte for byte; empty markers when the report or the markers are absent.
+fn kept_block(path: &Path, begin: &str, end: &str) -> String {
     let old = std::fs::read_to_string(path).unwrap_or_default();
-    let kept = old.find(ES_BEGIN).and_then(|b| {
+    let kept = old.find(begin).and_then(|b| {
         old[b..]
-            .find(ES_END)
-            .map(|e| old[b..b + e + ES_END.len()].to_string())
+            .find(end)
+            .map(|e| old[b..b + e + end.len()].to_string())
     });
-    let block = kept.unwrap_or_else(|| format!("{ES_BEGIN}\n{ES_END}"));
+    let block = kept.unwrap_or_else(|| format!("{begin}\n{end}"));
     format!("{block}\n\n")
 }
