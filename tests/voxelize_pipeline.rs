@@ -4,9 +4,7 @@ use std::sync::Arc;
 
 use billow::procgen::{truss, SceneBuilder};
 use billow::scene::{Aabb, AlphaMode, Material, Scene};
-use billow::voxelize::{
-    voxelize, CombineFn, Dir, Expr, Preset, Resolution, Volume, VoxelizeOptions,
-};
+use billow::voxelize::{voxelize, CombineFn, Expr, Preset, Resolution, Volume, VoxelizeOptions};
 use glam::{Vec3, Vec4};
 
 fn run(scene: &Scene, opts: &VoxelizeOptions) -> Volume {
@@ -304,26 +302,52 @@ fn same_bytes_with_one_or_two_threads() {
     }
 }
 
+/// Progress comes from the calling thread, in stage order (the six directions' rasterizing
+/// and pyramids, then combining, then quantizing), and the fraction of the directions'
+/// work never goes backwards although rasterizing and pyramids alternate — for a preset
+/// (level 0 combined at the end) and for an expression (all levels combined at the end).
 #[test]
 fn progress_reports_every_stage_in_order() {
+    use billow::voxelize::Stage;
     let scene = cube(0.0, 1.0);
-    let seen = std::sync::Mutex::new(Vec::new());
-    voxelize(
-        &scene,
-        &VoxelizeOptions {
-            resolution: Resolution::Longest(8),
-            ..Default::default()
-        },
-        &|s, f| {
-            assert!((0.0..=1.0).contains(&f));
-            seen.lock().unwrap().push(s)
-        },
-    )
-    .unwrap();
-    let seen = seen.into_inner().unwrap();
-    assert!(seen.contains(&billow::voxelize::Stage::Rasterize));
-    assert_eq!(seen.last(), Some(&billow::voxelize::Stage::Quantize));
-    let _ = Dir::ALL;
+    for combine in [
+        CombineFn::Preset(Preset::Mean),
+        CombineFn::Expr(Expr::parse("max(px, nx)").unwrap()),
+    ] {
+        let caller = std::thread::current().id();
+        let seen = std::sync::Mutex::new(Vec::new());
+        voxelize(
+            &scene,
+            &VoxelizeOptions {
+                resolution: Resolution::Longest(24),
+                combine,
+                ..Default::default()
+            },
+            &|s, f| {
+                assert_eq!(std::thread::current().id(), caller, "{s:?} off the caller");
+                assert!((0.0..=1.0).contains(&f), "{s:?} {f}");
+                seen.lock().unwrap().push((s, f))
+            },
+        )
+        .unwrap();
+        let seen = seen.into_inner().unwrap();
+        let rank = |s: Stage| match s {
+            Stage::Rasterize | Stage::Mip => 0,
+            Stage::Combine => 1,
+            Stage::Quantize => 2,
+        };
+        for w in seen.windows(2) {
+            let ((s0, f0), (s1, f1)) = (w[0], w[1]);
+            assert!(rank(s0) <= rank(s1), "{s0:?} before {s1:?}: {seen:?}");
+            if rank(s0) == rank(s1) {
+                assert!(f1 >= f0, "{s0:?} {f0} then {s1:?} {f1}: {seen:?}");
+            }
+        }
+        for s in [Stage::Rasterize, Stage::Mip, Stage::Combine] {
+            assert!(seen.iter().any(|x| x.0 == s), "no {s:?}: {seen:?}");
+        }
+        assert_eq!(seen.last(), Some(&(Stage::Quantize, 1.0)));
+    }
 }
 
 #[test]

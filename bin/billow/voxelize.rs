@@ -271,12 +271,13 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let bar = progress(ctx, 1000, "voxelize");
     let report = |stage: Stage, f: f32| {
         bar.set_message(format!("{stage:?}").to_lowercase());
-        // Rasterizing dominates; give it 70% of the bar.
+        // The six directions (each rasterized, then its pyramid built) take 85% of the
+        // bar: `Rasterize` and `Mip` report fractions of directions done, so the bar
+        // only moves forward although the two stages alternate.
         let (lo, span) = match stage {
-            Stage::Rasterize => (0.0, 0.7),
-            Stage::Mip => (0.7, 0.1),
-            Stage::Combine => (0.8, 0.15),
-            Stage::Quantize => (0.95, 0.05),
+            Stage::Rasterize | Stage::Mip => (0.0, 0.85),
+            Stage::Combine => (0.85, 0.12),
+            Stage::Quantize => (0.97, 0.03),
         };
         bar.set_position(((lo + span * f.clamp(0.0, 1.0)) * 1000.0) as u64);
     };

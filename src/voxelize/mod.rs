@@ -159,7 +159,8 @@ impl Default for VoxelizeOptions {
 pub enum Stage {
     /// Rasterizing the slice stacks (fraction over all six directions).
     Rasterize,
-    /// Building the per-direction MIP pyramids.
+    /// Building the per-direction MIP pyramids (fraction of directions done; each
+    /// direction is rasterized, then its pyramid built, before the next one).
     Mip,
     /// Combining the six directions.
     Combine,
@@ -592,12 +593,13 @@ pub fn voxelize(
                 });
                 zero.push(s);
                 times.combine += fold_secs;
-                progress(Stage::Combine, (dir.index() + 1) as f32 / 6.0);
+                progress(Stage::Mip, (dir.index() + 1) as f32 / 6.0);
             }
             drop(std::mem::take(&mut bufs)); // before the level-0 combine's peak
             let t = Instant::now();
             let (level0, normals0) = combine::combine_level0(*p, &zero, opts.normals);
             drop(zero);
+            progress(Stage::Combine, 1.0);
             let mut out = vec![level0];
             out.extend((1..mips as usize).map(|l| acc.finish_level(l)));
             if let (Some(na), Some(n0)) = (nacc.as_mut(), normals0) {
