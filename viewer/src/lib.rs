@@ -19,6 +19,7 @@ pub mod cloud_pass;
 pub mod content;
 pub mod error;
 pub mod gpu;
+pub mod layout;
 pub mod lines;
 pub mod mesh_pass;
 pub mod overlay;

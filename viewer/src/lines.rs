@@ -6,6 +6,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 use wgpu::util::DeviceExt;
 
+use crate::layout::{entry, shader, uniform};
 use crate::target::{COLOR_FORMAT, DEPTH_FORMAT};
 use crate::Gpu;
 
@@ -37,29 +38,22 @@ pub struct LinePass {
 impl LinePass {
     pub fn new(gpu: &Gpu) -> LinePass {
         let device = &gpu.device;
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("lines.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(
-                "struct F { view_proj: mat4x4<f32>, color: vec4<f32> }\n\
-                 @group(0) @binding(0) var<uniform> f: F;\n\
-                 @vertex fn vs(@location(0) p: vec3<f32>) -> @builtin(position) vec4<f32> {\n\
-                     return f.view_proj * vec4<f32>(p, 1.0);\n}\n\
-                 @fragment fn fs() -> @location(0) vec4<f32> { return f.color; }\n"
-                    .into(),
-            ),
-        });
+        let module = shader(
+            device,
+            "lines.wgsl",
+            &["struct F { view_proj: mat4x4<f32>, color: vec4<f32> }\n\
+               @group(0) @binding(0) var<uniform> f: F;\n\
+               @vertex fn vs(@location(0) p: vec3<f32>) -> @builtin(position) vec4<f32> {\n\
+                   return f.view_proj * vec4<f32>(p, 1.0);\n}\n\
+               @fragment fn fs() -> @location(0) vec4<f32> { return f.color; }\n"],
+        );
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("lines"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            }],
+            entries: &[entry(
+                0,
+                wgpu::ShaderStages::VERTEX_FRAGMENT,
+                uniform(false),
+            )],
         });
         let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("lines"),

@@ -9,6 +9,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use wgpu::util::DeviceExt;
 
+use crate::layout::{entry, material_layout, shader, uniform};
 use crate::target::{COLOR_FORMAT, DEPTH_FORMAT};
 use crate::texture::{upload_rgba8_mips, TextureData};
 use crate::{Gpu, ViewError};
@@ -109,52 +110,23 @@ pub struct MeshPass {
 impl MeshPass {
     pub fn new(gpu: &Gpu, shadow_layout: &wgpu::BindGroupLayout) -> MeshPass {
         let device = &gpu.device;
-        let src = format!(
-            "{}\n{}",
-            include_str!("shaders/shadow_lookup.wgsl"),
-            include_str!("shaders/mesh.wgsl")
+        let module = shader(
+            device,
+            "mesh.wgsl",
+            &[
+                include_str!("shaders/shadow_lookup.wgsl"),
+                include_str!("shaders/mesh.wgsl"),
+            ],
         );
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("mesh.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(src.into()),
-        });
-        let entry = |binding, visibility, ty| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility,
-            ty,
-            count: None,
-        };
-        let uniform = wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        };
-        let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
-        let fs = wgpu::ShaderStages::FRAGMENT;
         let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("mesh frame"),
-            entries: &[entry(0, vf, uniform)],
+            entries: &[entry(
+                0,
+                wgpu::ShaderStages::VERTEX_FRAGMENT,
+                uniform(false),
+            )],
         });
-        let material_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("mesh material"),
-            entries: &[
-                entry(0, fs, uniform),
-                entry(
-                    1,
-                    fs,
-                    wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                ),
-                entry(
-                    2,
-                    fs,
-                    wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                ),
-            ],
-        });
+        let material_layout = material_layout(device, "mesh material");
         let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("mesh"),
             bind_group_layouts: &[

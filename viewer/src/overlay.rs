@@ -5,6 +5,7 @@
 
 use font8x8::UnicodeFonts;
 
+use crate::layout::{entry, sampler, shader, texture, uniform};
 use crate::Gpu;
 
 /// Rasterizes `text` (ASCII; other characters show as `?`; `\n` starts a line) into
@@ -67,46 +68,21 @@ struct ResolveUniform {
 impl Resolve {
     pub fn new(gpu: &Gpu, format: wgpu::TextureFormat) -> Resolve {
         let device = &gpu.device;
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("resolve.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(
-                concat!(
-                    include_str!("shaders/fullscreen.wgsl"),
-                    include_str!("shaders/resolve.wgsl")
-                )
-                .into(),
-            ),
-        });
-        let fs = wgpu::ShaderStages::VERTEX_FRAGMENT;
+        let module = shader(
+            device,
+            "resolve.wgsl",
+            &[
+                include_str!("shaders/fullscreen.wgsl"),
+                include_str!("shaders/resolve.wgsl"),
+            ],
+        );
+        let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("resolve"),
             entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: fs,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: fs,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 2,
-                    visibility: fs,
-                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                    count: None,
-                },
+                entry(0, vf, uniform(false)),
+                entry(1, vf, texture(wgpu::TextureViewDimension::D2)),
+                entry(2, vf, sampler()),
             ],
         });
         let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {

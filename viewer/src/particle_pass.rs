@@ -17,6 +17,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use wgpu::util::DeviceExt;
 
+use crate::layout::{depth_texture, entry, sampler, shader, storage, texture, uniform};
 use crate::particle_layer::Bakes;
 pub use crate::particle_layer::{LayerResolution, MotionBlur, ParticleLayerDesc, ParticleNeeds};
 use crate::particles::{particles_at, BillboardMode, ParticleKind, ParticleSystemDesc};
@@ -78,76 +79,46 @@ pub struct ParticlePass {
 impl ParticlePass {
     pub fn new(gpu: &Gpu, needs: ParticleNeeds) -> ParticlePass {
         let device = &gpu.device;
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("particles.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("shaders/particles.wgsl").into()),
-        });
-        let comp_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("composite.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(
-                concat!(
-                    include_str!("shaders/fullscreen.wgsl"),
-                    include_str!("shaders/composite.wgsl")
-                )
-                .into(),
-            ),
-        });
-        let e = |binding, visibility, ty| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility,
-            ty,
-            count: None,
-        };
+        let module = shader(
+            device,
+            "particles.wgsl",
+            &[include_str!("shaders/particles.wgsl")],
+        );
+        let comp_module = shader(
+            device,
+            "composite.wgsl",
+            &[
+                include_str!("shaders/fullscreen.wgsl"),
+                include_str!("shaders/composite.wgsl"),
+            ],
+        );
         let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
         let fs = wgpu::ShaderStages::FRAGMENT;
-        let tex = |dim| wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Float { filterable: true },
-            view_dimension: dim,
-            multisampled: false,
-        };
-        let uniform = wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        };
-        let filtering = wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering);
+        let (d2, d3) = (
+            wgpu::TextureViewDimension::D2,
+            wgpu::TextureViewDimension::D3,
+        );
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("particles"),
             entries: &[
-                e(0, vf, uniform),
-                e(
-                    1,
-                    vf,
-                    wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Storage { read_only: true },
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                ),
-                e(
-                    2,
-                    fs,
-                    wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Depth,
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                ),
-                e(3, fs, tex(wgpu::TextureViewDimension::D3)),
-                e(4, fs, tex(wgpu::TextureViewDimension::D2)),
-                e(5, fs, tex(wgpu::TextureViewDimension::D2)),
-                e(6, fs, filtering),
-                e(7, fs, filtering),
+                entry(0, vf, uniform(false)),
+                entry(1, vf, storage()),
+                entry(2, fs, depth_texture()),
+                entry(3, fs, texture(d3)),
+                entry(4, fs, texture(d2)),
+                entry(5, fs, texture(d2)),
+                entry(6, fs, sampler()),
+                entry(7, fs, sampler()),
             ],
         });
         let comp_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("composite"),
             entries: &[
-                e(0, fs, uniform),
-                e(1, fs, tex(wgpu::TextureViewDimension::D2)),
-                e(2, fs, tex(wgpu::TextureViewDimension::D2)),
-                e(3, fs, tex(wgpu::TextureViewDimension::D2)),
-                e(4, fs, filtering),
+                entry(0, fs, uniform(false)),
+                entry(1, fs, texture(d2)),
+                entry(2, fs, texture(d2)),
+                entry(3, fs, texture(d2)),
+                entry(4, fs, sampler()),
             ],
         });
         let pipeline = |module: &wgpu::ShaderModule,

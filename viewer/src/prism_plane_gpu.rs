@@ -5,6 +5,7 @@
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
+use crate::layout::shader;
 use crate::volume_pass::GpuCell;
 use crate::{Gpu, ViewError};
 
@@ -40,15 +41,14 @@ pub fn intersect_on_gpu(gpu: &Gpu, cases: &[PrismCase]) -> Result<Vec<GpuPolygon
         return Ok(Vec::new());
     }
     let device = &gpu.device;
-    let src = format!(
-        "{}\n{}",
-        include_str!("shaders/prism_plane.wgsl"),
-        include_str!("shaders/prism_plane_check.wgsl")
+    let module = shader(
+        device,
+        "prism_plane_check.wgsl",
+        &[
+            include_str!("shaders/prism_plane.wgsl"),
+            include_str!("shaders/prism_plane_check.wgsl"),
+        ],
     );
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("prism_plane_check.wgsl"),
-        source: wgpu::ShaderSource::Wgsl(src.into()),
-    });
     let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some("prism/plane check"),
         layout: None,

@@ -11,6 +11,7 @@
 
 use glam::{Mat4, Vec3};
 
+use crate::layout::{comparison_sampler, depth_texture, entry};
 use crate::target::DEPTH_FORMAT;
 use crate::{Gpu, ViewCamera};
 
@@ -26,22 +27,8 @@ pub fn receiver_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("shadow receiver"),
         entries: &[
-            wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Depth,
-                    view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
-                },
-                count: None,
-            },
-            wgpu::BindGroupLayoutEntry {
-                binding: 1,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
-                count: None,
-            },
+            entry(0, wgpu::ShaderStages::FRAGMENT, depth_texture()),
+            entry(1, wgpu::ShaderStages::FRAGMENT, comparison_sampler()),
         ],
     })
 }

@@ -21,6 +21,7 @@
 use billow_format::{ColourSpace, VolumeAsset};
 use bytemuck::{Pod, Zeroable};
 
+use crate::layout::{entry, sampler, shader, storage, texture, uniform};
 use crate::target::{COLOR_FORMAT, DEPTH_FORMAT};
 use crate::{Gpu, ViewError};
 
@@ -164,39 +165,12 @@ pub fn repeat_axes(asset: &VolumeAsset) -> [bool; 3] {
     [shell, false, shell]
 }
 
-fn entry(
-    binding: u32,
-    visibility: wgpu::ShaderStages,
-    ty: wgpu::BindingType,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility,
-        ty,
-        count: None,
-    }
-}
-
-const STORAGE: wgpu::BindingType = wgpu::BindingType::Buffer {
-    ty: wgpu::BufferBindingType::Storage { read_only: true },
-    has_dynamic_offset: false,
-    min_binding_size: None,
-};
-
 impl VolumePass {
     /// The pipelines with `batch` texture slots (at most [`batch_size`]`(gpu)`).
     pub fn new(gpu: &Gpu, shadow_layout: &wgpu::BindGroupLayout, batch: usize) -> VolumePass {
         let batch = batch.clamp(1, batch_size(gpu));
         let device = &gpu.device;
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("volume.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(shader_source(batch).into()),
-        });
-        let uniform = |dynamic| wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: dynamic,
-            min_binding_size: None,
-        };
+        let module = shader(device, "volume.wgsl", &[&shader_source(batch)]);
         let vs = wgpu::ShaderStages::VERTEX;
         let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
         let fs = wgpu::ShaderStages::FRAGMENT;
@@ -204,32 +178,18 @@ impl VolumePass {
             label: Some("volume frame"),
             entries: &[
                 entry(0, vf, uniform(false)),
-                entry(1, vs, STORAGE),
-                entry(2, vs, STORAGE),
-                entry(3, vs, STORAGE),
-                entry(4, vs, STORAGE),
+                entry(1, vs, storage()),
+                entry(2, vs, storage()),
+                entry(3, vs, storage()),
+                entry(4, vs, storage()),
                 entry(5, vs, uniform(true)),
             ],
         });
         let mut batch_entries: Vec<_> = (0..batch as u32)
-            .map(|i| {
-                entry(
-                    i,
-                    fs,
-                    wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D3,
-                        multisampled: false,
-                    },
-                )
-            })
+            .map(|i| entry(i, fs, texture(wgpu::TextureViewDimension::D3)))
             .collect();
         for i in 0..2 {
-            batch_entries.push(entry(
-                batch as u32 + i,
-                fs,
-                wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-            ));
+            batch_entries.push(entry(batch as u32 + i, fs, sampler()));
         }
         let batch_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("volume textures"),

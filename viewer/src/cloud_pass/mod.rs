@@ -26,6 +26,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Mat4;
 use wgpu::util::DeviceExt;
 
+use crate::layout::{entry, material_layout, shader, uniform};
 use crate::mesh_pass::MeshFrame;
 use crate::target::{COLOR_FORMAT, DEPTH_FORMAT};
 use crate::texture::{upload_rgba8_mips, TextureData};
@@ -128,51 +129,23 @@ enum Kind {
 impl CloudPass {
     pub fn new(gpu: &Gpu, shadow_layout: &wgpu::BindGroupLayout) -> CloudPass {
         let device = &gpu.device;
-        let src = format!(
-            "{}\n{}",
-            include_str!("../shaders/shadow_lookup.wgsl"),
-            include_str!("../shaders/cloud.wgsl")
+        let module = shader(
+            device,
+            "cloud.wgsl",
+            &[
+                include_str!("../shaders/shadow_lookup.wgsl"),
+                include_str!("../shaders/cloud.wgsl"),
+            ],
         );
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("cloud.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(src.into()),
-        });
-        let entry = |binding, visibility, ty| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility,
-            ty,
-            count: None,
-        };
-        let uniform = wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        };
-        let fs = wgpu::ShaderStages::FRAGMENT;
         let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("cloud frame"),
-            entries: &[entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT, uniform)],
+            entries: &[entry(
+                0,
+                wgpu::ShaderStages::VERTEX_FRAGMENT,
+                uniform(false),
+            )],
         });
-        let draw_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("cloud draw"),
-            entries: &[
-                entry(0, fs, uniform),
-                entry(
-                    1,
-                    fs,
-                    wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                ),
-                entry(
-                    2,
-                    fs,
-                    wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                ),
-            ],
-        });
+        let draw_layout = material_layout(device, "cloud draw");
         let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("cloud"),
             bind_group_layouts: &[Some(&frame_layout), Some(&draw_layout), Some(shadow_layout)],
