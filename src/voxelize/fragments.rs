@@ -139,19 +139,22 @@ const fn full_mask<const K: usize>() -> u64 {
 /// misses overlap); then the fragments are grouped by column and, within a voxel,
 /// composited front to back per sample (a per-sample transmittance), so the voxel is the
 /// mean of its `K²` samples' composites.
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn raster_row<const K: usize, const AVX: bool>(
-    scene: &Scene,
-    shader: &Shader,
-    grid: &GridSpec,
-    dir: Dir,
-    normals: bool,
-    setups: &[TriSetup],
-    tris: &[u32],
+    ctx: &RowCtx<'_>,
     j: usize,
     scratch: &mut Scratch,
 ) -> RowOut {
+    let RowCtx {
+        scene,
+        shader,
+        grid,
+        dir,
+        normals,
+        setups,
+        bins,
+    } = *ctx;
+    let tris = &bins[j];
     let k = K as i64;
     let fk = 2 * k * SUB;
     let kk = K * K;
@@ -508,24 +511,27 @@ fn raster_row<const K: usize, const AVX: bool>(
     (out, out_n, count)
 }
 
-/// A row rasterizer ([`raster_row`] for one `K`).
-pub(crate) type RowFn =
-    fn(&Scene, &Shader, &GridSpec, Dir, bool, &[TriSetup], &[u32], usize, &mut Scratch) -> RowOut;
+/// What every row of one direction's slice stack reads.
+#[derive(Clone, Copy)]
+pub(crate) struct RowCtx<'a> {
+    pub scene: &'a Scene,
+    pub shader: &'a Shader<'a>,
+    pub grid: &'a GridSpec,
+    pub dir: Dir,
+    /// Whether weighted normals are wanted.
+    pub normals: bool,
+    /// The direction's triangle set-ups, sorted by first row.
+    pub setups: &'a [TriSetup],
+    /// Per image row, the indices in `setups` of the triangles that touch it.
+    pub bins: &'a [Vec<u32>],
+}
+
+/// A row rasterizer ([`raster_row`] for one `K`): row `j` of the context's direction.
+pub(crate) type RowFn = fn(&RowCtx<'_>, usize, &mut Scratch) -> RowOut;
 
 /// [`raster_row`] for `K`, compiled for the baseline instruction set.
-#[allow(clippy::too_many_arguments)]
-fn row_base<const K: usize>(
-    scene: &Scene,
-    shader: &Shader,
-    grid: &GridSpec,
-    dir: Dir,
-    normals: bool,
-    setups: &[TriSetup],
-    tris: &[u32],
-    j: usize,
-    scratch: &mut Scratch,
-) -> RowOut {
-    raster_row::<K, false>(scene, shader, grid, dir, normals, setups, tris, j, scratch)
+fn row_base<const K: usize>(ctx: &RowCtx<'_>, j: usize, scratch: &mut Scratch) -> RowOut {
+    raster_row::<K, false>(ctx, j, scratch)
 }
 
 /// [`raster_row`] for `K`, compiled with AVX2 (wider integer and float vectors, BMI,
@@ -533,36 +539,18 @@ fn row_base<const K: usize>(
 /// every operation rounds exactly as in [`row_base`]: the same bits.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
-#[allow(clippy::too_many_arguments)]
 unsafe fn row_avx2_inner<const K: usize>(
-    scene: &Scene,
-    shader: &Shader,
-    grid: &GridSpec,
-    dir: Dir,
-    normals: bool,
-    setups: &[TriSetup],
-    tris: &[u32],
+    ctx: &RowCtx<'_>,
     j: usize,
     scratch: &mut Scratch,
 ) -> RowOut {
-    raster_row::<K, true>(scene, shader, grid, dir, normals, setups, tris, j, scratch)
+    raster_row::<K, true>(ctx, j, scratch)
 }
 
 #[cfg(target_arch = "x86_64")]
-#[allow(clippy::too_many_arguments)]
-fn row_avx2<const K: usize>(
-    scene: &Scene,
-    shader: &Shader,
-    grid: &GridSpec,
-    dir: Dir,
-    normals: bool,
-    setups: &[TriSetup],
-    tris: &[u32],
-    j: usize,
-    scratch: &mut Scratch,
-) -> RowOut {
+fn row_avx2<const K: usize>(ctx: &RowCtx<'_>, j: usize, scratch: &mut Scratch) -> RowOut {
     // SAFETY: only handed out by `row_fn` after the features were detected.
-    unsafe { row_avx2_inner::<K>(scene, shader, grid, dir, normals, setups, tris, j, scratch) }
+    unsafe { row_avx2_inner::<K>(ctx, j, scratch) }
 }
 
 /// Whether this CPU runs the AVX2 build of the row rasterizer.

@@ -38,7 +38,7 @@ use glam::{Vec2, Vec4};
 use half::f16;
 use rayon::prelude::*;
 
-use super::fragments::{cross2, row_fn, simd_available, Scratch};
+use super::fragments::{cross2, row_fn, simd_available, RowCtx, Scratch};
 use super::grid::GridSpec;
 use super::mip::{Grid3, Texel};
 use super::shade::Shader;
@@ -319,19 +319,22 @@ pub(crate) fn rasterize_with(
         }
     }
     let row = row_fn(k as usize, simd);
+    let ctx = RowCtx {
+        scene,
+        shader,
+        grid,
+        dir,
+        normals,
+        setups,
+        bins: &bins,
+    };
     let chunk = nrows.div_ceil(8).max(8);
     let mut outs: Vec<RowOut> = Vec::with_capacity(nrows);
     for chunk_start in (0..nrows).step_by(chunk) {
         outs.par_extend(
             (chunk_start..(chunk_start + chunk).min(nrows))
                 .into_par_iter()
-                .map(|j| {
-                    SCRATCH.with_borrow_mut(|scratch| {
-                        row(
-                            scene, shader, grid, dir, normals, setups, &bins[j], j, scratch,
-                        )
-                    })
-                }),
+                .map(|j| SCRATCH.with_borrow_mut(|scratch| row(&ctx, j, scratch))),
         );
         progress(((chunk_start + chunk).min(nrows)) as f32 / nrows.max(1) as f32);
     }
