@@ -172,14 +172,16 @@ bench-bbcloud: build
 	python3 benches/bbcloud_bench.py --billow $(BILLOW) --mesh $(SAMPLE) --runs $(BBCLOUD_RUNS) \
 		--out docs/bbcloud_bench.md
 
+## $(call npm_package,NAME,VERSION): npm package NAME@VERSION installed once under $(OUT)/NAME.
+npm_package = mkdir -p $(OUT)/$(1) && cd $(OUT)/$(1) && { [ -d node_modules/$(1) ] || \
+	npm install --no-save --no-package-lock --silent $(1)@$(2); }
+
 ## The glTF exports checked by the Khronos glTF-Validator (needs Node.js and npm; the
 ## validator is installed under $(OUT)/gltf-validator): the oak's cloud as `make demo` bakes
 ## it, with normal maps and unlit, and with one LOD.
 GLTF_VALIDATOR ?= 2.0.0-dev.3.10
 check-gltf: build
-	@mkdir -p $(OUT)/gltf-validator
-	cd $(OUT)/gltf-validator && { [ -d node_modules/gltf-validator ] || \
-		npm install --no-save --no-package-lock --silent gltf-validator@$(GLTF_VALIDATOR); }
+	$(call npm_package,gltf-validator,$(GLTF_VALIDATOR))
 	$(BILLOW) bbcloud $(SAMPLE) -o $(OUT)/gltf-validator/oak.billow --lods 3 --gltf $(OUT)/gltf-validator/oak.glb -q
 	$(BILLOW) bbcloud $(SAMPLE) -o $(OUT)/gltf-validator/oak_nm.billow --lods 4 --normal-map --unlit \
 		--gltf $(OUT)/gltf-validator/oak_nm.glb -q
@@ -193,9 +195,7 @@ check-gltf: build
 ## level sizes of the full MIP chain, on a cubic-ish and an odd non-cubic volume.
 KTX_PARSE ?= 2.0.0
 check-ktx2: build
-	@mkdir -p $(OUT)/ktx-parse
-	cd $(OUT)/ktx-parse && { [ -d node_modules/ktx-parse ] || \
-		npm install --no-save --no-package-lock --silent ktx-parse@$(KTX_PARSE); }
+	$(call npm_package,ktx-parse,$(KTX_PARSE))
 	$(BILLOW) voxelize $(SAMPLE) -o $(OUT)/ktx-parse/oak.billow --res 128 --align 8 --ktx2 $(OUT)/ktx-parse/oak.ktx2 -q
 	$(BILLOW) voxelize $(SAMPLE) -o $(OUT)/ktx-parse/odd.billow --res 45x17x30 --ktx2 $(OUT)/ktx-parse/odd.ktx2 -q
 	node tests/ktx2_reader/check.mjs $(OUT)/ktx-parse/node_modules $(OUT)/ktx-parse/oak.ktx2 $(OUT)/ktx-parse/odd.ktx2
