@@ -324,6 +324,11 @@ fn resolution_parsing() {
     }
     assert!(err("12x0x4").to_string().contains("y size is 0"));
     assert!(err("100000").to_string().contains("2048"));
+    // The single-number form names what N is.
+    assert!(err("0").to_string().contains("N (the longest axis) is 0"));
+    assert!(err("100000")
+        .to_string()
+        .contains("N (the longest axis) 100000 is larger"));
 }
 
 #[test]

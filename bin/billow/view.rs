@@ -401,7 +401,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     };
     image
         .write_png(out)
-        .map_err(|e| CliError::new(Code::OutputIo, format!("{}: {e}", out.display())))?;
+        .map_err(|e| CliError::new(Code::OutputIo, e))?; // names the path
     let summary = Summary {
         target: args.target.display().to_string(),
         screenshot: Some(out.display().to_string()),

@@ -552,6 +552,13 @@ pub fn write_atomic_parts(path: &Path, parts: &[&[u8]]) -> Result<(), FormatErro
         use std::os::unix::fs::PermissionsExt;
         builder.permissions(std::fs::Permissions::from_mode(0o666));
     }
+    if !dir.is_dir() {
+        // Said plainly (the temporary file's own error would name its random path).
+        return Err(io(std::io::Error::new(
+            std::io::ErrorKind::NotFound,
+            format!("directory {} does not exist", dir.display()),
+        )));
+    }
     let mut tmp = builder.tempfile_in(dir).map_err(io)?;
     for p in parts {
         tmp.write_all(p).map_err(io)?;

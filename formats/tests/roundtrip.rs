@@ -203,6 +203,13 @@ fn write_atomic_failure_leaves_target_untouched() {
     let missing = dir.path().join("no_such_dir").join("out.billow");
     let msg = write_atomic(&missing, b"x").unwrap_err().to_string();
     assert!(msg.starts_with(&missing.display().to_string()), "{msg}");
+    // ... and says which directory is missing, without the temporary file's random name.
+    let parent = missing.parent().unwrap().display().to_string();
+    assert!(
+        msg.ends_with(&format!("directory {parent} does not exist")),
+        "{msg}"
+    );
+    assert!(!msg.contains(".billow.tmp"), "{msg}");
     assert!(dir_names(dir.path()).is_empty());
     // Target is a directory: rename fails, existing content untouched, temp removed.
     let target = dir.path().join("occupied");

@@ -61,10 +61,19 @@ pub enum ResolutionError {
     NotANumber { text: String, part: String },
     #[error("resolution '{text}': expected N or XxYxZ (three sizes), got {parts} parts")]
     WrongArity { text: String, parts: usize },
-    #[error("resolution: {axis} size is 0; every axis needs at least 1 voxel")]
+    #[error("resolution: {} is 0; every axis needs at least 1 voxel", axis_name(*axis))]
     Zero { axis: char },
-    #[error("resolution: {axis} size {value} is larger than the maximum of {max} voxels per axis")]
+    #[error("resolution: {} {value} is larger than the maximum of {max} voxels per axis", axis_name(*axis))]
     TooLarge { axis: char, value: u64, max: u32 },
+}
+
+/// `x size`, …, or `N (the longest axis)` for the single-number form (`axis` 'n').
+fn axis_name(axis: char) -> String {
+    if axis == 'n' {
+        "N (the longest axis)".into()
+    } else {
+        format!("{axis} size")
+    }
 }
 
 const AXES: [char; 3] = ['x', 'y', 'z'];
