@@ -47,20 +47,24 @@ def main():
     ap.add_argument("--out", required=True, help="Markdown file to write")
     ap.add_argument("--command", default="make bench", help="the command that regenerates the file")
     ap.add_argument("--notes", default=None, help="Markdown appended after the tables")
+    ap.add_argument("--sweep-res", type=int, default=256,
+                    help="resolution of the supersampling sweep (0: no sweep)")
+    ap.add_argument("--sweep", default="1 2 3 4",
+                    help="supersampling factors of the sweep (what the coverage samples cost)")
     a = ap.parse_args()
     work = a.work or os.path.dirname(os.path.abspath(a.mesh))
     asset = os.path.join(work, "bench_tmp.billow")
     extra = a.extra.split()
     stages = ["import", "rasterize", "bake", "mip", "combine", "quantize", "write", "total"]
     load_before = os.getloadavg()
-    rows = []
-    for r in [int(x) for x in a.res.split()]:
+    def measure(r, more):
+        """Medians of RUNS alternating floor / billow runs at resolution `r`."""
         floor_s, floor_cpu, floor_rss, b_s, b_cpu, b_rss, b_peak, b_stage = [], [], [], [], [], [], [], {}
         info = None
         for i in range(a.runs):
             w, rss, cpu, _ = run_rusage([a.floor, a.mesh, str(r)])
             floor_s.append(w), floor_cpu.append(cpu), floor_rss.append(rss)
-            cmd = [a.billow, "voxelize", a.mesh, "-o", asset, "--res", str(r), "--json", *extra]
+            cmd = [a.billow, "voxelize", a.mesh, "-o", asset, "--res", str(r), "--json", *extra, *more]
             w, rss, cpu, out = run_rusage(cmd)
             j = json.loads(out)
             info = j
@@ -71,13 +75,20 @@ def main():
                 if k in j["seconds"]:
                     b_stage.setdefault(k, []).append(j["seconds"][k])
             os.remove(asset)
-            print(f"res {r} run {i + 1}/{a.runs}: floor {floor_s[-1]:.2f} s, billow {b_s[-1]:.2f} s "
-                  f"(load {os.getloadavg()[0]:.2f})", file=sys.stderr)
-        rows.append(dict(res=r, dims=info["dims"], floor=med(floor_s), floor_cpu=med(floor_cpu),
-                         floor_rss=med(floor_rss), billow=med(b_s), billow_cpu=med(b_cpu),
-                         billow_rss=max(b_rss), peak=max(b_peak) if b_peak else None,
-                         stages={k: med(v) for k, v in b_stage.items()},
-                         fragments=info["fragments"], voxels=info["non_empty_voxels"]))
+            print(f"res {r} {' '.join(more)} run {i + 1}/{a.runs}: floor {floor_s[-1]:.2f} s, "
+                  f"billow {b_s[-1]:.2f} s (load {os.getloadavg()[0]:.2f})", file=sys.stderr)
+        return info, dict(res=r, dims=info["dims"], floor=med(floor_s), floor_cpu=med(floor_cpu),
+                          floor_rss=med(floor_rss), billow=med(b_s), billow_cpu=med(b_cpu),
+                          billow_rss=max(b_rss), peak=max(b_peak) if b_peak else None,
+                          stages={k: med(v) for k, v in b_stage.items()},
+                          fragments=info["fragments"], voxels=info["non_empty_voxels"],
+                          supersample=info["supersample"])
+
+    rows = []
+    for r in [int(x) for x in a.res.split()]:
+        info, row = measure(r, [])
+        rows.append(row)
+    sweep = [measure(a.sweep_res, ["--supersample", k])[1] for k in a.sweep.split()] if a.sweep_res else []
     load_after = os.getloadavg()
 
     gib = lambda b: f"{b / 2**30:.2f} GiB" if b is not None else "—"
@@ -117,6 +128,17 @@ def main():
         lines.append(f"| {x['res']} | " + " | ".join(f"{x['stages'][k]:.2f}" for k in stages if k in x["stages"])
                      + f" | {x['fragments']:,} | {x['voxels']:,} |")
     lines.append("")
+    if sweep:
+        lines += [f"What the coverage samples cost at {a.sweep_res}³ (`--supersample K`: K×K samples per",
+                  "voxel column, the default 4; same alternating runs; what they buy in accuracy is the",
+                  "supersampling sweep of [accuracy.md](accuracy.md)):", "",
+                  "| K | raster_floor s | billow s | ratio | rasterize s | fragments | non-empty voxels |",
+                  "|---|---|---|---|---|---|---|"]
+        for x in sweep:
+            lines.append(f"| {x['supersample']} | {x['floor']:.2f} | {x['billow']:.2f} "
+                         f"| **{x['billow'] / x['floor']:.1f}×** | {x['stages'].get('rasterize', float('nan')):.2f} "
+                         f"| {x['fragments']:,} | {x['voxels']:,} |")
+        lines.append("")
     if a.notes:
         with open(a.notes) as f:
             lines.append(f.read().rstrip())
