@@ -32,6 +32,7 @@ fn python() -> Option<&'static str> {
 fn read_py(py: &str, paths: &[PathBuf]) -> (Vec<Value>, i32) {
     let out = Command::new(py)
         .arg(repo().join("tests/spec_reader/read_billow.py"))
+        .env("PYTHONDONTWRITEBYTECODE", "1") // no __pycache__ in the checkout
         .args(paths)
         .output()
         .expect("run read_billow.py");
