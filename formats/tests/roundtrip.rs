@@ -298,3 +298,22 @@ fn cloud_kind_container_round_trips() {
         .to_string()
         .contains("not Volume"));
 }
+
+/// SPEC §6: every non-`Option` field is required, `params` may be the empty map, a field
+/// given twice is refused, unknown fields and omitted `Option`s are fine.
+#[test]
+fn header_required_and_duplicate_fields() {
+    let base = "kind: Cloud, tool: \"t\", bounds: (min: (0.0, 0.0, 0.0), max: (1.0, 1.0, 1.0)), \
+                colour_space: SrgbPremultiplied";
+    let ok = |extra: &str| Header::from_ron(&format!("({base}, {extra})"));
+    assert!(ok("params: {}").is_ok());
+    assert!(ok("params: {}, future_field: [1, 2], seed: None").is_ok());
+    assert!(
+        Header::from_ron(&format!("({base})")).is_err(),
+        "params missing"
+    );
+    let twice = ok("params: {}, tool: \"u\"");
+    assert!(twice.is_err(), "a field given twice: {twice:?}");
+    let no_tool = format!("({}, params: {{}})", base.replace("tool: \"t\", ", ""));
+    assert!(Header::from_ron(&no_tool).is_err(), "tool missing");
+}
