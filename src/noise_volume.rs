@@ -17,9 +17,7 @@
 
 use std::collections::BTreeMap;
 
-use billow_format::{
-    AssetKind, Bounds, ColourSpace, Header, TexelFormat, VolumeAsset, VolumeHeader,
-};
+use billow_format::{Bounds, ColourSpace, Header, VolumeAsset};
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
@@ -142,22 +140,19 @@ fn asset(res: u32, level0: &Grid3<[f32; 4]>, kind: &str, seed: u64) -> VolumeAss
     );
     VolumeAsset {
         header: Header {
-            kind: AssetKind::Volume,
-            tool: format!("billow {}", env!("CARGO_PKG_VERSION")),
-            source: None,
             bounds: Bounds {
                 min: lo.to_array(),
                 max: hi.to_array(),
             },
-            colour_space: ColourSpace::SrgbPremultiplied,
             seed: Some(seed),
             params,
-            volume: Some(VolumeHeader {
-                dims: [res; 3],
-                mip_count: levels.len() as u32,
-                texel: TexelFormat::Rgba8Unorm,
-                normals: None,
-            }),
+            ..Header::volume(
+                format!("billow {}", env!("CARGO_PKG_VERSION")),
+                ColourSpace::SrgbPremultiplied,
+                [res; 3],
+                levels.len() as u32,
+                false,
+            )
         },
         levels,
         normals: None,

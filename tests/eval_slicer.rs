@@ -1,8 +1,6 @@
 //! End to end: a synthetic opaque cube volume (16³, 2 box prisms, full MIP chain) rendered
 //! by the CPU slicer against the reference ray tracer of the equivalent mesh cube.
 
-use std::collections::BTreeMap;
-
 use billow::camera::{view_set, Camera, ViewDirections};
 use billow::eval::image::linear_to_srgb;
 use billow::eval::metrics::compare;
@@ -11,10 +9,7 @@ use billow::eval::slicer::{render_volume, SlicerParams, Spacing};
 use billow::eval::volume_sampler::MipFilter;
 use billow::procgen::SceneBuilder;
 use billow::scene::{Aabb, AlphaMode, Material, Scene, Vertex};
-use billow_format::{
-    full_mip_count, mip_dims, AssetKind, Bounds, ColourSpace, Header, Prism, TexelFormat,
-    VolumeAsset, VolumeHeader,
-};
+use billow_format::{full_mip_count, mip_dims, ColourSpace, Header, Prism, VolumeAsset};
 use glam::{Vec2, Vec3, Vec4};
 
 const COLOR: [f32; 3] = [0.2, 0.5, 0.8];
@@ -84,24 +79,7 @@ fn cube_volume(alpha: f32) -> VolumeAsset {
         })
         .collect();
     VolumeAsset {
-        header: Header {
-            kind: AssetKind::Volume,
-            tool: "test".into(),
-            source: None,
-            bounds: Bounds {
-                min: [0.0; 3],
-                max: [1.0; 3],
-            },
-            colour_space: ColourSpace::SrgbPremultiplied,
-            seed: None,
-            params: BTreeMap::new(),
-            volume: Some(VolumeHeader {
-                dims,
-                mip_count: mips,
-                texel: TexelFormat::Rgba8Unorm,
-                normals: None,
-            }),
-        },
+        header: Header::volume("test", ColourSpace::SrgbPremultiplied, dims, mips, false),
         levels,
         normals: None,
         bands: Vec::new(),
@@ -289,24 +267,13 @@ fn semi_transparent_volume_opacity_matches_theory() {
 
 fn volume(dims: [u32; 3], levels: Vec<Vec<u8>>, cells: Vec<Prism>) -> VolumeAsset {
     VolumeAsset {
-        header: Header {
-            kind: AssetKind::Volume,
-            tool: "test".into(),
-            source: None,
-            bounds: Bounds {
-                min: [0.0; 3],
-                max: [1.0; 3],
-            },
-            colour_space: ColourSpace::SrgbPremultiplied,
-            seed: None,
-            params: BTreeMap::new(),
-            volume: Some(VolumeHeader {
-                dims,
-                mip_count: levels.len() as u32,
-                texel: TexelFormat::Rgba8Unorm,
-                normals: None,
-            }),
-        },
+        header: Header::volume(
+            "test",
+            ColourSpace::SrgbPremultiplied,
+            dims,
+            levels.len() as u32,
+            false,
+        ),
         levels,
         normals: None,
         cells,

@@ -1,13 +1,9 @@
 //! KTX 2.0 export: read back with the `ktx2` crate and check every field.
 
-use std::collections::BTreeMap;
 use std::path::Path;
 
 use billow::export::{ktx2_bytes, write_ktx2, ExportError};
-use billow_format::{
-    full_mip_count, mip_dims, AssetKind, Bounds, ColourSpace, Header, Prism, TexelFormat,
-    VolumeAsset, VolumeHeader,
-};
+use billow_format::{full_mip_count, mip_dims, ColourSpace, Header, Prism, VolumeAsset};
 use ktx2::dfd::{Basic, ChannelTypeQualifiers, DataFormatFlags};
 
 /// A valid asset with distinct, deterministic bytes per level.
@@ -27,24 +23,7 @@ fn asset(dims: [u32; 3], mip_count: u32, cs: ColourSpace) -> VolumeAsset {
         })
         .collect();
     VolumeAsset {
-        header: Header {
-            kind: AssetKind::Volume,
-            tool: "test".into(),
-            source: None,
-            bounds: Bounds {
-                min: [0.0; 3],
-                max: [1.0; 3],
-            },
-            colour_space: cs,
-            seed: None,
-            params: BTreeMap::new(),
-            volume: Some(VolumeHeader {
-                dims,
-                mip_count,
-                texel: TexelFormat::Rgba8Unorm,
-                normals: None,
-            }),
-        },
+        header: Header::volume("test", cs, dims, mip_count, false),
         levels,
         normals: None,
         bands: Vec::new(),

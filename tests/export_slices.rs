@@ -1,11 +1,7 @@
 //! Slice export: PNG (straight alpha sRGB) and EXR (linear premultiplied) round trips.
 
-use std::collections::BTreeMap;
-
 use billow::export::{decode_texel, srgb_eotf, srgb_oetf, write_slices, ExportError, SliceFormat};
-use billow_format::{
-    mip_dims, AssetKind, Bounds, ColourSpace, Header, Prism, TexelFormat, VolumeAsset, VolumeHeader,
-};
+use billow_format::{mip_dims, ColourSpace, Header, Prism, VolumeAsset};
 
 /// A valid premultiplied asset: straight colour × alpha in linear space, then encoded.
 fn asset(dims: [u32; 3], mip_count: u32, cs: ColourSpace) -> VolumeAsset {
@@ -42,24 +38,7 @@ fn asset(dims: [u32; 3], mip_count: u32, cs: ColourSpace) -> VolumeAsset {
         })
         .collect();
     VolumeAsset {
-        header: Header {
-            kind: AssetKind::Volume,
-            tool: "test".into(),
-            source: None,
-            bounds: Bounds {
-                min: [0.0; 3],
-                max: [1.0; 3],
-            },
-            colour_space: cs,
-            seed: None,
-            params: BTreeMap::new(),
-            volume: Some(VolumeHeader {
-                dims,
-                mip_count,
-                texel: TexelFormat::Rgba8Unorm,
-                normals: None,
-            }),
-        },
+        header: Header::volume("test", cs, dims, mip_count, false),
         levels,
         normals: None,
         bands: Vec::new(),

@@ -5,9 +5,7 @@ use std::collections::{BTreeMap, HashMap};
 use billow::procgen::{torus, SceneBuilder};
 use billow::scene::{Material, Scene, Triangle, Vertex};
 use billow::shell::{shell, shell_asset, shell_prisms, ShellError};
-use billow_format::{
-    AssetKind, Bounds, ColourSpace, Header, Prism, TexelFormat, VolumeAsset, VolumeHeader,
-};
+use billow_format::{Bounds, ColourSpace, Header, Prism, VolumeAsset};
 use glam::{Mat3, Vec2, Vec3, Vec4};
 
 /// The unit square in the xz plane at y = 0, facing +Y (counter-clockwise from above).
@@ -261,22 +259,15 @@ fn bad_parameters_and_surfaces_are_errors() {
 fn shell_asset_replaces_cells_bounds_and_params() {
     let volume = VolumeAsset {
         header: Header {
-            kind: AssetKind::Volume,
-            tool: "billow test".into(),
-            source: None,
-            bounds: Bounds {
-                min: [0.0; 3],
-                max: [1.0; 3],
-            },
-            colour_space: ColourSpace::SrgbPremultiplied,
             seed: Some(7),
             params: BTreeMap::from([("res".to_string(), "2x2x2".to_string())]),
-            volume: Some(VolumeHeader {
-                dims: [2, 2, 2],
-                mip_count: 2,
-                texel: TexelFormat::Rgba8Unorm,
-                normals: None,
-            }),
+            ..Header::volume(
+                "billow test",
+                ColourSpace::SrgbPremultiplied,
+                [2, 2, 2],
+                2,
+                false,
+            )
         },
         levels: vec![vec![200; 32], vec![100; 4]],
         normals: None,

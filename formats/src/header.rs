@@ -152,6 +152,37 @@ impl Header {
         }
     }
 
+    /// A Volume header: level-0 `dims`, `mip_count` levels of RGBA8 colour in
+    /// `colour_space`, snorm8 normals when `normals`; unit bounds and no source, seed or
+    /// params — set those with struct update syntax (`Header { bounds, ..Header::volume(..) }`).
+    /// For synthetic assets and tests; bakers fill every field.
+    pub fn volume(
+        tool: impl Into<String>,
+        colour_space: ColourSpace,
+        dims: [u32; 3],
+        mip_count: u32,
+        normals: bool,
+    ) -> Header {
+        Header {
+            kind: AssetKind::Volume,
+            tool: tool.into(),
+            source: None,
+            bounds: Bounds {
+                min: [0.0; 3],
+                max: [1.0; 3],
+            },
+            colour_space,
+            seed: None,
+            params: BTreeMap::new(),
+            volume: Some(VolumeHeader {
+                dims,
+                mip_count,
+                texel: TexelFormat::Rgba8Unorm,
+                normals: normals.then_some(NormalEncoding::Rgba8Snorm),
+            }),
+        }
+    }
+
     /// Serialize to the canonical RON text stored in `HEAD` (deterministic:
     /// fixed pretty-printing settings, `\n` line ends, maps sorted).
     pub fn to_ron(&self) -> Result<String, FormatError> {

@@ -3,10 +3,7 @@
 //! `floor(j·r) ..` with `r = n / (n >> 1)`, rounded to whole texels — good enough for a
 //! test volume), one box cell over `[0, 1]³`.
 
-use billow_format::{
-    full_mip_count, mip_dims, AssetKind, Bounds, ColourSpace, Header, NormalEncoding, TexelFormat,
-    VolumeAsset, VolumeHeader,
-};
+use billow_format::{full_mip_count, mip_dims, ColourSpace, Header, NormalEncoding, VolumeAsset};
 use glam::Vec3;
 
 use crate::voxelize::box_prisms;
@@ -130,22 +127,14 @@ pub fn volume_from_fn(
     params.insert("res".into(), format!("{}x{}x{}", dims[0], dims[1], dims[2]));
     VolumeAsset {
         header: Header {
-            kind: AssetKind::Volume,
-            tool: "billow synthetic".into(),
-            source: None,
-            bounds: Bounds {
-                min: [0.0; 3],
-                max: [1.0; 3],
-            },
-            colour_space: ColourSpace::LinearPremultiplied,
-            seed: None,
             params,
-            volume: Some(VolumeHeader {
+            ..Header::volume(
+                "billow synthetic",
+                ColourSpace::LinearPremultiplied,
                 dims,
-                mip_count: mips,
-                texel: TexelFormat::Rgba8Unorm,
-                normals: normals.then_some(NormalEncoding::Rgba8Snorm),
-            }),
+                mips,
+                normals,
+            )
         },
         levels,
         normals: normal_levels,

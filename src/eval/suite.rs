@@ -436,26 +436,9 @@ mod tests {
 
     #[test]
     fn baked_lighting_selects_the_reference_lighting() {
-        use billow_format::{AssetKind, Bounds, ColourSpace, Header, TexelFormat, VolumeHeader};
+        use billow_format::{ColourSpace, Header};
         let mut asset = VolumeAsset {
-            header: Header {
-                kind: AssetKind::Volume,
-                tool: "test".into(),
-                source: None,
-                bounds: Bounds {
-                    min: [0.0; 3],
-                    max: [1.0; 3],
-                },
-                colour_space: ColourSpace::SrgbPremultiplied,
-                seed: None,
-                params: Default::default(),
-                volume: Some(VolumeHeader {
-                    dims: [1, 1, 1],
-                    mip_count: 1,
-                    texel: TexelFormat::Rgba8Unorm,
-                    normals: None,
-                }),
-            },
+            header: Header::volume("test", ColourSpace::SrgbPremultiplied, [1, 1, 1], 1, false),
             levels: vec![vec![0; 4]],
             normals: None,
             bands: Vec::new(),

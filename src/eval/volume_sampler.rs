@@ -251,26 +251,9 @@ mod tests {
 
     #[test]
     fn the_shell_param_selects_repeat() {
-        use billow_format::{AssetKind, Bounds, Header, TexelFormat, VolumeHeader};
+        use billow_format::Header;
         let mut asset = VolumeAsset {
-            header: Header {
-                kind: AssetKind::Volume,
-                tool: "test".into(),
-                source: None,
-                bounds: Bounds {
-                    min: [0.0; 3],
-                    max: [1.0; 3],
-                },
-                colour_space: ColourSpace::SrgbPremultiplied,
-                seed: None,
-                params: Default::default(),
-                volume: Some(VolumeHeader {
-                    dims: [1, 1, 1],
-                    mip_count: 1,
-                    texel: TexelFormat::Rgba8Unorm,
-                    normals: None,
-                }),
-            },
+            header: Header::volume("test", ColourSpace::SrgbPremultiplied, [1, 1, 1], 1, false),
             levels: vec![vec![0, 0, 0, 0]],
             normals: None,
             bands: Vec::new(),

@@ -4,10 +4,7 @@
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-use billow_format::{
-    full_mip_count, mip_dims, AssetKind, Bounds, ColourSpace, Header, Prism, TexelFormat,
-    VolumeAsset, VolumeHeader,
-};
+use billow_format::{full_mip_count, mip_dims, ColourSpace, Header, Prism, VolumeAsset};
 use billow_view::Gpu;
 
 /// The headless device, or `None` with a plain "skipping" line when no adapter exists.
@@ -132,22 +129,8 @@ pub fn ball_asset(shell: bool) -> VolumeAsset {
     }
     VolumeAsset {
         header: Header {
-            kind: AssetKind::Volume,
-            tool: "test".into(),
-            source: None,
-            bounds: Bounds {
-                min: [0.0; 3],
-                max: [1.0; 3],
-            },
-            colour_space: ColourSpace::SrgbPremultiplied,
-            seed: None,
             params,
-            volume: Some(VolumeHeader {
-                dims,
-                mip_count: mips,
-                texel: TexelFormat::Rgba8Unorm,
-                normals: None,
-            }),
+            ..Header::volume("test", ColourSpace::SrgbPremultiplied, dims, mips, false)
         },
         levels,
         normals: None,
