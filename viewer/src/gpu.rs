@@ -65,9 +65,21 @@ impl Gpu {
         )
     }
 
-    /// A material's bind group: a uniform buffer made from `uniform` (binding 0), a texture
-    /// (binding 1) and a sampler (binding 2), the layout the mesh and cloud pipelines share.
-    pub fn material_bind_group(
+    /// A buffer holding `contents`, for `usage`.
+    pub fn buffer(&self, label: &str, contents: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
+        use wgpu::util::DeviceExt;
+        self.device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage,
+            })
+    }
+
+    /// A bind group of a uniform buffer made from `uniform` (binding 0), a texture
+    /// (binding 1) and a sampler (binding 2): the mesh and cloud materials
+    /// ([`crate::layout::material_layout`]) and the resolve pass.
+    pub fn uniform_texture_bind_group(
         &self,
         label: &str,
         layout: &wgpu::BindGroupLayout,
@@ -75,14 +87,7 @@ impl Gpu {
         view: &wgpu::TextureView,
         sampler: &wgpu::Sampler,
     ) -> wgpu::BindGroup {
-        use wgpu::util::DeviceExt;
-        let buf = self
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: uniform,
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
+        let buf = self.buffer(label, uniform, wgpu::BufferUsages::UNIFORM);
         self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some(label),
             layout,

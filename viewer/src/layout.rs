@@ -70,7 +70,7 @@ pub fn shader(device: &wgpu::Device, label: &str, sources: &[&str]) -> wgpu::Sha
 }
 
 /// The material layout of the mesh and cloud passes (the bind group that
-/// [`crate::Gpu::material_bind_group`] makes): a uniform, a 2D texture and its sampler,
+/// [`crate::Gpu::uniform_texture_bind_group`] makes): a uniform, a 2D texture and its sampler,
 /// all read by the fragment stage.
 pub fn material_layout(device: &wgpu::Device, label: &str) -> wgpu::BindGroupLayout {
     let fs = ShaderStages::FRAGMENT;

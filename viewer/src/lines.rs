@@ -4,7 +4,6 @@
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
-use wgpu::util::DeviceExt;
 
 use crate::layout::{entry, shader, uniform};
 use crate::target::{COLOR_FORMAT, DEPTH_FORMAT};
@@ -118,21 +117,17 @@ impl LinePass {
             view_proj: view_proj.to_cols_array_2d(),
             color,
         };
-        let ub = gpu
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("lines frame"),
-                contents: bytemuck::bytes_of(&frame),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
+        let ub = gpu.buffer(
+            "lines frame",
+            bytemuck::bytes_of(&frame),
+            wgpu::BufferUsages::UNIFORM,
+        );
         let flat: Vec<[f32; 3]> = points.iter().map(|p| p.to_array()).collect();
-        let vb = gpu
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("lines"),
-                contents: bytemuck::cast_slice(&flat),
-                usage: wgpu::BufferUsages::VERTEX,
-            });
+        let vb = gpu.buffer(
+            "lines",
+            bytemuck::cast_slice(&flat),
+            wgpu::BufferUsages::VERTEX,
+        );
         let bind = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("lines"),
             layout: &self.layout,

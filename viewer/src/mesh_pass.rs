@@ -7,7 +7,6 @@
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
-use wgpu::util::DeviceExt;
 
 use crate::layout::{entry, material_layout, shader, uniform};
 use crate::target::{COLOR_FORMAT, DEPTH_FORMAT};
@@ -267,13 +266,11 @@ impl MeshPass {
         }
         let n = data.len();
         data.resize(n.max(3), MeshVertex::default());
-        let buffer = gpu
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("mesh"),
-                contents: bytemuck::cast_slice(&data),
-                usage: wgpu::BufferUsages::VERTEX,
-            });
+        let buffer = gpu.buffer(
+            "mesh",
+            bytemuck::cast_slice(&data),
+            wgpu::BufferUsages::VERTEX,
+        );
         let mut bounds = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         for v in &mesh.vertices {
             bounds.0 = bounds.0.min(Vec3::from(v.pos));
@@ -303,7 +300,7 @@ impl MeshPass {
             ],
         };
         let view = m.texture.map_or(&self.white, |i| &views[i as usize]);
-        gpu.material_bind_group(
+        gpu.uniform_texture_bind_group(
             "mesh material",
             &self.material_layout,
             bytemuck::bytes_of(&u),
@@ -314,13 +311,11 @@ impl MeshPass {
 
     /// The frame bind group of `frame` (the camera's, or the light's for the shadow map).
     pub fn frame_bind_group_from(&self, gpu: &Gpu, frame: &MeshFrame) -> wgpu::BindGroup {
-        let buf = gpu
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("mesh frame"),
-                contents: bytemuck::bytes_of(frame),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
+        let buf = gpu.buffer(
+            "mesh frame",
+            bytemuck::bytes_of(frame),
+            wgpu::BufferUsages::UNIFORM,
+        );
         gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("mesh frame"),
             layout: &self.frame_layout,

@@ -136,32 +136,13 @@ impl Resolve {
     }
 
     fn bind(&self, gpu: &Gpu, u: &ResolveUniform, view: &wgpu::TextureView) -> wgpu::BindGroup {
-        use wgpu::util::DeviceExt;
-        let buf = gpu
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("resolve"),
-                contents: bytemuck::bytes_of(u),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
-        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("resolve"),
-            layout: &self.layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: buf.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: wgpu::BindingResource::Sampler(&self.sampler),
-                },
-            ],
-        })
+        gpu.uniform_texture_bind_group(
+            "resolve",
+            &self.layout,
+            bytemuck::bytes_of(u),
+            view,
+            &self.sampler,
+        )
     }
 
     /// Composites `frame` over `background` into `out` (`srgb_out`: the output format

@@ -15,7 +15,6 @@
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
-use wgpu::util::DeviceExt;
 
 use crate::layout::{depth_texture, entry, sampler, shader, storage, texture, uniform};
 use crate::particle_layer::Bakes;
@@ -495,22 +494,14 @@ impl ParticlePass {
         parts: &[GpuParticle],
         depth: &wgpu::TextureView,
     ) -> wgpu::BindGroup {
-        let mk = |label, contents: &[u8], usage| {
-            gpu.device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some(label),
-                    contents,
-                    usage,
-                })
-        };
-        let fb = mk(
+        let fb = gpu.buffer(
             "particle frame",
             bytemuck::bytes_of(frame),
             wgpu::BufferUsages::UNIFORM,
         );
         let one = [GpuParticle::default()];
         let data: &[GpuParticle] = if parts.is_empty() { &one } else { parts };
-        let pb = mk(
+        let pb = gpu.buffer(
             "particles",
             bytemuck::cast_slice(data),
             wgpu::BufferUsages::STORAGE,
@@ -564,13 +555,11 @@ impl ParticlePass {
         layer: &wgpu::TextureView,
         shimmer: &wgpu::TextureView,
     ) -> wgpu::BindGroup {
-        let ub = gpu
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("composite"),
-                contents: bytemuck::bytes_of(u),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
+        let ub = gpu.buffer(
+            "composite",
+            bytemuck::bytes_of(u),
+            wgpu::BufferUsages::UNIFORM,
+        );
         let views = [scene, layer, shimmer];
         let mut entries = vec![wgpu::BindGroupEntry {
             binding: 0,

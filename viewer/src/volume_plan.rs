@@ -10,7 +10,6 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use glam::{Mat4, Vec3};
-use wgpu::util::DeviceExt;
 
 use crate::render::{FrameStats, VolumeEntry, VERTICES_PER_INSTANCE};
 use crate::slab::partition;
@@ -97,12 +96,11 @@ pub fn batch_bind_groups(
 fn storage<T: bytemuck::Pod + Default>(gpu: &Gpu, label: &str, data: &[T]) -> wgpu::Buffer {
     let one = [T::default()];
     let contents: &[T] = if data.is_empty() { &one } else { data };
-    gpu.device
-        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(label),
-            contents: bytemuck::cast_slice(contents),
-            usage: wgpu::BufferUsages::STORAGE,
-        })
+    gpu.buffer(
+        label,
+        bytemuck::cast_slice(contents),
+        wgpu::BufferUsages::STORAGE,
+    )
 }
 
 /// Plans the volumes for `camera` at time `time` (animated cells). `receive`: (camera
@@ -281,17 +279,17 @@ pub fn plan(
         })
         .collect();
     let device = &gpu.device;
-    let fb = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("volume frame"),
-        contents: bytemuck::bytes_of(&frame),
-        usage: wgpu::BufferUsages::UNIFORM,
-    });
+    let fb = gpu.buffer(
+        "volume frame",
+        bytemuck::bytes_of(&frame),
+        wgpu::BufferUsages::UNIFORM,
+    );
     draw_data.resize(draw_data.len().max(1), GpuDraw::default());
-    let db = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("volume draws"),
-        contents: bytemuck::cast_slice(&draw_data),
-        usage: wgpu::BufferUsages::UNIFORM,
-    });
+    let db = gpu.buffer(
+        "volume draws",
+        bytemuck::cast_slice(&draw_data),
+        wgpu::BufferUsages::UNIFORM,
+    );
     let cb = storage(gpu, "cells", &cells);
     let sb = storage(gpu, "slices", &gpu_slices);
     let lb = storage(gpu, "cell lists", &list);

@@ -24,7 +24,6 @@
 
 use bytemuck::{Pod, Zeroable};
 use glam::Mat4;
-use wgpu::util::DeviceExt;
 
 use crate::layout::{entry, material_layout, shader, uniform};
 use crate::mesh_pass::MeshFrame;
@@ -313,21 +312,13 @@ impl CloudPass {
         }
         inst.resize(inst.len().max(1), CloudInstance::default());
         indices.resize(indices.len().max(3), 0);
-        let mk = |label, contents: &[u8], usage| {
-            gpu.device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some(label),
-                    contents,
-                    usage,
-                })
-        };
         CloudFrame {
-            instances: mk(
+            instances: gpu.buffer(
                 "cloud instances",
                 bytemuck::cast_slice(&inst),
                 wgpu::BufferUsages::VERTEX,
             ),
-            indices: mk(
+            indices: gpu.buffer(
                 "cloud indices",
                 bytemuck::cast_slice(&indices),
                 wgpu::BufferUsages::INDEX,
@@ -380,13 +371,11 @@ impl CloudPass {
 
     /// The frame bind group (the mesh pass's frame uniform layout).
     pub fn frame_bind_group(&self, gpu: &Gpu, frame: &MeshFrame) -> wgpu::BindGroup {
-        let buf = gpu
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("cloud frame"),
-                contents: bytemuck::bytes_of(frame),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
+        let buf = gpu.buffer(
+            "cloud frame",
+            bytemuck::bytes_of(frame),
+            wgpu::BufferUsages::UNIFORM,
+        );
         gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("cloud frame"),
             layout: &self.frame_layout,

@@ -4,7 +4,6 @@
 
 use billow_format::{CloudAsset, NO_INDEX};
 use glam::Vec3;
-use wgpu::util::DeviceExt;
 
 use super::{CloudPass, CloudVertex, DrawUniform, BILLBOARD_CUTOFF};
 use crate::mesh_pass::{MeshData, MeshMaterial, MeshVertex};
@@ -57,7 +56,7 @@ impl CloudPass {
         color: [f32; 4],
         view: &wgpu::TextureView,
     ) -> wgpu::BindGroup {
-        gpu.material_bind_group(
+        gpu.uniform_texture_bind_group(
             "cloud draw",
             &self.draw_layout,
             bytemuck::bytes_of(&DrawUniform { params, color }),
@@ -207,13 +206,11 @@ impl CloudPass {
         }
         let n = verts.len();
         verts.resize(n.max(1), CloudVertex::default());
-        let buffer = gpu
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("cloud vertices"),
-                contents: bytemuck::cast_slice(&verts),
-                usage: wgpu::BufferUsages::VERTEX,
-            });
+        let buffer = gpu.buffer(
+            "cloud vertices",
+            bytemuck::cast_slice(&verts),
+            wgpu::BufferUsages::VERTEX,
+        );
         let b = &asset.header.bounds;
         let (lo, hi) = (Vec3::from(b.min), Vec3::from(b.max));
         Ok(GpuCloud {
