@@ -460,28 +460,21 @@ mod tests {
         };
         for k in [1, 3, 4, 8] {
             for dir in Dir::ALL {
-                let a = rasterize_with(
-                    &mut Default::default(),
-                    &s,
-                    &shader,
-                    &grid,
-                    dir,
-                    k,
-                    true,
-                    false,
-                    &mut |_| {},
-                );
-                let b = rasterize_with(
-                    &mut Default::default(),
-                    &s,
-                    &shader,
-                    &grid,
-                    dir,
-                    k,
-                    true,
-                    true,
-                    &mut |_| {},
-                );
+                let run = |simd| {
+                    let mut bufs = SetupBufs::default();
+                    rasterize_with(
+                        &mut bufs,
+                        &s,
+                        &shader,
+                        &grid,
+                        dir,
+                        k,
+                        true,
+                        simd,
+                        &mut |_| {},
+                    )
+                };
+                let (a, b) = (run(false), run(true));
                 assert!(a.fragments > 500, "{dir:?} K={k}: {}", a.fragments);
                 assert!(bits(&a) == bits(&b), "{dir:?} K={k}");
             }
