@@ -158,21 +158,8 @@ pub(crate) fn encode_with_minor(
     chunks: &[ChunkRef<'_>],
     minor: u16,
 ) -> Result<Vec<u8>, FormatError> {
-    let (ron, total) = check_chunks(header, chunks)?;
-    let mut out = Vec::with_capacity(total);
-    out.resize(PREAMBLE_LEN, 0);
-    push_chunk(&mut out, TAG_HEAD, ElemType::Opaque, ron.as_bytes());
-    for ch in chunks {
-        push_chunk(&mut out, ch.tag, ch.elem, ch.data);
-    }
-    push_chunk(&mut out, TAG_END, ElemType::Opaque, &[]);
-    write_preamble(
-        &mut out,
-        FORMAT_MAJOR,
-        minor.max(minor_for(chunks)),
-        header.kind.code(),
-    );
-    Ok(out)
+    let gaps = frame(header, chunks, minor)?;
+    Ok(parts(&gaps, chunks).concat())
 }
 
 /// [`encode_with_minor`] written straight to `path` with [`write_atomic_parts`]: the same
@@ -184,10 +171,19 @@ pub(crate) fn write_with_minor(
     chunks: &[ChunkRef<'_>],
     minor: u16,
 ) -> Result<(), FormatError> {
-    let (ron, _) = check_chunks(header, chunks)?;
-    // The bytes between the payloads: gap 0 is the preamble, HEAD and the first chunk's
-    // header; gap i the padding of payload i - 1 and chunk i's header; the last gap the
-    // last padding and END.
+    let gaps = frame(header, chunks, minor)?;
+    write_atomic_parts(path, &parts(&gaps, chunks))
+}
+
+/// The bytes between the payloads of the file that holds `chunks` (validated first):
+/// gap 0 is the preamble, HEAD and the first chunk's header; gap i the padding of payload
+/// i - 1 and chunk i's header; the last gap the last padding and END.
+fn frame(
+    header: &Header,
+    chunks: &[ChunkRef<'_>],
+    minor: u16,
+) -> Result<Vec<Vec<u8>>, FormatError> {
+    let ron = check_chunks(header, chunks)?;
     let mut gaps: Vec<Vec<u8>> = Vec::with_capacity(chunks.len() + 1);
     let mut first = vec![0u8; PREAMBLE_LEN];
     push_chunk(&mut first, TAG_HEAD, ElemType::Opaque, ron.as_bytes());
@@ -205,27 +201,31 @@ pub(crate) fn write_with_minor(
     );
     let total = gaps.iter().map(|g| g.len()).sum::<usize>()
         + chunks.iter().map(|c| c.data.len()).sum::<usize>();
-    write_preamble_len(
+    write_preamble(
         &mut gaps[0],
         total as u64,
         FORMAT_MAJOR,
         minor.max(minor_for(chunks)),
         header.kind.code(),
     );
+    Ok(gaps)
+}
+
+/// The file as a list of slices: gap 0, payload 0, gap 1, …, the last gap.
+fn parts<'a>(gaps: &'a [Vec<u8>], chunks: &[ChunkRef<'a>]) -> Vec<&'a [u8]> {
     let mut parts: Vec<&[u8]> = Vec::with_capacity(2 * chunks.len() + 1);
     parts.push(&gaps[0]);
     for (ch, gap) in chunks.iter().zip(&gaps[1..]) {
         parts.push(ch.data);
         parts.push(gap);
     }
-    write_atomic_parts(path, &parts)
+    parts
 }
 
-/// Validates the header and chunks; the header's RON and an upper bound of the file's length.
-fn check_chunks(header: &Header, chunks: &[ChunkRef<'_>]) -> Result<(String, usize), FormatError> {
+/// Validates the header and chunks; the header's RON.
+fn check_chunks(header: &Header, chunks: &[ChunkRef<'_>]) -> Result<String, FormatError> {
     header.validate()?;
     let ron = header.to_ron()?;
-    let mut total = PREAMBLE_LEN + 2 * CHUNK_HEADER_LEN + ron.len() + 8;
     for (i, ch) in chunks.iter().enumerate() {
         let fail = |m: String| {
             Err(FormatError::Encode(format!(
@@ -248,9 +248,8 @@ fn check_chunks(header: &Header, chunks: &[ChunkRef<'_>]) -> Result<(String, usi
                 ch.elem.size()
             ));
         }
-        total += CHUNK_HEADER_LEN + ch.data.len() + pad8(ch.data.len());
     }
-    Ok((ron, total))
+    Ok(ron)
 }
 
 /// Chunk tags introduced by each minor version after 1.0 (index 0: 1.1).
@@ -269,14 +268,8 @@ fn minor_for(chunks: &[ChunkRef<'_>]) -> u16 {
     minor
 }
 
-/// Fill in the 32-byte preamble at the start of `out` (file length = `out.len()`).
-pub(crate) fn write_preamble(out: &mut [u8], major: u16, minor: u16, kind: u32) {
-    let len = out.len() as u64;
-    write_preamble_len(out, len, major, minor, kind);
-}
-
-/// [`write_preamble`] for a file of `len` bytes whose start is `out`.
-fn write_preamble_len(out: &mut [u8], len: u64, major: u16, minor: u16, kind: u32) {
+/// Fill in the 32-byte preamble at the start of `out` for a file of `len` bytes.
+fn write_preamble(out: &mut [u8], len: u64, major: u16, minor: u16, kind: u32) {
     let p = &mut out[..PREAMBLE_LEN];
     p[0..8].copy_from_slice(&MAGIC);
     p[8..10].copy_from_slice(&major.to_le_bytes());
