@@ -246,18 +246,6 @@ impl ParticlePass {
         }
     }
 
-    /// What was baked for the scene (for `--print-passes`).
-    pub fn baked(&self) -> Vec<&'static str> {
-        let mut b = vec!["bake:detail-noise"];
-        if self.needs.scattering {
-            b.push("bake:phase-lut");
-        }
-        if self.needs.fire {
-            b.push("bake:blackbody-lut");
-        }
-        b
-    }
-
     /// Targets for a `w`×`h` frame with the layer at `1/div` of it.
     pub fn targets(&self, gpu: &Gpu, w: u32, h: u32, div: u32) -> LayerTargets {
         let (lw, lh) = (w.div_ceil(div).max(1), h.div_ceil(div).max(1));
