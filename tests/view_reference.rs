@@ -16,9 +16,8 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use billow::eval::image::{srgb_to_linear, write_comparison_png, ImageF32};
+use billow::eval::image::{write_comparison_png, ImageF32};
 use common::{repo, run};
-use glam::Vec4;
 
 const SIZE: &str = "160x112";
 const TIMES: [&str; 2] = ["0.8", "2.0"];
@@ -54,13 +53,7 @@ fn compare(a: &image::RgbaImage, b: &image::RgbaImage) -> (f64, f64) {
 }
 
 fn linear(img: &image::RgbaImage) -> ImageF32 {
-    let mut out = ImageF32::new(img.width(), img.height());
-    for (x, y, p) in img.enumerate_pixels() {
-        let a = p[3] as f32 / 255.0;
-        let c = |i: usize| srgb_to_linear(p[i] as f32 / 255.0) * a;
-        out.set(x, y, Vec4::new(c(0), c(1), c(2), a));
-    }
-    out
+    ImageF32::from_image(&image::DynamicImage::ImageRgba8(img.clone()))
 }
 
 /// Renders the scene at `t` into `dir`; `None` (after saying why) without an adapter.

@@ -4,9 +4,8 @@
 
 use std::path::{Path, PathBuf};
 
-use billow::eval::image::{srgb_to_linear, write_comparison_png, ImageF32};
+use billow::eval::image::{write_comparison_png, ImageF32};
 use billow::eval::metrics::{compare, ImageError};
-use glam::Vec4;
 use serde::Serialize;
 
 use crate::exit::{CliError, Code};
@@ -36,8 +35,7 @@ struct Summary {
     error: ImageError,
 }
 
-/// Reads an image as premultiplied linear RGBA (8-bit and 16-bit files are sRGB with
-/// straight alpha, float files linear).
+/// Reads an image as premultiplied linear RGBA ([`ImageF32::from_image`]).
 fn load(p: &Path) -> Result<ImageF32, CliError> {
     let img = image::open(p).map_err(|e| {
         let code = match &e {
@@ -46,24 +44,7 @@ fn load(p: &Path) -> Result<ImageF32, CliError> {
         };
         CliError::new(code, format!("{}: {e}", p.display()))
     })?;
-    let float = matches!(
-        img.color(),
-        image::ColorType::Rgb32F | image::ColorType::Rgba32F
-    );
-    let px = img.to_rgba32f();
-    let data = px
-        .pixels()
-        .map(|q| {
-            let a = q[3].clamp(0.0, 1.0);
-            let c = |v: f32| if float { v } else { srgb_to_linear(v) };
-            Vec4::new(c(q[0]) * a, c(q[1]) * a, c(q[2]) * a, a)
-        })
-        .collect();
-    Ok(ImageF32 {
-        width: px.width(),
-        height: px.height(),
-        data,
-    })
+    Ok(ImageF32::from_image(&img))
 }
 
 pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {

@@ -37,6 +37,30 @@ impl ImageF32 {
         self.data[y as usize * w + x as usize] = v;
     }
 
+    /// A decoded image as premultiplied linear RGBA: 8- and 16-bit images are taken as
+    /// sRGB with straight alpha (what [`ImageF32::write_png`] writes), float images as
+    /// linear; alpha is clamped to [0, 1].
+    pub fn from_image(img: &image::DynamicImage) -> ImageF32 {
+        let float = matches!(
+            img.color(),
+            image::ColorType::Rgb32F | image::ColorType::Rgba32F
+        );
+        let px = img.to_rgba32f();
+        let data = px
+            .pixels()
+            .map(|q| {
+                let a = q[3].clamp(0.0, 1.0);
+                let c = |v: f32| if float { v } else { srgb_to_linear(v) };
+                Vec4::new(c(q[0]) * a, c(q[1]) * a, c(q[2]) * a, a)
+            })
+            .collect();
+        ImageF32 {
+            width: px.width(),
+            height: px.height(),
+            data,
+        }
+    }
+
     /// Mean alpha: the fraction of the image covered.
     pub fn coverage(&self) -> f64 {
         if self.data.is_empty() {
