@@ -10,7 +10,7 @@
 
 use std::sync::OnceLock;
 
-use glam::{Vec2, Vec3, Vec4};
+use glam::{Vec2, Vec4};
 
 use crate::scene::{Texture, Wrap};
 
@@ -133,16 +133,17 @@ impl Texture {
 /// gives the same bits.
 #[inline(always)]
 pub(crate) fn filter_taps(taps: [(Vec4, f32); 4]) -> Vec4 {
-    let mut premul = Vec3::ZERO;
-    let mut plain = Vec3::ZERO;
-    let mut alpha = 0.0;
+    // Four lanes at once (the alpha lane of `premul` is unused; `plain.w` is the alpha);
+    // lane by lane the same operations as three colour sums and one alpha sum.
+    let mut premul = Vec4::ZERO;
+    let mut plain = Vec4::ZERO;
     for (c, w) in taps {
-        premul += c.truncate() * (c.w * w);
-        plain += c.truncate() * w;
-        alpha += c.w * w;
+        premul += c * (c.w * w);
+        plain += c * w;
     }
+    let alpha = plain.w;
     let rgb = if alpha > 1e-6 { premul / alpha } else { plain };
-    rgb.extend(alpha.clamp(0.0, 1.0))
+    rgb.truncate().extend(alpha.clamp(0.0, 1.0))
 }
 
 #[cfg(test)]

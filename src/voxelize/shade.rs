@@ -13,7 +13,9 @@
 use glam::{Vec2, Vec3, Vec4};
 
 use crate::scene::{AlphaMode, Material, Scene, Texture};
-use crate::texture::{finite_or_zero, floor_fast as floor, srgb_to_linear_lut, wrap_index as wrap};
+use crate::texture::{
+    filter_taps, finite_or_zero, floor_fast as floor, srgb_to_linear_lut, wrap_index as wrap,
+};
 
 /// Validated view of a scene's materials and textures.
 pub(crate) struct Shader<'a> {
@@ -248,22 +250,17 @@ impl Taps {
     /// alpha in the last lane of the plain sum).
     #[inline(always)]
     fn filtered(&self, lut: &[f32; 256]) -> Vec4 {
-        let mut premul = Vec4::ZERO;
-        let mut plain = Vec4::ZERO;
-        for (p, w) in self.texels.iter().zip(self.weights) {
-            let a = ALPHA[p[3] as usize];
+        let tap = |i: usize| {
+            let p = self.texels[i];
             let c = Vec4::new(
                 lut[p[0] as usize],
                 lut[p[1] as usize],
                 lut[p[2] as usize],
-                a,
+                ALPHA[p[3] as usize],
             );
-            premul += c * (a * w);
-            plain += c * w;
-        }
-        let alpha = plain.w;
-        let rgb = if alpha > 1e-6 { premul / alpha } else { plain };
-        rgb.truncate().extend(alpha.clamp(0.0, 1.0))
+            (c, self.weights[i])
+        };
+        filter_taps([tap(0), tap(1), tap(2), tap(3)])
     }
 }
 
