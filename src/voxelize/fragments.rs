@@ -21,7 +21,8 @@ use crate::scene::{AlphaMode, Scene};
 
 /// A fragment: one triangle in one voxel, covering the samples of `mask`.
 struct Frag {
-    /// `slice << 32 | depth (front first)`: with `tri`, the sort key.
+    /// `slice << 32 | depth` (ascending: the − direction's front first); with `tri`, the
+    /// sort key.
     key: u64,
     /// Bit `sj·K + si`: the samples it covers (0 once shading discarded it).
     mask: u64,
@@ -33,6 +34,8 @@ struct Frag {
     uv: Vec2,
     /// Pixel column.
     u: u32,
+    /// Which directions see it (bit 0: +, bit 1: −), as [`TriSetup::vis`].
+    vis: u8,
 }
 
 /// Per-thread buffers of [`raster_row`] (kept between rows).
@@ -47,6 +50,8 @@ pub(crate) struct Scratch {
     by_slice: Vec<u32>,
     /// Surviving fragments grouped by column: `(key, triangle, index in frags)`.
     order: Vec<(u64, u32, u32)>,
+    /// One voxel's fragments seen from one direction, in that direction's sort key.
+    voxel: Vec<(u64, u32, u32)>,
 }
 
 /// A u32 whose order is `f32::total_cmp`'s (ascending), or the reverse when `descending`.
@@ -126,9 +131,10 @@ const fn full_mask<const K: usize>() -> u64 {
     }
 }
 
-/// Rasterizes one pixel row `j` of direction `dir` with `K × K` samples per pixel; returns
-/// the non-empty voxels of the row sorted by `(u, slice)`, their weighted normals (when
-/// asked for) and the fragment count (see [`super::slices`] for the conventions).
+/// Rasterizes one pixel row `j` of both directions of the axis of `dir` (the + one) with
+/// `K × K` samples per pixel; returns, for the + and the − direction, the non-empty voxels
+/// of the row sorted by `(u, slice)`, their weighted normals (when asked for) and the
+/// fragment count (see [`super::slices`] for the conventions).
 ///
 /// Per (triangle, pixel) the coverage of the samples is one bit mask (exact integer edge
 /// functions); covered samples are grouped by the slice their depth falls in (one group
@@ -139,18 +145,24 @@ const fn full_mask<const K: usize>() -> u64 {
 /// misses overlap); then the fragments are grouped by column and, within a voxel,
 /// composited front to back per sample (a per-sample transmittance), so the voxel is the
 /// mean of its `K²` samples' composites.
+///
+/// Coverage, slice groups and shading do not depend on which side the camera is on, so
+/// they are done once for the two directions; each fragment remembers which of them see
+/// it (single-sided triangles: one; double-sided: both, the normal flipped for one), and
+/// only the per-voxel compositing runs once per direction, in its own depth order.
 #[inline(always)]
 fn raster_row<const K: usize, const AVX: bool>(
     ctx: &RowCtx<'_>,
     j: usize,
     scratch: &mut Scratch,
-) -> RowOut {
+) -> [RowOut; 2] {
     let RowCtx {
         scene,
         shader,
         grid,
         dir,
         normals,
+        sides,
         setups,
         bins,
     } = *ctx;
@@ -168,10 +180,10 @@ fn raster_row<const K: usize, const AVX: bool>(
         start,
         by_slice,
         order,
+        voxel,
     } = scratch;
     frags.clear();
     frag_n.clear();
-    let front_high = dir.positive();
     let km1 = k - 1;
     let mut groups: Vec<(u32, u64)> = Vec::with_capacity(64);
     // Sample (si, sj) of bit b.
@@ -380,7 +392,7 @@ fn raster_row<const K: usize, const AVX: bool>(
                 if normals {
                     frag_n.push(shading_normal(scene, s, bw));
                 }
-                let dk = depth_key(t as f32, front_high) as u64;
+                let dk = depth_key(t as f32, false) as u64;
                 frags.push(Frag {
                     key: (slice as u64) << 32 | dk,
                     mask: gmask,
@@ -389,12 +401,14 @@ fn raster_row<const K: usize, const AVX: bool>(
                     rgba: col,
                     uv,
                     u: i as u32,
+                    vis: s.vis,
                 });
             }
         }
     }
-    let mut count = frags.len() as u64;
-    // Shading, batched per row; the survivors are counted per slice.
+    // Shading, batched per row; the survivors are counted per slice and per direction.
+    let mut count = 0u64;
+    let mut seen = [0u64; 2];
     start.clear();
     start.resize(depth_n as usize + 1, 0);
     for f in frags.iter_mut() {
@@ -402,11 +416,11 @@ fn raster_row<const K: usize, const AVX: bool>(
             Some(c) => {
                 f.rgba = c;
                 start[(f.key >> 32) as usize + 1] += 1;
+                count += 1;
+                seen[0] += (f.vis & 1) as u64;
+                seen[1] += (f.vis >> 1) as u64;
             }
-            None => {
-                f.mask = 0;
-                count -= 1;
-            }
+            None => f.mask = 0,
         }
     }
     // Grouped by (column, slice) with two stable counting sorts (by slice, then by
@@ -443,15 +457,23 @@ fn raster_row<const K: usize, const AVX: bool>(
         }
     }
     let inv_samples = 1.0 / kk as f32;
-    let mut out = Vec::new();
-    let mut out_n = Vec::new();
+    let mut out: [RowOut; 2] = [
+        (Vec::new(), Vec::new(), seen[0]),
+        (Vec::new(), Vec::new(), seen[1]),
+    ];
     let mut transmit = [1.0f32; 64];
-    let zero_n = Vec3::ZERO;
-    for u in 0..width {
-        let col = &mut order[start[u] as usize..start[u + 1] as usize];
-        if col.is_empty() {
-            continue;
+    let nrm_of = |i: u32, side: usize| {
+        if !normals {
+            Vec3::ZERO
+        } else if side == 0 {
+            frag_n[i as usize]
+        } else {
+            // The − direction sees the other face: the shading normal flipped (exactly).
+            -frag_n[i as usize]
         }
+    };
+    for u in 0..width {
+        let col = &order[start[u] as usize..start[u + 1] as usize];
         let mut g = 0;
         while g < col.len() {
             let slice = (col[g].0 >> 32) as u32;
@@ -459,78 +481,100 @@ fn raster_row<const K: usize, const AVX: bool>(
             while end < col.len() && (col[end].0 >> 32) as u32 == slice {
                 end += 1;
             }
-            // A voxel's fragments by (depth front to back, triangle).
-            if end > g + 1 {
-                sort_small(&mut col[g..end]);
-            }
-            let nrm_of = |i: u32| {
-                if normals {
-                    frag_n[i as usize]
-                } else {
-                    zero_n
+            for (side, (vox, vox_n, _)) in out.iter_mut().enumerate() {
+                let bit = 1u8 << side;
+                if sides & bit == 0 {
+                    continue;
                 }
-            };
-            let (mut c, mut nsum) = (Vec4::ZERO, Vec3::ZERO);
-            if end == g + 1 {
-                let i = col[g].2;
-                let f = &frags[i as usize];
-                let w = f.mask.count_ones() as f32;
-                c = f.rgba * w;
-                nsum = nrm_of(i) * (f.rgba.w * w);
-            } else {
-                // Per-sample front-to-back compositing (ties in depth: lower triangle first).
-                transmit[..kk].fill(1.0);
-                for &(_, _, i) in &col[g..end] {
-                    let f = &frags[i as usize];
-                    let mut w = 0.0f32;
-                    let keep = 1.0 - f.rgba.w;
-                    let mut bits = f.mask;
-                    while bits != 0 {
-                        let b = bits.trailing_zeros() as usize;
-                        bits &= bits - 1;
-                        w += transmit[b];
-                        transmit[b] *= keep;
+                // The voxel's fragments seen from this side, by (depth front to back,
+                // triangle): the + camera sees high depths first.
+                voxel.clear();
+                if end == g + 1 {
+                    if frags[col[g].2 as usize].vis & bit != 0 {
+                        voxel.push(col[g]);
                     }
-                    c += f.rgba * w;
-                    nsum += nrm_of(i) * (f.rgba.w * w);
+                } else {
+                    voxel.extend(
+                        col[g..end]
+                            .iter()
+                            .filter(|e| frags[e.2 as usize].vis & bit != 0)
+                            .map(|&(key, tri, i)| {
+                                let key = if side == 0 { key ^ 0xffff_ffff } else { key };
+                                (key, tri, i)
+                            }),
+                    );
                 }
-            }
-            if c.w > 0.0 {
-                out.push(Vox {
-                    u: u as u16,
-                    s: slice as u16,
-                    rgba: (c * inv_samples).to_array(),
-                });
-                if normals {
-                    out_n.push((nsum * inv_samples).to_array());
+                let (mut c, mut nsum) = (Vec4::ZERO, Vec3::ZERO);
+                match voxel.len() {
+                    0 => continue,
+                    1 => {
+                        let i = voxel[0].2;
+                        let f = &frags[i as usize];
+                        let w = f.mask.count_ones() as f32;
+                        c = f.rgba * w;
+                        nsum = nrm_of(i, side) * (f.rgba.w * w);
+                    }
+                    _ => {
+                        sort_small(voxel);
+                        // Per-sample front-to-back compositing (ties in depth: lower
+                        // triangle first).
+                        transmit[..kk].fill(1.0);
+                        for &(_, _, i) in voxel.iter() {
+                            let f = &frags[i as usize];
+                            let mut w = 0.0f32;
+                            let keep = 1.0 - f.rgba.w;
+                            let mut bits = f.mask;
+                            while bits != 0 {
+                                let b = bits.trailing_zeros() as usize;
+                                bits &= bits - 1;
+                                w += transmit[b];
+                                transmit[b] *= keep;
+                            }
+                            c += f.rgba * w;
+                            nsum += nrm_of(i, side) * (f.rgba.w * w);
+                        }
+                    }
+                }
+                if c.w > 0.0 {
+                    vox.push(Vox {
+                        u: u as u16,
+                        s: slice as u16,
+                        rgba: (c * inv_samples).to_array(),
+                    });
+                    if normals {
+                        vox_n.push((nsum * inv_samples).to_array());
+                    }
                 }
             }
             g = end;
         }
     }
-    (out, out_n, count)
+    out
 }
 
-/// What every row of one direction's slice stack reads.
+/// What every row of one axis's two slice stacks reads.
 #[derive(Clone, Copy)]
 pub(crate) struct RowCtx<'a> {
     pub scene: &'a Scene,
     pub shader: &'a Shader<'a>,
     pub grid: &'a GridSpec,
+    /// The + direction of the axis.
     pub dir: Dir,
     /// Whether weighted normals are wanted.
     pub normals: bool,
-    /// The direction's triangle set-ups, sorted by first row.
+    /// Which directions this pass rasterizes (bit 0: +, bit 1: −).
+    pub sides: u8,
+    /// The axis's triangle set-ups, sorted by first row.
     pub setups: &'a [TriSetup],
     /// Per image row, the indices in `setups` of the triangles that touch it.
     pub bins: &'a [Vec<u32>],
 }
 
 /// A row rasterizer ([`raster_row`] for one `K`): row `j` of the context's direction.
-pub(crate) type RowFn = fn(&RowCtx<'_>, usize, &mut Scratch) -> RowOut;
+pub(crate) type RowFn = fn(&RowCtx<'_>, usize, &mut Scratch) -> [RowOut; 2];
 
 /// [`raster_row`] for `K`, compiled for the baseline instruction set.
-fn row_base<const K: usize>(ctx: &RowCtx<'_>, j: usize, scratch: &mut Scratch) -> RowOut {
+fn row_base<const K: usize>(ctx: &RowCtx<'_>, j: usize, scratch: &mut Scratch) -> [RowOut; 2] {
     raster_row::<K, false>(ctx, j, scratch)
 }
 
@@ -543,12 +587,12 @@ unsafe fn row_avx2_inner<const K: usize>(
     ctx: &RowCtx<'_>,
     j: usize,
     scratch: &mut Scratch,
-) -> RowOut {
+) -> [RowOut; 2] {
     raster_row::<K, true>(ctx, j, scratch)
 }
 
 #[cfg(target_arch = "x86_64")]
-fn row_avx2<const K: usize>(ctx: &RowCtx<'_>, j: usize, scratch: &mut Scratch) -> RowOut {
+fn row_avx2<const K: usize>(ctx: &RowCtx<'_>, j: usize, scratch: &mut Scratch) -> [RowOut; 2] {
     // SAFETY: only handed out by `row_fn` after the features were detected.
     unsafe { row_avx2_inner::<K>(ctx, j, scratch) }
 }

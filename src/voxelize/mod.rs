@@ -4,7 +4,9 @@
 //! Pipeline, one direction at a time (`+X, −X, +Y, −Y, +Z, −Z`):
 //! 1. [`slices`]: rasterize the scene into that direction's stack of slices (level 0),
 //!    kept **sparse** (the non-empty voxels of every image row); with [`Bake::Ao`],
-//!    multiply its colour by the voxels' ambient occlusion (`ao`);
+//!    multiply its colour by the voxels' ambient occlusion (`ao`). When many triangles
+//!    are double-sided, the two directions of an axis are rasterized in one pass (each
+//!    triangle covered and shaded once for both, [`slices::passes`]; same result);
 //! 2. [`mip`]: build that direction's MIP pyramid (composite along the view axis, average
 //!    across), level 1 straight from the sparse level 0;
 //! 3. [`combine`]: fold every coarser level into the combined volume as it is built
@@ -305,10 +307,11 @@ pub fn estimate_peak_bytes_sparse(
             let kept = 6 * vox + 2 * 8 * sparse;
             (kept + acc + pyr, kept + acc + output)
         }
-        // Six f16 pyramids (level 0 dense) + the sparse level 0 being converted.
+        // Six f16 pyramids (level 0 dense) + the sparse level 0 of the two directions
+        // of the axis being converted (a paired pass makes both at once).
         _ => {
             let nacc = 8 * all * normals as u64;
-            (48 * all + vox + nacc, 48 * all + nacc + output)
+            (48 * all + 2 * vox + nacc, 48 * all + nacc + output)
         }
     };
     building.max(finishing) + (64 << 20)
@@ -437,16 +440,20 @@ pub fn slice_stack(
 ) -> Result<SliceStack, VoxelizeError> {
     let (grid, _) = check(scene, opts)?;
     let shader = shade::Shader::new(scene);
+    let side = if dir.positive() { 1 } else { 2 };
     let mut s = slices::rasterize(
         &mut Default::default(),
         scene,
         &shader,
         &grid,
-        dir,
+        dir.axis(),
+        side,
         opts.supersample,
         opts.normals,
         &mut |_| {},
-    );
+    )
+    .pop()
+    .expect("one direction");
     if let Some(mut ao) = ao_baker(scene, &shader, &grid, opts) {
         ao.apply_sparse(&mut s);
     }
@@ -544,29 +551,43 @@ pub fn voxelize(
     let mut baker = ao_baker(scene, &shader, &grid, opts);
     times.bake += t.elapsed().as_secs_f64();
     let k = opts.supersample;
+    /// The directions of `axis` in `sides` (see [`slices::passes`]), + first.
     fn raster(
         bufs: &mut slices::SetupBufs,
         ctx: (&Scene, &shade::Shader, &GridSpec, u32, bool),
-        dir: Dir,
+        (axis, sides): (usize, u8),
         times: &mut StageTimes,
         baker: Option<&mut ao::AoBaker>,
         progress: &dyn Fn(Stage, f32),
-    ) -> slices::DirSlices {
+    ) -> Vec<slices::DirSlices> {
         let (scene, shader, grid, k, normals) = ctx;
         let t = Instant::now();
-        let d = dir.index() as f32;
-        let mut s = slices::rasterize(bufs, scene, shader, grid, dir, k, normals, &mut |x| {
-            progress(Stage::Rasterize, (d + x) / 6.0)
-        });
+        // Progress in directions done: this pass covers [d, d + n).
+        let (d, n) = (
+            (2 * axis + (sides == 2) as usize) as f32,
+            sides.count_ones() as f32,
+        );
+        let mut stacks = slices::rasterize(
+            bufs,
+            scene,
+            shader,
+            grid,
+            axis,
+            sides,
+            k,
+            normals,
+            &mut |x| progress(Stage::Rasterize, (d + n * x) / 6.0),
+        );
         times.rasterize += t.elapsed().as_secs_f64();
         if let Some(b) = baker {
             let t = Instant::now();
-            b.apply_sparse(&mut s);
+            stacks.iter_mut().for_each(|s| b.apply_sparse(s));
             times.bake += t.elapsed().as_secs_f64();
         }
-        s
+        stacks
     }
     let ctx = (scene, &shader, &grid, k, opts.normals);
+    let passes = slices::passes(scene);
     let mut bufs = slices::SetupBufs::default();
     let levels: Vec<Vec<u8>> = match &opts.combine {
         CombineFn::Preset(p) => {
@@ -577,23 +598,26 @@ pub fn voxelize(
             let mut acc = combine::Accum::new(*p, &coarse);
             nacc = opts.normals.then(|| toksvig::NormalAccum::new(&coarse));
             let mut zero = Vec::with_capacity(6);
-            for dir in Dir::ALL {
-                let s = raster(&mut bufs, ctx, dir, &mut times, baker.as_mut(), progress);
-                fragments += s.fragments;
-                let mut fold_secs = 0.0;
-                pyramid::<[f32; 4]>(&s, mips, &mut times.mip, |level, data| {
-                    if let Level::Dense(c, n) = data {
-                        let t = Instant::now();
-                        acc.fold(level, &c);
-                        if let (Some(na), Some(n)) = (nacc.as_mut(), n.as_ref()) {
-                            na.fold(level, n, &c);
+            for pass in (0..3).flat_map(|a| passes.iter().map(move |&p| (a, p))) {
+                let stacks = raster(&mut bufs, ctx, pass, &mut times, baker.as_mut(), progress);
+                for s in stacks {
+                    let dir = s.dir;
+                    fragments += s.fragments;
+                    let mut fold_secs = 0.0;
+                    pyramid::<[f32; 4]>(&s, mips, &mut times.mip, |level, data| {
+                        if let Level::Dense(c, n) = data {
+                            let t = Instant::now();
+                            acc.fold(level, &c);
+                            if let (Some(na), Some(n)) = (nacc.as_mut(), n.as_ref()) {
+                                na.fold(level, n, &c);
+                            }
+                            fold_secs += t.elapsed().as_secs_f64();
                         }
-                        fold_secs += t.elapsed().as_secs_f64();
-                    }
-                });
-                zero.push(s);
-                times.combine += fold_secs;
-                progress(Stage::Mip, (dir.index() + 1) as f32 / 6.0);
+                    });
+                    zero.push(s);
+                    times.combine += fold_secs;
+                    progress(Stage::Mip, (dir.index() + 1) as f32 / 6.0);
+                }
             }
             drop(std::mem::take(&mut bufs)); // before the level-0 combine's peak
             let t = Instant::now();
@@ -610,27 +634,30 @@ pub fn voxelize(
         }
         f => {
             let mut pyrs: Vec<Vec<Option<Grid3<[f16; 4]>>>> = Vec::with_capacity(6);
-            for dir in Dir::ALL {
-                // Stored in f16 (the arithmetic stays f32/f64).
-                let s = raster(&mut bufs, ctx, dir, &mut times, baker.as_mut(), progress);
-                fragments += s.fragments;
-                let mut levels = Vec::with_capacity(mips as usize);
-                pyramid::<[f16; 4]>(&s, mips, &mut times.mip, |level, data| match data {
-                    Level::Zero(s) => {
-                        if let Some(na) = nacc.as_mut() {
-                            na.fold_sparse(s);
+            for pass in (0..3).flat_map(|a| passes.iter().map(move |&p| (a, p))) {
+                let stacks = raster(&mut bufs, ctx, pass, &mut times, baker.as_mut(), progress);
+                for s in stacks {
+                    // Stored in f16 (the arithmetic stays f32/f64).
+                    let dir = s.dir;
+                    fragments += s.fragments;
+                    let mut levels = Vec::with_capacity(mips as usize);
+                    pyramid::<[f16; 4]>(&s, mips, &mut times.mip, |level, data| match data {
+                        Level::Zero(s) => {
+                            if let Some(na) = nacc.as_mut() {
+                                na.fold_sparse(s);
+                            }
+                            levels.push(Some(s.to_dense::<[f16; 4]>()));
                         }
-                        levels.push(Some(s.to_dense::<[f16; 4]>()));
-                    }
-                    Level::Dense(c, n) => {
-                        if let (Some(na), Some(n)) = (nacc.as_mut(), n.as_ref()) {
-                            na.fold(level, n, &c);
+                        Level::Dense(c, n) => {
+                            if let (Some(na), Some(n)) = (nacc.as_mut(), n.as_ref()) {
+                                na.fold(level, n, &c);
+                            }
+                            levels.push(Some(c));
                         }
-                        levels.push(Some(c));
-                    }
-                });
-                pyrs.push(levels);
-                progress(Stage::Mip, (dir.index() + 1) as f32 / 6.0);
+                    });
+                    pyrs.push(levels);
+                    progress(Stage::Mip, (dir.index() + 1) as f32 / 6.0);
+                }
             }
             drop(std::mem::take(&mut bufs));
             let t = Instant::now();

@@ -141,7 +141,11 @@ pub(crate) struct TriSetup {
     pub material: u32,
     /// Original vertex index of each slot.
     pub perm: [u8; 3],
+    /// Whether the + direction of the axis sees the triangle's back (the − direction then
+    /// sees its front, and the other way round).
     pub back: bool,
+    /// Which of the axis's two directions see it: bit 0 the + one, bit 1 the − one.
+    pub vis: u8,
     pub rows: [u32; 2],
     pub cols: [u32; 2],
 }
@@ -158,12 +162,25 @@ pub(crate) struct SetupBufs {
 /// A row's non-empty voxels, their weighted normals (when asked for) and its fragment count.
 pub(crate) type RowOut = (Vec<Vox>, Vec<[f32; 3]>, u64);
 
-fn setup(scene: &Scene, grid: &GridSpec, dir: Dir, k: i64, tri_index: usize) -> Option<TriSetup> {
+/// The set-up of triangle `tri_index` for both directions of the axis of `dir` (`dir` is
+/// the + one): the projection, coverage and depth do not depend on the side the camera
+/// is on, only which faces it sees and the compositing order do.
+/// `sides` says which directions are wanted (bits as [`TriSetup::vis`]).
+fn setup(
+    scene: &Scene,
+    grid: &GridSpec,
+    dir: Dir,
+    sides: u8,
+    k: i64,
+    tri_index: usize,
+) -> Option<TriSetup> {
     let tri = &scene.triangles[tri_index];
     let (a, [ua, va]) = (dir.axis(), dir.image_axes());
-    let facing = tri.cross()[a] * if dir.positive() { 1.0 } else { -1.0 };
+    let facing = tri.cross()[a];
     let double_sided = scene.materials[tri.material as usize].double_sided;
-    if !(facing > 0.0 || (double_sided && facing < 0.0)) {
+    let sees = |facing: f32| facing > 0.0 || (double_sided && facing < 0.0);
+    let vis = (sees(facing) as u8 | (sees(-facing) as u8) << 1) & sides;
+    if vis == 0 {
         return None;
     }
     let f = (2 * k * SUB) as f64;
@@ -228,6 +245,7 @@ fn setup(scene: &Scene, grid: &GridSpec, dir: Dir, k: i64, tri_index: usize) -> 
         material: tri.material,
         perm: perm.map(|x| x as u8),
         back: facing < 0.0,
+        vis,
         rows: rows.map(|x| x as u32),
         cols: cols.map(|x| x as u32),
     })
@@ -237,47 +255,62 @@ thread_local! {
     static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::new(Scratch::default());
 }
 
-/// Rasterizes the slice stack of direction `dir` into its sparse level 0.
-/// `progress` gets the fraction of rows done.
+/// Which rasterization passes an axis takes (bits as [`TriSetup::vis`]): one for both
+/// directions when many triangles are double-sided, else one per direction.
+///
+/// Double-sided triangles (foliage) are seen from both directions of an axis: one pass
+/// for the two sets them up, covers and shades them once (see [`super::fragments`]).
+/// A single-sided triangle is seen from one direction only, so there a pass per direction
+/// is faster (fewer fragments per row, each stack built and handed on before the next).
+/// The result is the same either way, bit for bit.
+pub(crate) fn passes(scene: &Scene) -> &'static [u8] {
+    let double = scene
+        .triangles
+        .iter()
+        .filter(|t| scene.materials[t.material as usize].double_sided)
+        .count();
+    if double >= scene.triangles.len().div_ceil(PAIRED_SHARE) {
+        &[3]
+    } else {
+        &[1, 2]
+    }
+}
+
+/// Rasterizes the slice stacks of the directions of `axis` (0 = x, 1 = y, 2 = z) in
+/// `sides` (bit 0: +, bit 1: −) into their sparse level 0, + first. `progress` gets the
+/// fraction of rows done.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn rasterize(
     bufs: &mut SetupBufs,
     scene: &Scene,
     shader: &Shader,
     grid: &GridSpec,
-    dir: Dir,
+    axis: usize,
+    sides: u8,
     k: u32,
     normals: bool,
     progress: &mut dyn FnMut(f32),
-) -> DirSlices {
-    rasterize_with(
-        bufs,
-        scene,
-        shader,
-        grid,
-        dir,
-        k,
-        normals,
-        simd_available(),
-        progress,
-    )
+) -> Vec<DirSlices> {
+    let args = (scene, shader, grid, axis, k, normals, simd_available());
+    rasterize_pass(bufs, args, sides, progress)
 }
 
-/// [`rasterize`] with the AVX2 build of the row loop (`simd`, when the CPU has it) or
+/// [`passes`] pairs the two directions when at least one triangle in this many is
+/// double-sided (a pass for both costs about 1.1 single ones on a single-sided mesh, and
+/// saves the second rasterization of every double-sided triangle).
+const PAIRED_SHARE: usize = 5;
+
+/// [`rasterize`] with the AVX2 build of the row loop (`args.6`, when the CPU has it) or
 /// the baseline one: the same result either way.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn rasterize_with(
+pub(crate) fn rasterize_pass(
     bufs: &mut SetupBufs,
-    scene: &Scene,
-    shader: &Shader,
-    grid: &GridSpec,
-    dir: Dir,
-    k: u32,
-    normals: bool,
-    simd: bool,
+    args: (&Scene, &Shader, &GridSpec, usize, u32, bool, bool),
+    sides: u8,
     progress: &mut dyn FnMut(f32),
-) -> DirSlices {
+) -> Vec<DirSlices> {
+    let (scene, shader, grid, axis, k, normals, simd) = args;
     let k = k.clamp(1, MAX_SUPERSAMPLE) as i64;
+    let dir = Dir::ALL[2 * axis];
     let va = dir.image_axes()[1];
     let dims = grid.dims.map(|d| d as usize);
     let nrows = dims[va];
@@ -285,7 +318,7 @@ pub(crate) fn rasterize_with(
     let unsorted = &mut bufs.unsorted;
     (0..scene.triangles.len())
         .into_par_iter()
-        .map(|i| setup(scene, grid, dir, k, i))
+        .map(|i| setup(scene, grid, dir, sides, k, i))
         .collect_into_vec(unsorted);
     // Sorted by first row (then triangle: a stable counting sort of the indices, then one
     // gather), so that a row's triangles lie close together in memory; the order of
@@ -325,11 +358,12 @@ pub(crate) fn rasterize_with(
         grid,
         dir,
         normals,
+        sides,
         setups,
         bins: &bins,
     };
     let chunk = nrows.div_ceil(8).max(8);
-    let mut outs: Vec<RowOut> = Vec::with_capacity(nrows);
+    let mut outs: Vec<[RowOut; 2]> = Vec::with_capacity(nrows);
     for chunk_start in (0..nrows).step_by(chunk) {
         outs.par_extend(
             (chunk_start..(chunk_start + chunk).min(nrows))
@@ -338,19 +372,32 @@ pub(crate) fn rasterize_with(
         );
         progress(((chunk_start + chunk).min(nrows)) as f32 / nrows.max(1) as f32);
     }
-    // Concatenated once at the exact size (growing the stack row by row would copy it
-    // again at every doubling).
-    let total: usize = outs.iter().map(|o| o.0.len()).sum();
+    (0..2)
+        .filter(|side| sides >> side & 1 == 1)
+        .map(|side| concat(Dir::ALL[2 * axis + side], dims, normals, &outs, side))
+        .collect()
+}
+
+/// One direction's rows (`side` of each pair) as one sparse stack, concatenated once at
+/// the exact size (growing the stack row by row would copy it again at every doubling).
+fn concat(
+    dir: Dir,
+    dims: [usize; 3],
+    normals: bool,
+    outs: &[[RowOut; 2]],
+    side: usize,
+) -> DirSlices {
+    let total: usize = outs.iter().map(|o| o[side].0.len()).sum();
     let mut vox = Vec::with_capacity(total);
     let mut nrm = normals.then(|| Vec::with_capacity(total));
-    let mut rows = Vec::with_capacity(nrows + 1);
+    let mut rows = Vec::with_capacity(outs.len() + 1);
     rows.push(0);
     let mut fragments = 0u64;
-    for (v, n, count) in outs {
+    for (v, n, count) in outs.iter().map(|o| &o[side]) {
         fragments += count;
-        vox.extend_from_slice(&v);
+        vox.extend_from_slice(v);
         if let Some(nrm) = nrm.as_mut() {
-            nrm.extend_from_slice(&n);
+            nrm.extend_from_slice(n);
         }
         rows.push(vox.len());
     }
@@ -435,7 +482,8 @@ mod tests {
     }
 
     /// The AVX2 build of the row loop gives the same voxels, bit for bit, as the
-    /// baseline build, for every direction and several supersampling factors.
+    /// baseline build, for every direction and several supersampling factors; and a pass
+    /// for both directions of an axis the same as a pass for each.
     #[test]
     fn simd_and_baseline_rows_agree_bit_for_bit() {
         if !simd_available() {
@@ -459,24 +507,24 @@ mod tests {
             (v, n, d.rows.clone(), d.fragments)
         };
         for k in [1, 3, 4, 8] {
-            for dir in Dir::ALL {
-                let run = |simd| {
+            for axis in 0..3 {
+                let run = |simd, sides| {
                     let mut bufs = SetupBufs::default();
-                    rasterize_with(
-                        &mut bufs,
-                        &s,
-                        &shader,
-                        &grid,
-                        dir,
-                        k,
-                        true,
-                        simd,
-                        &mut |_| {},
-                    )
+                    let args = (&s, &shader, &grid, axis, k, true, simd);
+                    rasterize_pass(&mut bufs, args, sides, &mut |_| {})
                 };
-                let (a, b) = (run(false), run(true));
-                assert!(a.fragments > 500, "{dir:?} K={k}: {}", a.fragments);
-                assert!(bits(&a) == bits(&b), "{dir:?} K={k}");
+                let (a, b) = (run(false, 3), run(true, 3));
+                for (a, b) in a.iter().zip(&b) {
+                    let dir = a.dir;
+                    assert!(a.fragments > 500, "{dir:?} K={k}: {}", a.fragments);
+                    assert!(bits(a) == bits(b), "{dir:?} K={k}");
+                }
+                // One pass for both directions = one pass each.
+                let one: Vec<_> = [1, 2].into_iter().flat_map(|s| run(true, s)).collect();
+                assert_eq!(one.len(), 2);
+                for (a, b) in one.iter().zip(&b) {
+                    assert!(a.dir == b.dir && bits(a) == bits(b), "{:?} K={k}", a.dir);
+                }
             }
         }
     }
