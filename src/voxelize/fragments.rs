@@ -457,10 +457,12 @@ fn raster_row<const K: usize, const AVX: bool>(
         }
     }
     let inv_samples = 1.0 / kk as f32;
-    let mut out: [RowOut; 2] = [
-        (Vec::new(), Vec::new(), seen[0]),
-        (Vec::new(), Vec::new(), seen[1]),
-    ];
+    // A direction has at most as many voxels as fragments: sized once, no regrowing.
+    let mut out: [RowOut; 2] = [0, 1].map(|side| {
+        let n = seen[side];
+        let n_nrm = if normals { n as usize } else { 0 };
+        (Vec::with_capacity(n as usize), Vec::with_capacity(n_nrm), n)
+    });
     let mut transmit = [1.0f32; 64];
     let nrm_of = |i: u32, side: usize| {
         if !normals {
