@@ -488,14 +488,21 @@ fn raster_row<const K: usize, const AVX: bool>(
                 if sides & bit == 0 {
                     continue;
                 }
-                // The voxel's fragments seen from this side, by (depth front to back,
-                // triangle): the + camera sees high depths first.
-                voxel.clear();
-                if end == g + 1 {
-                    if frags[col[g].2 as usize].vis & bit != 0 {
-                        voxel.push(col[g]);
+                // A fragment alone in its voxel (the common case): no compositing.
+                let single = |i: u32| {
+                    let f = &frags[i as usize];
+                    let w = f.mask.count_ones() as f32;
+                    (f.rgba * w, nrm_of(i, side) * (f.rgba.w * w))
+                };
+                let (c, nsum) = if end == g + 1 {
+                    if frags[col[g].2 as usize].vis & bit == 0 {
+                        continue;
                     }
+                    single(col[g].2)
                 } else {
+                    // The voxel's fragments seen from this side, by (depth front to back,
+                    // triangle): the + camera sees high depths first.
+                    voxel.clear();
                     voxel.extend(
                         col[g..end]
                             .iter()
@@ -505,38 +512,33 @@ fn raster_row<const K: usize, const AVX: bool>(
                                 (key, tri, i)
                             }),
                     );
-                }
-                let (mut c, mut nsum) = (Vec4::ZERO, Vec3::ZERO);
-                match voxel.len() {
-                    0 => continue,
-                    1 => {
-                        let i = voxel[0].2;
-                        let f = &frags[i as usize];
-                        let w = f.mask.count_ones() as f32;
-                        c = f.rgba * w;
-                        nsum = nrm_of(i, side) * (f.rgba.w * w);
-                    }
-                    _ => {
-                        sort_small(voxel);
-                        // Per-sample front-to-back compositing (ties in depth: lower
-                        // triangle first).
-                        transmit[..kk].fill(1.0);
-                        for &(_, _, i) in voxel.iter() {
-                            let f = &frags[i as usize];
-                            let mut w = 0.0f32;
-                            let keep = 1.0 - f.rgba.w;
-                            let mut bits = f.mask;
-                            while bits != 0 {
-                                let b = bits.trailing_zeros() as usize;
-                                bits &= bits - 1;
-                                w += transmit[b];
-                                transmit[b] *= keep;
+                    match voxel.len() {
+                        0 => continue,
+                        1 => single(voxel[0].2),
+                        _ => {
+                            sort_small(voxel);
+                            // Per-sample front-to-back compositing (ties in depth: lower
+                            // triangle first).
+                            let (mut c, mut nsum) = (Vec4::ZERO, Vec3::ZERO);
+                            transmit[..kk].fill(1.0);
+                            for &(_, _, i) in voxel.iter() {
+                                let f = &frags[i as usize];
+                                let mut w = 0.0f32;
+                                let keep = 1.0 - f.rgba.w;
+                                let mut bits = f.mask;
+                                while bits != 0 {
+                                    let b = bits.trailing_zeros() as usize;
+                                    bits &= bits - 1;
+                                    w += transmit[b];
+                                    transmit[b] *= keep;
+                                }
+                                c += f.rgba * w;
+                                nsum += nrm_of(i, side) * (f.rgba.w * w);
                             }
-                            c += f.rgba * w;
-                            nsum += nrm_of(i, side) * (f.rgba.w * w);
+                            (c, nsum)
                         }
                     }
-                }
+                };
                 if c.w > 0.0 {
                     vox.push(Vox {
                         u: u as u16,
