@@ -5,8 +5,8 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
-use crate::layout::{entry, shader, uniform};
-use crate::target::{COLOR_FORMAT, DEPTH_FORMAT};
+use crate::layout::{color_target, frame_layout, shader, Pipeline};
+use crate::target::COLOR_FORMAT;
 use crate::Gpu;
 
 /// Vertex index pairs of a prism's edges (0,1,2 bottom, 3,4,5 top).
@@ -46,58 +46,28 @@ impl LinePass {
                    return f.view_proj * vec4<f32>(p, 1.0);\n}\n\
                @fragment fn fs() -> @location(0) vec4<f32> { return f.color; }\n"],
         );
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("lines"),
-            entries: &[entry(
-                0,
-                wgpu::ShaderStages::VERTEX_FRAGMENT,
-                uniform(false),
-            )],
-        });
+        let layout = frame_layout(device, "lines");
         let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("lines"),
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
         let attrs = wgpu::vertex_attr_array![0 => Float32x3];
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("cell wireframe"),
-            layout: Some(&pl),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs"),
-                compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: 12,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &attrs,
-                })],
-            },
-            primitive: wgpu::PrimitiveState {
-                topology: wgpu::PrimitiveTopology::LineList,
-                ..Default::default()
-            },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(false),
-                depth_compare: Some(wgpu::CompareFunction::LessEqual),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: COLOR_FORMAT,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let buffers = [Some(wgpu::VertexBufferLayout {
+            array_stride: 12,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &attrs,
+        })];
+        let pipeline = Pipeline {
+            vs: "vs",
+            fs: "fs",
+            buffers: &buffers,
+            topology: wgpu::PrimitiveTopology::LineList,
+            depth: Some((false, wgpu::CompareFunction::LessEqual)),
+            target: color_target(COLOR_FORMAT, None),
+            ..Pipeline::new("cell wireframe", &pl, &module)
+        }
+        .build(device);
         LinePass { pipeline, layout }
     }
 

@@ -8,9 +8,9 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-use crate::layout::{entry, material_layout, shader, uniform};
-use crate::target::{COLOR_FORMAT, DEPTH_FORMAT};
-use crate::texture::{upload_rgba8_mips, TextureData};
+use crate::layout::{color_target, frame_layout, material_layout, shader, Pipeline};
+use crate::target::COLOR_FORMAT;
+use crate::texture::{repeat_sampler, upload_rgba8_mips, TextureData};
 use crate::{Gpu, ViewError};
 
 /// A vertex: world position, normal (any length; zero = unlit), uv, linear RGBA colour.
@@ -117,14 +117,7 @@ impl MeshPass {
                 include_str!("shaders/mesh.wgsl"),
             ],
         );
-        let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("mesh frame"),
-            entries: &[entry(
-                0,
-                wgpu::ShaderStages::VERTEX_FRAGMENT,
-                uniform(false),
-            )],
-        });
+        let frame_layout = frame_layout(device, "mesh frame");
         let material_layout = material_layout(device, "mesh material");
         let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("mesh"),
@@ -138,59 +131,28 @@ impl MeshPass {
         let attrs = wgpu::vertex_attr_array![
             0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4
         ];
-        let make = |label, fs_entry, color: bool| {
-            let targets = [Some(wgpu::ColorTargetState {
-                format: COLOR_FORMAT,
-                blend: None,
-                write_mask: wgpu::ColorWrites::ALL,
-            })];
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(&pl),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[Some(wgpu::VertexBufferLayout {
-                        array_stride: std::mem::size_of::<MeshVertex>() as u64,
-                        step_mode: wgpu::VertexStepMode::Vertex,
-                        attributes: &attrs,
-                    })],
+        let buffers = [Some(wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<MeshVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &attrs,
+        })];
+        let make = |label, fs, color: bool| {
+            Pipeline {
+                fs,
+                buffers: &buffers,
+                depth: Some((true, wgpu::CompareFunction::Less)),
+                target: if color {
+                    color_target(COLOR_FORMAT, None)
+                } else {
+                    None
                 },
-                primitive: wgpu::PrimitiveState {
-                    topology: wgpu::PrimitiveTopology::TriangleList,
-                    cull_mode: None,
-                    ..Default::default()
-                },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::Less),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some(fs_entry),
-                    compilation_options: Default::default(),
-                    targets: if color { &targets } else { &[] },
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
+                ..Pipeline::new(label, &pl, &module)
+            }
+            .build(device)
         };
         let pipeline = make("mesh", "fs_main", true);
         let shadow_pipeline = make("mesh shadow", "fs_shadow", false);
-        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("mesh texture"),
-            address_mode_u: wgpu::AddressMode::Repeat,
-            address_mode_v: wgpu::AddressMode::Repeat,
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            mipmap_filter: wgpu::MipmapFilterMode::Linear,
-            ..Default::default()
-        });
+        let sampler = repeat_sampler(device, "mesh texture");
         let white =
             upload_rgba8_mips(gpu, &TextureData::white(), "white").create_view(&Default::default());
         MeshPass {

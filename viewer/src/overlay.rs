@@ -5,7 +5,7 @@
 
 use font8x8::UnicodeFonts;
 
-use crate::layout::{entry, sampler, shader, texture, uniform};
+use crate::layout::{color_target, entry, sampler, shader, texture, uniform, Pipeline};
 use crate::Gpu;
 
 /// Rasterizes `text` (ASCII; other characters show as `?`; `\n` starts a line) into
@@ -90,32 +90,14 @@ impl Resolve {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let make = |entry_vs, entry_fs, blend| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("resolve"),
-                layout: Some(&pl),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some(entry_vs),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: Default::default(),
-                depth_stencil: None,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some(entry_fs),
-                    compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format,
-                        blend,
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
+        let make = |vs, fs, blend| {
+            Pipeline {
+                vs,
+                fs,
+                target: color_target(format, blend),
+                ..Pipeline::new("resolve", &pl, &module)
+            }
+            .build(device)
         };
         let pipeline = make("vs_full", "fs_resolve", None);
         let overlay = make(

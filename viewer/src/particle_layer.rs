@@ -7,6 +7,7 @@ use serde::Deserialize;
 use wgpu::util::DeviceExt;
 
 use crate::particles::{blackbody, noise, phase, ParticleKind, ParticleSystemDesc};
+use crate::texture::desc_2d;
 use crate::Gpu;
 
 /// Resolution of the particle layer relative to the frame (the paper's Figure 7).
@@ -170,20 +171,13 @@ fn texture_2d(
 ) -> wgpu::TextureView {
     let t = gpu.device.create_texture_with_data(
         &gpu.queue,
-        &wgpu::TextureDescriptor {
-            label: Some("particle LUT"),
-            size: wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
+        &desc_2d(
+            "particle LUT",
+            w,
+            h,
             format,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-            view_formats: &[],
-        },
+            wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        ),
         wgpu::util::TextureDataOrder::LayerMajor,
         data,
     );

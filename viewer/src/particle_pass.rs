@@ -16,11 +16,14 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-use crate::layout::{depth_texture, entry, sampler, shader, storage, texture, uniform};
+use crate::layout::{
+    color_target, depth_texture, entry, sampler, shader, storage, texture, uniform, Pipeline,
+};
 use crate::particle_layer::Bakes;
 pub use crate::particle_layer::{LayerResolution, MotionBlur, ParticleLayerDesc, ParticleNeeds};
 use crate::particles::{particles_at, BillboardMode, ParticleKind, ParticleSystemDesc};
 use crate::target::COLOR_FORMAT;
+use crate::texture::desc_2d;
 use crate::{Gpu, ViewCamera};
 
 #[repr(C)]
@@ -131,34 +134,13 @@ impl ParticlePass {
                 bind_group_layouts: &[Some(layout)],
                 immediate_size: 0,
             });
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(fs_entry),
-                layout: Some(&pl),
-                vertex: wgpu::VertexState {
-                    module,
-                    entry_point: Some(vs),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: wgpu::PrimitiveState {
-                    cull_mode: None,
-                    ..Default::default()
-                },
-                depth_stencil: None,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module,
-                    entry_point: Some(fs_entry),
-                    compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format,
-                        blend: Some(blend),
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
+            Pipeline {
+                vs,
+                fs: fs_entry,
+                target: color_target(format, Some(blend)),
+                ..Pipeline::new(fs_entry, &pl, module)
+            }
+            .build(device)
         };
         let add = wgpu::BlendComponent {
             src_factor: wgpu::BlendFactor::One,
@@ -250,22 +232,10 @@ impl ParticlePass {
     pub fn targets(&self, gpu: &Gpu, w: u32, h: u32, div: u32) -> LayerTargets {
         let (lw, lh) = (w.div_ceil(div).max(1), h.div_ceil(div).max(1));
         let make = |w, h, format, label| {
+            let usage =
+                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
             gpu.device
-                .create_texture(&wgpu::TextureDescriptor {
-                    label: Some(label),
-                    size: wgpu::Extent3d {
-                        width: w,
-                        height: h,
-                        depth_or_array_layers: 1,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format,
-                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                        | wgpu::TextureUsages::TEXTURE_BINDING,
-                    view_formats: &[],
-                })
+                .create_texture(&desc_2d(label, w, h, format, usage))
                 .create_view(&Default::default())
         };
         LayerTargets {

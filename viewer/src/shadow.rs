@@ -13,6 +13,7 @@ use glam::{Mat4, Vec3};
 
 use crate::layout::{comparison_sampler, depth_texture, entry};
 use crate::target::DEPTH_FORMAT;
+use crate::texture::desc_2d;
 use crate::{Gpu, ViewCamera};
 
 /// Side of the shadow map in texels.
@@ -43,20 +44,13 @@ pub struct ShadowMap {
 impl ShadowMap {
     /// A `size`² map (`size = 1`: the stand-in bound when a scene has no shadows).
     pub fn new(gpu: &Gpu, layout: &wgpu::BindGroupLayout, size: u32) -> ShadowMap {
-        let tex = gpu.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("shadow map"),
-            size: wgpu::Extent3d {
-                width: size,
-                height: size,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: DEPTH_FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
+        let tex = gpu.device.create_texture(&desc_2d(
+            "shadow map",
+            size,
+            size,
+            DEPTH_FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+        ));
         let view = tex.create_view(&Default::default());
         let sampler = gpu.device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("shadow compare"),

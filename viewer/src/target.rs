@@ -1,5 +1,6 @@
 //! The offscreen render target (Rgba16Float colour, Depth32Float) and its read-back.
 
+use crate::texture::desc_2d;
 use crate::{Gpu, ViewError};
 
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
@@ -23,22 +24,9 @@ pub struct Target {
 
 impl Target {
     pub fn new(gpu: &Gpu, width: u32, height: u32) -> Target {
-        let size = wgpu::Extent3d {
-            width,
-            height,
-            depth_or_array_layers: 1,
-        };
         let make = |format, usage, label| {
-            gpu.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size,
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage,
-                view_formats: &[],
-            })
+            gpu.device
+                .create_texture(&desc_2d(label, width, height, format, usage))
         };
         let color = make(
             COLOR_FORMAT,

@@ -21,8 +21,8 @@
 use billow_format::{ColourSpace, VolumeAsset};
 use bytemuck::{Pod, Zeroable};
 
-use crate::layout::{entry, sampler, shader, storage, texture, uniform};
-use crate::target::{COLOR_FORMAT, DEPTH_FORMAT};
+use crate::layout::{color_target, entry, sampler, shader, storage, texture, uniform, Pipeline};
+use crate::target::COLOR_FORMAT;
 use crate::{Gpu, ViewError};
 
 /// Most textures bound at once (the shaders switch over this many slots at most).
@@ -204,48 +204,22 @@ impl VolumePass {
             ],
             immediate_size: 0,
         });
-        let make = |label, fs_entry, target: Option<wgpu::ColorTargetState>, depth_write| {
-            let targets = [target];
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(&layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: wgpu::PrimitiveState {
-                    topology: wgpu::PrimitiveTopology::TriangleList,
-                    cull_mode: None,
-                    ..Default::default()
-                },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(depth_write),
-                    depth_compare: Some(wgpu::CompareFunction::Less),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some(fs_entry),
-                    compilation_options: Default::default(),
-                    targets: if targets[0].is_some() { &targets } else { &[] },
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
+        let make = |label, fs, target, depth_write| {
+            Pipeline {
+                fs,
+                depth: Some((depth_write, wgpu::CompareFunction::Less)),
+                target,
+                ..Pipeline::new(label, &layout, &module)
+            }
+            .build(device)
         };
         let pipeline = make(
             "volume slices",
             "fs_main",
-            Some(wgpu::ColorTargetState {
-                format: COLOR_FORMAT,
-                blend: Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
-                write_mask: wgpu::ColorWrites::ALL,
-            }),
+            color_target(
+                COLOR_FORMAT,
+                Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
+            ),
             false,
         );
         let shadow_pipeline = make("volume shadow slices", "fs_shadow", None, true);

@@ -25,10 +25,10 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Mat4;
 
-use crate::layout::{entry, material_layout, shader, uniform};
+use crate::layout::{frame_layout, material_layout, shader, Pipeline};
 use crate::mesh_pass::MeshFrame;
-use crate::target::{COLOR_FORMAT, DEPTH_FORMAT};
-use crate::texture::{upload_rgba8_mips, TextureData};
+use crate::target::COLOR_FORMAT;
+use crate::texture::{repeat_sampler, upload_rgba8_mips, TextureData};
 use crate::Gpu;
 
 mod upload;
@@ -136,14 +136,7 @@ impl CloudPass {
                 include_str!("../shaders/cloud.wgsl"),
             ],
         );
-        let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("cloud frame"),
-            entries: &[entry(
-                0,
-                wgpu::ShaderStages::VERTEX_FRAGMENT,
-                uniform(false),
-            )],
-        });
+        let frame_layout = frame_layout(device, "cloud frame");
         let draw_layout = material_layout(device, "cloud draw");
         let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("cloud"),
@@ -156,8 +149,20 @@ impl CloudPass {
         let iattrs = wgpu::vertex_attr_array![
             4 => Float32x4, 5 => Float32x4, 6 => Float32x4, 7 => Float32x4, 8 => Float32x4
         ];
+        let buffers = [
+            Some(wgpu::VertexBufferLayout {
+                array_stride: std::mem::size_of::<CloudVertex>() as u64,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &vattrs,
+            }),
+            Some(wgpu::VertexBufferLayout {
+                array_stride: std::mem::size_of::<CloudInstance>() as u64,
+                step_mode: wgpu::VertexStepMode::Instance,
+                attributes: &iattrs,
+            }),
+        ];
         let make = |kind: Kind| {
-            let (label, fs_entry, cull, blend, writes, depth_write, compare) = match kind {
+            let (label, fs, cull, blend, writes, depth_write, compare) = match kind {
                 Kind::Foliage => (
                     "cloud foliage",
                     "fs_foliage",
@@ -195,65 +200,24 @@ impl CloudPass {
                     wgpu::CompareFunction::Less,
                 ),
             };
-            let targets = [Some(wgpu::ColorTargetState {
-                format: COLOR_FORMAT,
-                blend,
-                write_mask: writes,
-            })];
-            let shadow = matches!(kind, Kind::Shadow);
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(&pl),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[
-                        Some(wgpu::VertexBufferLayout {
-                            array_stride: std::mem::size_of::<CloudVertex>() as u64,
-                            step_mode: wgpu::VertexStepMode::Vertex,
-                            attributes: &vattrs,
-                        }),
-                        Some(wgpu::VertexBufferLayout {
-                            array_stride: std::mem::size_of::<CloudInstance>() as u64,
-                            step_mode: wgpu::VertexStepMode::Instance,
-                            attributes: &iattrs,
-                        }),
-                    ],
+            Pipeline {
+                fs,
+                buffers: &buffers,
+                cull,
+                depth: Some((depth_write, compare)),
+                target: match kind {
+                    Kind::Shadow => None,
+                    _ => Some(wgpu::ColorTargetState {
+                        format: COLOR_FORMAT,
+                        blend,
+                        write_mask: writes,
+                    }),
                 },
-                primitive: wgpu::PrimitiveState {
-                    topology: wgpu::PrimitiveTopology::TriangleList,
-                    front_face: wgpu::FrontFace::Ccw,
-                    cull_mode: cull,
-                    ..Default::default()
-                },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(depth_write),
-                    depth_compare: Some(compare),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some(fs_entry),
-                    compilation_options: Default::default(),
-                    targets: if shadow { &[] } else { &targets },
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
+                ..Pipeline::new(label, &pl, &module)
+            }
+            .build(device)
         };
-        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("cloud texture"),
-            address_mode_u: wgpu::AddressMode::Repeat,
-            address_mode_v: wgpu::AddressMode::Repeat,
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            mipmap_filter: wgpu::MipmapFilterMode::Linear,
-            ..Default::default()
-        });
+        let sampler = repeat_sampler(device, "cloud texture");
         let white =
             upload_rgba8_mips(gpu, &TextureData::white(), "white").create_view(&Default::default());
         CloudPass {
