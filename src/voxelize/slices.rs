@@ -150,8 +150,8 @@ pub(crate) struct TriSetup {
     pub cols: [u32; 2],
 }
 
-/// The triangle set-up buffers of [`rasterize`], kept from one direction to the next so
-/// that the six directions write the same memory (≈ 200 bytes a triangle twice) instead of
+/// The triangle set-up buffers of [`rasterize`], kept from one pass to the next so
+/// that the passes write the same memory (≈ 200 bytes a triangle twice) instead of
 /// asking the system for fresh, zeroed pages each time. Contents do not carry over.
 #[derive(Default)]
 pub(crate) struct SetupBufs {
@@ -291,8 +291,10 @@ pub(crate) fn rasterize(
     normals: bool,
     progress: &mut dyn FnMut(f32),
 ) -> Vec<DirSlices> {
-    let args = (scene, shader, grid, axis, k, normals, simd_available());
-    rasterize_pass(bufs, args, sides, progress)
+    let simd = simd_available();
+    rasterize_with(
+        bufs, scene, shader, grid, axis, sides, k, normals, simd, progress,
+    )
 }
 
 /// [`passes`] pairs the two directions when at least one triangle in this many is
@@ -300,15 +302,21 @@ pub(crate) fn rasterize(
 /// saves the second rasterization of every double-sided triangle).
 const PAIRED_SHARE: usize = 5;
 
-/// [`rasterize`] with the AVX2 build of the row loop (`args.6`, when the CPU has it) or
+/// [`rasterize`] with the AVX2 build of the row loop (`simd`, when the CPU has it) or
 /// the baseline one: the same result either way.
-pub(crate) fn rasterize_pass(
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn rasterize_with(
     bufs: &mut SetupBufs,
-    args: (&Scene, &Shader, &GridSpec, usize, u32, bool, bool),
+    scene: &Scene,
+    shader: &Shader,
+    grid: &GridSpec,
+    axis: usize,
     sides: u8,
+    k: u32,
+    normals: bool,
+    simd: bool,
     progress: &mut dyn FnMut(f32),
 ) -> Vec<DirSlices> {
-    let (scene, shader, grid, axis, k, normals, simd) = args;
     let k = k.clamp(1, MAX_SUPERSAMPLE) as i64;
     let dir = Dir::ALL[2 * axis];
     let va = dir.image_axes()[1];
@@ -510,10 +518,21 @@ mod tests {
             for axis in 0..3 {
                 let run = |simd, sides| {
                     let mut bufs = SetupBufs::default();
-                    let args = (&s, &shader, &grid, axis, k, true, simd);
-                    rasterize_pass(&mut bufs, args, sides, &mut |_| {})
+                    rasterize_with(
+                        &mut bufs,
+                        &s,
+                        &shader,
+                        &grid,
+                        axis,
+                        sides,
+                        k,
+                        true,
+                        simd,
+                        &mut |_| {},
+                    )
                 };
                 let (a, b) = (run(false, 3), run(true, 3));
+                assert!(a.len() == 2 && b.len() == 2, "axis {axis} K={k}");
                 for (a, b) in a.iter().zip(&b) {
                     let dir = a.dir;
                     assert!(a.fragments > 500, "{dir:?} K={k}: {}", a.fragments);
