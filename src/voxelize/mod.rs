@@ -564,7 +564,7 @@ pub fn voxelize(
         let t = Instant::now();
         // Progress in directions done: this pass covers [d, d + n).
         let (d, n) = (
-            (2 * axis + (sides == 2) as usize) as f32,
+            (2 * axis) as f32 + sides.trailing_zeros() as f32,
             sides.count_ones() as f32,
         );
         let mut stacks = slices::rasterize(
@@ -587,7 +587,11 @@ pub fn voxelize(
         stacks
     }
     let ctx = (scene, &shader, &grid, k, opts.normals);
-    let passes = slices::passes(scene);
+    // (axis, sides) in the order the directions are combined: +X, −X, +Y, …
+    let sides = slices::passes(scene);
+    let passes: Vec<(usize, u8)> = (0..3)
+        .flat_map(|a| sides.iter().map(move |&p| (a, p)))
+        .collect();
     let mut bufs = slices::SetupBufs::default();
     let levels: Vec<Vec<u8>> = match &opts.combine {
         CombineFn::Preset(p) => {
@@ -598,7 +602,7 @@ pub fn voxelize(
             let mut acc = combine::Accum::new(*p, &coarse);
             nacc = opts.normals.then(|| toksvig::NormalAccum::new(&coarse));
             let mut zero = Vec::with_capacity(6);
-            for pass in (0..3).flat_map(|a| passes.iter().map(move |&p| (a, p))) {
+            for &pass in &passes {
                 let stacks = raster(&mut bufs, ctx, pass, &mut times, baker.as_mut(), progress);
                 for s in stacks {
                     let dir = s.dir;
@@ -634,7 +638,7 @@ pub fn voxelize(
         }
         f => {
             let mut pyrs: Vec<Vec<Option<Grid3<[f16; 4]>>>> = Vec::with_capacity(6);
-            for pass in (0..3).flat_map(|a| passes.iter().map(move |&p| (a, p))) {
+            for &pass in &passes {
                 let stacks = raster(&mut bufs, ctx, pass, &mut times, baker.as_mut(), progress);
                 for s in stacks {
                     // Stored in f16 (the arithmetic stays f32/f64).
