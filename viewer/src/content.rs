@@ -41,44 +41,25 @@ pub struct Needs {
 /// `particles` (+ `motion-blur`, `shimmer` when asked for) and `composite` only with
 /// particles, then `resolve`.
 pub fn pass_list(n: Needs) -> Vec<&'static str> {
-    let mut p = Vec::new();
     let pn = n.particles;
-    if pn.any {
-        p.push("bake:detail-noise");
-    }
-    if pn.scattering {
-        p.push("bake:phase-lut");
-    }
-    if pn.fire {
-        p.push("bake:blackbody-lut");
-    }
-    if n.animated {
-        p.push("animate:cells");
-    }
-    if n.shadows && (n.meshes || n.clouds || n.volumes) {
-        p.push("shadow");
-    }
-    if n.meshes {
-        p.push("mesh");
-    }
-    if n.clouds {
-        p.push("cloud");
-    }
-    if n.volumes {
-        p.push("volume");
-    }
-    if pn.any {
-        p.push("particles");
-        if pn.motion_blur {
-            p.push("motion-blur");
-        }
-        if pn.shimmer {
-            p.push("shimmer");
-        }
-        p.push("composite");
-    }
-    p.push("resolve");
-    p
+    [
+        (pn.any, "bake:detail-noise"),
+        (pn.scattering, "bake:phase-lut"),
+        (pn.fire, "bake:blackbody-lut"),
+        (n.animated, "animate:cells"),
+        (n.shadows && (n.meshes || n.clouds || n.volumes), "shadow"),
+        (n.meshes, "mesh"),
+        (n.clouds, "cloud"),
+        (n.volumes, "volume"),
+        (pn.any, "particles"),
+        (pn.any && pn.motion_blur, "motion-blur"),
+        (pn.any && pn.shimmer, "shimmer"),
+        (pn.any, "composite"),
+        (true, "resolve"),
+    ]
+    .into_iter()
+    .filter_map(|(on, pass)| on.then_some(pass))
+    .collect()
 }
 
 /// A volume asset, its instances and its cell animation.
