@@ -21,6 +21,10 @@ use crate::texture::{
 pub(crate) struct Shader<'a> {
     materials: &'a [Material],
     textures: &'a [Texture],
+    /// Per texture, its alpha bytes alone when a `Mask` material uses it: the alpha test
+    /// reads a quarter of the memory the RGBA texels take (the test is per coverage
+    /// sample, and its texel fetches are what it waits on).
+    alphas: Vec<Option<Vec<u8>>>,
     /// sRGB byte → linear ([`srgb_to_linear_lut`], fetched once).
     lut: &'static [f32; 256],
 }
@@ -62,9 +66,19 @@ pub(crate) fn validate_scene(scene: &Scene) -> Result<(), String> {
 impl<'a> Shader<'a> {
     /// The scene must have passed [`validate_scene`].
     pub(crate) fn new(scene: &'a Scene) -> Self {
+        let masked = |t: usize| {
+            scene.materials.iter().any(|m| {
+                matches!(m.alpha_mode, AlphaMode::Mask { .. })
+                    && m.base_color_texture == Some(t as u32)
+            })
+        };
+        let alphas = (0..scene.textures.len())
+            .map(|t| masked(t).then(|| scene.textures[t].texels.iter().map(|p| p[3]).collect()))
+            .collect();
         Shader {
             materials: &scene.materials,
             textures: &scene.textures,
+            alphas,
             lut: srgb_to_linear_lut(),
         }
     }
@@ -105,7 +119,11 @@ impl<'a> Shader<'a> {
         let cw = m.base_color_factor.w * vertex_alpha;
         match m.base_color_texture {
             Some(t) => {
-                let alpha = Taps::alpha_only(&self.textures[t as usize], uv);
+                let (tex, t) = (&self.textures[t as usize], t as usize);
+                let alpha = match &self.alphas[t] {
+                    Some(a) => Taps::alpha_only(tex, |i| a[i], uv),
+                    None => Taps::alpha_only(tex, |i| tex.texels[i][3], uv),
+                };
                 cw * alpha.clamp(0.0, 1.0) >= cutoff
             }
             None => cw >= cutoff,
@@ -209,9 +227,10 @@ impl Taps {
         }
     }
 
-    /// [`Taps::new`] followed by [`Taps::alpha`] (same value), reading only the alpha bytes.
+    /// [`Taps::new`] followed by [`Taps::alpha`] (same value), reading only the alpha bytes
+    /// (`alpha(i)` is texel `i`'s).
     #[inline]
-    fn alpha_only(t: &Texture, uv: Vec2) -> f32 {
+    fn alpha_only(t: &Texture, alpha: impl Fn(usize) -> u8, uv: Vec2) -> f32 {
         let x = finite_or_zero(uv.x) as f64 * t.width as f64 - 0.5;
         let y = finite_or_zero(uv.y) as f64 * t.height as f64 - 0.5;
         let (x0, y0) = (floor(x), floor(y));
@@ -226,7 +245,7 @@ impl Taps {
             wrap(y0.saturating_add(1), t.height, t.wrap_v),
         );
         let w = t.width as usize;
-        let at = |x: usize, y: usize| ALPHA[t.texels[y * w + x][3] as usize];
+        let at = |x: usize, y: usize| ALPHA[alpha(y * w + x) as usize];
         let mut alpha = 0.0f32;
         alpha += at(xa, ya) * ((1.0 - fx) * (1.0 - fy));
         alpha += at(xb, ya) * (fx * (1.0 - fy));
@@ -313,7 +332,13 @@ mod tests {
                     "{uv}"
                 );
                 assert_eq!(taps.alpha().clamp(0.0, 1.0).to_bits(), want.w.to_bits());
-                assert_eq!(Taps::alpha_only(&t, uv).to_bits(), taps.alpha().to_bits());
+                let plane: Vec<u8> = t.texels.iter().map(|p| p[3]).collect();
+                for a in [
+                    Taps::alpha_only(&t, |i| t.texels[i][3], uv),
+                    Taps::alpha_only(&t, |i| plane[i], uv),
+                ] {
+                    assert_eq!(a.to_bits(), taps.alpha().to_bits());
+                }
             }
         }
     }
