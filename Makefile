@@ -162,7 +162,7 @@ bench: build
 	cc -O3 -march=native -o $(BENCH_DIR)/raster_floor $(BENCH_SRC)/raster_floor.c
 	python3 benches/voxelize_bench.py --billow $(BILLOW) --floor $(BENCH_DIR)/raster_floor \
 		--mesh $(BENCH_DIR)/tree.obj --res "$(BENCH_RES)" --runs $(BENCH_RUNS) \
-		--notes benches/voxelize_bench_notes.md --out docs/benchmarks.md
+		--foliage $(SAMPLE) --notes benches/voxelize_bench_notes.md --out docs/benchmarks.md
 
 ## Benchmark: `billow bbcloud` on the oak (N = 500, ε = 0.04, defaults and a few options),
 ## medians of BBCLOUD_RUNS runs: wall and CPU time, billboards and atlas fill per LOD, stage
