@@ -119,8 +119,8 @@ impl<'a> Shader<'a> {
         let cw = m.base_color_factor.w * vertex_alpha;
         match m.base_color_texture {
             Some(t) => {
-                let (tex, t) = (&self.textures[t as usize], t as usize);
-                let alpha = match &self.alphas[t] {
+                let tex = &self.textures[t as usize];
+                let alpha = match &self.alphas[t as usize] {
                     Some(a) => Taps::alpha_only(tex, |i| a[i], uv),
                     None => Taps::alpha_only(tex, |i| tex.texels[i][3], uv),
                 };
