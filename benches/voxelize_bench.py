@@ -109,6 +109,11 @@ def main():
     load_after = os.getloadavg()
 
     gib = lambda b: f"{b / 2**30:.2f} GiB" if b is not None else "—"
+
+    def against_floor(x):
+        """The cells `floor s | billow s | ratio | rasterize s | fragments | voxels |`."""
+        return (f"{x['floor']:.2f} | {x['billow']:.2f} | **{x['billow'] / x['floor']:.1f}×** "
+                f"| {x['stages'].get('rasterize', float('nan')):.2f} | {x['fragments']:,} | {x['voxels']:,} |")
     lines = [
         "# Benchmarks: `billow voxelize` vs. the raster floor",
         "",
@@ -152,9 +157,7 @@ def main():
                   "| K | raster_floor s | billow s | ratio | rasterize s | fragments | non-empty voxels |",
                   "|---|---|---|---|---|---|---|"]
         for x in sweep:
-            lines.append(f"| {x['supersample']} | {x['floor']:.2f} | {x['billow']:.2f} "
-                         f"| **{x['billow'] / x['floor']:.1f}×** | {x['stages'].get('rasterize', float('nan')):.2f} "
-                         f"| {x['fragments']:,} | {x['voxels']:,} |")
+            lines.append(f"| {x['supersample']} | {against_floor(x)}")
         lines.append("")
     # The budget: what the target leaves once everything but rasterizing is paid for.
     for x in rows:
@@ -162,7 +165,7 @@ def main():
             rest = sum(v for k, v in x["stages"].items() if k not in ("rasterize", "total"))
             budget = 2 * x["floor"]
             lines += [f"**The budget at {x['res']}³:** the target allows {budget:.2f} s (2 × the floor). "
-                      f"billow's stages other than rasterizing (import, MIP, combine, quantize, write) take "
+                      f"billow's stages other than rasterizing (import, bake, MIP, combine, quantize, write) take "
                       f"{rest:.2f} s, {100 * rest / budget:.0f} % of that budget, before a single fragment is made; "
                       f"rasterizing takes {x['stages'].get('rasterize', float('nan')):.2f} s.", ""]
     if foliage:
@@ -173,8 +176,7 @@ def main():
                   "own opaque test texture, so its alpha test never discards):", "",
                   "| mesh | dims | raster_floor s | billow s | ratio | rasterize s | fragments | non-empty voxels |",
                   "|---|---|---|---|---|---|---|---|",
-                  f"| {os.path.splitext(os.path.basename(a.foliage))[0]} | {d} | {x['floor']:.2f} | {x['billow']:.2f} | **{x['billow'] / x['floor']:.1f}×** "
-                  f"| {x['stages'].get('rasterize', float('nan')):.2f} | {x['fragments']:,} | {x['voxels']:,} |", ""]
+                  f"| {os.path.splitext(os.path.basename(a.foliage))[0]} | {d} | {against_floor(x)}", ""]
     if a.notes:
         with open(a.notes) as f:
             lines.append(f.read().rstrip())
