@@ -388,6 +388,8 @@ pub(crate) fn rasterize_with(
 
 /// One direction's rows (`side` of each pair) as one sparse stack, concatenated once at
 /// the exact size (growing the stack row by row would copy it again at every doubling).
+/// The rows are copied in parallel, each into its own range (the copy, and the page
+/// faults of the fresh stack, would otherwise run on one thread).
 fn concat(
     dir: Dir,
     dims: [usize; 3],
@@ -395,20 +397,16 @@ fn concat(
     outs: &[[RowOut; 2]],
     side: usize,
 ) -> DirSlices {
-    let total: usize = outs.iter().map(|o| o[side].0.len()).sum();
-    let mut vox = Vec::with_capacity(total);
-    let mut nrm = normals.then(|| Vec::with_capacity(total));
     let mut rows = Vec::with_capacity(outs.len() + 1);
     rows.push(0);
     let mut fragments = 0u64;
-    for (v, n, count) in outs.iter().map(|o| &o[side]) {
+    for (v, _, count) in outs.iter().map(|o| &o[side]) {
         fragments += count;
-        vox.extend_from_slice(v);
-        if let Some(nrm) = nrm.as_mut() {
-            nrm.extend_from_slice(n);
-        }
-        rows.push(vox.len());
+        rows.push(rows.last().expect("starts with 0") + v.len());
     }
+    let total = *rows.last().expect("starts with 0");
+    let vox = gather(total, outs, |o| &o[side].0);
+    let nrm = normals.then(|| gather(total, outs, |o| &o[side].1));
     DirSlices {
         dir,
         dims,
@@ -417,6 +415,34 @@ fn concat(
         nrm,
         fragments,
     }
+}
+
+/// The slices `part(o)` of every `o` in `outs`, one after another (`total` elements in
+/// all), copied in parallel.
+fn gather<T: Copy + Send + Sync>(
+    total: usize,
+    outs: &[[RowOut; 2]],
+    part: impl Fn(&[RowOut; 2]) -> &Vec<T> + Sync,
+) -> Vec<T> {
+    let mut all = Vec::with_capacity(total);
+    let mut rest = &mut all.spare_capacity_mut()[..total];
+    let mut ranges = Vec::with_capacity(outs.len());
+    for o in outs {
+        let (head, tail) = rest.split_at_mut(part(o).len());
+        ranges.push(head);
+        rest = tail;
+    }
+    ranges
+        .into_par_iter()
+        .zip(outs)
+        .with_min_len(4)
+        .for_each(|(dst, o)| {
+            dst.write_copy_of_slice(part(o));
+        });
+    // SAFETY: the ranges cover `..total` exactly (their lengths sum to `total`) and every
+    // one was written just above.
+    unsafe { all.set_len(total) };
+    all
 }
 
 #[cfg(test)]
