@@ -298,6 +298,23 @@ pub(crate) fn combine_level<T: Texel>(f: &(dyn Combine + Sync), dirs: [&Grid3<T>
     out
 }
 
+/// How many voxels ahead [`combine_level0`] asks for the scattered reads of a plane.
+const PREFETCH: usize = 16;
+
+/// A hint that `x` will be read soon (no effect on the result).
+#[inline(always)]
+fn prefetch<T>(x: &T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch never faults and does not change memory; SSE is baseline on
+    // x86_64.
+    unsafe {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        _mm_prefetch::<_MM_HINT_T0>((x as *const T).cast());
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = x;
+}
+
 /// Level 0 of a preset combination, straight from the six directions' sparse level 0
 /// (in [`super::Dir::ALL`] order), one z plane at a time: each plane's voxels of the six
 /// directions are folded into a small plane-sized accumulator (in direction order, as
@@ -384,7 +401,16 @@ pub(crate) fn combine_level0(
                     }
                 }
                 Some((start, list)) => {
-                    for &(i, k) in &list[start[z]..start[z + 1]] {
+                    // The plane's voxels lie scattered over the whole stack (one per
+                    // column at most): their reads are issued ahead of their use.
+                    let run = &list[start[z]..start[z + 1]];
+                    for (n, &(i, k)) in run.iter().enumerate() {
+                        if let Some(&(_, ahead)) = run.get(n + PREFETCH) {
+                            prefetch(&s.vox[ahead as usize]);
+                            if let Some(nrm) = s.nrm.as_ref() {
+                                prefetch(&nrm[ahead as usize]);
+                            }
+                        }
                         fold(i as usize, k as usize);
                     }
                 }
