@@ -133,12 +133,13 @@ pub(crate) fn downsample_with<T: Texel, A: Texel>(
 ) -> Grid3<T> {
     let dims = src.dims;
     let nd = dims.map(|d| (d >> 1).max(1));
-    let mut axis_taps = [taps(dims[0]), taps(dims[1]), taps(dims[2])];
     let a = view.axis();
-    // Front-to-back order along the view axis: the camera on the + side sees high indices first.
-    if view.positive() {
-        axis_taps[a].iter_mut().for_each(|t| t.reverse());
-    }
+    // Per axis, the children of every parent as offsets into `src.data`; front to back
+    // along the view axis: the camera on the + side sees high indices first.
+    let strides = [1, dims[0], dims[0] * dims[1]];
+    let axis_taps: [FlatTaps; 3] = std::array::from_fn(|ax| {
+        FlatTaps::new(&taps(dims[ax]), strides[ax], ax == a && view.positive())
+    });
     let ratio = |ax: usize| dims[ax] as f64 / nd[ax] as f64;
     let across: Vec<usize> = (0..3).filter(|&x| x != a).collect();
     let norm = 1.0 / (ratio(across[0]) * ratio(across[1]));
@@ -151,6 +152,7 @@ pub(crate) fn downsample_with<T: Texel, A: Texel>(
     let (ty, tz) = (taps(dims[1]), taps(dims[2]));
     let mut out = Grid3::<T>::new(nd);
     let slice_len = nd[0] * nd[1];
+    let (data, alphas) = (&src.data, &alpha_src.data);
     out.data
         .par_chunks_mut(slice_len)
         .enumerate()
@@ -165,21 +167,18 @@ pub(crate) fn downsample_with<T: Texel, A: Texel>(
                 for x in 0..nd[0] {
                     let p = [x, y, z];
                     let mut acc = [0.0f64; 4];
-                    let tu = &axis_taps[across[0]][p[across[0]]];
-                    let tv = &axis_taps[across[1]][p[across[1]]];
-                    let tw = &axis_taps[a][p[a]];
-                    for &(cu, wu) in tu {
-                        for &(cv, wv) in tv {
+                    let tu = axis_taps[across[0]].of(p[across[0]]);
+                    let tv = axis_taps[across[1]].of(p[across[1]]);
+                    let tw = axis_taps[a].of(p[a]);
+                    for &(ou, wu) in tu {
+                        for &(ov, wv) in tv {
                             // Composite the column of children along the view axis, front first.
                             let mut col = [0.0f64; 4];
                             let mut transmit = 1.0f64;
-                            for &(cw, f) in tw {
-                                let mut c = [0usize; 3];
-                                c[across[0]] = cu;
-                                c[across[1]] = cv;
-                                c[a] = cw;
-                                let v = src.get(c);
-                                let alpha = alpha_src.get(c)[3] as f64;
+                            for &(ow, f) in tw {
+                                let i = ou + ov + ow;
+                                let v = data[i].load();
+                                let alpha = alphas[i].load()[3] as f64;
                                 let s = partial_scale(alpha, f as f64);
                                 for k in 0..4 {
                                     col[k] += transmit * s * v[k] as f64;
@@ -197,6 +196,34 @@ pub(crate) fn downsample_with<T: Texel, A: Texel>(
             }
         });
     out
+}
+
+/// [`Taps`] of one axis flattened for the filter loop: per parent, its children as offsets
+/// into the source grid's data (child index × the axis's stride) with their fractions.
+struct FlatTaps {
+    start: Vec<usize>,
+    taps: Vec<(usize, f32)>,
+}
+
+impl FlatTaps {
+    fn new(t: &Taps, stride: usize, reverse: bool) -> Self {
+        let mut start = Vec::with_capacity(t.len() + 1);
+        let mut taps = Vec::new();
+        start.push(0);
+        for list in t {
+            let from = taps.len();
+            taps.extend(list.iter().map(|&(c, f)| (c * stride, f)));
+            if reverse {
+                taps[from..].reverse();
+            }
+            start.push(taps.len());
+        }
+        FlatTaps { start, taps }
+    }
+    #[inline]
+    fn of(&self, parent: usize) -> &[(usize, f32)] {
+        &self.taps[self.start[parent]..self.start[parent + 1]]
+    }
 }
 
 /// One MIP step of a premultiplied RGBA direction volume (see the module docs).
