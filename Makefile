@@ -155,7 +155,7 @@ bench-particles: build
 BENCH_SRC  ?= /work/shared/bench
 BENCH_DIR  ?= $(OUT)/bench
 BENCH_RES  ?= 128 256 512
-BENCH_RUNS ?= 3
+BENCH_RUNS ?= 5
 bench: build
 	@mkdir -p $(BENCH_DIR)
 	python3 $(BENCH_SRC)/gen_tree.py $(BENCH_DIR)/tree
