@@ -404,9 +404,8 @@ fn concat(
         fragments += count;
         rows.push(rows.last().expect("starts with 0") + v.len());
     }
-    let total = *rows.last().expect("starts with 0");
-    let vox = gather(total, outs, |o| &o[side].0);
-    let nrm = normals.then(|| gather(total, outs, |o| &o[side].1));
+    let vox = gather(outs, |o| &o[side].0);
+    let nrm = normals.then(|| gather(outs, |o| &o[side].1));
     DirSlices {
         dir,
         dims,
@@ -417,13 +416,12 @@ fn concat(
     }
 }
 
-/// The slices `part(o)` of every `o` in `outs`, one after another (`total` elements in
-/// all), copied in parallel.
+/// The slices `part(o)` of every `o` in `outs`, one after another, copied in parallel.
 fn gather<T: Copy + Send + Sync>(
-    total: usize,
     outs: &[[RowOut; 2]],
     part: impl Fn(&[RowOut; 2]) -> &Vec<T> + Sync,
 ) -> Vec<T> {
+    let total = outs.iter().map(|o| part(o).len()).sum();
     let mut all = Vec::with_capacity(total);
     let mut rest = &mut all.spare_capacity_mut()[..total];
     let mut ranges = Vec::with_capacity(outs.len());
@@ -439,8 +437,8 @@ fn gather<T: Copy + Send + Sync>(
         .for_each(|(dst, o)| {
             dst.write_copy_of_slice(part(o));
         });
-    // SAFETY: the ranges cover `..total` exactly (their lengths sum to `total`) and every
-    // one was written just above.
+    // SAFETY: the ranges cover `..total` exactly (`total` is the sum of their lengths)
+    // and every one was written just above.
     unsafe { all.set_len(total) };
     all
 }
