@@ -381,6 +381,7 @@ pub(crate) fn combine_level0(
     let work = |(acc, nacc, list): &mut Bufs, z: usize, o: &mut [u8], mut on: Option<&mut [u8]>| {
         list.clear();
         for (s, table) in dirs.iter().zip(&by_plane) {
+            let nrm = s.nrm.as_deref();
             let mut fold = |i: usize, k: usize| {
                 let v = &s.vox[k];
                 let a = &mut acc[i * w..i * w + w];
@@ -388,7 +389,7 @@ pub(crate) fn combine_level0(
                     list.push(i as u32);
                 }
                 Accum::fold_one(preset, a, v.rgba);
-                if let Some(n) = s.nrm.as_ref() {
+                if let Some(n) = nrm {
                     let (n, a) = (n[k], &mut nacc[i]);
                     *a = [a[0] + n[0], a[1] + n[1], a[2] + n[2], a[3] + v.rgba[3]];
                 }
@@ -407,8 +408,8 @@ pub(crate) fn combine_level0(
                     for (n, &(i, k)) in run.iter().enumerate() {
                         if let Some(&(_, ahead)) = run.get(n + PREFETCH) {
                             prefetch(&s.vox[ahead as usize]);
-                            if let Some(nrm) = s.nrm.as_ref() {
-                                prefetch(&nrm[ahead as usize]);
+                            if let Some(n) = nrm {
+                                prefetch(&n[ahead as usize]);
                             }
                         }
                         fold(i as usize, k as usize);

@@ -149,7 +149,6 @@ pub(crate) fn downsample_with<T: Texel, A: Texel>(
         .par_chunks(dims[0])
         .map(|row| row.iter().any(|v| v.load() != [0.0; 4]))
         .collect();
-    let (ty, tz) = (taps(dims[1]), taps(dims[2]));
     let mut out = Grid3::<T>::new(nd);
     let slice_len = nd[0] * nd[1];
     let (data, alphas) = (&src.data, &alpha_src.data);
@@ -158,9 +157,11 @@ pub(crate) fn downsample_with<T: Texel, A: Texel>(
         .enumerate()
         .for_each(|(z, slice)| {
             for y in 0..nd[1] {
-                let any = ty[y]
+                // A child row's y and z offsets add up to its first voxel's offset.
+                let (ty, tz) = (axis_taps[1].of(y), axis_taps[2].of(z));
+                let any = ty
                     .iter()
-                    .any(|&(cy, _)| tz[z].iter().any(|&(cz, _)| occupied[cy + dims[1] * cz]));
+                    .any(|&(oy, _)| tz.iter().any(|&(oz, _)| occupied[(oy + oz) / dims[0]]));
                 if !any {
                     continue;
                 }
