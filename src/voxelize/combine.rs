@@ -405,8 +405,8 @@ pub(crate) fn combine_level0(
                     // The plane's voxels lie scattered over the whole stack (one per
                     // column at most): their reads are issued ahead of their use.
                     let run = &list[start[z]..start[z + 1]];
-                    for (n, &(i, k)) in run.iter().enumerate() {
-                        if let Some(&(_, ahead)) = run.get(n + PREFETCH) {
+                    for (at, &(i, k)) in run.iter().enumerate() {
+                        if let Some(&(_, ahead)) = run.get(at + PREFETCH) {
                             prefetch(&s.vox[ahead as usize]);
                             if let Some(n) = nrm {
                                 prefetch(&n[ahead as usize]);
