@@ -19,7 +19,7 @@ use serde::Serialize;
 
 use crate::exit::{CliError, Code};
 use crate::inspect::import_code;
-use crate::output::{print_json, progress, warn};
+use crate::output::{print_json, progress, refuse_clobbering, warn};
 use crate::Ctx;
 
 #[derive(clap::Args, Debug)]
@@ -220,6 +220,9 @@ fn parse_view(s: &str, up: Vec3, strength: f32) -> Result<ViewPreference, CliErr
 
 pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let start = Instant::now();
+    let mut outputs = vec![("-o", args.output.as_path())];
+    outputs.extend(args.gltf.as_deref().map(|g| ("--gltf", g)));
+    refuse_clobbering(&[&args.input], &outputs)?;
     if !(0.0..=1.0).contains(&args.ambient) {
         return Err(bad(
             "--ambient",

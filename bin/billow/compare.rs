@@ -9,7 +9,7 @@ use billow::eval::metrics::{compare, ImageError};
 use serde::Serialize;
 
 use crate::exit::{CliError, Code};
-use crate::output::print_json;
+use crate::output::{print_json, refuse_clobbering};
 use crate::Ctx;
 
 #[derive(clap::Args, Debug)]
@@ -48,6 +48,9 @@ fn load(p: &Path) -> Result<ImageF32, CliError> {
 }
 
 pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
+    if let Some(d) = &args.diff {
+        refuse_clobbering(&[&args.reference, &args.test], &[("--diff", d)])?;
+    }
     let r = load(&args.reference)?;
     let t = load(&args.test)?;
     if (r.width, r.height) != (t.width, t.height) {

@@ -12,7 +12,7 @@ use serde::Serialize;
 
 use crate::exit::{CliError, Code};
 use crate::info::format_code;
-use crate::output::{print_json, warn};
+use crate::output::{print_json, refuse_clobbering, warn};
 use crate::Ctx;
 
 #[derive(clap::Args, Debug)]
@@ -71,6 +71,7 @@ fn code(e: &EmptySpaceError) -> Code {
 
 pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let start = Instant::now();
+    refuse_clobbering(&[&args.input], &[("-o", &args.output)])?;
     let shown = args.input.display().to_string();
     let container = read_file(&args.input).map_err(|e| CliError::new(format_code(&e), e))?;
     if container.header.kind != AssetKind::Volume {

@@ -1,6 +1,7 @@
 //! Shared output helpers: JSON summaries on stdout, warnings and progress on stderr.
 
 use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
 
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
@@ -43,4 +44,66 @@ pub fn peak_rss_bytes() -> Option<u64> {
     let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
     let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kib * 1024)
+}
+
+/// Refuses, before any work, outputs that would replace one of the `inputs` or each
+/// other: inputs are never touched, and every output names its own file. `outputs` are
+/// `(option, path)`. Files are compared by identity where they exist (device and inode on
+/// Unix, so links are caught), else by their resolved path.
+pub fn refuse_clobbering(inputs: &[&Path], outputs: &[(&str, &Path)]) -> Result<(), CliError> {
+    for (i, &(flag, out)) in outputs.iter().enumerate() {
+        if let Some(input) = inputs.iter().find(|p| same_file(p, out)) {
+            return Err(CliError::new(
+                Code::BadParameter,
+                format!(
+                    "{flag} {}: is the input {}; write the output elsewhere (nothing was written)",
+                    out.display(),
+                    input.display()
+                ),
+            ));
+        }
+        if let Some((other, _)) = outputs[..i].iter().find(|(_, p)| same_file(p, out)) {
+            return Err(CliError::new(
+                Code::BadParameter,
+                format!(
+                    "{flag} {}: {other} writes that file too; give each output its own path",
+                    out.display()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Whether `a` and `b` name the same file (see [`refuse_clobbering`]).
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (std::fs::metadata(a), std::fs::metadata(b)) {
+        (Ok(ma), Ok(mb)) => match (identity(a, &ma), identity(b, &mb)) {
+            (Some(ia), Some(ib)) => ia == ib,
+            _ => false,
+        },
+        (Err(_), Err(_)) => resolved(a).is_some_and(|ra| resolved(b) == Some(ra)),
+        _ => false,
+    }
+}
+
+#[cfg(unix)]
+fn identity(_: &Path, m: &std::fs::Metadata) -> Option<(u64, u64)> {
+    use std::os::unix::fs::MetadataExt;
+    Some((m.dev(), m.ino()))
+}
+
+#[cfg(not(unix))]
+fn identity(p: &Path, _: &std::fs::Metadata) -> Option<PathBuf> {
+    std::fs::canonicalize(p).ok()
+}
+
+/// A path that does not exist yet, made absolute through its (existing) parent.
+fn resolved(p: &Path) -> Option<PathBuf> {
+    let name = p.file_name()?;
+    let parent = match p.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    Some(std::fs::canonicalize(parent).ok()?.join(name))
 }

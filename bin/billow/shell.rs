@@ -12,7 +12,7 @@ use serde::Serialize;
 use crate::exit::{CliError, Code};
 use crate::info::format_code;
 use crate::inspect::import_code;
-use crate::output::{print_json, warn};
+use crate::output::{print_json, refuse_clobbering, warn};
 use crate::Ctx;
 
 #[derive(clap::Args, Debug)]
@@ -56,6 +56,7 @@ fn shell_code(e: &ShellError) -> Code {
 }
 
 pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
+    refuse_clobbering(&[&args.surface, &args.volume], &[("-o", &args.output)])?;
     let tiles: Vec<f32> = args
         .tiles
         .split(',')

@@ -14,7 +14,7 @@ use serde::Serialize;
 
 use crate::eval::parse_size;
 use crate::exit::{CliError, Code};
-use crate::output::print_json;
+use crate::output::{print_json, refuse_clobbering};
 use crate::view_load::{load_content, load_scene};
 use crate::Ctx;
 
@@ -208,6 +208,9 @@ fn view_err(e: ViewError) -> CliError {
 }
 
 pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
+    if let Some(shot) = &args.screenshot {
+        refuse_clobbering(&[&args.target], &[("--screenshot", shot)])?;
+    }
     let mut scene = load_scene(&args.target)?;
     match args.shadows.as_deref() {
         None => {}

@@ -16,7 +16,7 @@ use serde::Serialize;
 
 use crate::exit::{CliError, Code};
 use crate::inspect::import_code;
-use crate::output::{peak_rss_bytes, print_json, progress, warn};
+use crate::output::{peak_rss_bytes, print_json, progress, refuse_clobbering, warn};
 use crate::Ctx;
 
 #[derive(clap::Args, Debug)]
@@ -246,6 +246,9 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             ))
         }
     };
+    let mut outputs = vec![("-o", args.output.as_path())];
+    outputs.extend(args.ktx2.as_deref().map(|k| ("--ktx2", k)));
+    refuse_clobbering(&[&args.input], &outputs)?;
     let input = args.input.display().to_string();
 
     // The input's checksum (provenance) is computed beside the import, which is mostly

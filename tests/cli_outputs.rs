@@ -1,0 +1,102 @@
+//! No command writes over its own input, and no two outputs of one command share a file:
+//! each is refused before any work with exit code 8, a line naming the file, and nothing
+//! written. Real binaries in a temp dir.
+
+mod common;
+
+use std::path::Path;
+
+use common::*;
+
+/// A triangle every baking command accepts (so without the check, each would succeed
+/// and replace its input).
+const TRIANGLE: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0.2\nvn 0 0 1\nf 1//1 2//1 3//1\n";
+
+fn refused(dir: &Path, args: &[&str], names: &str) {
+    let r = run(args, dir);
+    assert_eq!(r.code, Some(8), "{args:?}: {}", r.stderr);
+    let line = r.error_line().unwrap();
+    assert!(line.contains(names), "{args:?}: {line}");
+}
+
+#[test]
+fn outputs_never_replace_inputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("tri.obj"), TRIANGLE).unwrap();
+    std::fs::create_dir(d.join("sub")).unwrap();
+    let tri = sha256(&d.join("tri.obj"));
+
+    // The control: an ordinary bake, twice to the same output (replacing an old output
+    // is allowed).
+    for _ in 0..2 {
+        let r = run(&["voxelize", "tri.obj", "-o", "v.billow", "--res", "8"], d);
+        assert_eq!(r.code, Some(0), "{}", r.stderr);
+    }
+    let vol = sha256(&d.join("v.billow"));
+
+    refused(d, &["voxelize", "tri.obj", "-o", "tri.obj"], "tri.obj");
+    refused(
+        d,
+        &["voxelize", "tri.obj", "-o", "sub/../tri.obj"],
+        "is the input",
+    );
+    #[cfg(unix)]
+    {
+        std::fs::hard_link(d.join("tri.obj"), d.join("link.obj")).unwrap();
+        refused(d, &["voxelize", "tri.obj", "-o", "link.obj"], "link.obj");
+    }
+    refused(d, &["emptyspace", "v.billow", "-o", "v.billow"], "v.billow");
+    refused(d, &["bbcloud", "tri.obj", "-o", "tri.obj"], "tri.obj");
+    refused(
+        d,
+        &[
+            "shell", "tri.obj", "v.billow", "-o", "v.billow", "--height", "0.1",
+        ],
+        "v.billow",
+    );
+    refused(
+        d,
+        &["view", "v.billow", "--headless", "--screenshot", "v.billow"],
+        "v.billow",
+    );
+    assert_eq!(sha256(&d.join("tri.obj")), tri);
+    assert_eq!(sha256(&d.join("v.billow")), vol);
+
+    image::RgbaImage::new(4, 4).save(d.join("a.png")).unwrap();
+    let png = sha256(&d.join("a.png"));
+    refused(
+        d,
+        &["compare", "a.png", "a.png", "--diff", "a.png"],
+        "a.png",
+    );
+    assert_eq!(sha256(&d.join("a.png")), png);
+}
+
+#[test]
+fn two_outputs_of_one_command_cannot_share_a_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("tri.obj"), TRIANGLE).unwrap();
+    refused(
+        d,
+        &[
+            "voxelize", "tri.obj", "-o", "a.billow", "--ktx2", "a.billow",
+        ],
+        "--ktx2 a.billow",
+    );
+    refused(
+        d,
+        &[
+            "bbcloud",
+            "tri.obj",
+            "-o",
+            "c.billow",
+            "--gltf",
+            "./c.billow",
+        ],
+        "-o writes that file too",
+    );
+    assert!(!d.join("a.billow").exists());
+    assert!(!d.join("c.billow").exists());
+}
