@@ -36,6 +36,7 @@ impl SceneBuilder {
                 warnings: Vec::new(),
                 dropped_triangles: 0,
                 bounds: Aabb::EMPTY,
+                files: Vec::new(),
             },
         }
     }

@@ -8,6 +8,8 @@
 //! - colours (vertex colours, factors) are **linear**, straight (not premultiplied) alpha;
 //! - texture texels are stored as authored: RGB sRGB-encoded, alpha linear, straight alpha.
 
+use std::path::PathBuf;
+
 use glam::{Vec2, Vec3, Vec4};
 
 /// One vertex of a world-space triangle.
@@ -153,6 +155,10 @@ pub struct Scene {
     /// Zero-area (or non-finite-area) triangles dropped during import.
     pub dropped_triangles: usize,
     pub bounds: Aabb,
+    /// The files the import read besides the mesh file itself (glTF buffers and images,
+    /// MTL libraries, OBJ textures), in first-read order; empty for generated scenes.
+    /// Callers that write files use it never to write over an input.
+    pub files: Vec<PathBuf>,
 }
 
 impl Scene {

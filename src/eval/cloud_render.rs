@@ -204,6 +204,7 @@ pub fn trunk_scene(asset: &CloudAsset) -> Scene {
         warnings: Vec::new(),
         dropped_triangles: 0,
         bounds,
+        files: Vec::new(),
     }
 }
 

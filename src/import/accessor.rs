@@ -67,6 +67,7 @@ impl<'a> Buffers<'a> {
                     File::open(&p)
                         .and_then(|f| f.take(declared).read_to_end(&mut v))
                         .map_err(|e| ctx.io(&p, e))?;
+                    ctx.read_from(&p);
                     v
                 }
             };

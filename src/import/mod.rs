@@ -15,6 +15,7 @@ mod obj;
 use std::collections::HashSet;
 use std::fmt;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 use glam::Vec3;
 
@@ -104,6 +105,7 @@ pub fn import(path: &Path, opts: &ImportOptions) -> Result<Scene, ImportError> {
         opts: *opts,
         warnings: Vec::new(),
         seen: HashSet::new(),
+        files: Mutex::new(Vec::new()),
     };
     let builder = match ext.as_str() {
         "gltf" | "glb" => gltf::load(path, &mut ctx)?,
@@ -115,7 +117,9 @@ pub fn import(path: &Path, opts: &ImportOptions) -> Result<Scene, ImportError> {
             )))
         }
     };
-    Ok(builder.finish(ctx.warnings))
+    let mut scene = builder.finish(ctx.warnings);
+    scene.files = ctx.files.into_inner().unwrap_or_else(|e| e.into_inner());
+    Ok(scene)
 }
 
 /// Per-import context: the file name for messages, options and collected warnings.
@@ -124,9 +128,18 @@ pub(crate) struct Ctx {
     pub opts: ImportOptions,
     pub warnings: Vec<Warning>,
     seen: HashSet<String>,
+    /// The files read besides the mesh file ([`Scene::files`]).
+    files: Mutex<Vec<PathBuf>>,
 }
 
 impl Ctx {
+    /// Notes that `path` was read (once per path).
+    pub fn read_from(&self, path: &Path) {
+        let mut files = self.files.lock().unwrap_or_else(|e| e.into_inner());
+        if !files.iter().any(|f| f == path) {
+            files.push(path.to_path_buf());
+        }
+    }
     /// Records a warning (identical messages once, e.g. for an instanced mesh), or
     /// fails with [`ImportError::Strict`] in strict mode.
     pub fn warn(&mut self, message: impl fmt::Display) -> Result<(), ImportError> {
@@ -204,6 +217,7 @@ impl SceneBuilder {
                 warnings: Vec::new(),
                 dropped_triangles: 0,
                 bounds: Aabb::EMPTY,
+                files: Vec::new(),
             }),
         }
     }

@@ -50,6 +50,7 @@ pub(super) fn load(path: &Path, ctx: &mut Ctx) -> Result<SceneBuilder, ImportErr
                 let r = tobj::load_mtl(&p);
                 match &r {
                     Ok((mats, _)) => {
+                        ctx.read_from(&p);
                         let d = p.parent().unwrap_or(Path::new(".")).to_path_buf();
                         for m in mats {
                             mtl_dirs
@@ -284,9 +285,11 @@ fn load_texture(
     b: &mut SceneBuilder,
     ctx: &mut Ctx,
 ) -> Result<Option<Texture>, ImportError> {
-    let r = fs::read(path)
-        .map_err(|e| format!("{}: {e}", path.display()))
-        .and_then(|bytes| images::decode(&bytes, name, None));
+    let r = fs::read(path).map_err(|e| format!("{}: {e}", path.display()));
+    if r.is_ok() {
+        ctx.read_from(path);
+    }
+    let r = r.and_then(|bytes| images::decode(&bytes, name, None));
     let s = b.scene();
     if !s.texture_report.iter().any(|t| t.name == name) {
         s.texture_report.push(TextureReport {

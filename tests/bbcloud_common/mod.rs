@@ -57,6 +57,7 @@ pub fn scene_of(triangles: Vec<Triangle>, materials: Vec<Material>) -> Scene {
         warnings: vec![],
         dropped_triangles: 0,
         bounds,
+        files: vec![],
     }
 }
 
@@ -134,5 +135,6 @@ pub fn leafy_scene(leaves: usize) -> Scene {
         warnings: vec![],
         dropped_triangles: 0,
         bounds,
+        files: vec![],
     }
 }

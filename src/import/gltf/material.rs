@@ -144,6 +144,7 @@ impl Importer<'_> {
                 } else {
                     let p = resolve_relative(self.base, &percent_decode(uri));
                     let bytes = fs::read(&p).map_err(|e| format!("{}: {e}", p.display()))?;
+                    ctx.read_from(&p);
                     images::decode(&bytes, &name, mime)
                 }
             } else if let Some(v) = img.buffer_view {
