@@ -1,6 +1,7 @@
-//! No command writes over its own input, and no two outputs of one command share a file:
-//! each is refused before any work with exit code 8, a line naming the file, and nothing
-//! written. Real binaries in a temp dir.
+//! No command writes over its own input (the mesh or asset it was given, or a file the
+//! import read beside it: glTF buffers and images, MTL libraries, textures), and no two
+//! outputs of one command share a file: each is refused before baking with exit code 8, a
+//! line naming the file, and nothing written. Real binaries in a temp dir.
 
 mod common;
 
@@ -98,5 +99,74 @@ fn two_outputs_of_one_command_cannot_share_a_file() {
         "-o writes that file too",
     );
     assert!(!d.join("a.billow").exists());
+    assert!(!d.join("c.billow").exists());
+}
+
+#[test]
+fn outputs_never_replace_the_files_a_mesh_refers_to() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let oak = repo().join("fixtures/oak");
+    let files = [
+        "eztree_oak_medium.gltf",
+        "eztree_oak_medium.bin",
+        "eztree_oak_medium.obj",
+        "eztree_oak_medium.mtl",
+        "oak_color.png",
+        "oak_color_1k.jpg",
+    ];
+    for f in files {
+        std::fs::copy(oak.join(f), d.join(f)).unwrap();
+    }
+    let before: Vec<String> = files.iter().map(|f| sha256(&d.join(f))).collect();
+    let gltf = "eztree_oak_medium.gltf";
+    let obj = "eztree_oak_medium.obj";
+    refused(
+        d,
+        &[
+            "voxelize",
+            gltf,
+            "-o",
+            "eztree_oak_medium.bin",
+            "--res",
+            "8",
+        ],
+        "eztree_oak_medium.gltf reads that file (eztree_oak_medium.bin)",
+    );
+    refused(
+        d,
+        &[
+            "voxelize",
+            gltf,
+            "-o",
+            "v.billow",
+            "--ktx2",
+            "oak_color.png",
+            "--res",
+            "8",
+        ],
+        "--ktx2 oak_color.png",
+    );
+    refused(
+        d,
+        &["voxelize", obj, "-o", "eztree_oak_medium.mtl", "--res", "8"],
+        "eztree_oak_medium.mtl",
+    );
+    refused(
+        d,
+        &[
+            "bbcloud",
+            obj,
+            "-o",
+            "c.billow",
+            "--gltf",
+            "oak_color_1k.jpg",
+        ],
+        "oak_color_1k.jpg",
+    );
+    for (f, want) in files.iter().zip(&before) {
+        assert_eq!(&sha256(&d.join(f)), want, "{f} changed");
+    }
+    assert!(!d.join("v.billow").exists());
     assert!(!d.join("c.billow").exists());
 }

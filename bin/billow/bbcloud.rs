@@ -19,7 +19,7 @@ use serde::Serialize;
 
 use crate::exit::{CliError, Code};
 use crate::inspect::import_code;
-use crate::output::{print_json, progress, refuse_clobbering, warn};
+use crate::output::{print_json, progress, refuse_clobbering, refuse_clobbering_read, warn};
 use crate::Ctx;
 
 #[derive(clap::Args, Debug)]
@@ -275,6 +275,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         },
     )
     .map_err(|e| CliError::new(import_code(&e), &e))?;
+    refuse_clobbering_read(&args.input, &scene.files, &outputs)?;
     for w in &scene.warnings {
         warn(ctx, &format!("{input}: {}", w.message));
     }

@@ -75,6 +75,30 @@ pub fn refuse_clobbering(inputs: &[&Path], outputs: &[(&str, &Path)]) -> Result<
     Ok(())
 }
 
+/// [`refuse_clobbering`] for the files an import of `mesh` read beside it (its
+/// [`billow::scene::Scene::files`]), named as such in the message.
+pub fn refuse_clobbering_read(
+    mesh: &Path,
+    files: &[PathBuf],
+    outputs: &[(&str, &Path)],
+) -> Result<(), CliError> {
+    for &(flag, out) in outputs {
+        if let Some(f) = files.iter().find(|f| same_file(f, out)) {
+            return Err(CliError::new(
+                Code::BadParameter,
+                format!(
+                    "{flag} {}: {} reads that file ({}); write the output elsewhere \
+                     (nothing was written)",
+                    out.display(),
+                    mesh.display(),
+                    f.display()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Whether `a` and `b` name the same file (see [`refuse_clobbering`]).
 fn same_file(a: &Path, b: &Path) -> bool {
     match (std::fs::metadata(a), std::fs::metadata(b)) {

@@ -12,7 +12,7 @@ use serde::Serialize;
 use crate::exit::{CliError, Code};
 use crate::info::format_code;
 use crate::inspect::import_code;
-use crate::output::{print_json, refuse_clobbering, warn};
+use crate::output::{print_json, refuse_clobbering, refuse_clobbering_read, warn};
 use crate::Ctx;
 
 #[derive(clap::Args, Debug)]
@@ -76,6 +76,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         },
     )
     .map_err(|e| CliError::new(import_code(&e), &e))?;
+    refuse_clobbering_read(&args.surface, &surface.files, &[("-o", &args.output)])?;
     for w in &surface.warnings {
         warn(ctx, &format!("{}: {}", args.surface.display(), w.message));
     }

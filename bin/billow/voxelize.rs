@@ -16,7 +16,9 @@ use serde::Serialize;
 
 use crate::exit::{CliError, Code};
 use crate::inspect::import_code;
-use crate::output::{peak_rss_bytes, print_json, progress, refuse_clobbering, warn};
+use crate::output::{
+    peak_rss_bytes, print_json, progress, refuse_clobbering, refuse_clobbering_read, warn,
+};
 use crate::Ctx;
 
 #[derive(clap::Args, Debug)]
@@ -264,6 +266,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         (scene, source.join().expect("checksum thread panicked"))
     });
     let scene = scene.map_err(|e| CliError::new(import_code(&e), &e))?;
+    refuse_clobbering_read(&args.input, &scene.files, &outputs)?;
     for w in &scene.warnings {
         warn(ctx, &format!("{input}: {}", w.message));
     }
