@@ -164,6 +164,11 @@ fn outputs_never_replace_the_files_a_mesh_refers_to() {
         ],
         "oak_color_1k.jpg",
     );
+    refused(
+        d,
+        &["view", gltf, "--headless", "--screenshot", "oak_color.png"],
+        "eztree_oak_medium.gltf reads that file (oak_color.png)",
+    );
     for (f, want) in files.iter().zip(&before) {
         assert_eq!(&sha256(&d.join(f)), want, "{f} changed");
     }

@@ -14,7 +14,7 @@ use serde::Serialize;
 
 use crate::eval::parse_size;
 use crate::exit::{CliError, Code};
-use crate::output::{print_json, refuse_clobbering};
+use crate::output::{print_json, refuse_clobbering, refuse_clobbering_read};
 use crate::view_load::{load_content, load_scene};
 use crate::Ctx;
 
@@ -219,7 +219,11 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         Some(o) => return Err(bad("--shadows", format!("'{o}': expected on or off"))),
     }
     override_particles(&mut scene, &args)?;
-    let content = load_content(&scene)?;
+    let mut read = Vec::new();
+    let content = load_content(&scene, &mut read)?;
+    if let Some(shot) = &args.screenshot {
+        refuse_clobbering_read(&args.target, &read, &[("--screenshot", shot)])?;
+    }
     let passes = content.passes();
     if args.print_passes {
         for p in &passes {

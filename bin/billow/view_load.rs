@@ -1,6 +1,6 @@
 //! `billow view`: TARGET (scene file, asset or mesh) → the viewer's CPU-side content.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use billow::import::{import, ImportOptions};
 use billow::scene::{AlphaMode, Scene};
@@ -105,8 +105,9 @@ pub fn mesh_data(s: &Scene, t: &Transform) -> MeshData {
     data
 }
 
-/// Reads every asset and mesh of `scene`.
-pub fn load_content(scene: &SceneFile) -> Result<Content, CliError> {
+/// Reads every asset and mesh of `scene`; `read` receives every file read (the scene's
+/// assets and meshes, and the files the meshes refer to).
+pub fn load_content(scene: &SceneFile, read: &mut Vec<PathBuf>) -> Result<Content, CliError> {
     let mut c = Content {
         light_dir: Vec3::from(scene.light.direction),
         ambient: scene.light.ambient,
@@ -116,6 +117,7 @@ pub fn load_content(scene: &SceneFile) -> Result<Content, CliError> {
         ..Default::default()
     };
     for v in &scene.volumes {
+        read.push(v.asset.clone());
         let asset = VolumeAsset::read(&v.asset).map_err(|e| CliError::new(format_code(&e), e))?;
         c.volumes.push(VolumeContent {
             asset,
@@ -124,6 +126,7 @@ pub fn load_content(scene: &SceneFile) -> Result<Content, CliError> {
         });
     }
     for d in &scene.clouds {
+        read.push(d.asset.clone());
         let asset = CloudAsset::read(&d.asset).map_err(|e| {
             let code = match &e {
                 billow_format::CloudError::Format(f) => format_code(f),
@@ -155,6 +158,8 @@ pub fn load_content(scene: &SceneFile) -> Result<Content, CliError> {
     for m in &scene.meshes {
         let s = import(&m.path, &ImportOptions::default())
             .map_err(|e| CliError::new(import_code(&e), &e))?;
+        read.push(m.path.clone());
+        read.extend(s.files.iter().cloned());
         c.meshes.push(mesh_data(&s, &m.transform));
     }
     if let Some(g) = &scene.ground {
