@@ -19,6 +19,8 @@ pub struct InspectReport {
     /// `None` when the scene has no triangles.
     pub bounds: Option<BoundsSummary>,
     pub warnings: Vec<String>,
+    /// The files read beside the mesh file ([`Scene::files`]), as the import resolved them.
+    pub files: Vec<String>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -118,6 +120,11 @@ pub fn inspect(scene: &Scene, path: &Path) -> InspectReport {
         textures,
         bounds,
         warnings: scene.warnings.iter().map(|w| w.message.clone()).collect(),
+        files: scene
+            .files
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect(),
     }
 }
 
@@ -177,6 +184,10 @@ impl fmt::Display for InspectReport {
                 (true, _, _) => writeln!(f, "  {:<tw$}  found", t.name)?,
                 (false, _, _) => writeln!(f, "  {:<tw$}  MISSING", t.name)?,
             }
+        }
+        writeln!(f, "files read {}", self.files.len())?;
+        for p in &self.files {
+            writeln!(f, "  {p}")?;
         }
         write!(f, "warnings   {}", self.warnings.len())?;
         for w in &self.warnings {

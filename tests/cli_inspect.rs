@@ -23,6 +23,20 @@ fn inspects_the_bundled_oak_as_json() {
     let leaves = &v["materials"][1];
     assert_eq!(leaves["alpha_mode"], "mask");
     assert_eq!(leaves["double_sided"], true);
+    // The buffer and both images, each once, as the glTF names them.
+    let files: Vec<&str> = v["files"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f.as_str().unwrap())
+        .collect();
+    assert_eq!(files.len(), 3, "{files:?}");
+    for name in ["eztree_oak_medium.bin", "oak_color_1k.jpg", "oak_color.png"] {
+        assert!(
+            files.iter().any(|f| f.ends_with(name)),
+            "{name} in {files:?}"
+        );
+    }
     assert_eq!(sha256(&oak), before, "input must never be touched");
 }
 
@@ -37,6 +51,9 @@ fn inspects_the_oak_obj_as_text() {
         "{}",
         r.stdout
     );
+    // The MTL library and the two textures it names.
+    assert!(r.stdout.contains("files read 3"), "{}", r.stdout);
+    assert!(r.stdout.contains("eztree_oak_medium.mtl"), "{}", r.stdout);
 }
 
 #[test]
