@@ -285,11 +285,10 @@ fn load_texture(
     b: &mut SceneBuilder,
     ctx: &mut Ctx,
 ) -> Result<Option<Texture>, ImportError> {
-    let r = fs::read(path).map_err(|e| format!("{}: {e}", path.display()));
-    if r.is_ok() {
-        ctx.read_from(path);
-    }
-    let r = r.and_then(|bytes| images::decode(&bytes, name, None));
+    let r = fs::read(path)
+        .inspect(|_| ctx.read_from(path))
+        .map_err(|e| format!("{}: {e}", path.display()))
+        .and_then(|bytes| images::decode(&bytes, name, None));
     let s = b.scene();
     if !s.texture_report.iter().any(|t| t.name == name) {
         s.texture_report.push(TextureReport {
