@@ -75,6 +75,31 @@ fn unknown_extension_is_exit_5() {
 }
 
 #[test]
+fn an_asset_given_as_a_mesh_names_what_it_is() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(
+        repo().join("fixtures/format/v1_volume_3x2x1.billow"),
+        dir.path().join("tree.billow"),
+    )
+    .unwrap();
+    for cmd in ["inspect", "voxelize"] {
+        let mut args = vec![cmd, "tree.billow"];
+        if cmd == "voxelize" {
+            args.extend(["-o", "out.billow"]);
+        }
+        let r = run(&args, dir.path());
+        assert_eq!(r.code, Some(5), "{cmd}: {}", r.stderr);
+        let line = r.error_line().unwrap();
+        assert!(
+            line.contains("tree.billow") && line.contains("baked billow asset, not a mesh"),
+            "{cmd}: {line}"
+        );
+        assert!(line.contains("billow info"), "{cmd}: {line}");
+    }
+    assert!(!dir.path().join("out.billow").exists());
+}
+
+#[test]
 fn strict_turns_a_missing_texture_into_exit_6() {
     let dir = tempfile::tempdir().unwrap();
     let src = repo().join("fixtures/oak");

@@ -110,6 +110,12 @@ pub fn import(path: &Path, opts: &ImportOptions) -> Result<Scene, ImportError> {
     let builder = match ext.as_str() {
         "gltf" | "glb" => gltf::load(path, &mut ctx)?,
         "obj" => obj::load(path, &mut ctx)?,
+        "billow" => {
+            return Err(ctx.unsupported(
+                "this is a baked billow asset, not a mesh (expected .gltf, .glb or .obj; \
+                 `billow info` describes an asset, `billow view` shows it)",
+            ))
+        }
         _ => {
             return Err(ctx.unsupported(format!(
                 "unknown mesh file extension {:?} (expected .gltf, .glb or .obj)",
