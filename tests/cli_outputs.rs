@@ -175,3 +175,48 @@ fn outputs_never_replace_the_files_a_mesh_refers_to() {
     assert!(!d.join("v.billow").exists());
     assert!(!d.join("c.billow").exists());
 }
+
+/// An output that cannot be written (its folder is missing, it names a folder, or a
+/// folder output names a file) is refused before baking with exit code 7, and no other
+/// output of the command is written either (they used to be, with the error after the
+/// bake).
+#[test]
+fn unwritable_destinations_are_refused_before_baking() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("tri.obj"), TRIANGLE).unwrap();
+    std::fs::create_dir(d.join("sub")).unwrap();
+    let unwritable = |args: &[&str], names: &str| {
+        let r = run(args, d);
+        assert_eq!(r.code, Some(7), "{args:?}: {}", r.stderr);
+        let line = r.error_line().unwrap();
+        assert!(
+            line.contains(names) && line.contains("nothing was written"),
+            "{args:?}: {line}"
+        );
+        assert!(!d.join("v.billow").exists(), "{args:?} wrote -o");
+    };
+    let vox = ["voxelize", "tri.obj", "-o", "v.billow", "--res", "8"];
+    let with = |extra: &[&'static str]| [&vox[..], extra].concat();
+    unwritable(
+        &with(&["--ktx2", "missing/v.ktx2"]),
+        "missing does not exist",
+    );
+    unwritable(&with(&["--ktx2", "sub"]), "is a directory");
+    unwritable(
+        &with(&["--slices", "tri.obj"]),
+        "is a file, not a directory",
+    );
+    unwritable(
+        &["voxelize", "tri.obj", "-o", "missing/v.billow"],
+        "missing does not exist",
+    );
+    unwritable(
+        &["bbcloud", "tri.obj", "-o", "v.billow", "--atlas", "tri.obj"],
+        "is a file, not a directory",
+    );
+    // The control: the same bake with writable destinations succeeds.
+    let r = run(&with(&["--ktx2", "sub/v.ktx2", "--slices", "slices"]), d);
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    assert!(d.join("v.billow").exists() && d.join("sub/v.ktx2").exists());
+}

@@ -19,7 +19,9 @@ use serde::Serialize;
 
 use crate::exit::{CliError, Code};
 use crate::inspect::import_code;
-use crate::output::{print_json, progress, refuse_clobbering, refuse_clobbering_read, warn};
+use crate::output::{
+    print_json, progress, refuse_clobbering, refuse_clobbering_read, refuse_file_as_folder, warn,
+};
 use crate::Ctx;
 
 #[derive(clap::Args, Debug)]
@@ -223,6 +225,9 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let mut outputs = vec![("-o", args.output.as_path())];
     outputs.extend(args.gltf.as_deref().map(|g| ("--gltf", g)));
     refuse_clobbering(&[&args.input], &outputs)?;
+    if let Some(dir) = &args.atlas {
+        refuse_file_as_folder("--atlas", dir)?;
+    }
     if !(0.0..=1.0).contains(&args.ambient) {
         return Err(bad(
             "--ambient",

@@ -50,8 +50,11 @@ pub fn peak_rss_bytes() -> Option<u64> {
 /// other: inputs are never touched, and every output names its own file. `outputs` are
 /// `(option, path)`. Files are compared by identity where they exist (device and inode on
 /// Unix, so links are caught), else by their resolved path.
+/// Also refuses, before any work, an output whose folder does not exist or whose path is
+/// a folder (the write would fail only after the whole bake).
 pub fn refuse_clobbering(inputs: &[&Path], outputs: &[(&str, &Path)]) -> Result<(), CliError> {
     for (i, &(flag, out)) in outputs.iter().enumerate() {
+        writable_destination(flag, out)?;
         if let Some(input) = inputs.iter().find(|p| same_file(p, out)) {
             return Err(CliError::new(
                 Code::BadParameter,
@@ -71,6 +74,48 @@ pub fn refuse_clobbering(inputs: &[&Path], outputs: &[(&str, &Path)]) -> Result<
                 ),
             ));
         }
+    }
+    Ok(())
+}
+
+/// The checks of [`refuse_clobbering`] on one output file's destination.
+fn writable_destination(flag: &str, out: &Path) -> Result<(), CliError> {
+    let unwritable = |why: String| {
+        CliError::new(
+            Code::OutputIo,
+            format!(
+                "cannot write output: {flag} {}: {why} (nothing was written)",
+                out.display()
+            ),
+        )
+    };
+    if out.is_dir() {
+        return Err(unwritable("is a directory; name a file".into()));
+    }
+    let dir = match out.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        return Err(unwritable(format!(
+            "directory {} does not exist",
+            dir.display()
+        )));
+    }
+    Ok(())
+}
+
+/// Refuses, before any work, a folder output (`--slices DIR`, `--atlas DIR`, ...) whose
+/// path is an existing file; a missing folder is created when the output is written.
+pub fn refuse_file_as_folder(flag: &str, dir: &Path) -> Result<(), CliError> {
+    if dir.exists() && !dir.is_dir() {
+        return Err(CliError::new(
+            Code::OutputIo,
+            format!(
+                "cannot write output: {flag} {}: is a file, not a directory (nothing was written)",
+                dir.display()
+            ),
+        ));
     }
     Ok(())
 }

@@ -17,7 +17,8 @@ use serde::Serialize;
 use crate::exit::{CliError, Code};
 use crate::inspect::import_code;
 use crate::output::{
-    peak_rss_bytes, print_json, progress, refuse_clobbering, refuse_clobbering_read, warn,
+    peak_rss_bytes, print_json, progress, refuse_clobbering, refuse_clobbering_read,
+    refuse_file_as_folder, warn,
 };
 use crate::Ctx;
 
@@ -251,6 +252,9 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let mut outputs = vec![("-o", args.output.as_path())];
     outputs.extend(args.ktx2.as_deref().map(|k| ("--ktx2", k)));
     refuse_clobbering(&[&args.input], &outputs)?;
+    if let Some(dir) = &args.slices {
+        refuse_file_as_folder("--slices", dir)?;
+    }
     let input = args.input.display().to_string();
 
     // The input's checksum (provenance) is computed beside the import, which is mostly

@@ -23,7 +23,7 @@ use serde::Serialize;
 use crate::exit::{CliError, Code};
 use crate::info::format_code;
 use crate::inspect::import_code;
-use crate::output::{print_json, progress, warn};
+use crate::output::{print_json, progress, refuse_file_as_folder, warn};
 use crate::Ctx;
 
 /// Heatmap gain of the difference panels: a difference of 1/4 or more is white.
@@ -325,6 +325,9 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     parse_views(&args.views, &parse_distances(&args.distances)?)?;
     // Reject a bad --spacing before the (slow) work.
     parse_spacing(&args.spacing, None)?;
+    if let Some(dir) = &args.out {
+        refuse_file_as_folder("--out", dir)?;
+    }
     let scene = import_source(&args, ctx)?;
     let import_s = start.elapsed().as_secs_f64();
     let t = Instant::now();
