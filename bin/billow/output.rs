@@ -49,9 +49,9 @@ pub fn peak_rss_bytes() -> Option<u64> {
 /// Refuses, before any work, outputs that would replace one of the `inputs` or each
 /// other: inputs are never touched, and every output names its own file. `outputs` are
 /// `(option, path)`. Files are compared by identity where they exist (device and inode on
-/// Unix, so links are caught), else by their resolved path.
-/// Also refuses, before any work, an output whose folder does not exist or whose path is
-/// a folder (the write would fail only after the whole bake).
+/// Unix, so links are caught), else by their resolved path. Also refuses an output whose
+/// folder does not exist or whose path is a folder (the write would fail only after the
+/// whole bake).
 pub fn refuse_clobbering(inputs: &[&Path], outputs: &[(&str, &Path)]) -> Result<(), CliError> {
     for (i, &(flag, out)) in outputs.iter().enumerate() {
         writable_destination(flag, out)?;
@@ -92,10 +92,7 @@ fn writable_destination(flag: &str, out: &Path) -> Result<(), CliError> {
     if out.is_dir() {
         return Err(unwritable("is a directory; name a file".into()));
     }
-    let dir = match out.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
+    let dir = folder_of(out);
     if !dir.is_dir() {
         return Err(unwritable(format!(
             "directory {} does not exist",
@@ -170,9 +167,13 @@ fn identity(p: &Path, _: &std::fs::Metadata) -> Option<PathBuf> {
 /// A path that does not exist yet, made absolute through its (existing) parent.
 fn resolved(p: &Path) -> Option<PathBuf> {
     let name = p.file_name()?;
-    let parent = match p.parent() {
+    Some(std::fs::canonicalize(folder_of(p)).ok()?.join(name))
+}
+
+/// The folder a path's file lives in (`.` for a bare file name).
+fn folder_of(p: &Path) -> &Path {
+    match p.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
-    };
-    Some(std::fs::canonicalize(parent).ok()?.join(name))
+    }
 }
