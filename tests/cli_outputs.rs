@@ -14,10 +14,17 @@ use common::*;
 const TRIANGLE: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0.2\nvn 0 0 1\nf 1//1 2//1 3//1\n";
 
 fn refused(dir: &Path, args: &[&str], names: &str) {
+    refused_with(dir, args, 8, names);
+}
+
+/// Asserts that `args` exits with `code` and a one-line error containing `names`; returns
+/// that line.
+fn refused_with(dir: &Path, args: &[&str], code: i32, names: &str) -> String {
     let r = run(args, dir);
-    assert_eq!(r.code, Some(8), "{args:?}: {}", r.stderr);
-    let line = r.error_line().unwrap();
+    assert_eq!(r.code, Some(code), "{args:?}: {}", r.stderr);
+    let line = r.error_line().unwrap().to_string();
     assert!(line.contains(names), "{args:?}: {line}");
+    line
 }
 
 #[test]
@@ -187,13 +194,8 @@ fn unwritable_destinations_are_refused_before_baking() {
     std::fs::write(d.join("tri.obj"), TRIANGLE).unwrap();
     std::fs::create_dir(d.join("sub")).unwrap();
     let unwritable = |args: &[&str], names: &str| {
-        let r = run(args, d);
-        assert_eq!(r.code, Some(7), "{args:?}: {}", r.stderr);
-        let line = r.error_line().unwrap();
-        assert!(
-            line.contains(names) && line.contains("nothing was written"),
-            "{args:?}: {line}"
-        );
+        let line = refused_with(d, args, 7, names);
+        assert!(line.contains("nothing was written"), "{args:?}: {line}");
         assert!(!d.join("v.billow").exists(), "{args:?} wrote -o");
     };
     let vox = ["voxelize", "tri.obj", "-o", "v.billow", "--res", "8"];
