@@ -9,6 +9,7 @@ mod eval;
 mod exit;
 mod info;
 mod inspect;
+mod lod_sweep;
 mod output;
 mod shell;
 mod view;

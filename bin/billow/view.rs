@@ -75,6 +75,18 @@ pub struct Args {
     /// Choose cloud LODs as if every instance were this far from the eye (inspection).
     #[arg(long, value_name = "DISTANCE")]
     lod_distance: Option<f32>,
+    /// Sweep the LOD switches of the scene's one billboard cloud: dolly along --view at
+    /// constant screen size across every switch distance, write the frames on either side
+    /// of each switch (DIR/switch_K.png), DIR/sweep.json and DIR/sweep.md, and print the
+    /// table (docs/bbcloud.md, "LOD switches"); --size sets the frame. Exit 0 whether or not
+    /// the targets are met (they are in the JSON's `pass` fields).
+    #[arg(long, value_name = "DIR")]
+    lod_sweep: Option<PathBuf>,
+    /// With --lod-sweep: keep the cloud's bounding sphere at this fraction of the frame
+    /// height at every switch, in (0, 4] (default: each switch at the size the viewer shows
+    /// it at with --fov).
+    #[arg(long, value_name = "F")]
+    sweep_fill: Option<f32>,
     /// Print the passes a frame runs (one per line) and exit; needs no GPU.
     #[arg(long)]
     print_passes: bool,
@@ -255,7 +267,13 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     if args.slab_min_slices == 0 {
         return Err(bad("--slab-min-slices", "must be at least 1"));
     }
-    if args.headless && args.screenshot.is_none() {
+    if args.lod_sweep.is_some() && (args.screenshot.is_some() || args.lod_distance.is_some()) {
+        return Err(bad(
+            "--lod-sweep",
+            "renders its own frames: drop --screenshot and --lod-distance",
+        ));
+    }
+    if args.headless && args.screenshot.is_none() && args.lod_sweep.is_none() {
         return Err(bad("--screenshot", "--headless needs --screenshot OUT.png"));
     }
     if !args.headless && args.screenshot.is_some() {
@@ -348,6 +366,17 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             )
         }
     };
+    if let Some(dir) = &args.lod_sweep {
+        return run_sweep(
+            &args,
+            ctx,
+            &content,
+            (params, fov),
+            (width, height),
+            view_dir,
+            dir,
+        );
+    }
     if !args.headless {
         let bg = background.map_or([0.55, 0.62, 0.72], |b| b.to_array());
         return run_window(
@@ -441,6 +470,57 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             frames,
             out.display()
         );
+    }
+    Ok(())
+}
+
+/// `--lod-sweep DIR` (bin/billow/lod_sweep.rs).
+fn run_sweep(
+    args: &Args,
+    ctx: &Ctx,
+    content: &billow_view::content::Content,
+    (params, fov): (SliceParams, f32),
+    size: (u32, u32),
+    view_dir: Vec3,
+    dir: &std::path::Path,
+) -> Result<(), CliError> {
+    if dir.is_file() {
+        return Err(CliError::new(
+            Code::OutputIo,
+            format!(
+                "{}: --lod-sweep needs a folder, this is a file",
+                dir.display()
+            ),
+        ));
+    }
+    std::fs::create_dir_all(dir)
+        .map_err(|e| CliError::new(Code::OutputIo, format!("{}: {e}", dir.display())))?;
+    if std::env::var_os("NODEVICE_SELECT").is_none()
+        && std::env::var_os("XDG_RUNTIME_DIR").is_none()
+    {
+        std::env::set_var("NODEVICE_SELECT", "1");
+    }
+    let gpu = Gpu::headless().map_err(view_err)?;
+    let mut r = content.build(gpu, params, fov).map_err(view_err)?;
+    if let Some(f) = args.sweep_fill {
+        if !(f > 0.0 && f <= 4.0) {
+            return Err(bad("--sweep-fill", format!("{f}: must be in (0, 4]")));
+        }
+    }
+    let sweep =
+        crate::lod_sweep::sweep(&mut r, size, (-view_dir, fov, args.sweep_fill), Some(dir))?;
+    let table = crate::lod_sweep::table(&sweep);
+    let json =
+        serde_json::to_string_pretty(&sweep).map_err(|e| CliError::new(Code::Internal, e))?;
+    for (name, text) in [("sweep.json", json + "\n"), ("sweep.md", table.clone())] {
+        let p = dir.join(name);
+        std::fs::write(&p, text)
+            .map_err(|e| CliError::new(Code::OutputIo, format!("{}: {e}", p.display())))?;
+    }
+    if args.json {
+        print_json(&sweep)?;
+    } else if !ctx.quiet {
+        print!("{table}");
     }
     Ok(())
 }

@@ -337,6 +337,20 @@ impl Renderer {
         Ok(())
     }
 
+    /// Per cloud: its bounding sphere (centre placed by its first instance, radius), level-change
+    /// distances and transition fraction (what [`select_level`] is given), for tools that
+    /// sweep the LOD switches.
+    pub fn cloud_lod_setup(&self) -> Vec<(Vec3, f32, Vec<f32>, f32)> {
+        self.clouds
+            .iter()
+            .map(|c| {
+                let m = c.instances.first().copied().unwrap_or(Mat4::IDENTITY);
+                let centre = m.transform_point3(c.gpu.centre);
+                (centre, c.gpu.radius, c.distances.clone(), c.transition)
+            })
+            .collect()
+    }
+
     /// Whether anything casts into a shadow map.
     fn has_casters(&self) -> bool {
         self.passes().contains(&"shadow")
