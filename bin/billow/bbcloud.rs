@@ -70,13 +70,13 @@ pub struct Args {
     #[arg(long)]
     texel_density: Option<f32>,
     /// Direction towards the light, x,y,z.
-    #[arg(long, default_value = "0.3,1,0.2", conflicts_with = "unlit")]
+    #[arg(long, default_value = "0.3,1,0.5", conflicts_with = "unlit")]
     light: String,
     /// Bake albedo only, no lighting.
     #[arg(long)]
     unlit: bool,
     /// Ambient light fraction (the rest is diffuse).
-    #[arg(long, default_value_t = 0.35)]
+    #[arg(long, default_value_t = 0.3)]
     ambient: f32,
     /// K: K×K coverage samples per texel (1–8).
     #[arg(long, default_value_t = 3)]

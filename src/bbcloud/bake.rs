@@ -6,8 +6,10 @@
 //! above the plane for the front, smallest for the back). A fragment survives the material's
 //! alpha mode: MASK keeps it (alpha 1) where alpha ≥ cutoff, BLEND keeps it with its alpha
 //! (no blending of several layers), OPAQUE with alpha 1. Every triangle is treated as
-//! double-sided for visibility (leaf cards are); lighting uses the shading normal turned
-//! towards the viewer of that side: `albedo · (ambient + (1 − ambient) · max(0, N·L))`.
+//! double-sided for visibility (leaf cards are); lighting is the viewer's mesh-pass model,
+//! `albedo · (ambient + (1 − ambient) · |N·L|)` with the interpolated shading normal
+//! ([`crate::eval::lighting::diffuse_factor`]), so a leaf seen from either side is lit alike
+//! and a billboard looks like the mesh it replaces under the same light.
 //! A texel's colour is the mean of its samples' premultiplied colours, its alpha their mean
 //! coverage. Work is done in bands of rows so memory stays small for large billboards.
 //!
@@ -23,6 +25,7 @@ use glam::{Vec2, Vec3, Vec4};
 
 use super::rect::PlaneRect;
 use super::sampler::Decoded;
+use crate::eval::lighting::diffuse_factor;
 use crate::scene::{AlphaMode, Scene};
 
 /// Lighting of the bake. `light: None` bakes unlit albedo.
@@ -285,8 +288,9 @@ fn raster<const NORMALS: bool>(
             let (cf, cb) = match sh.light {
                 None => (albedo.truncate(), albedo.truncate()),
                 Some(l) => {
-                    let lit = |m: Vec3| sh.ambient + (1.0 - sh.ambient) * m.dot(l).max(0.0);
-                    (albedo.truncate() * lit(nf), albedo.truncate() * lit(-nf))
+                    // The viewer's mesh-pass model: two-sided, so both sides alike.
+                    let c = albedo.truncate() * diffuse_factor(nf, l, sh.ambient);
+                    (c, c)
                 }
             };
             if z > s.fz {

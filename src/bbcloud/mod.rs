@@ -21,6 +21,7 @@ pub mod assemble;
 pub mod atlas;
 pub mod bake;
 pub mod foliage;
+pub mod hashed_alpha;
 pub mod lod;
 pub mod plane_search;
 pub mod rect;
@@ -92,8 +93,8 @@ impl Default for BbcloudOptions {
             atlas_size: 2048,
             texel_density: None,
             shading: Shading {
-                light: Some(Vec3::new(0.3, 1.0, 0.2).normalize()),
-                ambient: 0.35,
+                light: Some(Vec3::new(0.3, 1.0, 0.5).normalize()),
+                ambient: 0.3,
             },
             supersample: 3,
             foliage: Vec::new(),

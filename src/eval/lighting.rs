@@ -10,8 +10,10 @@
 //!   point ([`voxel_stream`]), so the reference and the bake draw the same directions and
 //!   differ only in where the rays start. The colour is multiplied by AO; alpha unchanged.
 //! - [`Lighting::Diffuse`]: the billboard-cloud bake's ambient + diffuse term
-//!   (`src/bbcloud/bake.rs`), `albedo · (ambient + (1 − ambient) · max(0, N·L))`, with the
-//!   interpolated shading normal turned towards the viewer.
+//!   (`src/bbcloud/bake.rs`), `albedo · (ambient + (1 − ambient) · |N·L|)` with the
+//!   interpolated shading normal: the viewer's mesh-pass model (two-sided Lambert, leaf
+//!   cards lit from either side; `viewer/src/shaders/mesh.wgsl`), so a mesh drawn by the
+//!   viewer and its billboards baked with the same light look alike.
 //!
 //! [`Lighting::for_volume`] and [`Lighting::for_cloud`] read the choice from an asset's
 //! header parameters (`bake`, `ao_rays`, `ao_distance`, `ao_seed`; `light`, `ambient`).
@@ -37,10 +39,13 @@ pub enum Lighting {
     Diffuse { light: Vec3, ambient: f32 },
 }
 
-/// `ambient + (1 − ambient) · max(0, n·light)`: the billboard bake's lighting factor.
+/// `ambient + (1 − ambient) · |n·light|`: the one lighting model of billow — the
+/// billboard bake's factor, the reference's, and the viewer's mesh pass (two-sided Lambert;
+/// `viewer/src/shaders/mesh.wgsl`, which also multiplies the diffuse term by shadow
+/// visibility).
 #[inline]
 pub fn diffuse_factor(n: Vec3, light: Vec3, ambient: f32) -> f32 {
-    ambient + (1.0 - ambient) * n.dot(light).max(0.0)
+    ambient + (1.0 - ambient) * n.dot(light).abs()
 }
 
 fn num<T: std::str::FromStr>(
@@ -214,7 +219,8 @@ mod tests {
             }
         );
         assert_eq!(diffuse_factor(Vec3::Y, Vec3::Y, 0.25), 1.0);
-        assert_eq!(diffuse_factor(-Vec3::Y, Vec3::Y, 0.25), 0.25);
+        assert_eq!(diffuse_factor(-Vec3::Y, Vec3::Y, 0.25), 1.0);
+        assert_eq!(diffuse_factor(Vec3::X, Vec3::Y, 0.25), 0.25);
         p.insert("light".into(), "0,0".into());
         assert!(Lighting::for_cloud(&p).is_err());
     }
