@@ -17,6 +17,12 @@
 //! filtered on **premultiplied linear** colour: transparent texels contribute neither colour
 //! nor coverage, so edges never darken (no dark fringes); the result is then sRGB-encoded
 //! (`SrgbPremultiplied`, SPEC.md §8.3).
+//!
+//! Box-filtered alpha is each texel's mean coverage, which is what billow's renderers need:
+//! they alpha-test billboards against a hashed threshold ([`super::hashed_alpha`]), so a
+//! texel passes with probability α and every MIP level keeps level 0's expected coverage.
+//! (A constant cut-off would need rescaled alpha per level and still thins a canopy with
+//! distance; measured in docs/bbcloud.md, "LOD switches".)
 
 use glam::Vec4;
 use rayon::prelude::*;
