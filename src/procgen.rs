@@ -7,6 +7,9 @@
 //!   explicit geometry: thousands of thin double-sided triangles with vertex colours.
 //! - [`torus`] and [`fur_tile`]: the surface and the tileable fur volume source used to
 //!   build the same torus as a *shell* of prisms (volumetric texture).
+//! - [`leafy_tree`]: a broadleaf tree — an opaque trunk and branches, and alpha-masked
+//!   leaf cards with a generated leaf texture (MASK 0.5) in a crown — the second foliage
+//!   mesh of the billboard-cloud tests beside the bundled oak.
 //!
 //! Everything is deterministic for a given seed (see [`crate::rng`]).
 
@@ -17,7 +20,7 @@ use std::path::Path;
 use glam::{Vec2, Vec3, Vec4};
 
 use crate::rng::Pcg32;
-use crate::scene::{Aabb, AlphaMode, Material, MeshInfo, Scene, Triangle, Vertex};
+use crate::scene::{Aabb, AlphaMode, Material, MeshInfo, Scene, Texture, Triangle, Vertex, Wrap};
 
 /// Accumulates triangles into a [`Scene`].
 pub struct SceneBuilder {
@@ -320,8 +323,104 @@ impl Quat2 {
     }
 }
 
+/// The leaf texture of [`leafy_tree`]: `size`² RGBA, a pointed oval leaf (alpha 255
+/// inside, 0 outside) with a lighter midrib, green shades in sRGB.
+pub fn leaf_texture(size: u32) -> Texture {
+    let mut texels = Vec::with_capacity((size * size) as usize);
+    for y in 0..size {
+        for x in 0..size {
+            // u across the leaf, v along it (stem at v = 1).
+            let u = (x as f32 + 0.5) / size as f32 * 2.0 - 1.0;
+            let v = (y as f32 + 0.5) / size as f32;
+            // Half-width of a pointed oval along v.
+            let half = 0.9 * (std::f32::consts::PI * v).sin().powf(0.8) * (1.0 - 0.3 * v);
+            let inside = u.abs() <= half && v < 0.96;
+            let rib = (u.abs() < 0.06) as u8;
+            let shade = (1.0 - 0.4 * u.abs() / half.max(1e-3)).clamp(0.5, 1.0);
+            let g = (150.0 * shade) as u8;
+            texels.push(if inside {
+                [40 + 40 * rib, g + 30 * rib, 30, 255]
+            } else {
+                [40, 90, 30, 0]
+            });
+        }
+    }
+    Texture {
+        name: "leaf.png".into(),
+        width: size,
+        height: size,
+        texels,
+        wrap_u: Wrap::ClampToEdge,
+        wrap_v: Wrap::ClampToEdge,
+    }
+}
+
+/// A broadleaf tree about 8 units tall (+Y up, base at the origin): a tapering trunk and
+/// `branches` branches (opaque bark beams) and `leaves` leaf cards (double-sided, MASK 0.5,
+/// [`leaf_texture`], tinted per card by vertex colour) clustered around the branch tips in
+/// an ellipsoidal crown. Deterministic for a seed.
+pub fn leafy_tree(leaves: u32, branches: u32, seed: u64) -> Scene {
+    let mut rng = Pcg32::seeded(seed, 11);
+    let mut sb = SceneBuilder::new();
+    sb.scene.textures.push(leaf_texture(64));
+    let bark = sb.material(opaque("bark", Vec3::new(0.28, 0.18, 0.10), false));
+    let leaf = sb.material(Material {
+        name: "leaf".into(),
+        base_color_factor: Vec4::ONE,
+        base_color_texture: Some(0),
+        alpha_mode: AlphaMode::Mask { cutoff: 0.5 },
+        double_sided: true,
+    });
+    let trunk_mesh = sb.mesh("trunk");
+    let leaf_mesh = sb.mesh("leaves");
+    let top = Vec3::new(0.0, 3.2, 0.0);
+    beam(&mut sb, Vec3::ZERO, top, 0.35, bark, trunk_mesh);
+    let crown = Vec3::new(0.0, 5.0, 0.0);
+    let radii = Vec3::new(2.6, 2.0, 2.6);
+    let mut tips = Vec::new();
+    for b in 0..branches.max(1) {
+        let angle = TAU * (b as f32 + 0.3 * rng.next_f32()) / branches.max(1) as f32;
+        let rise = 0.2 + 0.8 * rng.next_f32();
+        let dir = Vec3::new(angle.cos(), rise, angle.sin()).normalize();
+        let start = Vec3::new(0.0, 2.4 + 0.8 * rng.next_f32(), 0.0);
+        let tip = crown + dir * radii * (0.55 + 0.35 * rng.next_f32());
+        beam(&mut sb, start, tip, 0.12, bark, trunk_mesh);
+        tips.push(tip);
+    }
+    for i in 0..leaves {
+        let tip = tips[i as usize % tips.len()];
+        // A point in a ball around the branch tip, kept inside the crown.
+        let off = loop {
+            let p = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0;
+            if p.length_squared() <= 1.0 {
+                break p;
+            }
+        };
+        let c = tip + off * Vec3::new(1.1, 0.8, 1.1);
+        let n = Vec3::new(
+            rng.next_f32() - 0.5,
+            rng.next_f32() - 0.2,
+            rng.next_f32() - 0.5,
+        )
+        .normalize_or(Vec3::Y);
+        let along = n.any_orthonormal_vector();
+        let side = n.cross(along);
+        let (len, wid) = (0.55 + 0.25 * rng.next_f32(), 0.35);
+        let a = along * len * 0.5;
+        let w = side * wid * 0.5;
+        // a: bottom-left (stem end), counter-clockwise seen from +n.
+        let p = [c - a - w, c - a + w, c + a + w, c + a - w];
+        let tint = 0.75 + 0.25 * rng.next_f32();
+        let colour = Vec4::new(tint, tint, 0.8 + 0.2 * rng.next_f32(), 1.0);
+        sb.quad(p, colour, leaf, leaf_mesh);
+    }
+    sb.finish()
+}
+
 /// Writes a scene as Wavefront OBJ + MTL (positions, normals, UVs; vertex colours as the
-/// common `v x y z r g b` extension). Used to ship the procedural shapes as fixture files.
+/// common `v x y z r g b` extension; a material's base-colour texture as a PNG beside the
+/// OBJ named after the texture, `map_Kd` + `map_d`). Used to ship the procedural shapes as
+/// fixture files.
 pub fn write_obj(scene: &Scene, obj_path: &Path) -> std::io::Result<()> {
     let mtl_path = obj_path.with_extension("mtl");
     let mtl_name = mtl_path
@@ -329,13 +428,31 @@ pub fn write_obj(scene: &Scene, obj_path: &Path) -> std::io::Result<()> {
         .and_then(|s| s.to_str())
         .unwrap_or("out.mtl");
     let mut mtl = Vec::new();
+    let dir = obj_path.parent().unwrap_or(Path::new("."));
     for m in &scene.materials {
         let c = m.base_color_factor;
         writeln!(
             mtl,
-            "newmtl {}\nKd {} {} {}\nd {}\n",
+            "newmtl {}\nKd {} {} {}\nd {}",
             m.name, c.x, c.y, c.z, c.w
         )?;
+        if let Some(t) = m
+            .base_color_texture
+            .and_then(|i| scene.textures.get(i as usize))
+        {
+            // The texture beside the OBJ; its alpha is the material's cut-out (map_d).
+            let bytes: Vec<u8> = t.texels.iter().flatten().copied().collect();
+            image::save_buffer(
+                dir.join(&t.name),
+                &bytes,
+                t.width,
+                t.height,
+                image::ExtendedColorType::Rgba8,
+            )
+            .map_err(std::io::Error::other)?;
+            writeln!(mtl, "map_Kd {0}\nmap_d {0}", t.name)?;
+        }
+        writeln!(mtl)?;
     }
     let mut obj = Vec::new();
     writeln!(obj, "# generated by billow::procgen\nmtllib {mtl_name}")?;
