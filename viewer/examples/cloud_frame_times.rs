@@ -3,9 +3,11 @@
 //! API, so the same file builds against older revisions for before/after tables.
 //!
 //! `cargo run --release -p billow-view --example cloud_frame_times -- CLOUD.billow
-//! [SIZE] [FRAMES]` (run with `NODEVICE_SELECT=1` on Mesa). Per instance count: the
+//! [SIZE] [FRAMES] [shadows|noshadows] [LEVEL]` (run with `NODEVICE_SELECT=1` on Mesa). Per instance count: the
 //! instances on a square grid 2.5 bounding-sphere radii apart, the camera fitting all of
-//! them, LOD distances the viewer's default, shadows on; 5 warm-up frames, then
+//! them, LOD distances the viewer's default, shadows on unless `noshadows`, every instance at
+//! billboard level `LEVEL` when given (the LOD distance forced just past its switch,
+//! no morph); 5 warm-up frames, then
 //! `FRAMES` frames, each timed as CPU = `Renderer::render` (plan, encode, submit) and
 //! GPU = the wait for the queue right after (submit→idle wall time: the adapter's
 //! timestamp queries are not enabled by the viewer). Prints medians, quads drawn, draw
@@ -36,6 +38,8 @@ fn main() {
     };
     let size: u32 = args.get(2).map_or(256, |s| s.parse().expect("SIZE"));
     let frames: usize = args.get(3).map_or(15, |s| s.parse().expect("FRAMES"));
+    let shadows = args.get(4).is_none_or(|s| s != "noshadows");
+    let level: Option<usize> = args.get(5).map(|s| s.parse().expect("LEVEL"));
     let asset = CloudAsset::read(std::path::Path::new(path)).expect("read the cloud");
     let b = &asset.header.bounds;
     let (lo, hi) = (Vec3::from(b.min), Vec3::from(b.max));
@@ -61,7 +65,11 @@ fn main() {
         let fov = 0.8f32;
         r.add_cloud(&asset, instances, None, 0.25, fov)
             .expect("add the cloud");
-        r.set_shadows(true);
+        r.set_shadows(shadows);
+        if let Some(k) = level {
+            let d = billow_view::render::default_lod_distances(radius, fov, asset.levels.len() + 1);
+            r.lod_distance_override = Some(1.01 * d[k - 1]);
+        }
         // Seen from above at 45°, far enough for the whole grid.
         let extent = 0.5 * side as f32 * step + radius;
         let dist = 1.6 * extent / (0.5 * fov).tan();
@@ -114,5 +122,11 @@ fn main() {
             &lods[..asset.levels.len() + 1]
         );
     }
-    println!("\nadapter: {adapter}, {size}x{size}, {frames} frames after 5 warm-up, shadows on");
+    println!(
+        "\nadapter: {adapter}, {size}x{size}, {frames} frames after 5 warm-up, shadows {}",
+        if shadows { "on" } else { "off" }
+    );
+    if let Some(k) = level {
+        println!("every instance at billboard level {k}");
+    }
 }
