@@ -2,8 +2,8 @@
 //! 1. `shadow` — the light's depth map (meshes, clouds, volumes cast), only with
 //!    shadows on and something to cast ([`crate::shadow`]);
 //! 2. `mesh` — opaque meshes (and kept cloud trunks, the ground), depth write;
-//! 3. `cloud` — billboard clouds: foliage meshes alpha-tested, billboards sorted and
-//!    blended after a depth pre-pass ([`crate::cloud_pass`]);
+//! 3. `cloud` — billboard clouds: foliage meshes and billboards alpha-tested, depth
+//!    write, one instanced draw per (cloud, level, atlas) ([`crate::cloud_pass`]);
 //! 4. `volume` — volumetric-billboard slices, back to front, depth test only, blended
 //!    into Rgba16Float ([`crate::volume_pass`], [`crate::volume_plan`]);
 //! 5. `resolve` — the read-back (headless) or the blit to the window.
@@ -13,7 +13,7 @@
 use billow_format::{CloudAsset, Prism, VolumeAsset};
 use glam::{Mat4, Vec3};
 
-use crate::cloud_pass::{select_level, CloudDraw, CloudPass, GpuCloud};
+use crate::cloud_pass::{select_level, CloudDraw, CloudFrame, CloudPass, GpuCloud, View};
 use crate::mesh_pass::{GpuMesh, MeshData, MeshFrame, MeshPass};
 use crate::shadow::{self, ShadowMap, SHADOW_MAP_SIZE};
 use crate::target::{RgbaImage, Target};
@@ -48,6 +48,9 @@ pub struct FrameStats {
     pub shadow_slices: usize,
     /// Billboard quads (sides) drawn.
     pub cloud_quads: usize,
+    /// Bytes written to the GPU per frame for the clouds (instance data and frame
+    /// uniforms; the per-asset buffers are uploaded once).
+    pub cloud_bytes_uploaded: usize,
     /// Particles drawn (at the frame's time).
     pub particles: usize,
 }
@@ -351,6 +354,14 @@ impl Renderer {
             .collect()
     }
 
+    /// Buffers and bind groups the cloud pass has made for frames (not uploads) so far:
+    /// constant from frame to frame once the instance count stops growing.
+    pub fn cloud_resources_created(&self) -> u64 {
+        self.cloud_pass
+            .as_ref()
+            .map_or(0, |p| p.resources_created())
+    }
+
     /// Whether anything casts into a shadow map.
     fn has_casters(&self) -> bool {
         self.passes().contains(&"shadow")
@@ -429,7 +440,6 @@ impl Renderer {
                 let (level, morph) = levels[k];
                 out.push(CloudDraw {
                     cloud: &c.gpu,
-                    instance: k as u32,
                     model: *m,
                     level,
                     morph,
@@ -455,6 +465,16 @@ impl Renderer {
         let levels = self.cloud_levels(camera);
         stats.cloud_lods = levels.clone();
         let cloud_draws = self.cloud_draws(&levels);
+        // The instance data serves the shadow and the main pass (it does not depend on
+        // the view): written once, before anything is encoded.
+        let cloud_frame = self
+            .cloud_pass
+            .as_ref()
+            .map(|p| p.frame(&self.gpu, &cloud_draws));
+        if let Some(cf) = &cloud_frame {
+            stats.cloud_quads = cf.quads;
+            stats.cloud_bytes_uploaded = cf.bytes_uploaded;
+        }
         let mut enc = device.create_command_encoder(&Default::default());
 
         // 1. Shadow map.
@@ -462,7 +482,7 @@ impl Renderer {
             Some(map) if self.has_casters() => {
                 let (centre, radius) = self.content_sphere();
                 let light = shadow::light_camera(self.light_dir, centre, radius, map.size);
-                self.shadow_pass(&mut enc, map, &light, &cloud_draws, &mut stats)?;
+                self.shadow_pass(&mut enc, map, &light, cloud_frame.as_ref(), &mut stats)?;
                 Some((map, light))
             }
             _ => None,
@@ -506,11 +526,9 @@ impl Renderer {
             .mesh_pass
             .as_ref()
             .map(|p| p.frame_bind_group_from(&self.gpu, &mesh_frame));
-        let cloud_frame = self.cloud_pass.as_ref().map(|p| {
-            (
-                p.frame_bind_group(&self.gpu, &mesh_frame),
-                p.frame(&self.gpu, &cloud_draws, camera.view),
-            )
+        let cloud_bind = self.cloud_pass.as_ref().map(|p| {
+            stats.cloud_bytes_uploaded += std::mem::size_of::<MeshFrame>();
+            p.frame_bind_group(&self.gpu, View::Camera, &mesh_frame)
         });
         // With particles the opaque + volume image goes to the layer's scene target and
         // the composite writes the frame.
@@ -552,9 +570,9 @@ impl Renderer {
                     stats.draw_calls += pass.draw(&mut rp, bind, receiver, m, false);
                 }
             }
-            if let (Some(pass), Some((bind, cf))) = (&self.cloud_pass, &cloud_frame) {
+            if let (Some(pass), Some(bind), Some(cf)) = (&self.cloud_pass, cloud_bind, &cloud_frame)
+            {
                 stats.draw_calls += pass.draw(&mut rp, bind, receiver, cf, false);
-                stats.cloud_quads = cf.quads;
             }
             if let (Some(pass), Some(plan)) = (&self.volume_pass, &plan) {
                 stats.draw_calls += plan.draw(&mut rp, &pass.pipeline, &self.batches, receiver);
@@ -592,7 +610,7 @@ impl Renderer {
         enc: &mut wgpu::CommandEncoder,
         map: &ShadowMap,
         light: &ViewCamera,
-        clouds: &[CloudDraw<'_>],
+        clouds: Option<&CloudFrame<'_>>,
         stats: &mut FrameStats,
     ) -> Result<(), ViewError> {
         let mut params = self.params;
@@ -620,10 +638,10 @@ impl Renderer {
                 pass.draw(&mut rp, &bind, none, m, true);
             }
         }
-        if let Some(pass) = &self.cloud_pass {
-            let bind = pass.frame_bind_group(&self.gpu, &frame);
-            let cf = pass.frame(&self.gpu, clouds, light.view);
-            pass.draw(&mut rp, &bind, none, &cf, true);
+        if let (Some(pass), Some(cf)) = (&self.cloud_pass, clouds) {
+            let bind = pass.frame_bind_group(&self.gpu, View::Light, &frame);
+            stats.cloud_bytes_uploaded += std::mem::size_of::<MeshFrame>();
+            pass.draw(&mut rp, bind, none, cf, true);
         }
         if let (Some(pass), Some(plan)) = (&self.volume_pass, &plan) {
             plan.draw(&mut rp, &pass.shadow_pipeline, &self.batches, none);

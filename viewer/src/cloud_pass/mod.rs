@@ -11,21 +11,33 @@
 //! At `a = 1` every vertex lies in its parent billboard's plane, so the silhouette does
 //! not pop when the parent replaces it (only the texture changes).
 //!
-//! The foliage mesh is alpha-tested (its materials' cut-off), writes depth and is lit
-//! like meshes. Billboards are semi-transparent: per frame and instance their quads are
-//! sorted back to front (by the depth of their morphed centres) and blended
-//! (premultiplied "over", atlases are premultiplied, SPEC §9) without writing depth,
-//! after a depth-only pre-pass of the texels with alpha ≥ [`BILLBOARD_CUTOFF`], so the
-//! dense parts occlude what lies behind them (meshes, other clouds and volume slices
-//! drawn later test against them) while thin leaves keep their partial coverage at a
-//! distance — an alpha test alone would erase leaves whose coverage in a texel is below
-//! the cut-off. Each billboard is two one-sided quads: the front texture seen from
-//! `+normal`, the back from `−normal`. Lighting is baked into the atlases.
+//! The foliage mesh and the billboards are alpha-tested and write depth, so nothing is
+//! sorted and nothing is blended (the paper alpha-tests its billboards, §6). The foliage
+//! mesh uses its materials' cut-off and is lit like meshes. A billboard texel passes
+//! when its (premultiplied, SPEC §9) alpha reaches [`BILLBOARD_CUTOFF`] and is drawn
+//! opaque in its straight colour `rgb / a`: lighting baked into the atlases (the
+//! default) is scaled only by the shadow, `ambient + (1 − ambient)·visibility`; an asset
+//! baked unlit with normal maps (`--normal-map --unlit`) is lit here with the mesh
+//! pass's model, `ambient + (1 − ambient)·|N·L|·visibility`, N decoded from the
+//! tangent-space normal map (T = U, B = −V, N = ± the plane normal, SPEC §9.4). Each
+//! billboard is two one-sided quads: the front texture seen from `+normal`, the back from
+//! `−normal` (back faces culled).
+//!
+//! Buffers: an asset's vertices and indices (per (level, atlas) group, fixed quad order)
+//! are uploaded once ([`CloudPass::upload`]); the morph runs in the vertex shader
+//! (`mix(pos, target, morph)`). Per frame only the instance data changes: one persistent
+//! instance buffer, written with `queue.write_buffer` (re-created only when the instance
+//! count outgrows it), instances grouped by (cloud, level) so that each (cloud, level,
+//! atlas group) is one instanced draw. The frame uniforms (camera and light, one buffer
+//! each so the shadow pass does not overwrite what the main pass reads in the same
+//! submission) and their bind groups are made once with the pass.
+
+use std::cell::{Cell, RefCell};
 
 use bytemuck::{Pod, Zeroable};
 use glam::Mat4;
 
-use crate::layout::{frame_layout, material_layout, shader, Pipeline};
+use crate::layout::{entry, frame_layout, sampler, shader, texture, uniform, Pipeline};
 use crate::mesh_pass::MeshFrame;
 use crate::target::COLOR_FORMAT;
 use crate::texture::{repeat_sampler, upload_rgba8_mips, TextureData};
@@ -33,9 +45,9 @@ use crate::Gpu;
 
 mod upload;
 pub use upload::GpuCloud;
-use upload::MeshRange;
 
-/// Texels at least this opaque write depth (the pre-pass) and cast shadows.
+/// Billboard texels at least this opaque (premultiplied alpha) are drawn, write depth
+/// and cast shadows; the others are discarded.
 pub const BILLBOARD_CUTOFF: f32 = 0.5;
 
 #[repr(C)]
@@ -46,6 +58,9 @@ pub struct CloudVertex {
     pub target: [f32; 3],
     pub normal: [f32; 3],
     pub uv: [f32; 2],
+    /// Billboards: `xyz` = T (the billboard's U), `w` = the sign `s` with
+    /// B = `s`·(N × T) = −V (−1 on the front side, +1 on the back; SPEC §9.4).
+    pub tangent: [f32; 4],
 }
 
 #[repr(C)]
@@ -59,7 +74,8 @@ pub struct CloudInstance {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 struct DrawUniform {
-    /// x: alpha cut-off, y: 1 = premultiplied texels, z: 1 = lit (Lambert), w: 1 = textured.
+    /// x: alpha cut-off, y: 1 = premultiplied texels, z: 1 = billboards lit at runtime
+    /// from the normal map, w: 1 = textured.
     params: [f32; 4],
     /// Linear base colour factor.
     color: [f32; 4],
@@ -82,46 +98,63 @@ pub fn select_level(z: f32, distances: &[f32], transition: f32) -> (usize, f32) 
 /// One cloud instance to draw this frame.
 pub struct CloudDraw<'a> {
     pub cloud: &'a GpuCloud,
-    /// Index into the frame's instance buffer.
-    pub instance: u32,
     pub model: Mat4,
     pub level: usize,
     pub morph: f32,
 }
 
-/// A frame's cloud work: the instance and index buffers and the draws.
+/// A frame's cloud work: the instance ranges of each (cloud, level) in the persistent
+/// instance buffer, written by [`CloudPass::frame`].
 pub struct CloudFrame<'a> {
     instances: wgpu::Buffer,
-    indices: wgpu::Buffer,
-    /// (vertex buffer, material range, instance).
-    mesh_draws: Vec<(&'a wgpu::Buffer, &'a MeshRange, u32)>,
-    /// (vertex buffer, atlas bind group, index range, instance).
-    quad_draws: Vec<(
-        &'a wgpu::Buffer,
-        &'a wgpu::BindGroup,
-        std::ops::Range<u32>,
-        u32,
-    )>,
-    /// Billboard quads drawn.
+    /// (cloud, level, instance range).
+    groups: Vec<(&'a GpuCloud, usize, std::ops::Range<u32>)>,
+    /// Billboard quads (sides) drawn.
     pub quads: usize,
+    /// Bytes written to the GPU for this frame's clouds (instances and frame uniforms).
+    pub bytes_uploaded: usize,
+}
+
+/// Which persistent frame uniform a pass uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum View {
+    Camera,
+    Light,
 }
 
 pub struct CloudPass {
     foliage: wgpu::RenderPipeline,
-    depth: wgpu::RenderPipeline,
-    blend: wgpu::RenderPipeline,
+    billboard: wgpu::RenderPipeline,
     shadow: wgpu::RenderPipeline,
-    pub frame_layout: wgpu::BindGroupLayout,
     draw_layout: wgpu::BindGroupLayout,
     sampler: wgpu::Sampler,
     white: wgpu::TextureView,
+    /// The flat normal (128, 128, 255), bound where an asset has no normal map.
+    flat_normal: wgpu::TextureView,
+    /// Frame uniforms and their bind groups: the camera's, the light's.
+    frames: [(wgpu::Buffer, wgpu::BindGroup); 2],
+    /// The persistent instance buffer and its capacity in instances.
+    instances: RefCell<(wgpu::Buffer, u64)>,
+    /// Buffers and bind groups made after [`CloudPass::new`] outside uploads (instance
+    /// buffer growth).
+    created: Cell<u64>,
+}
+
+const INSTANCE_SIZE: u64 = std::mem::size_of::<CloudInstance>() as u64;
+
+fn instance_buffer(gpu: &Gpu, capacity: u64) -> wgpu::Buffer {
+    gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("cloud instances"),
+        size: capacity.max(1) * INSTANCE_SIZE,
+        usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
 }
 
 #[derive(Clone, Copy)]
 enum Kind {
     Foliage,
-    Depth,
-    Blend,
+    Billboard,
     Shadow,
 }
 
@@ -137,17 +170,27 @@ impl CloudPass {
             ],
         );
         let frame_layout = frame_layout(device, "cloud frame");
-        let draw_layout = material_layout(device, "cloud draw");
+        let fs = wgpu::ShaderStages::FRAGMENT;
+        let d2 = wgpu::TextureViewDimension::D2;
+        let draw_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("cloud draw"),
+            entries: &[
+                entry(0, fs, uniform(false)),
+                entry(1, fs, texture(d2)),
+                entry(2, fs, sampler()),
+                entry(3, fs, texture(d2)),
+            ],
+        });
         let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("cloud"),
             bind_group_layouts: &[Some(&frame_layout), Some(&draw_layout), Some(shadow_layout)],
             immediate_size: 0,
         });
         let vattrs = wgpu::vertex_attr_array![
-            0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32x2
+            0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32x2, 4 => Float32x4
         ];
         let iattrs = wgpu::vertex_attr_array![
-            4 => Float32x4, 5 => Float32x4, 6 => Float32x4, 7 => Float32x4, 8 => Float32x4
+            5 => Float32x4, 6 => Float32x4, 7 => Float32x4, 8 => Float32x4, 9 => Float32x4
         ];
         let buffers = [
             Some(wgpu::VertexBufferLayout {
@@ -156,61 +199,28 @@ impl CloudPass {
                 attributes: &vattrs,
             }),
             Some(wgpu::VertexBufferLayout {
-                array_stride: std::mem::size_of::<CloudInstance>() as u64,
+                array_stride: INSTANCE_SIZE,
                 step_mode: wgpu::VertexStepMode::Instance,
                 attributes: &iattrs,
             }),
         ];
         let make = |kind: Kind| {
-            let (label, fs, cull, blend, writes, depth_write, compare) = match kind {
-                Kind::Foliage => (
-                    "cloud foliage",
-                    "fs_foliage",
-                    None,
-                    None,
-                    wgpu::ColorWrites::ALL,
-                    true,
-                    wgpu::CompareFunction::Less,
-                ),
-                Kind::Depth => (
-                    "cloud depth pre-pass",
-                    "fs_depth",
-                    Some(wgpu::Face::Back),
-                    None,
-                    wgpu::ColorWrites::empty(),
-                    true,
-                    wgpu::CompareFunction::Less,
-                ),
-                Kind::Blend => (
-                    "cloud billboards",
-                    "fs_blend",
-                    Some(wgpu::Face::Back),
-                    Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
-                    wgpu::ColorWrites::ALL,
-                    false,
-                    wgpu::CompareFunction::LessEqual,
-                ),
-                Kind::Shadow => (
-                    "cloud shadow",
-                    "fs_shadow",
-                    None,
-                    None,
-                    wgpu::ColorWrites::empty(),
-                    true,
-                    wgpu::CompareFunction::Less,
-                ),
+            let (label, fs, cull) = match kind {
+                Kind::Foliage => ("cloud foliage", "fs_foliage", None),
+                Kind::Billboard => ("cloud billboards", "fs_billboard", Some(wgpu::Face::Back)),
+                Kind::Shadow => ("cloud shadow", "fs_shadow", None),
             };
             Pipeline {
                 fs,
                 buffers: &buffers,
                 cull,
-                depth: Some((depth_write, compare)),
+                depth: Some((true, wgpu::CompareFunction::Less)),
                 target: match kind {
                     Kind::Shadow => None,
                     _ => Some(wgpu::ColorTargetState {
                         format: COLOR_FORMAT,
-                        blend,
-                        write_mask: writes,
+                        blend: None,
+                        write_mask: wgpu::ColorWrites::ALL,
                     }),
                 },
                 ..Pipeline::new(label, &pl, &module)
@@ -220,82 +230,115 @@ impl CloudPass {
         let sampler = repeat_sampler(device, "cloud texture");
         let white =
             upload_rgba8_mips(gpu, &TextureData::white(), "white").create_view(&Default::default());
+        let flat_normal = upload::linear_texture(gpu, 1, 1, &[vec![128, 128, 255, 255]])
+            .create_view(&Default::default());
+        let frames = [View::Camera, View::Light].map(|v| {
+            let buf = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(match v {
+                    View::Camera => "cloud frame (camera)",
+                    View::Light => "cloud frame (light)",
+                }),
+                size: std::mem::size_of::<MeshFrame>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let bind = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("cloud frame"),
+                layout: &frame_layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: buf.as_entire_binding(),
+                }],
+            });
+            (buf, bind)
+        });
         CloudPass {
             foliage: make(Kind::Foliage),
-            depth: make(Kind::Depth),
-            blend: make(Kind::Blend),
+            billboard: make(Kind::Billboard),
             shadow: make(Kind::Shadow),
-            frame_layout,
             draw_layout,
             sampler,
             white,
+            flat_normal,
+            frames,
+            instances: RefCell::new((instance_buffer(gpu, 1), 1)),
+            created: Cell::new(0),
         }
     }
 
-    /// Plans a frame's clouds for a camera with world → view `view`: the instance
-    /// buffer, and per billboard instance its quads sorted back to front.
-    pub fn frame<'a>(&self, gpu: &Gpu, draws: &[CloudDraw<'a>], view: Mat4) -> CloudFrame<'a> {
-        let mut inst: Vec<CloudInstance> = Vec::new();
-        let mut indices: Vec<u32> = Vec::new();
-        let mut mesh_draws = Vec::new();
-        let mut quad_draws = Vec::new();
-        let mut quads = 0;
+    /// Buffers and bind groups the pass has made for frames since it was built (the
+    /// instance buffer's growth): constant once the instance count stops growing.
+    pub fn resources_created(&self) -> u64 {
+        self.created.get()
+    }
+
+    /// Plans a frame's clouds: instances grouped by (cloud, level) — in the order of
+    /// each cloud's first draw, levels ascending, draw order within a group — and
+    /// written to the persistent instance buffer (grown when too small). The same frame
+    /// serves the shadow pass and the main pass: instance data does not depend on the
+    /// view.
+    pub fn frame<'a>(&self, gpu: &Gpu, draws: &[CloudDraw<'a>]) -> CloudFrame<'a> {
+        // (cloud, per level: its instances).
+        let mut clouds: Vec<(&'a GpuCloud, Vec<Vec<CloudInstance>>)> = Vec::new();
         for d in draws {
-            let i = inst.len() as u32;
-            inst.push(instance(d.model, d.morph));
-            if d.level == 0 {
-                for r in &d.cloud.foliage {
-                    mesh_draws.push((&d.cloud.buffer, r, i));
+            let i = match clouds.iter().position(|(c, _)| std::ptr::eq(*c, d.cloud)) {
+                Some(i) => i,
+                None => {
+                    clouds.push((d.cloud, vec![Vec::new(); d.cloud.level_count()]));
+                    clouds.len() - 1
                 }
-                continue;
-            }
-            let Some(groups) = d.cloud.billboard_levels.get(d.level - 1) else {
-                continue;
             };
-            let mv = view * d.model;
-            for g in groups {
-                let mut order: Vec<(f32, u32)> = g
-                    .centres
-                    .iter()
-                    .enumerate()
-                    .map(|(q, (own, target))| {
-                        let p = mv.transform_point3(own.lerp(*target, d.morph));
-                        (p.z, q as u32)
-                    })
-                    .collect();
-                // Far first: most negative view z first; ties by quad index.
-                order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-                let start = indices.len() as u32;
-                for (_, q) in &order {
-                    let b = g.first_vertex + 4 * q;
-                    indices.extend_from_slice(&[b, b + 1, b + 2, b, b + 2, b + 3]);
-                }
-                quads += order.len();
-                quad_draws.push((&d.cloud.buffer, &g.bind, start..indices.len() as u32, i));
+            if let Some(level) = clouds[i].1.get_mut(d.level) {
+                level.push(instance(d.model, d.morph));
             }
         }
-        inst.resize(inst.len().max(1), CloudInstance::default());
-        indices.resize(indices.len().max(3), 0);
+        let mut data: Vec<CloudInstance> = Vec::with_capacity(draws.len());
+        let mut groups = Vec::new();
+        let mut quads = 0;
+        for (cloud, levels) in clouds {
+            for (level, inst) in levels.into_iter().enumerate() {
+                if inst.is_empty() {
+                    continue;
+                }
+                let start = data.len() as u32;
+                data.extend_from_slice(&inst);
+                if level > 0 {
+                    quads += cloud.quads(level) * inst.len();
+                }
+                groups.push((cloud, level, start..data.len() as u32));
+            }
+        }
+        let mut held = self.instances.borrow_mut();
+        let n = data.len() as u64;
+        if n > held.1 {
+            let cap = n.next_power_of_two();
+            *held = (instance_buffer(gpu, cap), cap);
+            self.created.set(self.created.get() + 1);
+        }
+        if !data.is_empty() {
+            gpu.queue
+                .write_buffer(&held.0, 0, bytemuck::cast_slice(&data));
+        }
         CloudFrame {
-            instances: gpu.buffer(
-                "cloud instances",
-                bytemuck::cast_slice(&inst),
-                wgpu::BufferUsages::VERTEX,
-            ),
-            indices: gpu.buffer(
-                "cloud indices",
-                bytemuck::cast_slice(&indices),
-                wgpu::BufferUsages::INDEX,
-            ),
-            mesh_draws,
-            quad_draws,
+            instances: held.0.clone(),
+            groups,
             quads,
+            bytes_uploaded: std::mem::size_of_val(data.as_slice()),
         }
     }
 
-    /// Records the frame's clouds: the foliage meshes, then the billboards' depth
-    /// pre-pass and their sorted blend (`shadow`: everything alpha-tested into the
-    /// shadow map). Returns the draw calls.
+    /// Writes the frame uniform of `view` (written, not re-created) and returns its
+    /// bind group. The camera and the light have their own buffers: writes are applied
+    /// before the submission, so one shared buffer would give both passes the last one.
+    pub fn frame_bind_group(&self, gpu: &Gpu, view: View, frame: &MeshFrame) -> &wgpu::BindGroup {
+        let (buf, bind) = &self.frames[view as usize];
+        gpu.queue.write_buffer(buf, 0, bytemuck::bytes_of(frame));
+        bind
+    }
+
+    /// Records the frame's clouds: per (cloud, level) the foliage mesh's materials or
+    /// the billboards' atlas groups, each one instanced draw (`shadow`: everything
+    /// alpha-tested into the shadow map). Returns the draw calls.
     pub fn draw(
         &self,
         rp: &mut wgpu::RenderPass<'_>,
@@ -308,46 +351,33 @@ impl CloudPass {
         rp.set_bind_group(0, frame_bind, &[]);
         rp.set_bind_group(2, receiver, &[]);
         rp.set_vertex_buffer(1, f.instances.slice(..));
-        rp.set_index_buffer(f.indices.slice(..), wgpu::IndexFormat::Uint32);
-        rp.set_pipeline(if shadow { &self.shadow } else { &self.foliage });
-        for (b, r, i) in &f.mesh_draws {
-            rp.set_vertex_buffer(0, b.slice(..));
-            rp.set_bind_group(1, &r.bind, &[]);
-            rp.draw(r.vertices.clone(), *i..*i + 1);
-            n += 1;
-        }
-        let passes: &[&wgpu::RenderPipeline] = if shadow {
-            &[&self.shadow]
-        } else {
-            &[&self.depth, &self.blend]
-        };
-        for p in passes {
-            rp.set_pipeline(p);
-            for (b, bind, range, i) in &f.quad_draws {
-                rp.set_vertex_buffer(0, b.slice(..));
-                rp.set_bind_group(1, *bind, &[]);
-                rp.draw_indexed(range.clone(), 0, *i..*i + 1);
+        for &(cloud, level, ref range) in &f.groups {
+            rp.set_vertex_buffer(0, cloud.vertices.slice(..));
+            if level == 0 {
+                rp.set_pipeline(if shadow { &self.shadow } else { &self.foliage });
+                for r in &cloud.foliage {
+                    rp.set_bind_group(1, &r.bind, &[]);
+                    rp.draw(r.vertices.clone(), range.clone());
+                    n += 1;
+                }
+                continue;
+            }
+            let Some(atlas_groups) = cloud.billboard_levels.get(level - 1) else {
+                continue;
+            };
+            rp.set_pipeline(if shadow {
+                &self.shadow
+            } else {
+                &self.billboard
+            });
+            rp.set_index_buffer(cloud.indices.slice(..), wgpu::IndexFormat::Uint32);
+            for g in atlas_groups {
+                rp.set_bind_group(1, &g.bind, &[]);
+                rp.draw_indexed(g.indices.clone(), 0, range.clone());
                 n += 1;
             }
         }
         n
-    }
-
-    /// The frame bind group (the mesh pass's frame uniform layout).
-    pub fn frame_bind_group(&self, gpu: &Gpu, frame: &MeshFrame) -> wgpu::BindGroup {
-        let buf = gpu.buffer(
-            "cloud frame",
-            bytemuck::bytes_of(frame),
-            wgpu::BufferUsages::UNIFORM,
-        );
-        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("cloud frame"),
-            layout: &self.frame_layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: buf.as_entire_binding(),
-            }],
-        })
     }
 }
 

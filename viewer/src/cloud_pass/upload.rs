@@ -1,6 +1,7 @@
-//! Uploading a cloud asset for [`super::CloudPass`]: atlases and mesh textures, the
-//! billboard quads grouped by (level, atlas), the foliage mesh grouped by material, and
-//! the kept (trunk) mesh handed to the mesh pass.
+//! Uploading a cloud asset for [`super::CloudPass`], once: atlases (and their normal
+//! maps) and mesh textures, one vertex buffer (the foliage mesh grouped by material, the
+//! billboard quads by (level, atlas)) and one index buffer (the quads of each (level,
+//! atlas) group in a fixed order), and the kept (trunk) mesh handed to the mesh pass.
 
 use billow_format::{CloudAsset, NO_INDEX};
 use glam::Vec3;
@@ -16,17 +17,17 @@ pub(super) struct MeshRange {
     pub(super) bind: wgpu::BindGroup,
 }
 
-/// The quads of one billboard level that use one atlas: 4 vertices each from
-/// `first_vertex`, with their own and target (parent) centres for sorting.
+/// The quads of one billboard level that use one atlas: their range of the asset's
+/// index buffer (6 indices per quad side).
 pub(super) struct QuadGroup {
     pub(super) bind: wgpu::BindGroup,
-    pub(super) first_vertex: u32,
-    pub(super) centres: Vec<(Vec3, Vec3)>,
+    pub(super) indices: std::ops::Range<u32>,
 }
 
 /// A cloud asset on the GPU.
 pub struct GpuCloud {
-    pub(super) buffer: wgpu::Buffer,
+    pub(super) vertices: wgpu::Buffer,
+    pub(super) indices: wgpu::Buffer,
     /// Level 0: the foliage mesh, by material.
     pub(super) foliage: Vec<MeshRange>,
     /// Levels 1..: per billboard level, its quads by atlas.
@@ -34,6 +35,8 @@ pub struct GpuCloud {
     /// Billboards per billboard level (for the stats).
     pub billboards: Vec<u32>,
     pub foliage_triangles: u32,
+    /// Billboards lit at runtime from their normal maps (baked unlit, with `ANRM`).
+    pub runtime_lit: bool,
     /// Object-space bounds centre and radius.
     pub centre: Vec3,
     pub radius: f32,
@@ -46,6 +49,121 @@ impl GpuCloud {
     pub fn level_count(&self) -> usize {
         1 + self.billboard_levels.len()
     }
+
+    /// Quad sides drawn per instance of billboard level `level` (≥ 1).
+    pub fn quads(&self, level: usize) -> usize {
+        self.billboard_levels
+            .get(level.wrapping_sub(1))
+            .map_or(0, |g| g.iter().map(|q| q.indices.len() / 6).sum())
+    }
+}
+
+/// An `Rgba8Unorm` (linear) texture with exactly the given levels (level `i` is
+/// `max(1, w >> i)` × `max(1, h >> i)`): normal maps.
+pub(super) fn linear_texture(
+    gpu: &Gpu,
+    width: u32,
+    height: u32,
+    levels: &[Vec<u8>],
+) -> wgpu::Texture {
+    let tex = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("cloud normal map"),
+        size: wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: levels.len().max(1) as u32,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba8Unorm,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    for (l, texels) in levels.iter().enumerate() {
+        let (w, h) = ((width >> l).max(1), (height >> l).max(1));
+        gpu.queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &tex,
+                mip_level: l as u32,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            texels,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(4 * w),
+                rows_per_image: Some(h),
+            },
+            wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+        );
+    }
+    tex
+}
+
+/// Fraction of the texels whose alpha, scaled by `scale`, reaches `cutoff`.
+fn coverage(texels: &[u8], cutoff: f32, scale: f32) -> f64 {
+    let pass = texels
+        .chunks_exact(4)
+        .filter(|p| f32::from(p[3]) / 255.0 * scale >= cutoff)
+        .count();
+    pass as f64 / (texels.len() / 4).max(1) as f64
+}
+
+/// Scales a premultiplied sRGB level's alpha so that the fraction of texels passing the
+/// alpha test at `cutoff` is `target` (level 0's; Castaño, "Computing alpha mipmaps",
+/// 2010), keeping each texel's straight colour (premultiplied colour scaled with alpha).
+/// Averaged alpha MIPs thin an alpha-tested canopy with distance; assets whose MIPs
+/// already preserve coverage come out (almost) unchanged.
+fn preserve_coverage(level: &mut [u8], cutoff: f32, target: f64) {
+    let (mut lo, mut hi) = (0.0f32, 8.0f32);
+    for _ in 0..24 {
+        let mid = 0.5 * (lo + hi);
+        if coverage(level, cutoff, mid) < target {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    // Only ever scale up (a level never loses coverage to this), and leave a level that
+    // already has its share as it is.
+    let s = hi.max(1.0);
+    if s == 1.0 || coverage(level, cutoff, 1.0) >= target {
+        return;
+    }
+    let decode = |v: u8| {
+        let v = f32::from(v) / 255.0;
+        if v <= 0.04045 {
+            v / 12.92
+        } else {
+            ((v + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let encode = |v: f32| {
+        let v = v.clamp(0.0, 1.0);
+        let e = if v <= 0.003_130_8 {
+            12.92 * v
+        } else {
+            1.055 * v.powf(1.0 / 2.4) - 0.055
+        };
+        (e * 255.0).round() as u8
+    };
+    for p in level.chunks_exact_mut(4) {
+        if p[3] == 0 {
+            continue;
+        }
+        let a = f32::from(p[3]) / 255.0;
+        let a2 = (a * s).min(1.0);
+        let k = a2 / a;
+        for c in &mut p[..3] {
+            *c = encode(decode(*c) * k);
+        }
+        p[3] = (a2 * 255.0).round() as u8;
+    }
 }
 
 impl CloudPass {
@@ -55,18 +173,40 @@ impl CloudPass {
         params: [f32; 4],
         color: [f32; 4],
         view: &wgpu::TextureView,
+        normals: &wgpu::TextureView,
     ) -> wgpu::BindGroup {
-        gpu.uniform_texture_bind_group(
+        let buf = gpu.buffer(
             "cloud draw",
-            &self.draw_layout,
             bytemuck::bytes_of(&DrawUniform { params, color }),
-            view,
-            &self.sampler,
-        )
+            wgpu::BufferUsages::UNIFORM,
+        );
+        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("cloud draw"),
+            layout: &self.draw_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: buf.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::Sampler(&self.sampler),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::TextureView(normals),
+                },
+            ],
+        })
     }
 
-    /// Uploads a cloud asset: atlases, billboard quads grouped by (level, atlas), the
-    /// foliage mesh grouped by material; the trunk is returned as [`GpuCloud::trunk`].
+    /// Uploads a cloud asset: atlases (with their normal maps), billboard quads grouped
+    /// by (level, atlas), the foliage mesh grouped by material; the trunk is returned as
+    /// [`GpuCloud::trunk`]. Nothing of it changes afterwards.
     pub fn upload(&self, gpu: &Gpu, asset: &CloudAsset) -> Result<GpuCloud, ViewError> {
         asset
             .validate()
@@ -75,15 +215,35 @@ impl CloudPass {
             .atlases
             .iter()
             .map(|a| {
+                let mut mips = a.mips[1..].to_vec();
+                let target = coverage(&a.mips[0], BILLBOARD_CUTOFF, 1.0);
+                for m in &mut mips {
+                    preserve_coverage(m, BILLBOARD_CUTOFF, target);
+                }
                 let t = TextureData {
                     width: a.width,
                     height: a.height,
                     texels: a.mips[0].clone(),
                     premultiplied: true,
-                    mips: a.mips[1..].to_vec(),
+                    mips,
                     coverage_cutoff: None,
                 };
                 upload_rgba8_mips(gpu, &t, "cloud atlas").create_view(&Default::default())
+            })
+            .collect();
+        // Runtime lighting: every atlas has a normal map and the bake left lighting out.
+        let unlit = asset.header.params.get("light").map(String::as_str) == Some("unlit");
+        let has_normals =
+            !asset.atlases.is_empty() && asset.atlases.iter().all(|a| a.normals.is_some());
+        let runtime_lit = unlit && has_normals;
+        let normal_views: Vec<Option<wgpu::TextureView>> = asset
+            .atlases
+            .iter()
+            .map(|a| match (&a.normals, runtime_lit) {
+                (Some(n), true) => {
+                    Some(linear_texture(gpu, a.width, a.height, n).create_view(&Default::default()))
+                }
+                _ => None,
             })
             .collect();
         let mesh_textures: Vec<wgpu::TextureView> = asset
@@ -107,6 +267,7 @@ impl CloudPass {
             })
             .collect();
         let mut verts: Vec<CloudVertex> = Vec::new();
+        let mut indices: Vec<u32> = Vec::new();
         // Level 0: the foliage mesh, by material.
         let f = &asset.foliage;
         let mut foliage = Vec::new();
@@ -123,6 +284,7 @@ impl CloudPass {
                         target: f.morph[i as usize],
                         normal: v.normal,
                         uv: v.uv,
+                        tangent: [0.0; 4],
                     });
                 }
             }
@@ -139,11 +301,17 @@ impl CloudPass {
                 let textured = f32::from(u8::from(m.texture.is_some()));
                 foliage.push(MeshRange {
                     vertices: start..end,
-                    bind: self.bind(gpu, [cutoff, 0.0, 1.0, textured], m.base_color_factor, view),
+                    bind: self.bind(
+                        gpu,
+                        [cutoff, 0.0, 1.0, textured],
+                        m.base_color_factor,
+                        view,
+                        &self.flat_normal,
+                    ),
                 });
             }
         }
-        // Billboard levels, by atlas: 4 vertices per quad side.
+        // Billboard levels, by atlas: 4 vertices and 6 indices per quad side.
         let mut billboards = Vec::new();
         let mut billboard_levels = Vec::new();
         for l in &asset.levels {
@@ -152,10 +320,11 @@ impl CloudPass {
             billboards.push(l.billboard_count);
             let mut groups = Vec::new();
             for a in l.first_atlas..l.first_atlas + l.atlas_count {
-                let first_vertex = verts.len() as u32;
-                let mut centres = Vec::new();
+                let first_index = indices.len() as u32;
                 for b in bbs {
                     let n = Vec3::new(b.plane[0], b.plane[1], b.plane[2]);
+                    let u = (Vec3::from(b.corners[1]) - Vec3::from(b.corners[0]))
+                        .normalize_or(n.any_orthonormal_vector());
                     let has_parent = b.parent.is_some_and(|p| p != NO_INDEX);
                     let target = |c: usize| {
                         if has_parent {
@@ -166,39 +335,54 @@ impl CloudPass {
                     };
                     // Front: corners 0,1,2,3 (counter-clockwise from +normal); back: the
                     // reverse order, so both sides are front faces where they are seen.
-                    for (rect, order, nn) in [
-                        (&b.front, [0usize, 1, 2, 3], n),
-                        (&b.back, [0, 3, 2, 1], -n),
+                    // Tangent frame (SPEC §9.4): T = U, B = −V = s·(N × T), s = −1 on the
+                    // front (N = n, n × U = V), +1 on the back (N = −n).
+                    for (rect, order, nn, s) in [
+                        (&b.front, [0usize, 1, 2, 3], n, -1.0),
+                        (&b.back, [0, 3, 2, 1], -n, 1.0),
                     ] {
                         if rect.atlas != a {
                             continue;
                         }
                         let [u0, v0, u1, v1] = rect.uv;
                         let uv = [[u0, v0], [u1, v0], [u1, v1], [u0, v1]];
+                        let base = verts.len() as u32;
                         for c in order {
                             verts.push(CloudVertex {
                                 pos: b.corners[c],
                                 target: target(c),
                                 normal: nn.to_array(),
                                 uv: uv[c],
+                                tangent: [u.x, u.y, u.z, s],
                             });
                         }
-                        let mean = |p: [[f32; 3]; 4]| {
-                            p.iter().map(|q| Vec3::from(*q)).sum::<Vec3>() * 0.25
-                        };
-                        centres.push((mean(b.corners), mean([0, 1, 2, 3].map(target))));
+                        indices.extend_from_slice(&[
+                            base,
+                            base + 1,
+                            base + 2,
+                            base,
+                            base + 2,
+                            base + 3,
+                        ]);
                     }
                 }
-                if !centres.is_empty() {
+                let end = indices.len() as u32;
+                if end > first_index {
+                    let normals = normal_views[a as usize].as_ref();
                     groups.push(QuadGroup {
                         bind: self.bind(
                             gpu,
-                            [BILLBOARD_CUTOFF, 1.0, 0.0, 1.0],
+                            [
+                                BILLBOARD_CUTOFF,
+                                1.0,
+                                f32::from(u8::from(normals.is_some())),
+                                1.0,
+                            ],
                             [1.0; 4],
                             &atlas_views[a as usize],
+                            normals.unwrap_or(&self.flat_normal),
                         ),
-                        first_vertex,
-                        centres,
+                        indices: first_index..end,
                     });
                 }
             }
@@ -206,19 +390,28 @@ impl CloudPass {
         }
         let n = verts.len();
         verts.resize(n.max(1), CloudVertex::default());
-        let buffer = gpu.buffer(
+        let n = indices.len();
+        indices.resize(n.max(3), 0);
+        let vertices = gpu.buffer(
             "cloud vertices",
             bytemuck::cast_slice(&verts),
             wgpu::BufferUsages::VERTEX,
         );
+        let indices = gpu.buffer(
+            "cloud indices",
+            bytemuck::cast_slice(&indices),
+            wgpu::BufferUsages::INDEX,
+        );
         let b = &asset.header.bounds;
         let (lo, hi) = (Vec3::from(b.min), Vec3::from(b.max));
         Ok(GpuCloud {
-            buffer,
+            vertices,
+            indices,
             foliage,
             billboard_levels,
             billboards,
             foliage_triangles: f.triangles.len() as u32,
+            runtime_lit,
             centre: 0.5 * (lo + hi),
             radius: 0.5 * (hi - lo).length(),
             trunk: trunk_mesh(asset),
@@ -263,4 +456,47 @@ fn trunk_mesh(asset: &CloudAsset) -> MeshData {
         out.triangle_materials.push(t.materials[ti]);
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn atlas_levels_keep_their_coverage_and_straight_colour() {
+        // Level 0: one opaque texel in four (coverage 0.25 at the 0.5 cut-off); its
+        // averaged MIP has alpha 0.25 everywhere (coverage 0). Scaled, the level passes
+        // again, with the same straight colour.
+        let level0 = [[188u8, 137, 99, 255], [0; 4], [0; 4], [0; 4]].concat();
+        let mut mip = vec![99u8, 70, 50, 64];
+        let target = coverage(&level0, 0.5, 1.0);
+        assert_eq!(target, 0.25);
+        assert_eq!(coverage(&mip, 0.5, 1.0), 0.0);
+        let straight = |p: &[u8]| {
+            let d = |v: u8| {
+                let v = f32::from(v) / 255.0;
+                if v <= 0.04045 {
+                    v / 12.92
+                } else {
+                    ((v + 0.055) / 1.055).powf(2.4)
+                }
+            };
+            let a = f32::from(p[3]) / 255.0;
+            [d(p[0]) / a, d(p[1]) / a, d(p[2]) / a]
+        };
+        let before = straight(&mip);
+        preserve_coverage(&mut mip, 0.5, target);
+        assert!(mip[3] >= 128, "{mip:?}");
+        let after = straight(&mip);
+        for c in 0..3 {
+            assert!(
+                (before[c] - after[c]).abs() < 0.02,
+                "{before:?} vs {after:?}"
+            );
+        }
+        // A level that already has its coverage is left alone.
+        let mut full = vec![200u8, 100, 50, 255];
+        preserve_coverage(&mut full, 0.5, 1.0);
+        assert_eq!(full, vec![200, 100, 50, 255]);
+    }
 }

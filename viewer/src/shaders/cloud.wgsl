@@ -1,6 +1,7 @@
 // Billboard clouds (Lacewell et al. 2006): instanced quads (or the foliage base mesh)
-// whose vertices slide toward their parent billboard by the instance's morph factor;
-// alpha-tested, depth-writing. shadow_lookup.wgsl is prepended.
+// whose vertices slide toward their parent billboard by the instance's morph factor (in
+// this vertex shader: the per-asset vertex buffers never change); alpha-tested,
+// depth-writing, opaque. shadow_lookup.wgsl is prepended.
 
 struct Frame {
     view_proj: mat4x4<f32>,
@@ -12,7 +13,8 @@ struct Frame {
 }
 
 struct Draw {
-    // x: alpha cut-off, y: 1 = premultiplied, z: 1 = lit, w: 1 = textured
+    // x: alpha cut-off, y: 1 = premultiplied, z: 1 = lit at runtime from the normal map
+    // (billboards; the foliage mesh is always lit), w: 1 = textured
     params: vec4<f32>,
     color: vec4<f32>,
 }
@@ -21,17 +23,21 @@ struct Draw {
 @group(1) @binding(0) var<uniform> dr: Draw;
 @group(1) @binding(1) var tex: texture_2d<f32>;
 @group(1) @binding(2) var smp: sampler;
+// Tangent-space normal map (linear RGBA8, SPEC §9.4); a flat 1×1 where there is none.
+@group(1) @binding(3) var nrm: texture_2d<f32>;
 
 struct VIn {
     @location(0) pos: vec3<f32>,
     @location(1) target_pos: vec3<f32>,
     @location(2) normal: vec3<f32>,
     @location(3) uv: vec2<f32>,
-    @location(4) m0: vec4<f32>,
-    @location(5) m1: vec4<f32>,
-    @location(6) m2: vec4<f32>,
-    @location(7) m3: vec4<f32>,
-    @location(8) morph: vec4<f32>,
+    // xyz: T (the billboard's U), w: sign with B = w · cross(N, T) (glTF's convention)
+    @location(4) tangent: vec4<f32>,
+    @location(5) m0: vec4<f32>,
+    @location(6) m1: vec4<f32>,
+    @location(7) m2: vec4<f32>,
+    @location(8) m3: vec4<f32>,
+    @location(9) morph: vec4<f32>,
 }
 
 struct VOut {
@@ -39,6 +45,7 @@ struct VOut {
     @location(0) uv: vec2<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) shadow_clip: vec4<f32>,
+    @location(3) tangent: vec4<f32>,
 }
 
 @vertex
@@ -51,6 +58,7 @@ fn vs_main(v: VIn) -> VOut {
     o.shadow_clip = frame.world_to_shadow * w;
     o.uv = v.uv;
     o.normal = (model * vec4<f32>(v.normal, 0.0)).xyz;
+    o.tangent = vec4<f32>((model * vec4<f32>(v.tangent.xyz, 0.0)).xyz, v.tangent.w);
     return o;
 }
 
@@ -69,6 +77,16 @@ fn visibility(i: VOut) -> f32 {
     return 1.0;
 }
 
+// The mesh pass's light factor (mesh.wgsl fs_main): ambient + (1 − ambient)·|N·L|·vis.
+fn lambert_factor(n: vec3<f32>, i: VOut) -> f32 {
+    var lambert = 1.0;
+    let len = length(n);
+    if len > 0.0 {
+        lambert = abs(dot(n / len, frame.light.xyz));
+    }
+    return frame.light.w + (1.0 - frame.light.w) * lambert * visibility(i);
+}
+
 // The foliage base mesh: alpha-tested, lit like meshes (two-sided Lambert + ambient).
 @fragment
 fn fs_foliage(i: VOut) -> @location(0) vec4<f32> {
@@ -76,30 +94,28 @@ fn fs_foliage(i: VOut) -> @location(0) vec4<f32> {
     if c.a < dr.params.x {
         discard;
     }
-    var lambert = 1.0;
-    let len = length(i.normal);
-    if len > 0.0 {
-        lambert = abs(dot(i.normal / len, frame.light.xyz));
-    }
-    let k = frame.light.w + (1.0 - frame.light.w) * lambert * visibility(i);
-    return vec4<f32>(c.rgb * k, 1.0);
+    return vec4<f32>(c.rgb * lambert_factor(i.normal, i), 1.0);
 }
 
-// Billboards, depth pre-pass: only texels at least as opaque as the cut-off write depth.
+// Billboards: alpha-tested on the premultiplied texel, opaque output of its straight
+// colour. Baked lighting (the default): only the shadow scales it. Baked unlit with a
+// normal map: lit here like meshes, N from the tangent-space normal map.
 @fragment
-fn fs_depth(i: VOut) -> @location(0) vec4<f32> {
-    if texel(i).a < dr.params.x {
+fn fs_billboard(i: VOut) -> @location(0) vec4<f32> {
+    let c = texel(i);
+    let t = textureSample(nrm, smp, i.uv).xyz * 2.0 - 1.0;
+    if c.a < dr.params.x {
         discard;
     }
-    return vec4<f32>(0.0);
-}
-
-// Billboards, sorted blend: premultiplied texels (lighting baked in; shadows scale it).
-@fragment
-fn fs_blend(i: VOut) -> @location(0) vec4<f32> {
-    let c = texel(i);
-    let k = frame.light.w + (1.0 - frame.light.w) * visibility(i);
-    return vec4<f32>(c.rgb * k, c.a);
+    let albedo = c.rgb / c.a;
+    var k = frame.light.w + (1.0 - frame.light.w) * visibility(i);
+    if dr.params.z > 0.5 {
+        let nn = normalize(i.normal);
+        let tt = normalize(i.tangent.xyz);
+        let bb = i.tangent.w * cross(nn, tt);
+        k = lambert_factor(t.x * tt + t.y * bb + t.z * nn, i);
+    }
+    return vec4<f32>(albedo * k, 1.0);
 }
 
 @fragment

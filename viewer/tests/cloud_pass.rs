@@ -1,0 +1,403 @@
+//! The cloud pass on small synthetic cloud assets (one billboard level: a 2×2 quad in
+//! the plane z = 0, facing +z), rendered headless at a forced LOD distance so every
+//! instance shows the billboard level:
+//! - no buffers or bind groups are made per frame once the first frame has sized the
+//!   instance buffer, with 1 and with 300 instances, shadows on (two passes per frame);
+//! - billboards are alpha-tested: every pixel of a cloud-only frame has alpha 0 or 1,
+//!   covered pixels show the texel's straight colour, and an opaque mesh behind the
+//!   cloud is hidden wherever the cloud is drawn;
+//! - the frame does not depend on the order of the instances (overlapping billboards
+//!   with partial-alpha texels) and is identical when rendered twice;
+//! - an asset baked unlit with normal maps is lit at runtime like meshes: light along
+//!   the billboard normal, against it and at 60° gives `ambient + (1 − ambient)·|N·L|`
+//!   (1, 1, 0.65 for ambient 0.3); a tilted normal map turns the lit direction the way
+//!   SPEC §9.4's tangent frame says (front and back); a baked-lighting asset is not
+//!   relit.
+
+mod common;
+
+use std::collections::BTreeMap;
+
+use billow_format::{
+    Atlas, AtlasRect, Billboard, Bounds, CloudAsset, CloudLevel, ColourSpace, Header, Mesh,
+};
+use billow_view::mesh_pass::MeshData;
+use billow_view::{Renderer, RgbaImage, ViewCamera};
+use glam::{Mat4, Quat, Vec3};
+
+/// Side of the synthetic atlas.
+const N: u32 = 16;
+/// The atlas's straight linear colour.
+const ALBEDO: [f32; 3] = [0.8, 0.4, 0.2];
+
+fn srgb(v: f32) -> u8 {
+    let s = if v <= 0.003_130_8 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    };
+    (s.clamp(0.0, 1.0) * 255.0).round() as u8
+}
+
+/// The albedo channel `c` as stored (8-bit sRGB) and decoded by the sampler.
+fn stored(c: usize) -> f32 {
+    let v = f32::from(srgb(ALBEDO[c])) / 255.0;
+    if v <= 0.04045 {
+        v / 12.92
+    } else {
+        ((v + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// A cloud asset with one billboard level: the quad `[-1,1]² × {0}` (U = +x, V = +y,
+/// normal +z), both sides showing a 16² atlas whose alpha is `alpha(x, y)` (texel
+/// column, row), colour [`ALBEDO`] premultiplied. `normal`: a tangent-space normal map
+/// of one constant normal; `unlit`: the header says the bake left lighting out.
+fn asset(alpha: impl Fn(u32, u32) -> f32, normal: Option<[f32; 3]>, unlit: bool) -> CloudAsset {
+    let mut texels = Vec::new();
+    for y in 0..N {
+        for x in 0..N {
+            let a = alpha(x, y);
+            texels.extend_from_slice(&[
+                srgb(ALBEDO[0] * a),
+                srgb(ALBEDO[1] * a),
+                srgb(ALBEDO[2] * a),
+                (a * 255.0).round() as u8,
+            ]);
+        }
+    }
+    let normals = normal.map(|n| {
+        let e = |v: f32| ((v * 0.5 + 0.5) * 255.0).round() as u8;
+        let t = [e(n[0]), e(n[1]), e(n[2]), 255];
+        vec![t.repeat((N * N) as usize)]
+    });
+    let mut params = BTreeMap::new();
+    params.insert(
+        "light".to_string(),
+        if unlit { "unlit" } else { "0.3,1,0.2" }.to_string(),
+    );
+    let rect = AtlasRect {
+        atlas: 0,
+        uv: [0.0, 0.0, 1.0, 1.0],
+    };
+    let corners = [
+        [-1.0, -1.0, 0.0],
+        [1.0, -1.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [-1.0, 1.0, 0.0],
+    ];
+    CloudAsset {
+        header: Header {
+            kind: billow_format::AssetKind::Cloud,
+            tool: "test".into(),
+            source: None,
+            bounds: Bounds {
+                min: [-1.0, -1.0, -0.1],
+                max: [1.0, 1.0, 0.1],
+            },
+            colour_space: ColourSpace::SrgbPremultiplied,
+            seed: None,
+            params,
+            volume: None,
+        },
+        levels: vec![CloudLevel {
+            first_billboard: 0,
+            billboard_count: 1,
+            first_atlas: 0,
+            atlas_count: 1,
+            epsilon: 0.01,
+            texel_density: 8.0,
+        }],
+        billboards: vec![Billboard {
+            plane: [0.0, 0.0, 1.0, 0.0],
+            corners,
+            parent_corners: corners,
+            front: rect,
+            back: rect,
+            parent: None,
+            elements: 1,
+        }],
+        atlases: vec![Atlas {
+            width: N,
+            height: N,
+            mips: vec![texels],
+            normals,
+        }],
+        materials: Vec::new(),
+        textures: Vec::new(),
+        trunk: Mesh::default(),
+        foliage: Mesh::default(),
+    }
+}
+
+/// Alpha bands along x: 0, 0.25 (below the cut-off), 0.75, 1.
+fn banded(x: u32, _y: u32) -> f32 {
+    [0.0, 0.25, 0.75, 1.0][(x / 4) as usize]
+}
+
+/// A renderer showing `cloud` once per transform, at its billboard level.
+fn renderer(gpu: billow_view::Gpu, cloud: &CloudAsset, instances: Vec<Mat4>) -> Renderer {
+    let mut r = Renderer::new(gpu);
+    r.add_cloud(cloud, instances, Some(vec![1.0]), 0.0, 0.8)
+        .expect("upload");
+    r.lod_distance_override = Some(10.0);
+    r
+}
+
+/// Looking at the origin from `+z·dist` (or `−z·dist` when `back`).
+fn camera(size: u32, dist: f32, back: bool) -> ViewCamera {
+    let eye = Vec3::new(0.0, 0.0, if back { -dist } else { dist });
+    ViewCamera::look_at(eye, Vec3::ZERO, Vec3::Y, 0.8, size, size, 0.1, 100.0)
+}
+
+fn pixel(img: &RgbaImage, x: u32, y: u32) -> [f32; 4] {
+    img.data[(y * img.width + x) as usize]
+}
+
+/// Mean colour over the `k`×`k` block centred on the frame's centre.
+fn centre_mean(img: &RgbaImage, k: u32) -> [f32; 4] {
+    let (cx, cy) = (img.width / 2, img.height / 2);
+    let mut s = [0.0f32; 4];
+    for y in cy - k / 2..cy + k / 2 {
+        for x in cx - k / 2..cx + k / 2 {
+            let p = pixel(img, x, y);
+            for c in 0..4 {
+                s[c] += p[c];
+            }
+        }
+    }
+    s.map(|v| v / (k * k) as f32)
+}
+
+#[test]
+fn the_cloud_pass_makes_no_gpu_resources_per_frame() {
+    let name = "the_cloud_pass_makes_no_gpu_resources_per_frame";
+    for count in [1usize, 300] {
+        let Some(gpu) = common::gpu_or_skip(name) else {
+            return;
+        };
+        let instances: Vec<Mat4> = (0..count)
+            .map(|i| {
+                let (x, y) = ((i % 20) as f32 - 10.0, (i / 20) as f32 - 7.0);
+                Mat4::from_translation(Vec3::new(2.5 * x, 2.5 * y, -((i % 7) as f32)))
+            })
+            .collect();
+        let mut r = renderer(gpu, &asset(banded, None, false), instances);
+        r.set_shadows(true);
+        let cam = camera(64, 60.0, false);
+        let target = billow_view::target::Target::new(&r.gpu, 64, 64);
+        let mut after_first = None;
+        for frame in 0..6 {
+            let stats = r.render(&target, &cam).expect("render");
+            r.gpu.wait().expect("wait");
+            assert_eq!(stats.cloud_quads, 2 * count, "two sides per instance");
+            // One instanced draw for the whole level.
+            assert_eq!(stats.draw_calls, 1, "{count} instances: one draw");
+            let made = r.cloud_resources_created();
+            match after_first {
+                None => after_first = Some(made),
+                Some(m) => assert_eq!(
+                    made,
+                    m,
+                    "{count} instances, frame {frame}: the cloud pass made {} buffers or \
+                     bind groups after the first frame",
+                    made - m
+                ),
+            }
+        }
+    }
+}
+
+#[test]
+fn billboards_are_alpha_tested_and_hide_what_lies_behind() {
+    let name = "billboards_are_alpha_tested_and_hide_what_lies_behind";
+    let Some(gpu) = common::gpu_or_skip(name) else {
+        return;
+    };
+    let cloud = asset(banded, None, false);
+    let mut r = renderer(gpu, &cloud, vec![Mat4::IDENTITY]);
+    r.ambient = 0.3;
+    let cam = camera(96, 4.0, false);
+    let (alone, _) = r.render_image(&cam).expect("render");
+    let covered: Vec<usize> = (0..alone.data.len())
+        .filter(|&i| alone.data[i][3] > 0.0)
+        .collect();
+    let partial = alone
+        .data
+        .iter()
+        .filter(|p| p[3] > 0.0 && p[3] < 1.0)
+        .count();
+    assert!(covered.len() > 500, "the billboard is visible");
+    assert_eq!(
+        partial,
+        0,
+        "{partial} of {} covered pixels have a partial alpha",
+        covered.len()
+    );
+    // Covered pixels show the straight colour (baked lighting, no shadow: k = 1) — the
+    // 0.75 band too, not 0.75 × the colour.
+    let worst = covered
+        .iter()
+        .map(|&i| {
+            (0..3)
+                .map(|c| (alone.data[i][c] - stored(c)).abs())
+                .fold(0.0f32, f32::max)
+        })
+        .fold(0.0f32, f32::max);
+    assert!(worst < 0.02, "covered pixels are off the albedo by {worst}");
+    // The quad spans x ∈ [-1, 1] at distance 4 (fov 0.8): pixels 48 ± 28.4; the
+    // bands change at x = -0.5, 0, 0.5. Drawn: the 0.75 and 1 bands, from the centre
+    // column (where the filtered alpha crosses 0.5) to the right edge.
+    let row = 48;
+    let xs: Vec<u32> = (0..96)
+        .filter(|&x| pixel(&alone, x, row)[3] > 0.0)
+        .collect();
+    let (x0, x1) = (*xs.first().expect("covered"), *xs.last().expect("covered"));
+    assert!(
+        (46..=50).contains(&x0) && (74..=78).contains(&x1) && xs.len() as u32 == x1 - x0 + 1,
+        "covered columns {xs:?}"
+    );
+
+    // An opaque green wall behind the cloud: hidden exactly where the cloud is drawn.
+    let green = [0.1, 0.9, 0.2, 1.0];
+    r.add_mesh(&MeshData::quad(
+        Vec3::new(-3.0, -3.0, -0.5),
+        Vec3::new(6.0, 0.0, 0.0),
+        Vec3::new(0.0, 6.0, 0.0),
+        green,
+    ))
+    .expect("wall");
+    let (both, _) = r.render_image(&cam).expect("render");
+    for &i in &covered {
+        assert_eq!(
+            both.data[i], alone.data[i],
+            "pixel {i}: the wall shows through the cloud"
+        );
+    }
+    assert!(
+        both.data.iter().all(|p| p[3] == 1.0),
+        "wall + cloud cover the frame opaquely"
+    );
+}
+
+#[test]
+fn cloud_frames_do_not_depend_on_instance_order() {
+    let name = "cloud_frames_do_not_depend_on_instance_order";
+    let Some(gpu) = common::gpu_or_skip(name) else {
+        return;
+    };
+    // Twelve billboards in a staggered stack: overlapping on screen, at distinct depths,
+    // some turned about y (their partial-alpha bands overlap the others).
+    let m: Vec<Mat4> = (0..12)
+        .map(|i| {
+            let f = i as f32;
+            Mat4::from_rotation_translation(
+                Quat::from_rotation_y(0.3 * (f - 6.0) / 6.0),
+                Vec3::new(0.35 * (f - 6.0), 0.2 * ((i % 3) as f32 - 1.0), -0.4 * f),
+            )
+        })
+        .collect();
+    let cloud = asset(banded, None, false);
+    let cam = camera(96, 9.0, false);
+    let a = renderer(gpu, &cloud, m.clone());
+    let (img_a, _) = a.render_image(&cam).expect("render");
+    let (img_a2, _) = a.render_image(&cam).expect("render");
+    assert!(img_a.data == img_a2.data, "the same frame twice differs");
+    let Some(gpu) = common::gpu_or_skip(name) else {
+        return;
+    };
+    let mut rev = m.clone();
+    rev.reverse();
+    let b = renderer(gpu, &cloud, rev);
+    let (img_b, _) = b.render_image(&cam).expect("render");
+    let differ = img_a
+        .data
+        .iter()
+        .zip(&img_b.data)
+        .filter(|(p, q)| p != q)
+        .count();
+    assert_eq!(differ, 0, "{differ} pixels change with the instance order");
+    assert!(img_a.data.iter().filter(|p| p[3] > 0.0).count() > 1000);
+}
+
+/// Centre colour of the synthetic billboard lit from `light` (towards the light), seen
+/// from the front (or the back).
+fn lit(gpu: billow_view::Gpu, cloud: &CloudAsset, light: Vec3, back: bool) -> [f32; 4] {
+    let mut r = renderer(gpu, cloud, vec![Mat4::IDENTITY]);
+    r.ambient = 0.3;
+    r.light_dir = light.normalize();
+    let (img, _) = r.render_image(&camera(64, 4.0, back)).expect("render");
+    centre_mean(&img, 8)
+}
+
+#[test]
+fn unlit_normal_mapped_billboards_are_lit_like_meshes() {
+    let name = "unlit_normal_mapped_billboards_are_lit_like_meshes";
+    let ambient = 0.3f32;
+    let k = |cos: f32| ambient + (1.0 - ambient) * cos.abs();
+    let opaque = |_: u32, _: u32| 1.0;
+    let check = |what: &str, cloud: &CloudAsset, light: Vec3, back: bool, want: f32| {
+        let Some(gpu) = common::gpu_or_skip(name) else {
+            return false;
+        };
+        let c = lit(gpu, cloud, light, back);
+        assert_eq!(c[3], 1.0, "{what}: covered");
+        for (ch, v) in c.iter().take(3).enumerate() {
+            let got = v / stored(ch);
+            assert!(
+                (got - want).abs() < 0.01,
+                "{what}: channel {ch} is {got:.4} × the albedo, want {want:.4}"
+            );
+        }
+        true
+    };
+    // Flat normal map: the billboard's normal, +z on the front.
+    let flat = asset(opaque, Some([0.0, 0.0, 1.0]), true);
+    if !check("flat, light along +z", &flat, Vec3::Z, false, k(1.0)) {
+        return;
+    }
+    check("flat, light along -z", &flat, -Vec3::Z, false, k(1.0));
+    let sixty = Vec3::new(60f32.to_radians().sin(), 0.0, 0.5);
+    check("flat, light at 60°", &flat, sixty, false, k(0.5));
+    check("flat, back side, 60°", &flat, -sixty, true, k(0.5));
+    // Tilted toward T = U = +x: N = (0.6, 0, 0.8).
+    let t = asset(opaque, Some([0.6, 0.0, 0.8]), true);
+    let l = Vec3::new(1.0, 0.0, 1.0).normalize();
+    check("T tilt, front", &t, l, false, k(0.6 * l.x + 0.8 * l.z));
+    check(
+        "T tilt, other side of the normal",
+        &t,
+        Vec3::new(-1.0, 0.0, 1.0),
+        false,
+        k(-0.6 * l.x + 0.8 * l.z),
+    );
+    // Back side: N = 0.6·T − 0.8·z (the same T, N = −normal).
+    check(
+        "T tilt, back",
+        &t,
+        Vec3::new(1.0, 0.0, -1.0),
+        true,
+        k(0.6 * l.x + 0.8 * l.z),
+    );
+    // Tilted toward B = −V = −y (image up: v grows along +y here).
+    let b = asset(opaque, Some([0.0, 0.6, 0.8]), true);
+    check(
+        "B tilt",
+        &b,
+        Vec3::new(0.0, -1.0, 1.0),
+        false,
+        k(0.6 * l.x + 0.8 * l.z),
+    );
+    check(
+        "B tilt, other side",
+        &b,
+        Vec3::new(0.0, 1.0, 1.0),
+        false,
+        k(-0.6 * l.x + 0.8 * l.z),
+    );
+    // Baked lighting (the default): not relit, whatever the normal map says.
+    let baked = asset(opaque, Some([0.0, 0.0, 1.0]), false);
+    check("baked, light at 60°", &baked, sixty, false, 1.0);
+    let plain = asset(opaque, None, true);
+    check("unlit without normals, 60°", &plain, sixty, false, 1.0);
+}
