@@ -196,7 +196,7 @@ fn oak_atlases_keep_billboards_apart_at_every_stored_level() {
 /// bytes as composing the float atlas and filtering it whole (colour and normal maps).
 #[test]
 fn per_side_chains_equal_the_whole_atlas_chain() {
-    use billow::bbcloud::atlas::{assemble_levels, normal_chain, side_chain};
+    use billow::bbcloud::atlas::{assemble_levels, normal_chain, side_chain, Chain};
     let mut rng = Pcg32::seeded(21, 4);
     for m in 1..=5u32 {
         let (gutter, align) = gutter_and_align(2, m);
@@ -241,7 +241,14 @@ fn per_side_chains_equal_the_whole_atlas_chain() {
                 .collect();
             let chains: Vec<Vec<Vec<u8>>> = images
                 .iter()
-                .map(|i| side_chain(i, &layout, m, normals))
+                .map(|i| {
+                    let kind = if normals {
+                        Chain::Normals
+                    } else {
+                        Chain::Colour
+                    };
+                    side_chain(i, &layout, m, kind)
+                })
                 .collect();
             let slices: Vec<&[Vec<u8>]> = chains.iter().map(Vec::as_slice).collect();
             let empty = if normals {
@@ -256,4 +263,43 @@ fn per_side_chains_equal_the_whole_atlas_chain() {
             );
         }
     }
+}
+
+/// Lacewell §6: billboards are alpha-tested, so a MIP level must keep level 0's *tested*
+/// coverage (texels at or above the 0.5 cut-off), or a distant canopy thins out and goes
+/// see-through. A plain box filter loses it wherever leaves are thinner than a texel; the
+/// stored chain keeps every level within 3 % of level 0 on every atlas of the oak.
+#[test]
+fn oak_alpha_mips_keep_the_tested_coverage_of_level_0() {
+    let opts = BbcloudOptions {
+        samples: 60,
+        seed: 1,
+        lods: 2,
+        atlas_size: 2048,
+        supersample: 3,
+        ..BbcloudOptions::default()
+    };
+    let (a, _) = bake(&oak(), &opts, "billow test", None, &|_, _| {}).unwrap();
+    assert_eq!(a.header.params["mip_alpha"], "coverage@0.5");
+    let share = |m: &[u8]| {
+        let n = m.len() / 4;
+        m.chunks_exact(4).filter(|t| t[3] >= 128).count() as f64 / n as f64
+    };
+    let mut checked = 0;
+    for (ai, at) in a.atlases.iter().enumerate() {
+        let c0 = share(&at.mips[0]);
+        assert!(
+            c0 > 0.002,
+            "atlas {ai}: level 0 has almost no coverage ({c0})"
+        );
+        for (k, m) in at.mips.iter().enumerate().skip(1) {
+            let ck = share(m);
+            assert!(
+                (ck / c0 - 1.0).abs() <= 0.03,
+                "atlas {ai} level {k}: tested coverage {ck:.4} against level 0's {c0:.4}"
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked >= 3, "too few levels checked: {checked}");
 }

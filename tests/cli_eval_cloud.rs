@@ -70,24 +70,26 @@ fn eval_scores_every_lod_of_the_oak_cloud() {
         assert!(dir.path().join("images").join(f).is_file(), "{f}");
     }
     let raster = v["raster_1spp"]["rmse"].as_f64().unwrap();
-    // Measured (48×48, 4 spp, +x and +x+y+z at 1×/4×/16×), billboards alpha-tested
-    // against a hashed threshold as the viewer draws them: mean RMSE 0.0235 / 0.0265 /
-    // 0.0383 for LOD 0 / 1 / 2 against 0.0353 for the mesh at 1 spp; at 1× 0.056 / 0.062
-    // / 0.087; at 16× 0.0016 / 0.0032 / 0.0053; coverage within +16 % / −13 % of the
-    // reference at every distance. (Blended, before 2026-12: 0.0179 / 0.0191 / 0.0272;
-    // alpha-testing gives up the blend's soft edges for depth writes and no sorting.)
+    // Measured (48×48, 4 spp, +x and +x+y+z at 1×/4×/16×), billboards alpha-tested at
+    // 0.5 as the viewer draws them, MIPs keeping level 0's tested coverage: mean RMSE
+    // 0.0269 / 0.0325 / 0.0321 for LOD 0 / 1 / 2 against 0.0353 for the mesh at 1 spp; at
+    // 1× 0.065 / 0.079 / 0.077; at 16× 0.0040 / 0.0032 / 0.0032; coverage −25 % / −33 % /
+    // −6 % of the reference (an alpha test keeps each billboard's share of opaque texels,
+    // but where many billboards overlap a few pixels their union thins out: docs/bbcloud.md,
+    // "LOD switches"). Blended, before 2026-12: 0.0179 / 0.0191 / 0.0272, coverage within
+    // ±10 %, but pale and see-through where the mesh is opaque.
     let mean = |l: &Value| l["mean"]["rmse"].as_f64().unwrap();
-    assert!(mean(&levels[0]) < 0.026, "LOD 0: {}", levels[0]["mean"]);
+    assert!(mean(&levels[0]) < 0.028, "LOD 0: {}", levels[0]["mean"]);
     assert!(
-        mean(&levels[0]) < 0.7 * raster,
+        mean(&levels[0]) < 0.8 * raster,
         "LOD 0 beats the 1-spp mesh"
     );
-    assert!(mean(&levels[1]) < 0.03, "LOD 1: {}", levels[1]["mean"]);
-    assert!(rmse_at(&levels[2], 1.0) > 1.3 * rmse_at(&levels[0], 1.0));
+    assert!(mean(&levels[1]) < 0.034, "LOD 1: {}", levels[1]["mean"]);
+    assert!(rmse_at(&levels[2], 1.0) > 1.1 * rmse_at(&levels[0], 1.0));
     assert!(rmse_at(&levels[2], 16.0) < 0.01, "the cross 3 pixels wide");
     for l in levels {
         let c = l["mean"]["coverage_rel_diff"].as_f64().unwrap();
-        assert!(c.abs() < 0.1, "LOD {}: coverage {c}", l["lod"]);
+        assert!(c.abs() < 0.4, "LOD {}: coverage {c}", l["lod"]);
         assert!(l["texture_bytes"].as_u64().unwrap() > 0);
     }
 
@@ -129,8 +131,9 @@ fn eval_scores_every_lod_of_the_oak_cloud() {
         rmse_at(bad, 4.0),
         rmse_at(bad, 16.0)
     );
-    // Measured with the hashed alpha test: RMSE 0.0048 against 0.0016 at 16× (0.0121
-    // against 0.0126 at 4×, where decimated alpha is still mostly 0 or 1 and an alpha test
-    // of 0/1 texels needs no filtering; blended, before 2026-12: 0.0154 against 0.0120).
-    assert!(rmse_at(bad, 16.0) > 2.0 * rmse_at(good, 16.0));
+    // Measured with the alpha test: RMSE 0.0135 against 0.0122 at 4×, 0.0045 against
+    // 0.0040 at 16× (blended, before 2026-12: 0.0154 against 0.0120, 0.0036 against 0.0029;
+    // an alpha test of mostly 0/1 texels gains less from filtering).
+    assert!(rmse_at(bad, 16.0) > 1.08 * rmse_at(good, 16.0));
+    assert!(rmse_at(bad, 4.0) > 1.08 * rmse_at(good, 4.0));
 }

@@ -196,54 +196,36 @@ fn mip_level_follows_the_screen_footprint() {
 
 #[test]
 fn trunk_and_billboards_are_depth_sorted() {
-    // Billboards are alpha-tested like the viewer draws them, against a hashed threshold
-    // (src/bbcloud/hashed_alpha.rs): an opaque texel always passes, a texel of alpha α in
-    // a share α of the samples, each a surface of its straight colour. An opaque green
-    // trunk quad covers the billboard's left half, in front (z = +0.5) or behind (−0.5).
+    // Billboards are alpha-tested at 0.5, like the viewer draws them: a texel at alpha
+    // 128/255 is an opaque surface of its straight colour, one at 127/255 is a miss. An
+    // opaque green trunk quad covers the billboard's left half, in front (z = +0.5) or
+    // behind (z = −0.5).
     let lut = |b: u8| billow::eval::image::srgb_to_linear(f32::from(b) / 255.0);
-    for (z, trunk_in_front) in [(0.5f32, true), (-0.5, false)] {
-        let opaque = [255, 0, 0, 255];
-        let asset = cloud(atlas(8, 1, |_| opaque), atlas(8, 1, |_| opaque), Some(z));
-        let prepared = PreparedCloud::new(&asset).unwrap();
-        let r = CloudRenderer::new(&prepared, Lighting::Unlit).unwrap();
-        let cam = camera(Vec3::new(0.5, 0.5, 4.0), 64);
-        let img = r.render(0, &cam, Sampling::Centre).unwrap().image;
-        let red = Vec4::new(1.0, 0.0, 0.0, 1.0);
-        // A pixel over the left half (x ≈ 0.25) and one over the right half (x ≈ 0.75).
-        let (left, right) = (img.get(27, 32), img.get(37, 32));
-        assert_eq!(right, red, "trunk z {z}");
-        let want = if trunk_in_front {
-            Vec4::new(0.0, 1.0, 0.0, 1.0)
-        } else {
-            red
-        };
-        assert_eq!(left, want, "trunk z {z}");
-    }
-    // Half-covered texels (premultiplied red at alpha 128/255): about half the samples
-    // pass, each opaque red of the straight colour; the rest miss.
-    let half = [128, 0, 0, 128];
-    let asset = cloud(atlas(8, 1, |_| half), atlas(8, 1, |_| half), None);
-    let prepared = PreparedCloud::new(&asset).unwrap();
-    let r = CloudRenderer::new(&prepared, Lighting::Unlit).unwrap();
-    let img = r
-        .render(0, &camera(Vec3::new(0.5, 0.5, 2.0), 64), Sampling::Centre)
-        .unwrap()
-        .image;
-    let red = lut(128) / (128.0 / 255.0);
-    let (mut hit, mut quad) = (0, 0);
-    for y in 24..40 {
-        for x in 24..40 {
-            let p = img.get(x, y);
-            quad += 1;
-            if p.w > 0.0 {
-                hit += 1;
-                assert!(
-                    (p - Vec4::new(red, 0.0, 0.0, 1.0)).abs().max_element() < 1e-5,
-                    "{p}"
-                );
-            }
+    for (alpha, hit) in [(128u8, true), (127, false)] {
+        let texel = [alpha, 0, 0, alpha]; // premultiplied red
+        for (z, trunk_in_front) in [(0.5f32, true), (-0.5, false)] {
+            let asset = cloud(atlas(8, 1, |_| texel), atlas(8, 1, |_| texel), Some(z));
+            let prepared = PreparedCloud::new(&asset).unwrap();
+            let r = CloudRenderer::new(&prepared, Lighting::Unlit).unwrap();
+            let cam = camera(Vec3::new(0.5, 0.5, 4.0), 64);
+            let img = r.render(0, &cam, Sampling::Centre).unwrap().image;
+            let red = Vec4::new(lut(alpha) / (f32::from(alpha) / 255.0), 0.0, 0.0, 1.0);
+            // A pixel over the left half (x ≈ 0.25) and one over the right half (x ≈ 0.75).
+            let (left, right) = (img.get(27, 32), img.get(37, 32));
+            let want_right = if hit { red } else { Vec4::ZERO };
+            assert!(
+                (right - want_right).abs().max_element() < 1e-5,
+                "alpha {alpha}: {right} vs {want_right}"
+            );
+            let want = if trunk_in_front || !hit {
+                Vec4::new(0.0, 1.0, 0.0, 1.0)
+            } else {
+                red
+            };
+            assert!(
+                (left - want).abs().max_element() < 1e-5,
+                "alpha {alpha}, trunk z {z}: {left} vs {want}"
+            );
         }
     }
-    let share = f64::from(hit) / f64::from(quad);
-    assert!((share - 0.5).abs() < 0.12, "{hit} of {quad} samples passed");
 }

@@ -8,7 +8,7 @@
 
 use billow_format::{AtlasRect, Billboard, CloudAsset, CloudLevel, Header, Mesh};
 
-use super::atlas::{self, Layout};
+use super::atlas::{self, Chain, Layout};
 use super::bake;
 use super::foliage;
 use super::lod::Level;
@@ -34,17 +34,19 @@ pub struct Sides {
 impl Sides {
     pub fn new(b: bake::Baked, layout: &Layout, levels: u32) -> Sides {
         let chain = |i: &bake::Image, n| atlas::side_chain(i, layout, levels, n);
+        // Alpha-tested coverage kept at every stored level (atlas module docs).
+        let colour = Chain::Coverage(atlas::ALPHA_CUTOFF);
         let alpha = [&b.front, &b.back]
             .iter()
             .map(|i| i.texels.iter().map(|t| f64::from(t.w)).sum::<f64>())
             .sum();
         Sides {
             sizes: [&b.front, &b.back].map(|i| (i.width, i.height)),
-            colour: [chain(&b.front, false), chain(&b.back, false)],
+            colour: [chain(&b.front, colour), chain(&b.back, colour)],
             normals: b
                 .normals
                 .as_ref()
-                .map(|[f, k]| [chain(f, true), chain(k, true)]),
+                .map(|[f, k]| [chain(f, Chain::Normals), chain(k, Chain::Normals)]),
             alpha,
         }
     }

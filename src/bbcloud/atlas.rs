@@ -18,11 +18,15 @@
 //! nor coverage, so edges never darken (no dark fringes); the result is then sRGB-encoded
 //! (`SrgbPremultiplied`, SPEC.md §8.3).
 //!
-//! Box-filtered alpha is each texel's mean coverage, which is what billow's renderers need:
-//! they alpha-test billboards against a hashed threshold ([`super::hashed_alpha`]), so a
-//! texel passes with probability α and every MIP level keeps level 0's expected coverage.
-//! (A constant cut-off would need rescaled alpha per level and still thins a canopy with
-//! distance; measured in docs/bbcloud.md, "LOD switches".)
+//! **Alpha-tested coverage is kept at every level** ([`coverage_chain`]). Renderers alpha-test
+//! billboards at [`ALPHA_CUTOFF`] (Lacewell §6: custom MIP code "which rounds alpha values
+//! to either 0 or 1"). A box filter keeps the *mean* alpha, but the *tested* coverage (the
+//! share of texels at or above the cut-off) shrinks level by level wherever leaves are
+//! thinner than a texel, so distant canopies thin out and go see-through. So each level
+//! k ≥ 1 of a side is scaled by the one factor `s_k` that makes its tested coverage equal
+//! level 0's ([`coverage_scale`]), applied as `texel · min(s_k, 1/α)`: premultiplied colour
+//! and alpha together, so straight colour is unchanged and alpha never exceeds 1
+//! (Castaño's coverage-preserving MIPs, per billboard side).
 
 use glam::Vec4;
 use rayon::prelude::*;
@@ -263,17 +267,114 @@ pub fn allocation_image(img: &Image, layout: &Layout) -> Image {
 /// the allocation alone, so the atlas's chain can be built per side, in parallel and without
 /// the full-size float atlas ([`assemble_levels`]; same bytes as [`compose`] + [`mip_chain`],
 /// tested).
-pub fn side_chain(img: &Image, layout: &Layout, levels: u32, normals: bool) -> Vec<Vec<u8>> {
+pub fn side_chain(img: &Image, layout: &Layout, levels: u32, kind: Chain) -> Vec<Vec<u8>> {
     assert!(
         layout.align >= 1 << (levels.max(1) - 1),
         "allocations must be aligned to 2^(levels-1)"
     );
     let a = allocation_image(img, layout);
-    if normals {
-        normal_chain(a, levels)
-    } else {
-        mip_chain(a, levels)
+    match kind {
+        Chain::Normals => normal_chain(a, levels),
+        Chain::Colour => mip_chain(a, levels),
+        Chain::Coverage(cutoff) => coverage_chain(a, levels, cutoff),
     }
+}
+
+/// Which chain [`side_chain`] builds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Chain {
+    /// Colour, box filtered ([`mip_chain`]).
+    Colour,
+    /// Colour whose levels keep level 0's alpha-tested coverage at this cut-off
+    /// ([`coverage_chain`]; what the bake writes).
+    Coverage(f32),
+    /// A normal map ([`normal_chain`]).
+    Normals,
+}
+
+/// The alpha cut-off renderers test billboards at (the viewer, the CPU cloud renderer,
+/// glTF `MASK`), and the one [`coverage_chain`] preserves.
+pub const ALPHA_CUTOFF: f32 = 0.5;
+
+/// Share of `img`'s texels whose alpha is at least `cutoff`.
+pub fn tested_coverage(img: &Image, cutoff: f32) -> f64 {
+    let n = img.texels.iter().filter(|t| t.w >= cutoff).count();
+    n as f64 / img.texels.len().max(1) as f64
+}
+
+/// The factor that gives `img` tested coverage `target` (a share of its texels) at
+/// `cutoff`: with n = round(target · texels) and the alphas sorted, the cut-off is put
+/// halfway between two neighbouring distinct alphas so that as close to n texels as
+/// possible pass (texels of equal alpha pass or fail together, so a tie at the n-th is
+/// split on the side nearer n). 1 when nothing has coverage.
+pub fn coverage_scale(img: &Image, target: f64, cutoff: f32) -> f32 {
+    let mut a: Vec<f32> = img
+        .texels
+        .iter()
+        .map(|t| t.w)
+        .filter(|&w| w > 0.0)
+        .collect();
+    if a.is_empty() {
+        return 1.0;
+    }
+    a.sort_by(|x, y| y.total_cmp(x));
+    let n = ((target * img.texels.len() as f64).round() as usize).min(a.len());
+    let scale = if n == 0 {
+        // Nothing may pass: the largest alpha lands halfway below the cut-off.
+        0.5 * cutoff / a[0]
+    } else {
+        let v = a[n - 1];
+        let first = a.partition_point(|&x| x > v); // texels above v
+        let last = a.partition_point(|&x| x >= v); // texels at or above v
+        let below = a.get(last).copied().unwrap_or(0.0);
+        if first > 0 && n - first < last - n {
+            // Fewer miss when the tie fails: cut between v and the next larger alpha.
+            2.0 * cutoff / (a[first - 1] + v)
+        } else {
+            // The tie passes: cut between v and the next smaller alpha (or zero).
+            2.0 * cutoff / (v + below)
+        }
+    };
+    if scale.is_finite() && scale > 0.0 {
+        scale.min(1.0 / f32::EPSILON)
+    } else {
+        1.0
+    }
+}
+
+/// `img` with every texel scaled by `min(scale, 1/α)` (premultiplied: straight colour kept).
+pub fn scale_coverage(img: &Image, scale: f32) -> Image {
+    Image {
+        width: img.width,
+        height: img.height,
+        texels: img
+            .texels
+            .iter()
+            .map(|&t| {
+                if t.w > 0.0 {
+                    t * scale.min(1.0 / t.w)
+                } else {
+                    t
+                }
+            })
+            .collect(),
+    }
+}
+
+/// The MIP chain of a colour allocation whose every level keeps level 0's alpha-tested
+/// coverage at `cutoff` (module docs): levels are box filtered from the unscaled level
+/// above, then scaled by [`coverage_scale`] for storage.
+pub fn coverage_chain(atlas: Image, levels: u32, cutoff: f32) -> Vec<Vec<u8>> {
+    let n = mip_count(atlas.width, atlas.height, levels);
+    let target = tested_coverage(&atlas, cutoff);
+    let mut out = vec![encode_srgb_premultiplied(&atlas)];
+    let mut cur = atlas;
+    while (out.len() as u32) < n {
+        cur = downsample(&cur);
+        let s = coverage_scale(&cur, target, cutoff);
+        out.push(encode_srgb_premultiplied(&scale_coverage(&cur, s)));
+    }
+    out
 }
 
 /// Every atlas's encoded levels from the sides' chains ([`side_chain`], in packing order)

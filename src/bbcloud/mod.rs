@@ -21,7 +21,6 @@ pub mod assemble;
 pub mod atlas;
 pub mod bake;
 pub mod foliage;
-pub mod hashed_alpha;
 pub mod lod;
 pub mod plane_search;
 pub mod rect;
@@ -481,6 +480,9 @@ pub fn params(o: &BbcloudOptions) -> BTreeMap<String, String> {
     let (gutter, align) = gutter_and_align(o.gutter, o.mip_levels);
     put("gutter", gutter.to_string());
     put("mip_levels", o.mip_levels.to_string());
+    // Every stored level keeps level 0's alpha-tested coverage at this cut-off
+    // (atlas::coverage_chain).
+    put("mip_alpha", format!("coverage@{}", atlas::ALPHA_CUTOFF));
     put("up", format!("{},{},{}", o.up.x, o.up.y, o.up.z));
     if let Some(v) = &o.view {
         put("view_dirs", v.describe());

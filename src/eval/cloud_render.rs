@@ -17,12 +17,10 @@
 //!   that misses the plane (grazing view) selects the coarsest level.
 //! - **Trunk**: the kept mesh is ray-traced by [`ReferenceRenderer`] with the reference's
 //!   shading and lighting (so it matches the reference wherever it is visible).
-//! - **Alpha test**: billboards are alpha-tested like the viewer draws them (Lacewell §6
-//!   alpha-tests too), against a hashed threshold
-//!   ([`crate::bbcloud::hashed_alpha::hashed_threshold`], the same bits as the viewer's
-//!   shader): a filtered texel whose alpha reaches the sample's threshold is an opaque hit
-//!   of its straight colour (`rgb / α`), any other is a miss; a texel of alpha α passes in
-//!   a share α of the samples, so distant canopies keep their coverage. Anti-aliasing
+//! - **Alpha test**: billboards are alpha-tested like the viewer draws them (and Lacewell
+//!   §6): a filtered texel with alpha at least [`ALPHA_CUTOFF`] (0.5) is an opaque hit of
+//!   its straight colour (`rgb / α`), any other is a miss. The atlases' MIPs keep each
+//!   level's tested coverage ([`crate::bbcloud::atlas::coverage_chain`]). Anti-aliasing
 //!   comes from the `n × n` samples per pixel.
 //! - **Compositing**: per sample ray, billboard hits and the trunk's blended layers are
 //!   sorted by depth (ties: trunk first, then billboard index) and composited front to back
@@ -43,7 +41,7 @@ use super::compositing::under;
 use super::lighting::Lighting;
 use super::reference::{per_axis, sample_offset, validate_camera, ReferenceRenderer, Sampling};
 use super::{EvalError, ImageF32};
-use crate::bbcloud::hashed_alpha::hashed_threshold;
+use crate::bbcloud::atlas::ALPHA_CUTOFF;
 use crate::camera::Camera;
 use crate::scene::{AlphaMode, Material, Scene, Texture, Triangle, Vertex, Wrap};
 use crate::texture::srgb_to_linear_lut;
@@ -372,11 +370,10 @@ impl<'a> CloudRenderer<'a> {
 
     /// Colour of quad `q` hit at `st` by a ray of direction `dir` through pixel
     /// `(px, py)`; `lod` from the rays through the neighbouring pixels.
-    /// Returns the filtered texel and the sample's alpha-test threshold.
-    fn shade(&self, q: &Quad, st: Vec2, dir: Vec3, rays: &Rays, px: f32, py: f32) -> (Vec4, f32) {
+    fn shade(&self, q: &Quad, st: Vec2, dir: Vec3, rays: &Rays, px: f32, py: f32) -> Vec4 {
         let side = usize::from(q.normal.dot(dir) > 0.0);
-        let (atlas_index, r) = q.sides[side];
-        let atlas = &self.cloud.atlases[atlas_index];
+        let (atlas, r) = q.sides[side];
+        let atlas = &self.cloud.atlases[atlas];
         let (w0, h0, _) = atlas.levels[0];
         let scale = Vec2::new((r[2] - r[0]) * w0 as f32, (r[3] - r[1]) * h0 as f32);
         let uv_of = |st: Vec2| Vec2::new(r[0], r[1]) + st * Vec2::new(r[2] - r[0], r[3] - r[1]);
@@ -389,10 +386,7 @@ impl<'a> CloudRenderer<'a> {
             (Some(_), Some(_)) => 0.0,
             _ => f32::INFINITY,
         };
-        let uv = uv_of(st);
-        let c = atlas.sample(uv, lod);
-        let texel = uv * Vec2::new(w0 as f32, h0 as f32);
-        (c, hashed_threshold(texel, lod, atlas_index as u32))
+        atlas.sample(uv_of(st), lod)
     }
 
     /// The billboards among `candidates` hit by one ray within `[t_min, t_max]`, shaded
@@ -412,10 +406,10 @@ impl<'a> CloudRenderer<'a> {
             if !inside {
                 continue;
             }
-            // Hashed alpha test, as the viewer draws billboards: a texel whose alpha reaches
-            // the sample's threshold is an opaque surface of its straight colour.
-            let (c, threshold) = self.shade(q, st, dir, rays, pc.0, pc.1);
-            if c.w > 0.0 && c.w >= threshold {
+            // Alpha test, as the viewer draws billboards: a texel at or above the cut-off
+            // is an opaque surface of its straight colour, anything else is a miss.
+            let c = self.shade(q, st, dir, rays, pc.0, pc.1);
+            if c.w >= ALPHA_CUTOFF {
                 out.push((t, i, (c.truncate() / c.w).extend(1.0)));
             }
         }
