@@ -18,7 +18,7 @@ PRUNED  := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.pruned.billow,$(MESHES))
 CLOUDS  := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.cloud.billow,$(MESHES))
 BATCH_RES ?= 128
 
-.PHONY: all build demo test lint fmt batch clean fixtures accuracy accuracy-emptyspace bench bench-bbcloud gallery bench-view bench-particles check-gltf check-ktx2
+.PHONY: all build demo test lint fmt batch clean fixtures accuracy accuracy-emptyspace bench bench-bbcloud gallery bench-view bench-particles check-gltf check-ktx2 lod-sweep
 
 all: build
 
@@ -189,6 +189,21 @@ check-gltf: build
 		--gltf $(OUT)/gltf-validator/oak_1.glb -q
 	NODE_PATH=$(OUT)/gltf-validator/node_modules node tests/gltf_validator/validate.js \
 		$(OUT)/gltf-validator/oak.glb $(OUT)/gltf-validator/oak_nm.glb $(OUT)/gltf-validator/oak_1.glb
+
+## LOD switches as a viewer sees them (docs/bbcloud.md, "LOD switches"): bakes the oak and a
+## generated tree into 3-level clouds and sweeps their switches in the GPU viewer, on screen
+## and at a constant fill: $(OUT)/lod_sweep/{oak,tree}{,_fill}/ (sweep.md, sweep.json,
+## switch_K.png). Needs a Vulkan adapter (lavapipe is installed like for `make test`).
+lod-sweep: build
+	@mkdir -p $(OUT)/lod_sweep
+	$(CARGO) run --release --locked --example gen_fixtures -- $(OUT)/procedural
+	$(BILLOW) bbcloud $(SAMPLE) -o $(OUT)/lod_sweep/oak.billow --lods 3 -q
+	$(BILLOW) bbcloud $(OUT)/procedural/tree.obj -o $(OUT)/lod_sweep/tree.billow --lods 3 -q
+	sh .ci/ensure-vulkan
+	for m in oak tree; do \
+		NODEVICE_SELECT=1 $(BILLOW) view $(OUT)/lod_sweep/$$m.billow --lod-sweep $(OUT)/lod_sweep/$$m --size 400x400 --view=-z && \
+		NODEVICE_SELECT=1 $(BILLOW) view $(OUT)/lod_sweep/$$m.billow --lod-sweep $(OUT)/lod_sweep/$${m}_fill --sweep-fill 0.9 --size 400x400 --view=-z || exit 1; \
+	done
 
 ## The KTX2 exports read back by ktx-parse (the KTX2 reader three.js and glTF-Transform use;
 ## needs Node.js and npm, installed under $(OUT)/ktx-parse): header, DFD premultiplied flag,
