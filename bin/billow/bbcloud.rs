@@ -1,8 +1,6 @@
 //! `billow bbcloud IN -o OUT.billow`: a stochastic billboard cloud (Lacewell et al. 2006)
 //! of a mesh's foliage, plus its other triangles kept as a mesh.
 
-mod staged;
-
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -13,15 +11,17 @@ use billow::bbcloud::{
 use billow::export::gltf::cloud_glb_bytes_with;
 use billow::export::{GltfAlpha, GltfOptions};
 use billow::import::{import, ImportOptions};
-use billow::provenance::{source_info, tool_version};
+use billow::provenance::{source_info_all, tool_version};
 use glam::Vec3;
 use serde::Serialize;
 
+use crate::depfile;
 use crate::exit::{CliError, Code};
 use crate::inspect::import_code;
 use crate::output::{
     print_json, progress, refuse_clobbering, refuse_clobbering_read, refuse_file_as_folder, warn,
 };
+use crate::staged::{out_err, Staged};
 use crate::Ctx;
 
 #[derive(clap::Args, Debug)]
@@ -102,6 +102,10 @@ pub struct Args {
     /// Treat import warnings (e.g. a missing texture) as errors.
     #[arg(long)]
     strict: bool,
+    /// Also write a Makefile rule listing every file the bake read (the mesh, its buffers,
+    /// textures and material libraries) as prerequisites of the outputs; committed with them.
+    #[arg(long, value_name = "FILE")]
+    depfile: Option<PathBuf>,
     /// Print a machine-readable summary on stdout.
     #[arg(long)]
     json: bool,
@@ -224,10 +228,15 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let start = Instant::now();
     let mut outputs = vec![("-o", args.output.as_path())];
     outputs.extend(args.gltf.as_deref().map(|g| ("--gltf", g)));
+    outputs.extend(args.depfile.as_deref().map(|g| ("--depfile", g)));
     refuse_clobbering(&[&args.input], &outputs)?;
     if let Some(dir) = &args.atlas {
         refuse_file_as_folder("--atlas", dir)?;
     }
+    let mut named: Vec<&std::path::Path> = outputs.iter().map(|(_, p)| *p).collect();
+    named.push(&args.input);
+    named.extend(args.atlas.as_deref());
+    depfile::check(args.depfile.as_deref(), &named)?;
     if !(0.0..=1.0).contains(&args.ambient) {
         return Err(bad(
             "--ambient",
@@ -284,7 +293,11 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     for w in &scene.warnings {
         warn(ctx, &format!("{input}: {}", w.message));
     }
-    let source = source_info(&args.input)
+    depfile::check(
+        args.depfile.as_deref(),
+        &scene.files.iter().map(PathBuf::as_path).collect::<Vec<_>>(),
+    )?;
+    let source = source_info_all(&args.input, &scene.files)
         .map_err(|e| CliError::new(Code::InputIo, format!("{input}: cannot read: {e}")))?;
     let seconds_import = start.elapsed().as_secs_f64();
 
@@ -350,14 +363,8 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         .map_err(|e| CliError::new(Code::Internal, e))?;
     // Every file goes to a temporary name first; all are renamed into place only when all
     // are written, so a failure leaves no new file (and no new folder) behind.
-    let out_err = |p: &std::path::Path, e: std::io::Error| {
-        CliError::new(
-            Code::OutputIo,
-            format!("{}: cannot write output: {e}", p.display()),
-        )
-    };
-    let mut stage = staged::Staged::default();
-    let mut atlas_files = Vec::new();
+    let mut stage = Staged::new(&args.output);
+    let mut atlas_paths = Vec::new();
     if let Some(dir) = &args.atlas {
         stage.create_dir(dir).map_err(|e| {
             CliError::new(
@@ -368,7 +375,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         for (name, png) in &pngs {
             let p = dir.join(name);
             stage.stage(&p, png).map_err(|e| out_err(&p, e))?;
-            atlas_files.push(p.display().to_string());
+            atlas_paths.push(p);
         }
     }
     if let Some((path, glb)) = &glb {
@@ -377,7 +384,18 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     stage
         .stage(&args.output, &bytes)
         .map_err(|e| out_err(&args.output, e))?;
-    stage.commit().map_err(|(p, e)| out_err(&p, e))?;
+    if let Some(d) = &args.depfile {
+        let mut targets = vec![args.output.as_path()];
+        targets.extend(args.gltf.as_deref());
+        targets.extend(atlas_paths.iter().map(PathBuf::as_path));
+        let text = depfile::render(&targets, &args.input, &scene.files)?;
+        stage.stage(d, text.as_bytes()).map_err(|e| out_err(d, e))?;
+    }
+    stage.commit_or_fail()?;
+    let atlas_files: Vec<String> = atlas_paths
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect();
     let seconds_write = write_start.elapsed().as_secs_f64();
 
     let summary = Summary {

@@ -4,6 +4,7 @@
 mod alloc;
 mod bbcloud;
 mod compare;
+mod depfile;
 mod emptyspace;
 mod eval;
 mod exit;
@@ -11,6 +12,7 @@ mod info;
 mod inspect;
 mod output;
 mod shell;
+mod staged;
 mod view;
 mod view_load;
 mod voxelize;
