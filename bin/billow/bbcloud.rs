@@ -5,8 +5,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use billow::bbcloud::{
-    bake, straight, BbcloudError, BbcloudOptions, BbcloudStats, Shading, Stage, ViewDirs,
-    ViewPreference,
+    bake, estimate, straight, BbcloudError, BbcloudOptions, BbcloudStats, Estimate, Shading, Stage,
+    ViewDirs, ViewPreference, MAX_ATLAS_BYTES,
 };
 use billow::export::gltf::cloud_glb_bytes_with;
 use billow::export::{GltfAlpha, GltfOptions};
@@ -129,6 +129,7 @@ struct Summary<'a> {
     mip_levels: u32,
     normal_map: bool,
     stats: &'a BbcloudStats,
+    estimate: Estimate,
     seconds_import: f64,
     seconds_write: f64,
     seconds_export: f64,
@@ -224,6 +225,26 @@ fn parse_view(s: &str, up: Vec3, strength: f32) -> Result<ViewPreference, CliErr
     Ok(ViewPreference { dirs, strength })
 }
 
+/// `0.04`, `1e-30`: a number as a person would write it.
+fn short(x: f32) -> String {
+    if x == 0.0 || x.abs() >= 1e-3 {
+        x.to_string()
+    } else {
+        format!("{x:e}")
+    }
+}
+
+/// A plane search expected to take longer than this (seconds) is announced with a warning.
+const SLOW_SECONDS: f64 = 60.0;
+
+fn cloud_code(e: &BbcloudError) -> Code {
+    match e {
+        BbcloudError::NoFoliage => Code::InvalidInput,
+        BbcloudError::Asset(_) => Code::Internal,
+        _ => Code::BadParameter,
+    }
+}
+
 pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let start = Instant::now();
     let mut outputs = vec![("-o", args.output.as_path())];
@@ -301,6 +322,49 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         .map_err(|e| CliError::new(Code::InputIo, format!("{input}: cannot read: {e}")))?;
     let seconds_import = start.elapsed().as_secs_f64();
 
+    // What the bake will cost, before any heavy work: refused when the atlases would be
+    // too large, a warning with the expected time when the plane search will be long.
+    let cost = estimate(&scene, &opts)
+        .map_err(|e| CliError::new(cloud_code(&e), format!("{input}: {e}")))?;
+    let mib = |b: u64| b as f64 / f64::from(1u32 << 20);
+    if cost.atlas_bytes > MAX_ATLAS_BYTES {
+        return Err(bad(
+            if args.texel_density.is_some() {
+                "--texel-density"
+            } else {
+                "--atlas-size"
+            },
+            format!(
+                "the atlases would take {}about {:.0} MiB (peak memory about 3x that), more \
+                 than the limit of {:.0} MiB; lower --atlas-size, --texel-density, --lods or \
+                 --mip-levels (nothing was baked)",
+                if args.texel_density.is_some() {
+                    "at least "
+                } else {
+                    ""
+                },
+                mib(cost.atlas_bytes),
+                mib(MAX_ATLAS_BYTES)
+            ),
+        ));
+    }
+    if cost.search_seconds > SLOW_SECONDS {
+        warn(
+            ctx,
+            &format!(
+                "{input}: about {} billboards per level from {} foliage triangles: the plane \
+                 search will take roughly {:.0} s ({:.1e} candidate tests; --epsilon {} and \
+                 --max-extent {} set it, the defaults take a few seconds)",
+                cost.billboards,
+                cost.foliage_triangles,
+                cost.search_seconds,
+                cost.search_tests,
+                short(args.epsilon),
+                args.max_extent.map_or("none".into(), short)
+            ),
+        );
+    }
+
     let bar = progress(ctx, 1000, "bbcloud");
     let report = |stage: Stage, f: f32| {
         let (lo, span, msg) = match stage {
@@ -311,15 +375,8 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         bar.set_message(msg);
         bar.set_position(((lo + span * f.clamp(0.0, 1.0)) * 1000.0) as u64);
     };
-    let (asset, stats) =
-        bake(&scene, &opts, &tool_version(), Some(source), &report).map_err(|e| {
-            let code = match e {
-                BbcloudError::NoFoliage => Code::InvalidInput,
-                BbcloudError::Asset(_) => Code::Internal,
-                _ => Code::BadParameter,
-            };
-            CliError::new(code, format!("{input}: {e}"))
-        })?;
+    let (asset, stats) = bake(&scene, &opts, &tool_version(), Some(source), &report)
+        .map_err(|e| CliError::new(cloud_code(&e), format!("{input}: {e}")))?;
     bar.finish_and_clear();
 
     // Everything is encoded before anything is written, so a failure leaves no output.
@@ -409,6 +466,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         texels: stats.levels.iter().map(|l| l.texels).sum(),
         bytes: bytes.len() as u64,
         stats: &stats,
+        estimate: cost,
         seconds_import,
         seconds_write,
         seconds_export,

@@ -367,11 +367,56 @@ pub(crate) fn source_note(
     Some(note)
 }
 
+/// Most reference samples (pixels × spp × views) an eval may trace: 10¹⁰, about 80 minutes at
+/// [`REFERENCE_SAMPLES_PER_SECOND`].
+pub(crate) const MAX_REFERENCE_SAMPLES: f64 = 1e10;
+/// Reference samples per second assumed for the time estimate (measured: the oak, release
+/// build, a few cores).
+pub(crate) const REFERENCE_SAMPLES_PER_SECOND: f64 = 2e6;
+
+/// Refuses (exit 8) an eval whose reference would trace more than
+/// [`MAX_REFERENCE_SAMPLES`], and warns with the expected time above a minute; before any
+/// work.
+fn check_cost(ctx: &Ctx, args: &Args, views: usize) -> Result<(), CliError> {
+    let (w, h) = parse_size(&args.size)?;
+    let samples = f64::from(w) * f64::from(h) * f64::from(args.spp) * views as f64;
+    let seconds = samples / REFERENCE_SAMPLES_PER_SECOND;
+    // Float images (reference, asset, 1-spp mesh, panels) per view: about 100 bytes a pixel.
+    let mib = f64::from(w) * f64::from(h) * 100.0 / f64::from(1u32 << 20);
+    if samples > MAX_REFERENCE_SAMPLES {
+        return Err(bad(
+            "--size",
+            format!(
+                "{}x{} px x {} spp x {views} views = {samples:.1e} reference samples, about \
+                 {:.0} min and {mib:.0} MiB per view, more than the limit of {:.0e} samples; \
+                 lower --size, --spp or the number of --views/--distances (nothing was done)",
+                w,
+                h,
+                args.spp,
+                seconds / 60.0,
+                MAX_REFERENCE_SAMPLES
+            ),
+        ));
+    }
+    if seconds > 60.0 {
+        warn(
+            ctx,
+            &format!(
+                "{w}x{h} px x {} spp x {views} views = {samples:.1e} reference samples: \
+                 expect roughly {:.0} s",
+                args.spp, seconds
+            ),
+        );
+    }
+    Ok(())
+}
+
 pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let start = Instant::now();
     parse_size(&args.size)?;
     spp_per_axis(args.spp)?;
-    parse_views(&args.views, &parse_distances(&args.distances)?)?;
+    let views = parse_views(&args.views, &parse_distances(&args.distances)?)?;
+    check_cost(ctx, &args, views.len())?;
     // Reject a bad --spacing before the (slow) work.
     parse_spacing(&args.spacing, None)?;
     if let Some(dir) = &args.out {
