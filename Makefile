@@ -6,17 +6,37 @@ BILLOW  := $(or $(CARGO_TARGET_DIR),target)/release/billow
 SAMPLE  := fixtures/oak/eztree_oak_medium.gltf
 OUT     ?= out
 
+# The binary is a file target: built (`cargo build --release`) only when a source is newer
+# than it. `make batch BILLOW=path/to/billow` uses that binary as it is, never building.
+ifeq ($(origin BILLOW),command line)
+BILLOW_SRC :=
+else
+BILLOW_SRC := $(shell find src bin formats/src viewer/src -type f 2>/dev/null) \
+	Cargo.toml Cargo.lock formats/Cargo.toml viewer/Cargo.toml
+endif
+
 # Batch conversion: every mesh under IN_DIR becomes an asset under OUT_DIR (make -j safe:
-# each output is its own target, written atomically by billow, and the binary is built once
-# by the order-only prerequisite before any job starts).
+# each output is its own target, written atomically by billow, and the binary is built once,
+# as an order-only prerequisite, before any job starts). Each bake writes a depfile
+# (billow --depfile, included below) naming every file it read, so a changed buffer,
+# texture or .mtl rebakes exactly the meshes that read it, and `make -q batch` is true
+# after a batch. Paths make cannot hold (spaces, quotes, : % # $ \) are refused loudly.
 IN_DIR  ?= fixtures
 OUT_DIR ?= $(OUT)/batch
-MESHES  := $(shell find $(IN_DIR) -type f \( -name '*.gltf' -o -name '*.glb' -o -name '*.obj' \) 2>/dev/null | grep -v ' ')
+FOUND   := $(shell find $(IN_DIR) -type f \( -name '*.gltf' -o -name '*.glb' -o -name '*.obj' \) 2>/dev/null | sort)
+UNSAFE  := $(shell find $(IN_DIR) -type f \( -name '*.gltf' -o -name '*.glb' -o -name '*.obj' \) 2>/dev/null | grep "[][ :%\#$$\\\"'()*?;&|<>\`]" | head -n 3)
+ifneq ($(filter batch,$(MAKECMDGOALS)),)
+ifneq ($(UNSAFE),)
+$(error batch: mesh paths under $(IN_DIR) with a space or another character make cannot handle, such as: $(UNSAFE); rename them (nothing was baked))
+endif
+endif
+MESHES  := $(FOUND)
 REPORTS := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.inspect.json,$(MESHES))
 VOLUMES := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.volume.billow,$(MESHES))
 PRUNED  := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.pruned.billow,$(MESHES))
-CLOUDS  := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.cloud.billow,$(MESHES))
+CLOUDS  := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.cloud.done,$(MESHES))
 BATCH_RES ?= 128
+BATCH_CLOUD_ARGS ?=
 
 .PHONY: all build demo test lint fmt batch clean fixtures accuracy accuracy-emptyspace bench bench-bbcloud gallery bench-view bench-particles check-gltf check-ktx2 lod-sweep
 
@@ -25,7 +45,9 @@ all: build
 build:
 	$(CARGO) build --release --locked
 
-$(BILLOW): build
+$(BILLOW): $(BILLOW_SRC)
+	$(CARGO) build --release --locked -p billow
+	@touch $@
 
 ## The main job on the bundled oak: bake it into a volumetric billboard (plus a KTX2 copy),
 ## prune the volume's empty space, bake it into a billboard cloud with 3 LODs (plus a .glb),
@@ -68,30 +90,43 @@ fmt:
 
 ## Batch rule: `make -j2 batch IN_DIR=some/folder` maps every mesh in the folder to an
 ## import report (X.inspect.json), a volume (X.volume.billow, --res BATCH_RES), the volume
-## with its empty space removed (X.pruned.billow) and a billboard cloud (X.cloud.billow).
+## with its empty space removed (X.pruned.billow) and a billboard cloud (X.cloud.billow,
+## with BATCH_CLOUD_ARGS), or, for a mesh without foliage, its reason in X.cloud.skipped;
+## X.cloud.done records which. Each has a depfile (X.….d) listing the files it was made from.
 batch: $(REPORTS) $(VOLUMES) $(PRUNED) $(CLOUDS)
 
-$(OUT_DIR)/%.inspect.json: $(IN_DIR)/% | build
+-include $(wildcard $(addsuffix .d,$(REPORTS) $(VOLUMES) $(PRUNED) $(CLOUDS)))
+
+# $(call retarget,DEPFILE,TARGET): DEPFILE's prerequisites, for TARGET (billow's depfiles
+# have the targets on the first line and one prerequisite per line after it).
+retarget = { printf '%s: \\\n' '$(2)'; tail -n +2 '$(1)'; } > '$(2).d.tmp' && mv '$(2).d.tmp' '$(2).d'
+
+# The report depends on the files the volume's bake read (the same import).
+$(OUT_DIR)/%.inspect.json: $(IN_DIR)/% $(OUT_DIR)/%.volume.billow | $(BILLOW)
 	@mkdir -p $(dir $@)
 	$(BILLOW) inspect --json $< > $@.tmp && mv $@.tmp $@
+	@$(call retarget,$(OUT_DIR)/$*.volume.billow.d,$@)
 
-$(OUT_DIR)/%.volume.billow: $(IN_DIR)/% | build
+$(OUT_DIR)/%.volume.billow: $(IN_DIR)/% | $(BILLOW)
 	@mkdir -p $(dir $@)
-	$(BILLOW) voxelize -q --res $(BATCH_RES) --align 8 $< -o $@
+	$(BILLOW) voxelize -q --res $(BATCH_RES) --align 8 $< -o $@ --depfile $@.d
 
-$(OUT_DIR)/%.pruned.billow: $(OUT_DIR)/%.volume.billow | build
-	$(BILLOW) emptyspace -q $< -o $@
+$(OUT_DIR)/%.pruned.billow: $(OUT_DIR)/%.volume.billow | $(BILLOW)
+	$(BILLOW) emptyspace -q $< -o $@ --depfile $@.d
 
-# A cloud for every mesh with foliage (alpha MASK/BLEND materials); a mesh without any is
-# reported in X.cloud.skipped instead (bbcloud's exit code 4 and its one-line reason;
-# no .billow is written for it, so the rule runs again next time).
-$(OUT_DIR)/%.cloud.billow: $(IN_DIR)/% | build
+# A cloud for every mesh with foliage (alpha MASK/BLEND materials); a mesh without any gets
+# X.cloud.skipped (bbcloud's one-line reason) and no .billow. Either way X.cloud.done is
+# written, the target make keeps up to date, with the depfile of what the outcome came from.
+$(OUT_DIR)/%.cloud.done: $(IN_DIR)/% | $(BILLOW) $(OUT_DIR)/%.volume.billow
 	@mkdir -p $(dir $@)
-	@rm -f $@.skipped
-	@$(BILLOW) bbcloud -q $< -o $@ 2> $@.err; rc=$$?; \
-	if [ $$rc -eq 0 ]; then rm -f $@.err; \
-	elif [ $$rc -eq 4 ] && grep -q 'no foliage' $@.err; then mv $@.err $@.skipped; \
-	else cat $@.err >&2; rm -f $@.err; exit $$rc; fi
+	@rm -f $(@:.done=.skipped)
+	@$(BILLOW) bbcloud -q $(BATCH_CLOUD_ARGS) $< -o $(@:.done=.billow) --depfile $@.bbcloud.d 2> $@.err; rc=$$?; \
+	if [ $$rc -eq 0 ]; then rm -f $@.err; echo 'cloud: $(notdir $(@:.done=.billow))' > $@.tmp; \
+		$(call retarget,$@.bbcloud.d,$@) && rm -f $@.bbcloud.d; \
+	elif grep -q 'no foliage' $@.err; then mv $@.err $(@:.done=.skipped); \
+		rm -f $(@:.done=.billow) $(@:.done=.billow).d; echo 'skipped: no foliage' > $@.tmp; \
+		$(call retarget,$(OUT_DIR)/$*.volume.billow.d,$@); \
+	else cat $@.err >&2; rm -f $@.err $@.bbcloud.d; exit $$rc; fi && mv $@.tmp $@
 
 ## Regenerate the procedural hard-case shapes (truss, furry torus, fur tile) as OBJ files.
 fixtures:

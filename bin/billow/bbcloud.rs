@@ -1,27 +1,27 @@
 //! `billow bbcloud IN -o OUT.billow`: a stochastic billboard cloud (Lacewell et al. 2006)
 //! of a mesh's foliage, plus its other triangles kept as a mesh.
 
-mod staged;
-
 use std::path::PathBuf;
 use std::time::Instant;
 
 use billow::bbcloud::{
-    bake, straight, BbcloudError, BbcloudOptions, BbcloudStats, Shading, Stage, ViewDirs,
-    ViewPreference,
+    bake, estimate, straight, BbcloudError, BbcloudOptions, BbcloudStats, Estimate, Shading, Stage,
+    ViewDirs, ViewPreference, MAX_ATLAS_BYTES,
 };
 use billow::export::gltf::cloud_glb_bytes_with;
 use billow::export::{GltfAlpha, GltfOptions};
 use billow::import::{import, ImportOptions};
-use billow::provenance::{source_info, tool_version};
+use billow::provenance::{source_info_all, tool_version};
 use glam::Vec3;
 use serde::Serialize;
 
+use crate::depfile;
 use crate::exit::{CliError, Code};
 use crate::inspect::import_code;
 use crate::output::{
     print_json, progress, refuse_clobbering, refuse_clobbering_read, refuse_file_as_folder, warn,
 };
+use crate::staged::{out_err, Staged};
 use crate::Ctx;
 
 #[derive(clap::Args, Debug)]
@@ -102,6 +102,10 @@ pub struct Args {
     /// Treat import warnings (e.g. a missing texture) as errors.
     #[arg(long)]
     strict: bool,
+    /// Also write a Makefile rule listing every file the bake read (the mesh, its buffers,
+    /// textures and material libraries) as prerequisites of the outputs; committed with them.
+    #[arg(long, value_name = "FILE")]
+    depfile: Option<PathBuf>,
     /// Print a machine-readable summary on stdout.
     #[arg(long)]
     json: bool,
@@ -125,6 +129,7 @@ struct Summary<'a> {
     mip_levels: u32,
     normal_map: bool,
     stats: &'a BbcloudStats,
+    estimate: Estimate,
     seconds_import: f64,
     seconds_write: f64,
     seconds_export: f64,
@@ -220,14 +225,39 @@ fn parse_view(s: &str, up: Vec3, strength: f32) -> Result<ViewPreference, CliErr
     Ok(ViewPreference { dirs, strength })
 }
 
+/// `0.04`, `1e-30`: a number as a person would write it.
+fn short(x: f32) -> String {
+    if x == 0.0 || x.abs() >= 1e-3 {
+        x.to_string()
+    } else {
+        format!("{x:e}")
+    }
+}
+
+/// A plane search expected to take longer than this (seconds) is announced with a warning.
+const SLOW_SECONDS: f64 = 60.0;
+
+fn cloud_code(e: &BbcloudError) -> Code {
+    match e {
+        BbcloudError::NoFoliage => Code::InvalidInput,
+        BbcloudError::Asset(_) => Code::Internal,
+        _ => Code::BadParameter,
+    }
+}
+
 pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let start = Instant::now();
     let mut outputs = vec![("-o", args.output.as_path())];
     outputs.extend(args.gltf.as_deref().map(|g| ("--gltf", g)));
+    outputs.extend(args.depfile.as_deref().map(|g| ("--depfile", g)));
     refuse_clobbering(&[&args.input], &outputs)?;
     if let Some(dir) = &args.atlas {
         refuse_file_as_folder("--atlas", dir)?;
     }
+    let mut named: Vec<&std::path::Path> = outputs.iter().map(|(_, p)| *p).collect();
+    named.push(&args.input);
+    named.extend(args.atlas.as_deref());
+    depfile::check(args.depfile.as_deref(), &named)?;
     if !(0.0..=1.0).contains(&args.ambient) {
         return Err(bad(
             "--ambient",
@@ -284,9 +314,56 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     for w in &scene.warnings {
         warn(ctx, &format!("{input}: {}", w.message));
     }
-    let source = source_info(&args.input)
+    depfile::check(
+        args.depfile.as_deref(),
+        &scene.files.iter().map(PathBuf::as_path).collect::<Vec<_>>(),
+    )?;
+    let source = source_info_all(&args.input, &scene.files)
         .map_err(|e| CliError::new(Code::InputIo, format!("{input}: cannot read: {e}")))?;
     let seconds_import = start.elapsed().as_secs_f64();
+
+    // What the bake will cost, before any heavy work: refused when the atlases would be
+    // too large, a warning with the expected time when the plane search will be long.
+    let cost = estimate(&scene, &opts)
+        .map_err(|e| CliError::new(cloud_code(&e), format!("{input}: {e}")))?;
+    let mib = |b: u64| b as f64 / f64::from(1u32 << 20);
+    if cost.atlas_bytes > MAX_ATLAS_BYTES {
+        return Err(bad(
+            if args.texel_density.is_some() {
+                "--texel-density"
+            } else {
+                "--atlas-size"
+            },
+            format!(
+                "the atlases would take {}about {:.0} MiB (peak memory about 3x that), more \
+                 than the limit of {:.0} MiB; lower --atlas-size, --texel-density, --lods or \
+                 --mip-levels (nothing was baked)",
+                if args.texel_density.is_some() {
+                    "at least "
+                } else {
+                    ""
+                },
+                mib(cost.atlas_bytes),
+                mib(MAX_ATLAS_BYTES)
+            ),
+        ));
+    }
+    if cost.search_seconds > SLOW_SECONDS {
+        warn(
+            ctx,
+            &format!(
+                "{input}: about {} billboards per level from {} foliage triangles: the plane \
+                 search will take roughly {:.0} s ({:.1e} candidate tests; --epsilon {} and \
+                 --max-extent {} set it, the defaults take a few seconds)",
+                cost.billboards,
+                cost.foliage_triangles,
+                cost.search_seconds,
+                cost.search_tests,
+                short(args.epsilon),
+                args.max_extent.map_or("none".into(), short)
+            ),
+        );
+    }
 
     let bar = progress(ctx, 1000, "bbcloud");
     let report = |stage: Stage, f: f32| {
@@ -298,15 +375,8 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         bar.set_message(msg);
         bar.set_position(((lo + span * f.clamp(0.0, 1.0)) * 1000.0) as u64);
     };
-    let (asset, stats) =
-        bake(&scene, &opts, &tool_version(), Some(source), &report).map_err(|e| {
-            let code = match e {
-                BbcloudError::NoFoliage => Code::InvalidInput,
-                BbcloudError::Asset(_) => Code::Internal,
-                _ => Code::BadParameter,
-            };
-            CliError::new(code, format!("{input}: {e}"))
-        })?;
+    let (asset, stats) = bake(&scene, &opts, &tool_version(), Some(source), &report)
+        .map_err(|e| CliError::new(cloud_code(&e), format!("{input}: {e}")))?;
     bar.finish_and_clear();
 
     // Everything is encoded before anything is written, so a failure leaves no output.
@@ -350,14 +420,8 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         .map_err(|e| CliError::new(Code::Internal, e))?;
     // Every file goes to a temporary name first; all are renamed into place only when all
     // are written, so a failure leaves no new file (and no new folder) behind.
-    let out_err = |p: &std::path::Path, e: std::io::Error| {
-        CliError::new(
-            Code::OutputIo,
-            format!("{}: cannot write output: {e}", p.display()),
-        )
-    };
-    let mut stage = staged::Staged::default();
-    let mut atlas_files = Vec::new();
+    let mut stage = Staged::new(&args.output);
+    let mut atlas_paths = Vec::new();
     if let Some(dir) = &args.atlas {
         stage.create_dir(dir).map_err(|e| {
             CliError::new(
@@ -368,7 +432,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         for (name, png) in &pngs {
             let p = dir.join(name);
             stage.stage(&p, png).map_err(|e| out_err(&p, e))?;
-            atlas_files.push(p.display().to_string());
+            atlas_paths.push(p);
         }
     }
     if let Some((path, glb)) = &glb {
@@ -377,7 +441,18 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     stage
         .stage(&args.output, &bytes)
         .map_err(|e| out_err(&args.output, e))?;
-    stage.commit().map_err(|(p, e)| out_err(&p, e))?;
+    if let Some(d) = &args.depfile {
+        let mut targets = vec![args.output.as_path()];
+        targets.extend(args.gltf.as_deref());
+        targets.extend(atlas_paths.iter().map(PathBuf::as_path));
+        let text = depfile::render(&targets, &args.input, &scene.files)?;
+        stage.stage(d, text.as_bytes()).map_err(|e| out_err(d, e))?;
+    }
+    stage.commit_or_fail()?;
+    let atlas_files: Vec<String> = atlas_paths
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect();
     let seconds_write = write_start.elapsed().as_secs_f64();
 
     let summary = Summary {
@@ -391,6 +466,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         texels: stats.levels.iter().map(|l| l.texels).sum(),
         bytes: bytes.len() as u64,
         stats: &stats,
+        estimate: cost,
         seconds_import,
         seconds_write,
         seconds_export,

@@ -4,12 +4,13 @@
 
 use std::path::{Path, PathBuf};
 
-use billow::eval::image::{write_comparison_png, ImageF32};
+use billow::eval::image::{comparisons_png_bytes, ImageF32};
 use billow::eval::metrics::{compare, ImageError};
 use serde::Serialize;
 
 use crate::exit::{CliError, Code};
 use crate::output::{print_json, refuse_clobbering};
+use crate::staged::{out_err, Staged};
 use crate::Ctx;
 
 #[derive(clap::Args, Debug)]
@@ -69,8 +70,11 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     }
     let error = compare(&r, &t).map_err(|e| CliError::new(Code::InvalidInput, e))?;
     if let Some(d) = &args.diff {
-        write_comparison_png(&r, &t, 4.0, d)
-            .map_err(|e| CliError::new(Code::OutputIo, format!("{}: {e}", d.display())))?;
+        let png = comparisons_png_bytes(&r, &[&t], 4.0, d)
+            .map_err(|e| CliError::new(Code::Internal, format!("{}: {e}", d.display())))?;
+        let mut stage = Staged::new(d);
+        stage.stage(d, &png).map_err(|e| out_err(d, e))?;
+        stage.commit_or_fail()?;
     }
     if args.json {
         print_json(&Summary {

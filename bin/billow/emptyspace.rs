@@ -10,9 +10,11 @@ use billow::emptyspace::{
 use billow_format::{read_file, AssetKind, VolumeAsset};
 use serde::Serialize;
 
+use crate::depfile;
 use crate::exit::{CliError, Code};
 use crate::info::format_code;
 use crate::output::{print_json, refuse_clobbering, warn};
+use crate::staged::{out_err, Staged};
 use crate::Ctx;
 
 #[derive(clap::Args, Debug)]
@@ -43,6 +45,10 @@ pub struct Args {
     /// volume whole.
     #[arg(long)]
     max_tiers: Option<u32>,
+    /// Also write a Makefile rule with the input asset as the output's prerequisite;
+    /// committed with the output.
+    #[arg(long, value_name = "FILE")]
+    depfile: Option<PathBuf>,
     /// Print a machine-readable summary on stdout.
     #[arg(long)]
     json: bool,
@@ -71,7 +77,10 @@ fn code(e: &EmptySpaceError) -> Code {
 
 pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let start = Instant::now();
-    refuse_clobbering(&[&args.input], &[("-o", &args.output)])?;
+    let mut outputs = vec![("-o", args.output.as_path())];
+    outputs.extend(args.depfile.as_deref().map(|d| ("--depfile", d)));
+    refuse_clobbering(&[&args.input], &outputs)?;
+    depfile::check(args.depfile.as_deref(), &[&args.input, &args.output])?;
     let shown = args.input.display().to_string();
     let container = read_file(&args.input).map_err(|e| CliError::new(format_code(&e), e))?;
     if container.header.kind != AssetKind::Volume {
@@ -104,12 +113,15 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         .asset
         .to_bytes()
         .map_err(|e| CliError::new(Code::Internal, e))?;
-    billow_format::write_atomic(&args.output, &bytes).map_err(|e| {
-        CliError::new(
-            Code::OutputIo,
-            format!("{}: cannot write output: {e}", args.output.display()),
-        )
-    })?;
+    let mut stage = Staged::new(&args.output);
+    stage
+        .stage(&args.output, &bytes)
+        .map_err(|e| out_err(&args.output, e))?;
+    if let Some(d) = &args.depfile {
+        let text = depfile::render(&[&args.output], &args.input, &[])?;
+        stage.stage(d, text.as_bytes()).map_err(|e| out_err(d, e))?;
+    }
+    stage.commit_or_fail()?;
     let summary = Summary {
         input: shown,
         output: args.output.display().to_string(),

@@ -4,6 +4,7 @@
 mod alloc;
 mod bbcloud;
 mod compare;
+mod depfile;
 mod emptyspace;
 mod eval;
 mod exit;
@@ -12,6 +13,7 @@ mod inspect;
 mod lod_sweep;
 mod output;
 mod shell;
+mod staged;
 mod view;
 mod view_load;
 mod voxelize;

@@ -9,10 +9,12 @@ use billow_format::VolumeAsset;
 use glam::Vec2;
 use serde::Serialize;
 
+use crate::depfile;
 use crate::exit::{CliError, Code};
 use crate::info::format_code;
 use crate::inspect::import_code;
 use crate::output::{print_json, refuse_clobbering, refuse_clobbering_read, warn};
+use crate::staged::{out_err, Staged};
 use crate::Ctx;
 
 #[derive(clap::Args, Debug)]
@@ -33,6 +35,10 @@ pub struct Args {
     /// Treat import warnings as errors.
     #[arg(long)]
     strict: bool,
+    /// Also write a Makefile rule listing every file read (the surface mesh and the files
+    /// beside it, the volume) as prerequisites of the output; committed with it.
+    #[arg(long, value_name = "FILE")]
+    depfile: Option<PathBuf>,
     /// Print a machine-readable summary on stdout.
     #[arg(long)]
     json: bool,
@@ -56,7 +62,13 @@ fn shell_code(e: &ShellError) -> Code {
 }
 
 pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
-    refuse_clobbering(&[&args.surface, &args.volume], &[("-o", &args.output)])?;
+    let mut outputs = vec![("-o", args.output.as_path())];
+    outputs.extend(args.depfile.as_deref().map(|d| ("--depfile", d)));
+    refuse_clobbering(&[&args.surface, &args.volume], &outputs)?;
+    depfile::check(
+        args.depfile.as_deref(),
+        &[&args.surface, &args.volume, &args.output],
+    )?;
     let tiles: Vec<f32> = args
         .tiles
         .split(',')
@@ -76,7 +88,15 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         },
     )
     .map_err(|e| CliError::new(import_code(&e), &e))?;
-    refuse_clobbering_read(&args.surface, &surface.files, &[("-o", &args.output)])?;
+    refuse_clobbering_read(&args.surface, &surface.files, &outputs)?;
+    depfile::check(
+        args.depfile.as_deref(),
+        &surface
+            .files
+            .iter()
+            .map(PathBuf::as_path)
+            .collect::<Vec<_>>(),
+    )?;
     for w in &surface.warnings {
         warn(ctx, &format!("{}: {}", args.surface.display(), w.message));
     }
@@ -100,8 +120,17 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let bytes = asset
         .to_bytes()
         .map_err(|e| CliError::new(Code::Internal, e))?;
-    billow_format::write_atomic(&args.output, &bytes)
-        .map_err(|e| CliError::new(Code::OutputIo, format!("cannot write output: {e}")))?;
+    let mut stage = Staged::new(&args.output);
+    stage
+        .stage(&args.output, &bytes)
+        .map_err(|e| out_err(&args.output, e))?;
+    if let Some(d) = &args.depfile {
+        let mut read = surface.files.clone();
+        read.push(args.volume.clone());
+        let text = depfile::render(&[&args.output], &args.surface, &read)?;
+        stage.stage(d, text.as_bytes()).map_err(|e| out_err(d, e))?;
+    }
+    stage.commit_or_fail()?;
     let summary = Summary {
         output: args.output.display().to_string(),
         prisms: asset.cells.len(),

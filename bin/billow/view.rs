@@ -435,9 +435,14 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             })
             .collect(),
     };
-    image
-        .write_png(out)
-        .map_err(|e| CliError::new(Code::OutputIo, e))?; // names the path
+    let png = image
+        .png_bytes(out)
+        .map_err(|e| CliError::new(Code::Internal, e))?; // names the path
+    let mut stage = crate::staged::Staged::new(out);
+    stage
+        .stage(out, &png)
+        .map_err(|e| crate::staged::out_err(out, e))?;
+    stage.commit_or_fail()?;
     let summary = Summary {
         target: args.target.display().to_string(),
         screenshot: Some(out.display().to_string()),

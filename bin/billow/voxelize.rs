@@ -4,9 +4,11 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use billow::export::{write_ktx2, write_slices, ExportError, SliceFormat};
+use billow::export::{
+    check_slices, ktx2_bytes, slice_bytes, slice_file_name, ExportError, SliceFormat,
+};
 use billow::import::{import, ImportOptions};
-use billow::provenance::{source_info, tool_version};
+use billow::provenance::{source_info, tool_version, with_companions};
 use billow::scene::Aabb;
 use billow::voxelize::{
     bake_params, voxelize, Bake, CombineFn, Resolution, Stage, VoxelizeError, VoxelizeOptions,
@@ -14,12 +16,14 @@ use billow::voxelize::{
 use glam::Vec3;
 use serde::Serialize;
 
+use crate::depfile;
 use crate::exit::{CliError, Code};
 use crate::inspect::import_code;
 use crate::output::{
     peak_rss_bytes, print_json, progress, refuse_clobbering, refuse_clobbering_read,
     refuse_file_as_folder, warn,
 };
+use crate::staged::{out_err, Staged};
 use crate::Ctx;
 
 #[derive(clap::Args, Debug)]
@@ -83,6 +87,10 @@ pub struct Args {
     /// Treat import warnings (e.g. a missing texture) as errors.
     #[arg(long)]
     strict: bool,
+    /// Also write a Makefile rule listing every file the bake read (the mesh, its buffers,
+    /// textures and material libraries) as prerequisites of the outputs; committed with them.
+    #[arg(long, value_name = "FILE")]
+    depfile: Option<PathBuf>,
     /// Print a machine-readable summary on stdout.
     #[arg(long)]
     json: bool,
@@ -182,6 +190,10 @@ pub fn export_code(e: &ExportError) -> Code {
 /// `--bake`, `--ao-rays`, `--ao-distance` → [`Bake`].
 fn parse_bake(bake: &str, rays: u32, distance: Option<f32>) -> Result<Bake, CliError> {
     match bake {
+        "none" if distance.is_some() => Err(bad(
+            "--ao-distance",
+            "applies to --bake ao only (nothing would use it); add --bake ao or drop it",
+        )),
         "none" => Ok(Bake::None),
         "ao" => {
             if !(1..=billow::voxelize::MAX_AO_RAYS).contains(&rays) {
@@ -251,10 +263,14 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     };
     let mut outputs = vec![("-o", args.output.as_path())];
     outputs.extend(args.ktx2.as_deref().map(|k| ("--ktx2", k)));
+    outputs.extend(args.depfile.as_deref().map(|k| ("--depfile", k)));
     refuse_clobbering(&[&args.input], &outputs)?;
     if let Some(dir) = &args.slices {
         refuse_file_as_folder("--slices", dir)?;
     }
+    let mut named: Vec<&std::path::Path> = outputs.iter().map(|(_, p)| *p).collect();
+    named.push(&args.input);
+    depfile::check(args.depfile.as_deref(), &named)?;
     let input = args.input.display().to_string();
 
     // The input's checksum (provenance) is computed beside the import, which is mostly
@@ -274,8 +290,28 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     for w in &scene.warnings {
         warn(ctx, &format!("{input}: {}", w.message));
     }
-    let source =
-        source.map_err(|e| CliError::new(Code::InputIo, format!("{input}: cannot read: {e}")))?;
+    let source = source
+        .and_then(|s| with_companions(&args.input, s, &scene.files))
+        .map_err(|e| CliError::new(Code::InputIo, format!("{input}: cannot read: {e}")))?;
+    depfile::check(
+        args.depfile.as_deref(),
+        &scene.files.iter().map(PathBuf::as_path).collect::<Vec<_>>(),
+    )?;
+    let mut warnings: Vec<String> = scene.warnings.iter().map(|w| w.message.clone()).collect();
+    if let Some(b) = opts.bounds {
+        let m = scene.bounds;
+        if !scene.triangles.is_empty() && (b.max.cmplt(m.min).any() || b.min.cmpgt(m.max).any()) {
+            let w = format!(
+                "--bounds {}: the box misses the mesh (its bounds are {:?}..{:?}): the volume \
+                 will be empty",
+                args.bounds.as_deref().unwrap_or_default(),
+                m.min.to_array(),
+                m.max.to_array()
+            );
+            warn(ctx, &format!("{input}: {w}"));
+            warnings.push(w);
+        }
+    }
     let import_s = start.elapsed().as_secs_f64();
 
     let bar = progress(ctx, 1000, "voxelize");
@@ -300,23 +336,42 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let params = bake_params(&volume, &opts, &BTreeMap::new());
     let asset = volume.into_asset(&tool_version(), Some(source), params);
     let write_start = Instant::now();
+    // All outputs go to temporary files first and are renamed into place together, -o last
+    // (see staged.rs): a failure or a kill leaves the old outputs as they were.
+    let mut stage = Staged::new(&args.output);
     // Streamed from the texel data (no file-sized copy in memory).
-    asset.write(&args.output).map_err(|e| match e {
-        billow_format::FormatError::Io { .. } => {
-            CliError::new(Code::OutputIo, format!("cannot write output: {e}"))
-        }
-        e => CliError::new(Code::Internal, e),
-    })?;
-    let bytes = std::fs::metadata(&args.output)
-        .map_err(|e| CliError::new(Code::OutputIo, format!("cannot write output: {e}")))?
-        .len();
+    let bytes = asset
+        .with_parts(|parts| {
+            let len = parts.iter().map(|p| p.len() as u64).sum::<u64>();
+            stage.stage_parts(&args.output, parts).map(|()| len)
+        })
+        .map_err(|e| CliError::new(Code::Internal, e))?
+        .map_err(|e| out_err(&args.output, e))?;
     if let Some(path) = &args.ktx2 {
-        write_ktx2(&asset, path).map_err(|e| CliError::new(export_code(&e), e))?;
+        let ktx = ktx2_bytes(&asset, path).map_err(|e| CliError::new(export_code(&e), e))?;
+        stage.stage(path, &ktx).map_err(|e| out_err(path, e))?;
     }
+    let mut written: Vec<PathBuf> = Vec::new();
     if let Some(dir) = &args.slices {
-        write_slices(&asset, args.slice_level, dir, slice_format)
+        let depth = check_slices(&asset, args.slice_level, dir)
             .map_err(|e| CliError::new(export_code(&e), e))?;
+        stage.create_dir(dir).map_err(|e| out_err(dir, e))?;
+        for z in 0..depth {
+            let path = dir.join(slice_file_name(z, slice_format));
+            let png = slice_bytes(&asset, args.slice_level, z, slice_format, &path)
+                .map_err(|e| CliError::new(export_code(&e), e))?;
+            stage.stage(&path, &png).map_err(|e| out_err(&path, e))?;
+            written.push(path);
+        }
     }
+    if let Some(d) = &args.depfile {
+        let mut targets = vec![args.output.as_path()];
+        targets.extend(args.ktx2.as_deref());
+        targets.extend(written.iter().map(PathBuf::as_path));
+        let text = depfile::render(&targets, &args.input, &scene.files)?;
+        stage.stage(d, text.as_bytes()).map_err(|e| out_err(d, e))?;
+    }
+    stage.commit_or_fail()?;
     let write_s = write_start.elapsed().as_secs_f64();
 
     let summary = Summary {
@@ -342,7 +397,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             write: write_s,
             total: start.elapsed().as_secs_f64(),
         },
-        warnings: scene.warnings.iter().map(|w| w.message.clone()).collect(),
+        warnings,
     };
     if args.json {
         print_json(&summary)?;

@@ -162,6 +162,18 @@ pub(crate) fn encode_with_minor(
     Ok(parts(&gaps, chunks).concat())
 }
 
+/// [`encode_with_minor`] as the list of slices whose concatenation is the file (the
+/// payloads borrowed from where they are), handed to `f`: for writers that stream a file.
+pub(crate) fn with_parts_minor<R>(
+    header: &Header,
+    chunks: &[ChunkRef<'_>],
+    minor: u16,
+    f: impl FnOnce(&[&[u8]]) -> R,
+) -> Result<R, FormatError> {
+    let gaps = frame(header, chunks, minor)?;
+    Ok(f(&parts(&gaps, chunks)))
+}
+
 /// [`encode_with_minor`] written straight to `path` with [`write_atomic_parts`]: the same
 /// bytes, without assembling the file in memory first (the payloads are written from
 /// where they are).
@@ -532,11 +544,13 @@ pub fn write_atomic_parts(path: &Path, parts: &[&[u8]]) -> Result<(), FormatErro
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
-    // `.<name>.<random>.billow.tmp`: hidden, recognisable, matches `*.billow.tmp*`.
+    // `.<name>.<pid>-<random>.billow.tmp`: hidden, recognisable (matches `*.billow.tmp*`),
+    // and naming the writing process, so that a later run can tell the temporary file of a
+    // killed writer (whose process is gone) from one still being written.
     let name = path
         .file_name()
         .map_or_else(|| "asset".into(), |n| n.to_string_lossy().into_owned());
-    let prefix = format!(".{name}.");
+    let prefix = format!(".{name}.{}-", std::process::id());
     let mut builder = tempfile::Builder::new();
     builder.prefix(&prefix).suffix(".billow.tmp");
     #[cfg(unix)]

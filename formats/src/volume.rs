@@ -11,7 +11,7 @@ use std::path::Path;
 
 use crate::bands::{band_table, prism_bytes, validate_bands, LodBand, RawBands};
 use crate::bands::{TAG_BCEL, TAG_BLEV, TAG_BNRM, TAG_VBND};
-use crate::container::{encode_with_minor, write_with_minor, ChunkRef};
+use crate::container::{encode_with_minor, with_parts_minor, write_with_minor, ChunkRef};
 use crate::{
     from_bytes, AssetKind, Chunk, Container, ElemType, FormatError, Header, NormalEncoding,
     TexelFormat, VolumeHeader,
@@ -344,6 +344,14 @@ impl VolumeAsset {
             source,
         })?;
         Self::from_bytes(&bytes).map_err(|e| e.in_file(path))
+    }
+
+    /// The bytes of [`VolumeAsset::to_bytes`] as a list of slices (their concatenation is
+    /// the file), handed to `f`, the texel data borrowed where it is: for a writer that
+    /// streams the file somewhere without assembling it in memory first.
+    pub fn with_parts<R>(&self, f: impl FnOnce(&[&[u8]]) -> R) -> Result<R, FormatError> {
+        let minor = if self.bands.is_empty() { 0 } else { 1 };
+        self.with_chunks(|refs| with_parts_minor(&self.header, refs, minor, f))?
     }
 
     /// Encode and write atomically (see [`crate::write_atomic`]): the bytes of

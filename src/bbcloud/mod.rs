@@ -115,8 +115,96 @@ pub enum BbcloudError {
     UnknownMaterial(String, String),
     #[error("{0}")]
     BadParameter(String),
+    /// The atlases would exceed [`MAX_ATLAS_BYTES`] (found after the plane search, with the
+    /// billboards' exact sizes, before any texture is allocated).
+    #[error(
+        "the atlases would take about {} MiB, more than the limit of {} MiB; lower \
+         --atlas-size or --texel-density",
+        .0 >> 20,
+        MAX_ATLAS_BYTES >> 20
+    )]
+    TooLarge(u64),
     #[error(transparent)]
     Asset(#[from] CloudError),
+}
+
+/// Most bytes of atlas texels (all LOD levels, MIP levels and layers) a bake may make:
+/// 1 GiB (the file is about as large, the bake's peak memory about three times that).
+pub const MAX_ATLAS_BYTES: u64 = 1 << 30;
+
+/// Candidate-plane tests per second assumed by [`Estimate::search_seconds`] (measured: the
+/// release build, a few cores).
+pub const TESTS_PER_SECOND: f64 = 1e9;
+
+/// What a bake will cost, known before any heavy work ([`estimate`]).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Estimate {
+    pub foliage_triangles: usize,
+    /// Billboards expected at LOD 0 (fitted on the bundled oak: `0.74 ε^-1.6`, at most one
+    /// per triangle, more when `max_extent` is small).
+    pub billboards: u64,
+    /// Bytes of atlas texels, all levels: exact for the atlas budget (no `texel_density`),
+    /// a lower bound with an explicit density (the triangles' own area at that density).
+    pub atlas_bytes: u64,
+    /// Plane-search work (candidate tests, all cloud levels) and its time at
+    /// [`TESTS_PER_SECOND`].
+    pub search_tests: f64,
+    pub search_seconds: f64,
+}
+
+/// The sum over MIP levels `0..m` of `4^-k`: bytes of a MIP chain per level-0 byte.
+fn mip_factor(m: u32) -> f64 {
+    (0..m).map(|k| 0.25f64.powi(k as i32)).sum()
+}
+
+/// [`Estimate`] of baking `scene` with `opts` (the options are checked first).
+pub fn estimate(scene: &Scene, opts: &BbcloudOptions) -> Result<Estimate, BbcloudError> {
+    check(opts)?;
+    let is_leaf = foliage::classify(scene, &opts.foliage)?;
+    let leaves: Vec<u32> = (0..scene.triangles.len() as u32)
+        .filter(|&i| is_leaf[i as usize])
+        .collect();
+    if leaves.is_empty() {
+        return Err(BbcloudError::NoFoliage);
+    }
+    let t = leaves.len() as f64;
+    let per_texel = 4.0 * mip_factor(opts.mip_levels) * if opts.normal_map { 2.0 } else { 1.0 };
+    let cloud_levels = if opts.lods >= 2 { opts.lods - 1 } else { 1 };
+    let atlas = f64::from(opts.atlas_size);
+    let mut texels = 0.0f64;
+    for l in 0..opts.lods {
+        texels += match opts.texel_density {
+            None => (f64::from((opts.atlas_size >> l).max(64))).powi(2),
+            Some(d) => {
+                let d = f64::from(d) / f64::from(1u32 << l);
+                leaves
+                    .iter()
+                    .map(|&i| {
+                        let a = f64::from(scene.triangles[i as usize].area());
+                        (2.0 * a * d * d).min(2.0 * atlas * atlas)
+                    })
+                    .sum::<f64>()
+            }
+        };
+    }
+    let billboards_at = |eps: f64| -> f64 {
+        let by_eps = 0.74 * eps.max(1e-12).powf(-1.6);
+        let by_extent = opts
+            .max_extent
+            .map_or(0.0, |m| (1.0 / f64::from(m).max(1e-12)).powi(2));
+        by_eps.max(by_extent).clamp(1.0, t)
+    };
+    let eps = f64::from(opts.epsilon);
+    let search_tests: f64 = (0..cloud_levels)
+        .map(|l| billboards_at(eps * f64::from(1u32 << l)) * f64::from(opts.samples) * t)
+        .sum();
+    Ok(Estimate {
+        foliage_triangles: leaves.len(),
+        billboards: billboards_at(eps) as u64,
+        atlas_bytes: (texels * per_texel).min(u64::MAX as f64) as u64,
+        search_tests,
+        search_seconds: search_tests / TESTS_PER_SECOND,
+    })
 }
 
 /// What a progress callback is told.
@@ -353,13 +441,21 @@ pub fn bake(
         let n = per_level.len();
         per_level[n - 1].0 = per_level[n - 1].0.min(0.5 * per_level[n - 2].0);
     }
+    let mut texels = 0u64;
     for (level, (d, _, rects)) in levels.iter().zip(per_level.iter_mut()) {
         for b in &level.boards {
             let (w, h) = tex_size(&b.rect, *d);
             let mut r = b.rect;
             (r.width, r.height) = (w as f32 / *d, h as f32 / *d);
             rects.push((r, w, h));
+            texels = texels.saturating_add(2 * u64::from(w) * u64::from(h));
         }
+    }
+    // Front and back of every billboard, all MIP levels and layers, before any allocation.
+    let per_texel = 4.0 * mip_factor(opts.mip_levels) * if opts.normal_map { 2.0 } else { 1.0 };
+    let bytes = (texels as f64 * per_texel) as u64;
+    if bytes > MAX_ATLAS_BYTES {
+        return Err(BbcloudError::TooLarge(bytes));
     }
     secs.trim_and_density = t.elapsed().as_secs_f64();
 

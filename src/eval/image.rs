@@ -80,7 +80,12 @@ impl ImageF32 {
 
     /// Writes the image as an sRGB PNG with straight alpha.
     pub fn write_png(&self, path: &Path) -> Result<(), EvalError> {
-        write_rgba8(path, self.width, self.height, self.to_srgb8())
+        write_png_bytes(path, &self.png_bytes(path)?)
+    }
+
+    /// The PNG [`ImageF32::write_png`] writes, in memory (`path` only names it in errors).
+    pub fn png_bytes(&self, path: &Path) -> Result<Vec<u8>, EvalError> {
+        encode_rgba8(path, self.width, self.height, self.to_srgb8())
     }
 }
 
@@ -118,7 +123,7 @@ pub fn premul_linear_to_srgb8(p: Vec4) -> [u8; 4] {
     [s(p.x), s(p.y), s(p.z), q(a)]
 }
 
-fn write_rgba8(path: &Path, w: u32, h: u32, bytes: Vec<u8>) -> Result<(), EvalError> {
+fn encode_rgba8(path: &Path, w: u32, h: u32, bytes: Vec<u8>) -> Result<Vec<u8>, EvalError> {
     let img = image::RgbaImage::from_raw(w, h, bytes).ok_or_else(|| EvalError::Encode {
         path: path.to_path_buf(),
         message: "buffer size does not match the image size".into(),
@@ -129,8 +134,12 @@ fn write_rgba8(path: &Path, w: u32, h: u32, bytes: Vec<u8>) -> Result<(), EvalEr
             path: path.to_path_buf(),
             message: e.to_string(),
         })?;
+    Ok(png)
+}
+
+fn write_png_bytes(path: &Path, png: &[u8]) -> Result<(), EvalError> {
     // Atomic: a temporary file in the destination folder, then a rename.
-    billow_format::write_atomic(path, &png).map_err(|e| match e {
+    billow_format::write_atomic(path, png).map_err(|e| match e {
         billow_format::FormatError::Io { path, source } => EvalError::Io { path, source },
         other => EvalError::Encode {
             path: path.to_path_buf(),
@@ -179,6 +188,16 @@ pub fn write_comparisons_png(
     gain: f32,
     path: &Path,
 ) -> Result<(), EvalError> {
+    write_png_bytes(path, &comparisons_png_bytes(reference, tests, gain, path)?)
+}
+
+/// The PNG [`write_comparisons_png`] writes, in memory (`path` only names it in errors).
+pub fn comparisons_png_bytes(
+    reference: &ImageF32,
+    tests: &[&ImageF32],
+    gain: f32,
+    path: &Path,
+) -> Result<Vec<u8>, EvalError> {
     for t in tests {
         if reference.width != t.width || reference.height != t.height {
             return Err(EvalError::SizeMismatch {
@@ -209,5 +228,5 @@ pub fn write_comparisons_png(
             }
         }
     }
-    write_rgba8(path, (panels * w) as u32, reference.height, out)
+    encode_rgba8(path, (panels * w) as u32, reference.height, out)
 }

@@ -20,7 +20,7 @@ use billow_format::{ColourSpace, FormatError, VolumeAsset};
 
 pub use self::gltf::{cloud_glb_bytes, write_cloud_glb, GltfAlpha, GltfError, GltfOptions};
 pub use self::ktx2::{ktx2_bytes, write_ktx2};
-pub use self::slices::{slice_file_name, write_slices, SliceFormat};
+pub use self::slices::{check_slices, slice_bytes, slice_file_name, write_slices, SliceFormat};
 
 /// Everything that can go wrong exporting.
 #[derive(Debug, thiserror::Error)]

@@ -53,6 +53,24 @@ pub fn write_slices(
     dir: &Path,
     format: SliceFormat,
 ) -> Result<Vec<PathBuf>, ExportError> {
+    let depth = check_slices(asset, level, dir)?;
+    std::fs::create_dir_all(dir).map_err(|source| ExportError::CreateDir {
+        path: dir.to_path_buf(),
+        source,
+    })?;
+    let mut paths = Vec::with_capacity(depth as usize);
+    for z in 0..depth {
+        let path = dir.join(slice_file_name(z, format));
+        let bytes = slice_bytes(asset, level, z, format, &path)?;
+        write_atomic(&path, &bytes).map_err(ExportError::Write)?;
+        paths.push(path);
+    }
+    Ok(paths)
+}
+
+/// Checks that `asset` can be exported and has MIP level `level` (`dir` names the output in
+/// errors); the number of slices (the level's depth).
+pub fn check_slices(asset: &VolumeAsset, level: u32, dir: &Path) -> Result<u32, ExportError> {
     check_asset(asset, dir)?;
     let mip_count = asset.levels.len() as u32;
     if level >= mip_count {
@@ -62,25 +80,26 @@ pub fn write_slices(
             mip_count,
         });
     }
-    std::fs::create_dir_all(dir).map_err(|source| ExportError::CreateDir {
-        path: dir.to_path_buf(),
-        source,
-    })?;
-    let [w, h, d] = asset.level_dims(level);
+    Ok(asset.level_dims(level)[2])
+}
+
+/// The file [`write_slices`] writes for slice `z` of MIP level `level` (checked with
+/// [`check_slices`] first), in memory; `path` only names it in errors.
+pub fn slice_bytes(
+    asset: &VolumeAsset,
+    level: u32,
+    z: u32,
+    format: SliceFormat,
+    path: &Path,
+) -> Result<Vec<u8>, ExportError> {
+    let [w, h, _] = asset.level_dims(level);
     let texels = &asset.levels[level as usize];
     let slice_bytes = (w * h) as usize * 4;
-    let mut paths = Vec::with_capacity(d as usize);
-    for z in 0..d {
-        let path = dir.join(slice_file_name(z, format));
-        let slice = &texels[z as usize * slice_bytes..(z as usize + 1) * slice_bytes];
-        let bytes = match format {
-            SliceFormat::Png8 => png_bytes(asset, slice, w, h, &path)?,
-            SliceFormat::Exr => exr_bytes(asset, slice, w, h, &path)?,
-        };
-        write_atomic(&path, &bytes).map_err(ExportError::Write)?;
-        paths.push(path);
+    let slice = &texels[z as usize * slice_bytes..(z as usize + 1) * slice_bytes];
+    match format {
+        SliceFormat::Png8 => png_bytes(asset, slice, w, h, path),
+        SliceFormat::Exr => exr_bytes(asset, slice, w, h, path),
     }
-    Ok(paths)
 }
 
 /// The texel shown at image pixel `(px, row)` of a `w × h` slice.

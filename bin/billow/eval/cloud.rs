@@ -4,7 +4,6 @@
 use std::time::Instant;
 
 use billow::eval::cloud_render::{CloudRenderer, PreparedCloud};
-use billow::eval::image::write_comparisons_png;
 use billow::eval::lighting::Lighting;
 use billow::eval::suite::{
     mean_errors, means_by_distance, view_file_stem, DistanceMeans, EvalOptions, Evaluator,
@@ -15,8 +14,8 @@ use billow_format::{CloudAsset, Container};
 use serde::Serialize;
 
 use super::{
-    bad, create_out, eval_code, parse_distances, parse_size, parse_views, print_rows, spp_per_axis,
-    write_json_out, Args, LightingArg, LightingJson, Means, Seconds, DIFF_GAIN,
+    bad, create_out, eval_code, finish_out, parse_distances, parse_size, parse_views, print_rows,
+    source_note, spp_per_axis, stage_png, Args, LightingArg, LightingJson, Means, Seconds,
 };
 use crate::exit::{CliError, Code};
 use crate::info::format_code;
@@ -128,7 +127,8 @@ pub(super) fn run(
         .map_err(|e| CliError::new(Code::InvalidInput, format!("{source_shown}: {e}")))?;
     let renderer = CloudRenderer::new(&prepared, lighting)
         .map_err(|e| CliError::new(eval_code(&e), format!("{asset_shown}: {e}")))?;
-    create_out(args)?;
+    let mut stage = create_out(args)?;
+    let mismatch = source_note(ctx, args, scene, asset.header.source.as_ref());
 
     let bar = progress(ctx, (views.len() * lods.len()) as u64, "eval");
     let mut per_lod: Vec<Vec<ViewResult>> = vec![Vec::new(); lods.len()];
@@ -159,8 +159,7 @@ pub(super) fn run(
         if let Some(dir) = &args.out {
             let path = dir.join(format!("{}.png", view_file_stem(&spec.name)));
             let tests: Vec<_> = panels.iter().collect();
-            write_comparisons_png(&reference.image, &tests, DIFF_GAIN, &path)
-                .map_err(|e| CliError::new(eval_code(&e), e))?;
+            stage_png(&mut stage, &path, &reference.image, &tests)?;
             images.push(path.display().to_string());
         }
     }
@@ -195,7 +194,7 @@ pub(super) fn run(
             reference: lighting.name(),
             reference_details: lighting.describe(),
         },
-        notes: note.into_iter().collect(),
+        notes: mismatch.into_iter().chain(note).collect(),
         raster_1spp: mean_errors(&raster),
         seconds: Seconds {
             import: import_s,
@@ -208,7 +207,7 @@ pub(super) fn run(
         levels,
         images,
     };
-    write_json_out(args, &summary)?;
+    finish_out(args, stage, &summary)?;
     if args.json {
         print_json(&summary)?;
     } else {

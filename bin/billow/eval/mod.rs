@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use billow::camera::{parse_direction, view_directions, views_of, ViewDirections, ViewSpec};
-use billow::eval::image::write_comparisons_png;
+use billow::eval::image::comparisons_png_bytes;
 use billow::eval::lighting::Lighting;
 use billow::eval::slicer::{SlicerParams, Spacing};
 use billow::eval::suite::{
@@ -24,6 +24,7 @@ use crate::exit::{CliError, Code};
 use crate::info::format_code;
 use crate::inspect::import_code;
 use crate::output::{print_json, progress, refuse_file_as_folder, warn};
+use crate::staged::{out_err, Staged};
 use crate::Ctx;
 
 /// Heatmap gain of the difference panels: a difference of 1/4 or more is white.
@@ -293,27 +294,119 @@ pub(crate) fn import_source(args: &Args, ctx: &Ctx) -> Result<billow::scene::Sce
     Ok(scene)
 }
 
-/// Creates the `--out` folder.
-pub(crate) fn create_out(args: &Args) -> Result<(), CliError> {
-    if let Some(dir) = &args.out {
-        std::fs::create_dir_all(dir).map_err(|e| {
-            CliError::new(
-                Code::OutputIo,
-                format!("{}: cannot create folder: {e}", dir.display()),
-            )
-        })?;
+/// The `--out` folder's files, staged: written as the views are rendered, renamed into
+/// place together (eval.json last) when all are there ([`finish_out`]).
+pub(crate) fn create_out(args: &Args) -> Result<Option<Staged>, CliError> {
+    let Some(dir) = &args.out else {
+        return Ok(None);
+    };
+    let mut stage = Staged::new(&dir.join("eval.json"));
+    stage.create_dir(dir).map_err(|e| {
+        CliError::new(
+            Code::OutputIo,
+            format!("{}: cannot create folder: {e}", dir.display()),
+        )
+    })?;
+    Ok(Some(stage))
+}
+
+/// Stages one comparison image of `--out`.
+pub(crate) fn stage_png(
+    stage: &mut Option<Staged>,
+    path: &Path,
+    reference: &billow::eval::image::ImageF32,
+    tests: &[&billow::eval::image::ImageF32],
+) -> Result<(), CliError> {
+    if let Some(stage) = stage {
+        let png = comparisons_png_bytes(reference, tests, DIFF_GAIN, path)
+            .map_err(|e| CliError::new(eval_code(&e), e))?;
+        stage.stage(path, &png).map_err(|e| out_err(path, e))?;
     }
     Ok(())
 }
 
-/// Writes `eval.json` into the `--out` folder, atomically.
-pub(crate) fn write_json_out(args: &Args, summary: &impl Serialize) -> Result<(), CliError> {
-    if let Some(dir) = &args.out {
+/// Stages `eval.json` and commits every file of the `--out` folder.
+pub(crate) fn finish_out(
+    args: &Args,
+    stage: Option<Staged>,
+    summary: &impl Serialize,
+) -> Result<(), CliError> {
+    if let (Some(dir), Some(mut stage)) = (&args.out, stage) {
         let json = serde_json::to_vec_pretty(summary)
             .map_err(|e| CliError::new(Code::Internal, format!("cannot encode JSON: {e}")))?;
         let path = dir.join("eval.json");
-        billow_format::write_atomic(&path, &json)
-            .map_err(|e| CliError::new(Code::OutputIo, format!("cannot write output: {e}")))?;
+        stage.stage(&path, &json).map_err(|e| out_err(&path, e))?;
+        stage.commit_or_fail()?;
+    }
+    Ok(())
+}
+
+/// A note (also a warning on stderr) when `source` is not the file the asset was baked
+/// from: the asset records the source's name and hash (covering the files read beside it).
+pub(crate) fn source_note(
+    ctx: &Ctx,
+    args: &Args,
+    scene: &billow::scene::Scene,
+    recorded: Option<&billow_format::SourceInfo>,
+) -> Option<String> {
+    let recorded = recorded?;
+    let actual = billow::provenance::source_info_all(&args.source, &scene.files).ok()?;
+    if actual.sha256 == recorded.sha256 {
+        return None;
+    }
+    let note = format!(
+        "{} is not the source {} was baked from: the asset records {} (SHA-256 {}…), this \
+         source hashes to {}… (the comparison may be meaningless)",
+        args.source.display(),
+        args.asset.display(),
+        recorded.file_name,
+        &recorded.sha256[..recorded.sha256.len().min(12)],
+        &actual.sha256[..12]
+    );
+    warn(ctx, &note);
+    Some(note)
+}
+
+/// Most reference samples (pixels × spp × views) an eval may trace: 10¹⁰, about 80 minutes at
+/// [`REFERENCE_SAMPLES_PER_SECOND`].
+pub(crate) const MAX_REFERENCE_SAMPLES: f64 = 1e10;
+/// Reference samples per second assumed for the time estimate (measured: the oak, release
+/// build, a few cores).
+pub(crate) const REFERENCE_SAMPLES_PER_SECOND: f64 = 2e6;
+
+/// Refuses (exit 8) an eval whose reference would trace more than
+/// [`MAX_REFERENCE_SAMPLES`], and warns with the expected time above a minute; before any
+/// work.
+fn check_cost(ctx: &Ctx, args: &Args, views: usize) -> Result<(), CliError> {
+    let (w, h) = parse_size(&args.size)?;
+    let samples = f64::from(w) * f64::from(h) * f64::from(args.spp) * views as f64;
+    let seconds = samples / REFERENCE_SAMPLES_PER_SECOND;
+    // Float images (reference, asset, 1-spp mesh, panels) per view: about 100 bytes a pixel.
+    let mib = f64::from(w) * f64::from(h) * 100.0 / f64::from(1u32 << 20);
+    if samples > MAX_REFERENCE_SAMPLES {
+        return Err(bad(
+            "--size",
+            format!(
+                "{}x{} px x {} spp x {views} views = {samples:.1e} reference samples, about \
+                 {:.0} min and {mib:.0} MiB per view, more than the limit of {:.0e} samples; \
+                 lower --size, --spp or the number of --views/--distances (nothing was done)",
+                w,
+                h,
+                args.spp,
+                seconds / 60.0,
+                MAX_REFERENCE_SAMPLES
+            ),
+        ));
+    }
+    if seconds > 60.0 {
+        warn(
+            ctx,
+            &format!(
+                "{w}x{h} px x {} spp x {views} views = {samples:.1e} reference samples: \
+                 expect roughly {:.0} s",
+                args.spp, seconds
+            ),
+        );
     }
     Ok(())
 }
@@ -322,7 +415,8 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let start = Instant::now();
     parse_size(&args.size)?;
     spp_per_axis(args.spp)?;
-    parse_views(&args.views, &parse_distances(&args.distances)?)?;
+    let views = parse_views(&args.views, &parse_distances(&args.distances)?)?;
+    check_cost(ctx, &args, views.len())?;
     // Reject a bad --spacing before the (slow) work.
     parse_spacing(&args.spacing, None)?;
     if let Some(dir) = &args.out {
@@ -394,7 +488,8 @@ fn run_volume(
     };
     let evaluator = Evaluator::new(scene, options)
         .map_err(|e| CliError::new(Code::InvalidInput, format!("{source_shown}: {e}")))?;
-    create_out(args)?;
+    let mut stage = create_out(args)?;
+    let mismatch = source_note(ctx, args, scene, asset.header.source.as_ref());
 
     let bar = progress(ctx, views.len() as u64, "eval");
     let mut results = Vec::with_capacity(views.len());
@@ -413,8 +508,7 @@ fn run_volume(
             if let Some((r, _, _)) = &reference.raster_1spp {
                 tests.push(r);
             }
-            write_comparisons_png(&reference.image, &tests, DIFF_GAIN, &path)
-                .map_err(|e| CliError::new(eval_code(&e), e))?;
+            stage_png(&mut stage, &path, &reference.image, &tests)?;
             images.push(path.display().to_string());
         }
         results.push(result);
@@ -422,7 +516,7 @@ fn run_volume(
     }
     bar.finish_and_clear();
 
-    let notes: Vec<String> = lighting_note.into_iter().collect();
+    let notes: Vec<String> = mismatch.into_iter().chain(lighting_note).collect();
     let sum = |f: &dyn Fn(&ViewResult) -> f64| results.iter().map(f).sum::<f64>();
     let summary = Summary {
         source: source_shown,
@@ -462,7 +556,7 @@ fn run_volume(
         views: results,
         images,
     };
-    write_json_out(args, &summary)?;
+    finish_out(args, stage, &summary)?;
     if args.json {
         print_json(&summary)?;
     } else {

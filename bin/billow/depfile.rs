@@ -1,0 +1,113 @@
+//! `--depfile FILE`: the files a bake read, as a Makefile rule without a recipe
+//! (docs/cli.md):
+//!
+//! ```make
+//! out.billow out.ktx2: \
+//!  mesh.gltf \
+//!  mesh.bin \
+//!  bark.png
+//! ```
+//!
+//! The targets are the command's output files; the prerequisites every file it read, the
+//! input first, then the files read beside it in the order they were read. The first line
+//! is always `TARGETS: \` and each prerequisite has its own line. Like `gcc -MP`, an empty
+//! rule follows for each file read beside the input (`bark.png:`), so that make rebakes,
+//! rather than stops, when one of them is deleted. Spaces, `#` and `%` are
+//! escaped with a backslash and `$` is written `$$`, as GNU make reads them; a path make
+//! cannot express (a newline, a colon, a backslash) is refused with exit 8 before the bake.
+
+use std::path::{Path, PathBuf};
+
+use crate::exit::{CliError, Code};
+
+/// One path, escaped for a Makefile rule.
+fn escape(flag: &str, p: &Path) -> Result<String, CliError> {
+    let Some(s) = p.to_str() else {
+        return Err(CliError::new(
+            Code::BadParameter,
+            format!(
+                "{flag}: {} is not valid UTF-8, which a depfile cannot hold",
+                p.display()
+            ),
+        ));
+    };
+    let mut out = String::with_capacity(s.len() + 8);
+    for c in s.chars() {
+        match c {
+            ' ' | '\t' | '#' | '%' => {
+                out.push('\\');
+                out.push(c);
+            }
+            '$' => out.push_str("$$"),
+            '\n' | '\r' | ':' | '\\' => {
+                return Err(CliError::new(
+                    Code::BadParameter,
+                    format!(
+                        "{flag}: the path {s:?} has a character a Makefile rule cannot hold \
+                         ({c:?}); rename it or bake without --depfile"
+                    ),
+                ))
+            }
+            c => out.push(c),
+        }
+    }
+    Ok(out)
+}
+
+/// Checks, before the bake, that every output and the input can be written into a depfile.
+pub fn check(depfile: Option<&Path>, paths: &[&Path]) -> Result<(), CliError> {
+    if depfile.is_some() {
+        for p in paths {
+            escape("--depfile", p)?;
+        }
+    }
+    Ok(())
+}
+
+/// The depfile's text: `targets` depend on `input` and then `read`.
+pub fn render(targets: &[&Path], input: &Path, read: &[PathBuf]) -> Result<String, CliError> {
+    let mut out = String::new();
+    for (i, t) in targets.iter().enumerate() {
+        if i > 0 {
+            out.push(' ');
+        }
+        out.push_str(&escape("--depfile", t)?);
+    }
+    out.push(':');
+    let mut prereqs = vec![input];
+    prereqs.extend(read.iter().map(PathBuf::as_path));
+    for p in prereqs {
+        out.push_str(" \\\n ");
+        out.push_str(&escape("--depfile", p)?);
+    }
+    out.push('\n');
+    for p in read {
+        out.push('\n');
+        out.push_str(&escape("--depfile", p)?);
+        out.push_str(":\n");
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn escapes_what_make_needs() {
+        let t = render(
+            &[Path::new("out dir/a.billow"), Path::new("b.ktx2")],
+            Path::new("my mesh.gltf"),
+            &[PathBuf::from("tex/50%#$.png")],
+        )
+        .unwrap();
+        assert_eq!(
+            t,
+            "out\\ dir/a.billow b.ktx2: \\\n my\\ mesh.gltf \\\n tex/50\\%\\#$$.png\n\n\
+             tex/50\\%\\#$$.png:\n"
+        );
+        assert!(render(&[Path::new("a:b")], Path::new("m.obj"), &[]).is_err());
+        assert!(check(Some(Path::new("d")), &[Path::new("x\ny")]).is_err());
+        assert!(check(None, &[Path::new("x\ny")]).is_ok());
+    }
+}
