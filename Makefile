@@ -83,14 +83,14 @@ $(OUT_DIR)/%.pruned.billow: $(OUT_DIR)/%.volume.billow | build
 	$(BILLOW) emptyspace -q $< -o $@
 
 # A cloud for every mesh with foliage (alpha MASK/BLEND materials); a mesh without any is
-# reported in X.cloud.skipped instead (bbcloud's exit code 4 and its one-line reason;
+# reported in X.cloud.skipped instead (bbcloud's exit code 9 and its one-line reason;
 # no .billow is written for it, so the rule runs again next time).
 $(OUT_DIR)/%.cloud.billow: $(IN_DIR)/% | build
 	@mkdir -p $(dir $@)
 	@rm -f $@.skipped
 	@$(BILLOW) bbcloud -q $< -o $@ 2> $@.err; rc=$$?; \
 	if [ $$rc -eq 0 ]; then rm -f $@.err; \
-	elif [ $$rc -eq 4 ] && grep -q 'no foliage' $@.err; then mv $@.err $@.skipped; \
+	elif [ $$rc -eq 9 ] && grep -q 'no foliage' $@.err; then mv $@.err $@.skipped; \
 	else cat $@.err >&2; rm -f $@.err; exit $$rc; fi
 
 ## Regenerate the procedural hard-case shapes (truss, furry torus, fur tile) as OBJ files.

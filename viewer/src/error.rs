@@ -27,4 +27,8 @@ pub enum ViewError {
     /// A scene file problem: the file and the field or value at fault.
     #[error("{file}: {problem}")]
     Scene { file: String, problem: String },
+    /// A file a scene needs could not be read: the scene file itself, or an asset or
+    /// mesh it names that does not exist.
+    #[error("{file}: {problem}")]
+    SceneInput { file: String, problem: String },
 }

@@ -15,11 +15,10 @@ use billow_format::{CloudAsset, Container};
 use serde::Serialize;
 
 use super::{
-    bad, create_out, eval_code, parse_distances, parse_size, parse_views, print_rows, spp_per_axis,
+    bad, create_out, parse_distances, parse_size, parse_views, print_rows, spp_per_axis,
     write_json_out, Args, LightingArg, LightingJson, Means, Seconds, DIFF_GAIN,
 };
 use crate::exit::{CliError, Code};
-use crate::info::format_code;
 use crate::output::{print_json, progress};
 use crate::Ctx;
 
@@ -74,15 +73,10 @@ pub(super) fn run(
     let views = parse_views(&args.views, &parse_distances(&args.distances)?)?;
     let source_shown = args.source.display().to_string();
     let asset_shown = args.asset.display().to_string();
-    let asset = CloudAsset::from_container(container).map_err(|e| {
-        let code = match &e {
-            billow_format::CloudError::Format(f) => format_code(f),
-            billow_format::CloudError::Invalid(_) => Code::InvalidInput,
-        };
-        CliError::new(code, format!("{asset_shown}: {e}"))
-    })?;
+    let asset = CloudAsset::from_container(container)
+        .map_err(|e| CliError::new(Code::from(&e), format!("{asset_shown}: {e}")))?;
     let prepared = PreparedCloud::new(&asset)
-        .map_err(|e| CliError::new(eval_code(&e), format!("{asset_shown}: {e}")))?;
+        .map_err(|e| CliError::new(Code::from(&e), format!("{asset_shown}: {e}")))?;
     let read_s = t.elapsed().as_secs_f64();
     let lods: Vec<usize> = match args.lod {
         Some(k) if k < prepared.level_count() => vec![k],
@@ -127,7 +121,7 @@ pub(super) fn run(
     let evaluator = Evaluator::new(scene, options)
         .map_err(|e| CliError::new(Code::InvalidInput, format!("{source_shown}: {e}")))?;
     let renderer = CloudRenderer::new(&prepared, lighting)
-        .map_err(|e| CliError::new(eval_code(&e), format!("{asset_shown}: {e}")))?;
+        .map_err(|e| CliError::new(Code::from(&e), format!("{asset_shown}: {e}")))?;
     create_out(args)?;
 
     let bar = progress(ctx, (views.len() * lods.len()) as u64, "eval");
@@ -140,13 +134,13 @@ pub(super) fn run(
         bar.set_message(spec.name.clone());
         let reference = evaluator
             .reference(spec)
-            .map_err(|e| CliError::new(eval_code(&e), format!("{source_shown}: {e}")))?;
+            .map_err(|e| CliError::new(Code::from(&e), format!("{source_shown}: {e}")))?;
         reference_s += reference.seconds;
         let mut panels = Vec::new();
         for (i, &lod) in lods.iter().enumerate() {
             let (result, image) = evaluator
                 .cloud(&renderer, &prepared, lod, &reference)
-                .map_err(|e| CliError::new(eval_code(&e), format!("{asset_shown}: {e}")))?;
+                .map_err(|e| CliError::new(Code::from(&e), format!("{asset_shown}: {e}")))?;
             per_lod[i].push(result);
             panels.push(image);
             bar.inc(1);
@@ -160,7 +154,7 @@ pub(super) fn run(
             let path = dir.join(format!("{}.png", view_file_stem(&spec.name)));
             let tests: Vec<_> = panels.iter().collect();
             write_comparisons_png(&reference.image, &tests, DIFF_GAIN, &path)
-                .map_err(|e| CliError::new(eval_code(&e), e))?;
+                .map_err(|e| CliError::new(Code::from(&e), e))?;
             images.push(path.display().to_string());
         }
     }
@@ -218,7 +212,7 @@ pub(super) fn run(
 }
 
 fn print_table(s: &CloudSummary) {
-    println!(
+    outln!(
         "{} vs {} (billboard cloud, {} LOD level(s) evaluated), {}x{} px, {} spp, lighting {}",
         s.asset,
         s.source,
@@ -229,10 +223,10 @@ fn print_table(s: &CloudSummary) {
         s.lighting.reference
     );
     for n in &s.notes {
-        println!("note: {n}");
+        outln!("note: {n}");
     }
     for l in &s.levels {
-        println!(
+        outln!(
             "\nLOD {}: {} billboards, ε {:.4}, {:.3} texels/unit, {:.2} MiB of atlases",
             l.lod,
             l.billboards,
@@ -248,7 +242,7 @@ fn print_table(s: &CloudSummary) {
         let totals = (s.seconds.reference, l.seconds, hit, l.fragments);
         print_rows(&l.views, &l.by_distance, &mean, totals, "bboard");
     }
-    println!(
+    outln!(
         "\nRMSE/PSNR on premultiplied linear RGBA; cov% = asset coverage vs reference; SSIM on \
          luma; FLIP over black; bboard = billboards hit. Total {:.2} s.",
         s.seconds.total
