@@ -213,7 +213,7 @@ impl From<&BbcloudError> for Code {
 impl From<&ViewError> for Code {
     fn from(e: &ViewError) -> Code {
         match e {
-            ViewError::NoAdapter(_) => Code::Unsupported,
+            ViewError::NoAdapter(_) | ViewError::NoDisplay(_) => Code::Unsupported,
             ViewError::Gpu(_) => Code::Internal,
             ViewError::SceneInput { .. } => Code::InputIo,
             ViewError::InvalidAsset(_) | ViewError::Scene { .. } => Code::InvalidInput,

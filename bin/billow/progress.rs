@@ -116,12 +116,18 @@ mod tests {
         for l in [2, 0, 1] {
             events.push((B::Pack, l as f32 / 3.0));
         }
-        let mut last = 0.0;
+        let (mut last, mut shown) = (0.0, 0);
         for (stage, f) in events {
             let x = bbcloud_fraction(stage, f, 3);
-            assert!(x >= last - 1e-12, "{stage:?} {f}: {x} after {last}");
-            last = x.max(last);
+            // The search levels and the render counter map forward by themselves; the
+            // pack reports come from parallel threads, so only the bar keeps them in order.
+            if !matches!(stage, B::Pack) {
+                assert!(x >= last - 1e-12, "{stage:?} {f}: {x} after {last}");
+                last = x;
+            }
             bar.set(x, String::new);
+            assert!(bar.position() >= shown, "{stage:?} {f}: the bar went back");
+            shown = bar.position();
         }
         let before = bar.position();
         assert!(before < LEN, "the last pack report is below 100 %");

@@ -364,6 +364,16 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             )
         }
     };
+    // Mesa's device-select Vulkan layer probes a Wayland display server and prints a
+    // misleading "error: XDG_RUNTIME_DIR is invalid or not set" on stderr without one,
+    // in a window as well as headless (the window needs no such probe: winit picks the
+    // display). Skip the layer unless the user chose otherwise (no other thread reads
+    // the environment here).
+    if std::env::var_os("NODEVICE_SELECT").is_none()
+        && std::env::var_os("XDG_RUNTIME_DIR").is_none()
+    {
+        std::env::set_var("NODEVICE_SELECT", "1");
+    }
     if !args.headless {
         let bg = background.map_or([0.55, 0.62, 0.72], |b| b.to_array());
         return run_window(
@@ -378,14 +388,6 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let out = args.screenshot.as_ref().expect("checked above");
     let frames = args.frames.unwrap_or(1);
 
-    // Mesa's device-select Vulkan layer probes a display server and prints
-    // "XDG_RUNTIME_DIR is invalid" on stderr without one; headless needs no display, so
-    // skip the layer unless the user chose otherwise (single-threaded here: safe).
-    if std::env::var_os("NODEVICE_SELECT").is_none()
-        && std::env::var_os("XDG_RUNTIME_DIR").is_none()
-    {
-        std::env::set_var("NODEVICE_SELECT", "1");
-    }
     let gpu = Gpu::headless().map_err(view_err)?;
     let adapter = gpu.describe();
     let mut r = content.build(gpu, params, fov).map_err(view_err)?;
