@@ -115,7 +115,7 @@ $(OUT_DIR)/%.pruned.billow: $(OUT_DIR)/%.volume.billow | $(BILLOW)
 	$(BILLOW) emptyspace -q $< -o $@ --depfile $@.d
 
 # A cloud for every mesh with foliage (alpha MASK/BLEND materials); a mesh without any gets
-# X.cloud.skipped (bbcloud's one-line reason) and no .billow. Either way X.cloud.done is
+# X.cloud.skipped (bbcloud's exit code 9 and its one-line reason) and no .billow. Either way X.cloud.done is
 # written, the target make keeps up to date, with the depfile of what the outcome came from.
 $(OUT_DIR)/%.cloud.done: $(IN_DIR)/% | $(BILLOW) $(OUT_DIR)/%.volume.billow
 	@mkdir -p $(dir $@)
@@ -123,7 +123,7 @@ $(OUT_DIR)/%.cloud.done: $(IN_DIR)/% | $(BILLOW) $(OUT_DIR)/%.volume.billow
 	@$(BILLOW) bbcloud -q $(BATCH_CLOUD_ARGS) $< -o $(@:.done=.billow) --depfile $@.bbcloud.d 2> $@.err; rc=$$?; \
 	if [ $$rc -eq 0 ]; then rm -f $@.err; echo 'cloud: $(notdir $(@:.done=.billow))' > $@.tmp; \
 		$(call retarget,$@.bbcloud.d,$@) && rm -f $@.bbcloud.d; \
-	elif grep -q 'no foliage' $@.err; then mv $@.err $(@:.done=.skipped); \
+	elif [ $$rc -eq 9 ] && grep -q 'no foliage' $@.err; then mv $@.err $(@:.done=.skipped); \
 		rm -f $(@:.done=.billow) $(@:.done=.billow).d; echo 'skipped: no foliage' > $@.tmp; \
 		$(call retarget,$(OUT_DIR)/$*.volume.billow.d,$@); \
 	else cat $@.err >&2; rm -f $@.err $@.bbcloud.d; exit $$rc; fi && mv $@.tmp $@

@@ -12,7 +12,10 @@ use sha2::{Digest, Sha256};
 /// Hashes `path` (streaming; the file is only read). The name is the file name alone,
 /// without folders, so the same input baked on two machines gives the same header.
 pub fn source_info(path: &Path) -> std::io::Result<SourceInfo> {
-    let mut file = std::fs::File::open(path)?;
+    // A FIFO or a device (`/dev/zero`) is refused, and no more than the input limit is
+    // hashed, so a hostile path cannot keep this thread reading forever.
+    let (file, _) = crate::import::open_input(path)?;
+    let mut file = file.take(crate::import::MAX_INPUT_BYTES);
     let mut hasher = Sha256::new();
     let mut buf = vec![0u8; 1 << 16];
     let mut bytes = 0u64;

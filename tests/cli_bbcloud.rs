@@ -179,8 +179,9 @@ fn bad_parameters_are_one_line_errors_and_write_nothing() {
         (&["--max-extent", "0"], 8, "extent"),
         (&["--mip-levels", "6"], 8, "mip levels"),
         (&["--up", "0,0,0"], 8, "--up"),
-        (&["--up", "sideways"], 8, "--up"),
-        (&["--view-dirs", "sideways"], 8, "--view-dirs"),
+        // Values that do not parse: usage errors (docs/cli.md: 2 or 8).
+        (&["--up", "sideways"], 2, "--up"),
+        (&["--view-dirs", "sideways"], 2, "--view-dirs"),
         (
             &["--view-dirs", "horizontal", "--view-strength", "2"],
             8,
@@ -198,10 +199,10 @@ fn bad_parameters_are_one_line_errors_and_write_nothing() {
         assert!(line.contains(needle), "{extra:?}: {line}");
         assert!(files(d).is_empty(), "{extra:?} left {:?}", files(d));
     }
-    // A mesh without foliage (one opaque triangle): invalid input, named.
+    // A mesh without foliage (one opaque triangle): nothing to bake (exit 9), named.
     std::fs::write(d.join("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
     let r = run(&["bbcloud", "tri.obj", "-o", "x.billow"], d);
-    assert_eq!(r.code, Some(4), "{}", r.stderr);
+    assert_eq!(r.code, Some(9), "{}", r.stderr);
     let line = r.error_line().unwrap();
     assert!(
         line.contains("tri.obj") && line.contains("no foliage"),

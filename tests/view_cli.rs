@@ -179,12 +179,6 @@ fn bad_scene_files_give_one_line_naming_file_and_field() {
             "(volumes: [(asset: \"oak.billow\")], particles: [(kind: Dust, emitter: (count: 4))])",
             "particles[0].emitter",
         ),
-        // missing asset
-        (
-            "(volumes: [(asset: \"missing.billow\")])",
-            "volumes[0].asset",
-        ),
-        ("(meshes: [(path: \"nope.obj\")])", "meshes[0].path"),
         // negative sizes
         (
             "(volumes: [(asset: \"oak.billow\", instances: [(scale: -2.0)])])",
@@ -202,6 +196,20 @@ fn bad_scene_files_give_one_line_naming_file_and_field() {
         assert!(line.contains("bad.ron"), "{text}: {line}");
         assert!(line.contains(field), "{text}: expected '{field}' in {line}");
         assert_eq!(code, Some(4), "{text}: {line}");
+    }
+    // A missing asset or mesh cannot be read: exit 3 (docs/cli.md), not 4.
+    for (text, field) in [
+        (
+            "(volumes: [(asset: \"missing.billow\")])",
+            "volumes[0].asset",
+        ),
+        ("(clouds: [(asset: \"missing.billow\")])", "clouds[0].asset"),
+        ("(meshes: [(path: \"nope.obj\")])", "meshes[0].path"),
+    ] {
+        let (line, code) = scene_error(text);
+        assert!(line.contains("bad.ron"), "{text}: {line}");
+        assert!(line.contains(field), "{text}: expected '{field}' in {line}");
+        assert_eq!(code, Some(3), "{text}: {line}");
     }
     // A syntax error gives the position.
     let (line, code) = scene_error("(volumes: [(asset: \"oak.billow\"]");

@@ -5,8 +5,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use billow::bbcloud::{
-    bake, estimate, straight, BbcloudError, BbcloudOptions, BbcloudStats, Estimate, Shading, Stage,
-    ViewDirs, ViewPreference, MAX_ATLAS_BYTES,
+    bake, estimate, straight, BbcloudOptions, BbcloudStats, Estimate, Shading, Stage, ViewDirs,
+    ViewPreference, MAX_ATLAS_BYTES,
 };
 use billow::export::gltf::cloud_glb_bytes_with;
 use billow::export::{GltfAlpha, GltfOptions};
@@ -16,11 +16,11 @@ use glam::Vec3;
 use serde::Serialize;
 
 use crate::depfile;
-use crate::exit::{CliError, Code};
-use crate::inspect::import_code;
+use crate::exit::{usage, CliError, Code};
 use crate::output::{
     print_json, progress, refuse_clobbering, refuse_clobbering_read, refuse_file_as_folder, warn,
 };
+use crate::progress::{self, Monotone};
 use crate::staged::{out_err, Staged};
 use crate::Ctx;
 
@@ -31,16 +31,17 @@ pub struct Args {
     /// Where to write the cloud asset (.billow). Written atomically.
     #[arg(short, long)]
     output: PathBuf,
-    /// Slab half-width ε of the plane search, in foliage bounding-sphere radii (doubled per LOD).
+    /// Slab half-width ε of the plane search, in foliage bounding-sphere radii (doubled per LOD);
+    /// in (0, 2].
     #[arg(long, default_value_t = 0.04)]
     epsilon: f32,
-    /// Candidate planes tried per billboard (N).
+    /// Candidate planes tried per billboard (N), 1–1000000.
     #[arg(long, default_value_t = 500)]
     samples: u32,
-    /// Random seed (PCG32); the same seed gives the same bytes.
+    /// Random seed (PCG32), any 64-bit number; the same seed gives the same bytes.
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Number of LOD levels; with 2 or more the last is two crossed vertical billboards.
+    /// Number of LOD levels, 1–8; with 2 or more the last is two crossed vertical billboards.
     #[arg(long, default_value_t = 3)]
     lods: u32,
     /// Up axis: +x, -x, +y, -y, +z, -z or x,y,z (the last LOD's billboards contain it;
@@ -59,30 +60,30 @@ pub struct Args {
     /// atlas, exported as the glTF normalTexture). Pair with --unlit for runtime lighting.
     #[arg(long)]
     normal_map: bool,
-    /// MIP levels stored per atlas (1–5); allocations are aligned and padded so no stored
+    /// MIP levels stored per atlas, 1–5; allocations are aligned and padded so no stored
     /// level mixes two billboards.
     #[arg(long, default_value_t = 4)]
     mip_levels: u32,
-    /// Largest atlas side in texels (a power of two).
+    /// Largest atlas side in texels: a power of two, 64–16384.
     #[arg(long, default_value_t = 2048)]
     atlas_size: u32,
-    /// Texels per world unit at LOD 0 (default: the most that fits one atlas per level).
+    /// Texels per world unit at LOD 0, > 0 (default: the most that fits one atlas per level).
     #[arg(long)]
     texel_density: Option<f32>,
-    /// Direction towards the light, x,y,z.
+    /// Direction towards the light, x,y,z (finite, not zero).
     #[arg(long, default_value = "0.3,1,0.5", conflicts_with = "unlit")]
     light: String,
     /// Bake albedo only, no lighting.
     #[arg(long)]
     unlit: bool,
-    /// Ambient light fraction (the rest is diffuse).
+    /// Ambient light fraction (the rest is diffuse), in [0, 1].
     #[arg(long, default_value_t = 0.3)]
     ambient: f32,
-    /// K: K×K coverage samples per texel (1–8).
+    /// K: K×K coverage samples per texel, 1–8.
     #[arg(long, default_value_t = 3)]
     supersample: u32,
     /// Limit each billboard to triangles within this distance of its seed, in foliage
-    /// bounding-sphere radii (Lacewell §5; doubled per LOD). Default: no limit.
+    /// bounding-sphere radii, > 0 and at most 4 (Lacewell §5; doubled per LOD). Default: no limit.
     #[arg(long)]
     max_extent: Option<f32>,
     /// Materials that make up the foliage (default: every alpha MASK/BLEND material).
@@ -148,10 +149,10 @@ fn parse_light(s: &str) -> Result<Vec3, CliError> {
         .split(',')
         .map(|p| p.trim().parse::<f32>())
         .collect::<Result<_, _>>()
-        .map_err(|e| bad("--light", format!("'{s}': {e}")))?;
+        .map_err(|e| usage("--light", format!("'{s}': {e}")))?;
     let l = match v[..] {
         [x, y, z] => Vec3::new(x, y, z),
-        _ => return Err(bad("--light", format!("'{s}': expected x,y,z"))),
+        _ => return Err(usage("--light", format!("'{s}': expected x,y,z"))),
     };
     if !l.is_finite() || l.length() == 0.0 {
         return Err(bad(
@@ -180,10 +181,10 @@ fn parse_dir(flag: &str, s: &str) -> Result<Vec3, CliError> {
             .split(',')
             .map(|p| p.trim().parse::<f32>())
             .collect::<Result<_, _>>()
-            .map_err(|_| bad(flag, format!("'{s}': expected ±x, ±y, ±z or x,y,z")))?;
+            .map_err(|_| usage(flag, format!("'{s}': expected ±x, ±y, ±z or x,y,z")))?;
         match c[..] {
             [x, y, z] => Vec3::new(x, y, z),
-            _ => return Err(bad(flag, format!("'{s}': expected ±x, ±y, ±z or x,y,z"))),
+            _ => return Err(usage(flag, format!("'{s}': expected ±x, ±y, ±z or x,y,z"))),
         }
     };
     if !v.is_finite() || v.length() == 0.0 {
@@ -236,14 +237,6 @@ fn short(x: f32) -> String {
 
 /// A plane search expected to take longer than this (seconds) is announced with a warning.
 const SLOW_SECONDS: f64 = 60.0;
-
-fn cloud_code(e: &BbcloudError) -> Code {
-    match e {
-        BbcloudError::NoFoliage => Code::InvalidInput,
-        BbcloudError::Asset(_) => Code::Internal,
-        _ => Code::BadParameter,
-    }
-}
 
 pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let start = Instant::now();
@@ -309,7 +302,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             strict: args.strict,
         },
     )
-    .map_err(|e| CliError::new(import_code(&e), &e))?;
+    .map_err(|e| CliError::new(Code::from(&e), &e))?;
     refuse_clobbering_read(&args.input, &scene.files, &outputs)?;
     for w in &scene.warnings {
         warn(ctx, &format!("{input}: {}", w.message));
@@ -325,7 +318,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     // What the bake will cost, before any heavy work: refused when the atlases would be
     // too large, a warning with the expected time when the plane search will be long.
     let cost = estimate(&scene, &opts)
-        .map_err(|e| CliError::new(cloud_code(&e), format!("{input}: {e}")))?;
+        .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;
     let mib = |b: u64| b as f64 / f64::from(1u32 << 20);
     if cost.atlas_bytes > MAX_ATLAS_BYTES {
         return Err(bad(
@@ -365,19 +358,20 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         );
     }
 
-    let bar = progress(ctx, 1000, "bbcloud");
+    let bar = Monotone::new(progress(ctx, progress::LEN, "bbcloud"));
     let report = |stage: Stage, f: f32| {
-        let (lo, span, msg) = match stage {
-            Stage::Search { level } => (0.0, 0.5, format!("plane search, LOD {level}")),
-            Stage::Render => (0.5, 0.4, "billboard textures".to_string()),
-            Stage::Pack => (0.9, 0.1, "atlases".to_string()),
-        };
-        bar.set_message(msg);
-        bar.set_position(((lo + span * f.clamp(0.0, 1.0)) * 1000.0) as u64);
+        bar.set(
+            progress::bbcloud_fraction(stage, f, opts.lods),
+            || match stage {
+                Stage::Search { level } => format!("plane search, LOD {level}"),
+                Stage::Render => "billboard textures".to_string(),
+                Stage::Pack => "atlases".to_string(),
+            },
+        );
     };
     let (asset, stats) = bake(&scene, &opts, &tool_version(), Some(source), &report)
-        .map_err(|e| CliError::new(cloud_code(&e), format!("{input}: {e}")))?;
-    bar.finish_and_clear();
+        .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;
+    bar.finish();
 
     // Everything is encoded before anything is written, so a failure leaves no output.
     // The atlas PNGs are encoded once for both the .glb and the --atlas dump.

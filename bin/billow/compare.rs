@@ -38,13 +38,8 @@ struct Summary {
 
 /// Reads an image as premultiplied linear RGBA ([`ImageF32::from_image`]).
 fn load(p: &Path) -> Result<ImageF32, CliError> {
-    let img = image::open(p).map_err(|e| {
-        let code = match &e {
-            image::ImageError::IoError(_) => Code::InputIo,
-            _ => Code::InvalidInput,
-        };
-        CliError::new(code, format!("{}: {e}", p.display()))
-    })?;
+    let img = image::open(p)
+        .map_err(|e| CliError::new(Code::from(&e), format!("{}: {e}", p.display())))?;
     Ok(ImageF32::from_image(&img))
 }
 
@@ -85,7 +80,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             error,
         })?;
     } else if !ctx.quiet {
-        println!(
+        outln!(
             "RMSE {:.5}  PSNR {:.2} dB  FLIP {:.4}  SSIM luma {:.4}  alpha {:.4}  coverage {:+.2}%",
             error.rmse,
             error.psnr,

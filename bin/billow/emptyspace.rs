@@ -4,15 +4,12 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use billow::emptyspace::{
-    prune, EmptySpaceError, EmptySpaceOptions, EmptySpaceStats, DEFAULT_CELL_COST,
-};
+use billow::emptyspace::{prune, EmptySpaceOptions, EmptySpaceStats, DEFAULT_CELL_COST};
 use billow_format::{read_file, AssetKind, VolumeAsset};
 use serde::Serialize;
 
 use crate::depfile;
 use crate::exit::{CliError, Code};
-use crate::info::format_code;
 use crate::output::{print_json, refuse_clobbering, warn};
 use crate::staged::{out_err, Staged};
 use crate::Ctx;
@@ -32,13 +29,13 @@ pub struct Args {
     /// 2-voxel blocks; halved for each coarser tier).
     #[arg(long, default_value_t = 0)]
     min_box: u32,
-    /// Deepest kd-tree level (the root is 0).
+    /// Deepest kd-tree level (the root is 0), 0–64.
     #[arg(long, default_value_t = 24)]
     max_depth: u32,
-    /// Smallest relative cost reduction worth a split (0–1).
+    /// Smallest relative cost reduction worth a split, in [0, 1).
     #[arg(long, default_value_t = 0.01)]
     min_gain: f64,
-    /// Cost of one more box in the kd-tree's split cost, in atlas texels.
+    /// Cost of one more box in the kd-tree's split cost, in atlas texels, ≥ 0.
     #[arg(long, default_value_t = DEFAULT_CELL_COST)]
     cell_cost: f64,
     /// Most MIP tiers stored as bricks (default: as many as save memory); 0 keeps the
@@ -65,16 +62,6 @@ struct Summary {
     seconds_total: f64,
 }
 
-fn code(e: &EmptySpaceError) -> Code {
-    match e {
-        EmptySpaceError::InvalidParam(_) => Code::BadParameter,
-        EmptySpaceError::Shell | EmptySpaceError::NotABox(_) => Code::Unsupported,
-        EmptySpaceError::InvalidAsset(_)
-        | EmptySpaceError::AlreadyPruned(_)
-        | EmptySpaceError::HasBands => Code::InvalidInput,
-    }
-}
-
 pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let start = Instant::now();
     let mut outputs = vec![("-o", args.output.as_path())];
@@ -82,7 +69,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     refuse_clobbering(&[&args.input], &outputs)?;
     depfile::check(args.depfile.as_deref(), &[&args.input, &args.output])?;
     let shown = args.input.display().to_string();
-    let container = read_file(&args.input).map_err(|e| CliError::new(format_code(&e), e))?;
+    let container = read_file(&args.input).map_err(|e| CliError::new(Code::from(&e), e))?;
     if container.header.kind != AssetKind::Volume {
         return Err(CliError::new(
             Code::Unsupported,
@@ -93,7 +80,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         ));
     }
     let asset = VolumeAsset::from_container(container)
-        .map_err(|e| CliError::new(format_code(&e), format!("{shown}: {e}")))?;
+        .map_err(|e| CliError::new(Code::from(&e), format!("{shown}: {e}")))?;
     let file_bytes_before = std::fs::metadata(&args.input).map_or(0, |m| m.len());
     let options = EmptySpaceOptions {
         threshold: args.threshold,
@@ -104,8 +91,8 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         max_tiers: args.max_tiers,
         apron: true,
     };
-    let pruned =
-        prune(&asset, &options).map_err(|e| CliError::new(code(&e), format!("{shown}: {e}")))?;
+    let pruned = prune(&asset, &options)
+        .map_err(|e| CliError::new(Code::from(&e), format!("{shown}: {e}")))?;
     if let Some(note) = &pruned.stats.note {
         warn(ctx, &format!("{shown}: {note}"));
     }

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use billow_format::{inspect_bytes, tag_str, AssetKind, FormatError, Report, VolumeAsset};
+use billow_format::{inspect_bytes, tag_str, AssetKind, Report, VolumeAsset};
 use serde::Serialize;
 
 use crate::exit::{CliError, Code};
@@ -16,16 +16,6 @@ pub struct Args {
     /// Print a machine-readable JSON summary on stdout instead of text.
     #[arg(long)]
     json: bool,
-}
-
-/// Exit code for a format error (shared by every command that reads assets).
-pub fn format_code(e: &FormatError) -> Code {
-    match e {
-        FormatError::Io { .. } => Code::InputIo,
-        FormatError::InFile { source, .. } => format_code(source),
-        FormatError::NewerMajor { .. } | FormatError::OlderMajor { .. } => Code::Unsupported,
-        _ => Code::InvalidInput,
-    }
 }
 
 #[derive(Serialize)]
@@ -52,10 +42,15 @@ struct InfoJson<'a> {
 pub fn run(args: Args, _ctx: &Ctx) -> Result<(), CliError> {
     let path = &args.asset;
     let shown = path.display();
-    let bytes = std::fs::read(path)
-        .map_err(|e| CliError::new(Code::InputIo, format!("{shown}: cannot read: {e}")))?;
+    let bytes = billow_format::read_regular(path).map_err(|e| match &e {
+        // Only I/O errors come from reading; the message names the file once.
+        billow_format::FormatError::Io { source, .. } => {
+            CliError::new(Code::from(&e), format!("{shown}: cannot read: {source}"))
+        }
+        _ => CliError::new(Code::from(&e), e),
+    })?;
     let report = inspect_bytes(&bytes)
-        .map_err(|e| CliError::new(format_code(&e), format!("{shown}: {e}")))?;
+        .map_err(|e| CliError::new(Code::from(&e), format!("{shown}: {e}")))?;
     if args.json {
         print_json(&to_json(path, &report))?;
     } else {
@@ -82,7 +77,7 @@ pub fn run(args: Args, _ctx: &Ctx) -> Result<(), CliError> {
     // The structure is sound; also decode the typed payload so `info` vouches for all of it.
     if report.kind == AssetKind::Volume {
         VolumeAsset::from_bytes(&bytes)
-            .map_err(|e| CliError::new(format_code(&e), format!("{shown}: {e}")))?;
+            .map_err(|e| CliError::new(Code::from(&e), format!("{shown}: {e}")))?;
     }
     Ok(())
 }
@@ -111,23 +106,28 @@ fn to_json<'a>(path: &std::path::Path, r: &'a Report) -> InfoJson<'a> {
 }
 
 fn print_text(path: &std::path::Path, r: &Report) {
-    println!("file:     {}", path.display());
-    println!(
+    outln!("file:     {}", path.display());
+    outln!(
         "format:   billow {}.{} ({} bytes)",
-        r.major, r.minor, r.file_len
+        r.major,
+        r.minor,
+        r.file_len
     );
-    println!("kind:     {:?}", r.kind);
-    println!("header:");
+    outln!("kind:     {:?}", r.kind);
+    outln!("header:");
     for line in r.header_ron.lines() {
-        println!("  {line}");
+        outln!("  {line}");
     }
-    println!("chunks:");
-    println!(
+    outln!("chunks:");
+    outln!(
         "  {:<6} {:<6} {:>10} {:>12}  crc32",
-        "tag", "type", "offset", "bytes"
+        "tag",
+        "type",
+        "offset",
+        "bytes"
     );
     for c in &r.chunks {
-        println!(
+        outln!(
             "  {:<6} {:<6} {:>10} {:>12}  {:08x} {}",
             tag_str(&c.tag),
             format!("{:?}", c.elem),

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use billow::import::{import, ImportError, ImportErrorKind, ImportOptions};
+use billow::import::{import, ImportOptions};
 use billow::inspect::inspect;
 
 use crate::exit::{CliError, Code};
@@ -21,21 +21,11 @@ pub struct Args {
     strict: bool,
 }
 
-/// Exit code for an import error (shared by every command that reads meshes).
-pub fn import_code(e: &ImportError) -> Code {
-    match e.kind() {
-        ImportErrorKind::Io => Code::InputIo,
-        ImportErrorKind::Parse | ImportErrorKind::Invalid => Code::InvalidInput,
-        ImportErrorKind::Unsupported => Code::Unsupported,
-        ImportErrorKind::Strict => Code::Strict,
-    }
-}
-
 pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let opts = ImportOptions {
         strict: args.strict,
     };
-    let scene = import(&args.mesh, &opts).map_err(|e| CliError::new(import_code(&e), &e))?;
+    let scene = import(&args.mesh, &opts).map_err(|e| CliError::new(Code::from(&e), &e))?;
     let report = inspect(&scene, &args.mesh);
     if args.json {
         print_json(&report)?;
@@ -43,7 +33,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         for w in &scene.warnings {
             warn(ctx, &format!("{}: {}", args.mesh.display(), w.message));
         }
-        print!("{report}");
+        outln!("{report}");
     }
     Ok(())
 }

@@ -1,6 +1,9 @@
 //! The `billow` command line: argument parsing, progress, messages and exit codes.
 //! All the work happens in the `billow` library; this binary only talks to the user.
 
+#[macro_use]
+mod out;
+
 mod alloc;
 mod bbcloud;
 mod compare;
@@ -12,6 +15,7 @@ mod info;
 mod inspect;
 mod lod_sweep;
 mod output;
+mod progress;
 mod shell;
 mod staged;
 mod view;
@@ -55,6 +59,7 @@ enum Command {
     /// Compare two images (e.g. screenshots): RMSE/PSNR, alpha coverage, SSIM, FLIP; --diff writes a heatmap.
     Compare(compare::Args),
     /// View a scene (.ron), volume asset or mesh with the GPU viewer; --headless --screenshot renders a PNG.
+    #[command(after_help = view::WINDOW_HELP)]
     View(view::Args),
     /// Remove a volume's empty space: kd-tree boxes packed with aprons into a smaller atlas.
     Emptyspace(emptyspace::Args),
@@ -66,6 +71,7 @@ pub struct Ctx {
 }
 
 fn main() -> ExitCode {
+    out::install_panic_hook();
     let cli = Cli::parse();
     let ctx = Ctx { quiet: cli.quiet };
     let result: Result<(), CliError> = match cli.command {
@@ -79,10 +85,13 @@ fn main() -> ExitCode {
         Command::View(a) => view::run(a, &ctx),
         Command::Emptyspace(a) => emptyspace::run(a, &ctx),
     };
-    match result {
+    // The command's own error first; else a failure to write stdout (exit 7).
+    match result.and_then(|()| out::finish()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {}", e.message);
+            use std::io::Write;
+            // A closed stderr must not turn this into a panic.
+            let _ = writeln!(std::io::stderr().lock(), "error: {}", e.message);
             ExitCode::from(e.code as u8)
         }
     }

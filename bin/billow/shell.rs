@@ -4,15 +4,13 @@
 use std::path::PathBuf;
 
 use billow::import::{import, ImportOptions};
-use billow::shell::{shell, shell_asset, ShellError};
+use billow::shell::{shell, shell_asset};
 use billow_format::VolumeAsset;
 use glam::Vec2;
 use serde::Serialize;
 
 use crate::depfile;
 use crate::exit::{CliError, Code};
-use crate::info::format_code;
-use crate::inspect::import_code;
 use crate::output::{print_json, refuse_clobbering, refuse_clobbering_read, warn};
 use crate::staged::{out_err, Staged};
 use crate::Ctx;
@@ -26,10 +24,10 @@ pub struct Args {
     /// Where to write the shell asset (.billow). Written atomically.
     #[arg(short, long)]
     output: PathBuf,
-    /// Shell thickness along the normals, in the surface's units.
+    /// Shell thickness along the normals, in the surface's units, > 0.
     #[arg(long, allow_negative_numbers = true)]
     height: f32,
-    /// Volume tiles per unit of UV, `U,V` (e.g. `8,3`).
+    /// Volume tiles per unit of UV, `U,V` (e.g. `8,3`), each > 0.
     #[arg(long, default_value = "1,1")]
     tiles: String,
     /// Treat import warnings as errors.
@@ -54,13 +52,6 @@ struct Summary {
     bytes: u64,
 }
 
-fn shell_code(e: &ShellError) -> Code {
-    match e {
-        ShellError::InvalidHeight(_) | ShellError::InvalidUvScale(_) => Code::BadParameter,
-        _ => Code::InvalidInput,
-    }
-}
-
 pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let mut outputs = vec![("-o", args.output.as_path())];
     outputs.extend(args.depfile.as_deref().map(|d| ("--depfile", d)));
@@ -74,10 +65,10 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         .split(',')
         .map(|p| p.trim().parse::<f32>())
         .collect::<Result<_, _>>()
-        .map_err(|e| CliError::new(Code::BadParameter, format!("--tiles '{}': {e}", args.tiles)))?;
+        .map_err(|e| CliError::new(Code::Usage, format!("--tiles '{}': {e}", args.tiles)))?;
     let [u, v] = tiles[..] else {
         return Err(CliError::new(
-            Code::BadParameter,
+            Code::Usage,
             format!("--tiles '{}': expected two numbers U,V", args.tiles),
         ));
     };
@@ -87,7 +78,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             strict: args.strict,
         },
     )
-    .map_err(|e| CliError::new(import_code(&e), &e))?;
+    .map_err(|e| CliError::new(Code::from(&e), &e))?;
     refuse_clobbering_read(&args.surface, &surface.files, &outputs)?;
     depfile::check(
         args.depfile.as_deref(),
@@ -100,9 +91,9 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     for w in &surface.warnings {
         warn(ctx, &format!("{}: {}", args.surface.display(), w.message));
     }
-    let volume = VolumeAsset::read(&args.volume).map_err(|e| CliError::new(format_code(&e), &e))?;
+    let volume = VolumeAsset::read(&args.volume).map_err(|e| CliError::new(Code::from(&e), &e))?;
     let s = shell(&surface, args.height, Vec2::new(u, v))
-        .map_err(|e| CliError::new(shell_code(&e), format!("{}: {e}", args.surface.display())))?;
+        .map_err(|e| CliError::new(Code::from(&e), format!("{}: {e}", args.surface.display())))?;
     let (skipped, mirrored, folded) = (s.skipped, s.mirrored, s.folded);
     if mirrored > 0 {
         warn(

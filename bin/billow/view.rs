@@ -13,10 +13,23 @@ use glam::{Vec3, Vec4};
 use serde::Serialize;
 
 use crate::eval::parse_size;
-use crate::exit::{CliError, Code};
+use crate::exit::{usage, CliError, Code};
 use crate::output::{print_json, refuse_clobbering, refuse_clobbering_read};
 use crate::view_load::{load_content, load_scene};
 use crate::Ctx;
+
+/// The window's controls, shown after `billow view --help`'s flags (docs/viewer.md).
+pub const WINDOW_HELP: &str = "\
+In the window:
+  left drag        orbit
+  right drag       pan (or shift + left drag)
+  wheel            zoom
+  A                adaptive <-> uniform slicing (one level-0 voxel apart)
+  P                slab partitioning on/off
+  W                cell wireframe on/off
+  S                shadows on/off
+  R                reset the camera
+  Q, Esc           quit";
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -28,7 +41,7 @@ pub struct Args {
     /// Write the frame here as an sRGB PNG (straight alpha), atomically.
     #[arg(long, value_name = "OUT.png")]
     screenshot: Option<PathBuf>,
-    /// Image size WxH in pixels.
+    /// Image size WxH in pixels, each side 1–4096.
     #[arg(long, default_value = "512x512")]
     size: String,
     /// Camera position X,Y,Z (overrides the scene's camera); looks at --look-at.
@@ -41,10 +54,10 @@ pub struct Args {
     /// (`-z`, `+x-y-z`); the content's bounding sphere just fills the image at distance 1.
     #[arg(long, default_value = "+x-y-z", allow_hyphen_values = true)]
     view: String,
-    /// Without --eye: multiple of the framed distance.
+    /// Without --eye: multiple of the framed distance, > 0.
     #[arg(long, default_value_t = 1.0)]
     distance: f32,
-    /// Vertical field of view in degrees (overrides the scene's).
+    /// Vertical field of view in degrees, in (0, 180) (overrides the scene's).
     #[arg(long)]
     fov: Option<f32>,
     /// Slice spacing: adaptive (the paper: one pixel's footprint, never finer than a
@@ -54,7 +67,7 @@ pub struct Args {
     /// Turn slab partitioning off (every cell meets every slice: the paper's plain slicing).
     #[arg(long)]
     no_partition: bool,
-    /// Fewest slices per slab when partitioning.
+    /// Fewest slices per slab when partitioning, ≥ 1.
     #[arg(long, default_value_t = 16)]
     slab_min_slices: u32,
     /// Shadows on or off, overriding the scene's `shadows`.
@@ -72,7 +85,7 @@ pub struct Args {
     /// from here.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     time: f32,
-    /// Choose cloud LODs as if every instance were this far from the eye (inspection).
+    /// Choose cloud LODs as if every instance were this far from the eye (inspection), > 0.
     #[arg(long, value_name = "DISTANCE")]
     lod_distance: Option<f32>,
     /// Sweep the LOD switches of the scene's one billboard cloud: dolly along --view at
@@ -90,11 +103,11 @@ pub struct Args {
     /// Print the passes a frame runs (one per line) and exit; needs no GPU.
     #[arg(long)]
     print_passes: bool,
-    /// Render this many frames (timing: mean and minimum frame time are reported).
+    /// Render this many frames, ≥ 1 (timing: mean and minimum frame time are reported).
     /// Headless default 1; in a window: close after N frames (default: when closed).
     #[arg(long)]
     frames: Option<u32>,
-    /// Composite the screenshot over this opaque linear colour R,G,B (default: keep a
+    /// Composite the screenshot over this opaque linear colour R,G,B, each in [0, 1] (default: keep a
     /// transparent background).
     #[arg(long, value_name = "R,G,B")]
     background: Option<String>,
@@ -132,13 +145,11 @@ fn parse_vec3(flag: &str, s: &str) -> Result<Vec3, CliError> {
         .split(',')
         .map(|p| p.trim().parse::<f32>())
         .collect::<Result<_, _>>()
-        .map_err(|e| bad(flag, format!("'{s}': {e}")))?;
+        .map_err(|e| usage(flag, format!("'{s}': {e}")))?;
     match v.as_slice() {
         [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(Vec3::new(*x, *y, *z)),
-        _ => Err(bad(
-            flag,
-            format!("'{s}': expected three finite numbers X,Y,Z"),
-        )),
+        [_, _, _] => Err(bad(flag, format!("'{s}': the numbers must be finite"))),
+        _ => Err(usage(flag, format!("'{s}': expected three numbers X,Y,Z"))),
     }
 }
 
@@ -150,7 +161,7 @@ fn parse_spacing(s: &str) -> Result<Spacing, CliError> {
     let num = |a: &str| -> Result<f32, CliError> {
         let v: f32 = a
             .parse()
-            .map_err(|e| bad("--spacing", format!("'{s}': {e}")))?;
+            .map_err(|e| usage("--spacing", format!("'{s}': {e}")))?;
         if !(v.is_finite() && v > 0.0) {
             return Err(bad("--spacing", format!("'{s}': must be > 0")));
         }
@@ -160,7 +171,7 @@ fn parse_spacing(s: &str) -> Result<Spacing, CliError> {
         ("adaptive", None) => Ok(Spacing::Adaptive { bias: 1.0 }),
         ("adaptive", Some(a)) => Ok(Spacing::Adaptive { bias: num(a)? }),
         ("uniform", Some(a)) => Ok(Spacing::Uniform { spacing: num(a)? }),
-        _ => Err(bad(
+        _ => Err(usage(
             "--spacing",
             format!("'{s}': expected adaptive, adaptive:BIAS or uniform:WORLD"),
         )),
@@ -181,7 +192,7 @@ fn override_particles(
             "quarter" | "1/4" => R::Quarter,
             "eighth" | "1/8" => R::Eighth,
             o => {
-                return Err(bad(
+                return Err(usage(
                     "--particle-layer",
                     format!("'{o}': expected full, half, quarter or eighth"),
                 ))
@@ -193,7 +204,7 @@ fn override_particles(
             "spherical" => M::Spherical,
             "planar" => M::Planar,
             o => {
-                return Err(bad(
+                return Err(usage(
                     "--particle-mode",
                     format!("'{o}': expected spherical or planar"),
                 ))
@@ -206,17 +217,8 @@ fn override_particles(
     Ok(())
 }
 
-fn view_code(e: &ViewError) -> Code {
-    match e {
-        ViewError::NoAdapter(_) => Code::Unsupported,
-        ViewError::Gpu(_) => Code::Internal,
-        ViewError::InvalidAsset(_) | ViewError::Scene { .. } => Code::InvalidInput,
-        ViewError::InvalidParam(_) | ViewError::TooManySlices { .. } => Code::BadParameter,
-    }
-}
-
 fn view_err(e: ViewError) -> CliError {
-    CliError::new(view_code(&e), e)
+    CliError::new(Code::from(&e), e)
 }
 
 pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
@@ -228,7 +230,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         None => {}
         Some("on") => scene.shadows = true,
         Some("off") => scene.shadows = false,
-        Some(o) => return Err(bad("--shadows", format!("'{o}': expected on or off"))),
+        Some(o) => return Err(usage("--shadows", format!("'{o}': expected on or off"))),
     }
     override_particles(&mut scene, &args)?;
     let mut read = Vec::new();
@@ -238,8 +240,19 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     }
     let passes = content.passes();
     if args.print_passes {
+        if args.json {
+            #[derive(Serialize)]
+            struct Passes<'a> {
+                target: String,
+                passes: &'a [&'static str],
+            }
+            return print_json(&Passes {
+                target: args.target.display().to_string(),
+                passes: &passes,
+            });
+        }
         for p in &passes {
-            println!("{p}");
+            outln!("{p}");
         }
         return Ok(());
     }
@@ -267,17 +280,25 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     if args.slab_min_slices == 0 {
         return Err(bad("--slab-min-slices", "must be at least 1"));
     }
+    if let Some(f) = args.sweep_fill {
+        if !(f > 0.0 && f <= 4.0) {
+            return Err(bad("--sweep-fill", format!("{f}: must be in (0, 4]")));
+        }
+    }
     if args.lod_sweep.is_some() && (args.screenshot.is_some() || args.lod_distance.is_some()) {
-        return Err(bad(
+        return Err(usage(
             "--lod-sweep",
             "renders its own frames: drop --screenshot and --lod-distance",
         ));
     }
     if args.headless && args.screenshot.is_none() && args.lod_sweep.is_none() {
-        return Err(bad("--screenshot", "--headless needs --screenshot OUT.png"));
+        return Err(usage(
+            "--screenshot",
+            "--headless needs --screenshot OUT.png",
+        ));
     }
     if !args.headless && args.screenshot.is_some() {
-        return Err(bad(
+        return Err(usage(
             "--screenshot",
             "screenshots are taken headless: add --headless",
         ));
@@ -293,7 +314,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         .map(|s| parse_vec3("--look-at", s))
         .transpose()?;
     let view_dir = parse_direction(&args.view).ok_or_else(|| {
-        bad(
+        usage(
             "--view",
             format!("'{}': expected a direction like -z or +x-y-z", args.view),
         )
@@ -366,6 +387,16 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             )
         }
     };
+    // Mesa's device-select Vulkan layer probes a Wayland display server and prints a
+    // misleading "error: XDG_RUNTIME_DIR is invalid or not set" on stderr without one,
+    // in a window as well as headless (the window needs no such probe: winit picks the
+    // display). Skip the layer unless the user chose otherwise (no other thread reads
+    // the environment here).
+    if std::env::var_os("NODEVICE_SELECT").is_none()
+        && std::env::var_os("XDG_RUNTIME_DIR").is_none()
+    {
+        std::env::set_var("NODEVICE_SELECT", "1");
+    }
     if let Some(dir) = &args.lod_sweep {
         return run_sweep(
             &args,
@@ -391,14 +422,6 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let out = args.screenshot.as_ref().expect("checked above");
     let frames = args.frames.unwrap_or(1);
 
-    // Mesa's device-select Vulkan layer probes a display server and prints
-    // "XDG_RUNTIME_DIR is invalid" on stderr without one; headless needs no display, so
-    // skip the layer unless the user chose otherwise (single-threaded here: safe).
-    if std::env::var_os("NODEVICE_SELECT").is_none()
-        && std::env::var_os("XDG_RUNTIME_DIR").is_none()
-    {
-        std::env::set_var("NODEVICE_SELECT", "1");
-    }
     let gpu = Gpu::headless().map_err(view_err)?;
     let adapter = gpu.describe();
     let mut r = content.build(gpu, params, fov).map_err(view_err)?;
@@ -500,18 +523,8 @@ fn run_sweep(
     }
     std::fs::create_dir_all(dir)
         .map_err(|e| CliError::new(Code::OutputIo, format!("{}: {e}", dir.display())))?;
-    if std::env::var_os("NODEVICE_SELECT").is_none()
-        && std::env::var_os("XDG_RUNTIME_DIR").is_none()
-    {
-        std::env::set_var("NODEVICE_SELECT", "1");
-    }
     let gpu = Gpu::headless().map_err(view_err)?;
     let mut r = content.build(gpu, params, fov).map_err(view_err)?;
-    if let Some(f) = args.sweep_fill {
-        if !(f > 0.0 && f <= 4.0) {
-            return Err(bad("--sweep-fill", format!("{f}: must be in (0, 4]")));
-        }
-    }
     let sweep =
         crate::lod_sweep::sweep(&mut r, size, (-view_dir, fov, args.sweep_fill), Some(dir))?;
     let table = crate::lod_sweep::table(&sweep);
@@ -525,7 +538,7 @@ fn run_sweep(
     if args.json {
         print_json(&sweep)?;
     } else if !ctx.quiet {
-        print!("{table}");
+        out!("{table}");
     }
     Ok(())
 }

@@ -9,12 +9,9 @@ use billow_view::content::{CloudContent, Content, VolumeContent};
 use billow_view::mesh_pass::{MeshData, MeshMaterial, MeshVertex};
 use billow_view::scene::{CloudDesc, MeshDesc, SceneFile, Transform, VolumeDesc};
 use billow_view::texture::TextureData;
-use billow_view::ViewError;
 use glam::{Mat4, Quat, Vec3};
 
 use crate::exit::{CliError, Code};
-use crate::info::format_code;
-use crate::inspect::import_code;
 
 fn extension_is(p: &Path, ext: &str) -> bool {
     p.extension()
@@ -25,15 +22,7 @@ fn extension_is(p: &Path, ext: &str) -> bool {
 /// TARGET as a scene (a lone asset or mesh becomes a one-item scene).
 pub fn load_scene(target: &Path) -> Result<SceneFile, CliError> {
     if extension_is(target, "ron") {
-        return SceneFile::load(target).map_err(|e| {
-            let code = match &e {
-                ViewError::Scene { problem, .. } if problem.starts_with("cannot read") => {
-                    Code::InputIo
-                }
-                _ => Code::InvalidInput,
-            };
-            CliError::new(code, e)
-        });
+        return SceneFile::load(target).map_err(|e| CliError::new(Code::from(&e), e));
     }
     if !target.is_file() {
         return Err(CliError::new(
@@ -43,7 +32,7 @@ pub fn load_scene(target: &Path) -> Result<SceneFile, CliError> {
     }
     let mut s = SceneFile::default();
     if extension_is(target, "billow") {
-        let c = read_file(target).map_err(|e| CliError::new(format_code(&e), e))?;
+        let c = read_file(target).map_err(|e| CliError::new(Code::from(&e), e))?;
         match c.header.kind {
             AssetKind::Cloud => s.clouds.push(CloudDesc {
                 asset: target.to_path_buf(),
@@ -118,7 +107,7 @@ pub fn load_content(scene: &SceneFile, read: &mut Vec<PathBuf>) -> Result<Conten
     };
     for v in &scene.volumes {
         read.push(v.asset.clone());
-        let asset = VolumeAsset::read(&v.asset).map_err(|e| CliError::new(format_code(&e), e))?;
+        let asset = VolumeAsset::read(&v.asset).map_err(|e| CliError::new(Code::from(&e), e))?;
         c.volumes.push(VolumeContent {
             asset,
             instances: v.instances.iter().map(|t| t.matrix()).collect(),
@@ -127,13 +116,8 @@ pub fn load_content(scene: &SceneFile, read: &mut Vec<PathBuf>) -> Result<Conten
     }
     for d in &scene.clouds {
         read.push(d.asset.clone());
-        let asset = CloudAsset::read(&d.asset).map_err(|e| {
-            let code = match &e {
-                billow_format::CloudError::Format(f) => format_code(f),
-                billow_format::CloudError::Invalid(_) => Code::InvalidInput,
-            };
-            CliError::new(code, format!("{}: {e}", d.asset.display()))
-        })?;
+        let asset = CloudAsset::read(&d.asset)
+            .map_err(|e| CliError::new(Code::from(&e), format!("{}: {e}", d.asset.display())))?;
         let levels = asset.levels.len();
         if let Some(dist) = &d.lod_distances {
             if dist.len() != levels {
@@ -157,7 +141,7 @@ pub fn load_content(scene: &SceneFile, read: &mut Vec<PathBuf>) -> Result<Conten
     }
     for m in &scene.meshes {
         let s = import(&m.path, &ImportOptions::default())
-            .map_err(|e| CliError::new(import_code(&e), &e))?;
+            .map_err(|e| CliError::new(Code::from(&e), &e))?;
         read.push(m.path.clone());
         read.extend(s.files.iter().cloned());
         c.meshes.push(mesh_data(&s, &m.transform));

@@ -4,25 +4,23 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use billow::export::{
-    check_slices, ktx2_bytes, slice_bytes, slice_file_name, ExportError, SliceFormat,
-};
+use billow::export::{check_slices, ktx2_bytes, slice_bytes, slice_file_name, SliceFormat};
 use billow::import::{import, ImportOptions};
 use billow::provenance::{source_info, tool_version, with_companions};
 use billow::scene::Aabb;
 use billow::voxelize::{
-    bake_params, voxelize, Bake, CombineFn, Resolution, Stage, VoxelizeError, VoxelizeOptions,
+    bake_params, voxelize, Bake, CombineFn, Resolution, Stage, VoxelizeOptions,
 };
 use glam::Vec3;
 use serde::Serialize;
 
 use crate::depfile;
-use crate::exit::{CliError, Code};
-use crate::inspect::import_code;
+use crate::exit::{usage, CliError, Code};
 use crate::output::{
     peak_rss_bytes, print_json, progress, refuse_clobbering, refuse_clobbering_read,
     refuse_file_as_folder, warn,
 };
+use crate::progress::{self, Monotone};
 use crate::staged::{out_err, Staged};
 use crate::Ctx;
 
@@ -33,10 +31,11 @@ pub struct Args {
     /// Where to write the volume asset (.billow). Written atomically.
     #[arg(short, long)]
     output: PathBuf,
-    /// Voxels along the longest axis (others in proportion), or exactly XxYxZ (e.g. 256x128x128).
+    /// Voxels along the longest axis (others in proportion), or exactly XxYxZ (e.g. 256x128x128);
+    /// each axis 1–2048, and the estimated memory must fit.
     #[arg(long, default_value = "128")]
     res: String,
-    /// K: K×K coverage samples per voxel column (1–8); gives thin parts fractional opacity.
+    /// K: K×K coverage samples per voxel column, 1–8; gives thin parts fractional opacity.
     #[arg(long, default_value_t = 4)]
     supersample: u32,
     /// How the six directional volumes merge: opaque (max opacity, averaged colour: keeps thin
@@ -47,13 +46,13 @@ pub struct Args {
     /// Capture normals (Toksvig-filtered MIPs).
     #[arg(long)]
     normals: bool,
-    /// Number of MIP levels (default: the full chain down to 1×1×1).
+    /// Number of MIP levels, 1–the full chain (default: the full chain down to 1×1×1).
     #[arg(long)]
     mips: Option<u32>,
-    /// Empty border around the mesh, in voxels.
+    /// Empty border around the mesh, in voxels, 0–64.
     #[arg(long, default_value_t = 0.5)]
     margin: f32,
-    /// Round every side of the grid up to a multiple of N voxels (the box grows evenly with
+    /// Round every side of the grid up to a multiple of N voxels, 1–2048 (the box grows evenly with
     /// empty voxels). `billow emptyspace` needs even sides, and sides that are multiples of
     /// 2^k to prune MIP levels 1..k as well; 8 is a good choice.
     #[arg(long, default_value_t = 1)]
@@ -68,7 +67,7 @@ pub struct Args {
     /// Also write every slice of one MIP level (see --slice-level) into this folder.
     #[arg(long, value_name = "DIR")]
     slices: Option<PathBuf>,
-    /// MIP level whose slices --slices writes.
+    /// MIP level whose slices --slices writes, 0–(MIP levels − 1).
     #[arg(long, default_value_t = 0)]
     slice_level: u32,
     /// Slice image format: png (8-bit, straight alpha) or exr (float, premultiplied).
@@ -78,10 +77,10 @@ pub struct Args {
     /// against the source mesh; see docs/voxelize.md).
     #[arg(long, default_value = "none")]
     bake: String,
-    /// Rays per voxel for --bake ao (1–4096).
+    /// Rays per voxel for --bake ao, 1–4096.
     #[arg(long, default_value_t = billow::voxelize::DEFAULT_AO_RAYS)]
     ao_rays: u32,
-    /// Occlusion distance for --bake ao, in scene units (default: 0.2 × the grid's diagonal).
+    /// Occlusion distance for --bake ao, in scene units, > 0 (default: 0.2 × the grid's diagonal).
     #[arg(long)]
     ao_distance: Option<f32>,
     /// Treat import warnings (e.g. a missing texture) as errors.
@@ -137,9 +136,15 @@ pub fn options(
     normals: bool,
     margin: f32,
 ) -> Result<VoxelizeOptions, CliError> {
-    let resolution: Resolution = res.parse().map_err(|e| bad("--res", e))?;
-    resolution.validate().map_err(|e| bad("--res", e))?;
-    let combine: CombineFn = combine.parse().map_err(|e| bad("--combine", e))?;
+    let resolution: Resolution = res
+        .parse()
+        .map_err(|e| CliError::new(Code::from(&e), format!("--res: {e}")))?;
+    resolution
+        .validate()
+        .map_err(|e| CliError::new(Code::from(&e), format!("--res: {e}")))?;
+    let combine: CombineFn = combine
+        .parse()
+        .map_err(|e| CliError::new(Code::from(&e), format!("--combine: {e}")))?;
     if !(margin.is_finite() && (0.0..=64.0).contains(&margin)) {
         return Err(bad(
             "--margin",
@@ -162,8 +167,14 @@ fn parse_bounds(s: &str) -> Result<Aabb, CliError> {
         .split(',')
         .map(|p| p.trim().parse::<f32>())
         .collect::<Result<_, _>>()
-        .map_err(|e| bad("--bounds", format!("'{s}': {e}")))?;
-    if v.len() != 6 || v.iter().any(|x| !x.is_finite()) {
+        .map_err(|e| usage("--bounds", format!("'{s}': {e}")))?;
+    if v.len() != 6 {
+        return Err(usage(
+            "--bounds",
+            format!("'{s}': expected six numbers minx,miny,minz,maxx,maxy,maxz"),
+        ));
+    }
+    if v.iter().any(|x| !x.is_finite()) {
         return Err(bad(
             "--bounds",
             format!("'{s}': expected six finite numbers minx,miny,minz,maxx,maxy,maxz"),
@@ -177,14 +188,6 @@ fn parse_bounds(s: &str) -> Result<Aabb, CliError> {
         ));
     }
     Ok(Aabb { min, max })
-}
-
-pub fn export_code(e: &ExportError) -> Code {
-    match e {
-        ExportError::NoSuchLevel { .. } => Code::BadParameter,
-        ExportError::InvalidAsset { .. } => Code::Internal,
-        _ => Code::OutputIo,
-    }
 }
 
 /// `--bake`, `--ao-rays`, `--ao-distance` → [`Bake`].
@@ -215,14 +218,10 @@ fn parse_bake(bake: &str, rays: u32, distance: Option<f32>) -> Result<Bake, CliE
             }
             Ok(Bake::Ao { rays, distance })
         }
-        other => Err(bad("--bake", format!("expected none or ao, got '{other}'"))),
-    }
-}
-
-pub fn voxelize_code(e: &VoxelizeError) -> Code {
-    match e {
-        VoxelizeError::EmptyScene | VoxelizeError::InvalidScene(_) => Code::InvalidInput,
-        _ => Code::BadParameter,
+        other => Err(usage(
+            "--bake",
+            format!("expected none or ao, got '{other}'"),
+        )),
     }
 }
 
@@ -255,7 +254,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         "png" => SliceFormat::Png8,
         "exr" => SliceFormat::Exr,
         other => {
-            return Err(bad(
+            return Err(usage(
                 "--slice-format",
                 format!("expected png or exr, got '{other}'"),
             ))
@@ -285,7 +284,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         );
         (scene, source.join().expect("checksum thread panicked"))
     });
-    let scene = scene.map_err(|e| CliError::new(import_code(&e), &e))?;
+    let scene = scene.map_err(|e| CliError::new(Code::from(&e), &e))?;
     refuse_clobbering_read(&args.input, &scene.files, &outputs)?;
     for w in &scene.warnings {
         warn(ctx, &format!("{input}: {}", w.message));
@@ -314,22 +313,15 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     }
     let import_s = start.elapsed().as_secs_f64();
 
-    let bar = progress(ctx, 1000, "voxelize");
+    let bar = Monotone::new(progress(ctx, progress::LEN, "voxelize"));
     let report = |stage: Stage, f: f32| {
-        bar.set_message(format!("{stage:?}").to_lowercase());
-        // The six directions (each rasterized, then its pyramid built) take 85% of the
-        // bar: `Rasterize` and `Mip` report fractions of directions done, so the bar
-        // only moves forward although the two stages alternate.
-        let (lo, span) = match stage {
-            Stage::Rasterize | Stage::Mip => (0.0, 0.85),
-            Stage::Combine => (0.85, 0.12),
-            Stage::Quantize => (0.97, 0.03),
-        };
-        bar.set_position(((lo + span * f.clamp(0.0, 1.0)) * 1000.0) as u64);
+        bar.set(progress::voxelize_fraction(stage, f), || {
+            format!("{stage:?}").to_lowercase()
+        });
     };
     let volume = voxelize(&scene, &opts, &report)
-        .map_err(|e| CliError::new(voxelize_code(&e), format!("{input}: {e}")))?;
-    bar.finish_and_clear();
+        .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;
+    bar.finish();
 
     let stats = volume.stats;
     let (dims, mip_count) = (volume.dims(), volume.mip_count());
@@ -348,18 +340,18 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         .map_err(|e| CliError::new(Code::Internal, e))?
         .map_err(|e| out_err(&args.output, e))?;
     if let Some(path) = &args.ktx2 {
-        let ktx = ktx2_bytes(&asset, path).map_err(|e| CliError::new(export_code(&e), e))?;
+        let ktx = ktx2_bytes(&asset, path).map_err(|e| CliError::new(Code::from(&e), e))?;
         stage.stage(path, &ktx).map_err(|e| out_err(path, e))?;
     }
     let mut written: Vec<PathBuf> = Vec::new();
     if let Some(dir) = &args.slices {
         let depth = check_slices(&asset, args.slice_level, dir)
-            .map_err(|e| CliError::new(export_code(&e), e))?;
+            .map_err(|e| CliError::new(Code::from(&e), e))?;
         stage.create_dir(dir).map_err(|e| out_err(dir, e))?;
         for z in 0..depth {
             let path = dir.join(slice_file_name(z, slice_format));
             let png = slice_bytes(&asset, args.slice_level, z, slice_format, &path)
-                .map_err(|e| CliError::new(export_code(&e), e))?;
+                .map_err(|e| CliError::new(Code::from(&e), e))?;
             stage.stage(&path, &png).map_err(|e| out_err(&path, e))?;
             written.push(path);
         }

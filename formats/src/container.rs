@@ -580,11 +580,54 @@ pub fn write_atomic_parts(path: &Path, parts: &[&[u8]]) -> Result<(), FormatErro
     Ok(())
 }
 
-/// Read and decode an asset file. Errors carry the path: `"<path>: <problem>"`.
-pub fn read_file(path: &Path) -> Result<Container, FormatError> {
-    let bytes = std::fs::read(path).map_err(|source| FormatError::Io {
+/// Largest asset file the readers accept: 16 GiB (a 2048³ volume with its MIPs is
+/// under 40 GiB only with normals; this bounds what a hostile path can make billow read).
+pub const MAX_ASSET_BYTES: u64 = 16 << 30;
+
+/// Reads a whole asset file after checking that it is a regular file (not a FIFO or a
+/// device such as `/dev/zero`, checked before opening) of at most [`MAX_ASSET_BYTES`],
+/// with a reader bounded by that limit. Errors are [`FormatError::Io`].
+pub fn read_regular(path: &Path) -> Result<Vec<u8>, FormatError> {
+    use std::io::{Error, ErrorKind, Read};
+    let io = |source: Error| FormatError::Io {
         path: path.to_path_buf(),
         source,
-    })?;
+    };
+    let not_regular = || {
+        io(Error::new(
+            ErrorKind::InvalidInput,
+            "not a regular file (a device, FIFO, socket or folder); billow reads regular files only",
+        ))
+    };
+    let too_large = |n: u64| {
+        io(Error::new(
+            ErrorKind::FileTooLarge,
+            format!("{n} bytes or more, over the asset size limit of {MAX_ASSET_BYTES} bytes"),
+        ))
+    };
+    if !std::fs::metadata(path).map_err(io)?.is_file() {
+        return Err(not_regular());
+    }
+    let file = std::fs::File::open(path).map_err(io)?;
+    let meta = file.metadata().map_err(io)?;
+    if !meta.is_file() {
+        return Err(not_regular());
+    }
+    if meta.len() > MAX_ASSET_BYTES {
+        return Err(too_large(meta.len()));
+    }
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    file.take(MAX_ASSET_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(io)?;
+    if bytes.len() as u64 > MAX_ASSET_BYTES {
+        return Err(too_large(bytes.len() as u64));
+    }
+    Ok(bytes)
+}
+
+/// Read and decode an asset file. Errors carry the path: `"<path>: <problem>"`.
+pub fn read_file(path: &Path) -> Result<Container, FormatError> {
+    let bytes = read_regular(path)?;
     from_bytes(&bytes).map_err(|e| e.in_file(path))
 }

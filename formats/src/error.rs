@@ -10,8 +10,10 @@ use thiserror::Error;
 use crate::{FORMAT_MAJOR, PREAMBLE_LEN};
 
 /// Everything that can go wrong encoding, decoding, reading or writing an asset.
+///
+/// Not `#[non_exhaustive]`: the `billow` binary maps every variant to an exit code with an
+/// exhaustive `match` (docs/cli.md), so a new variant must not compile until it has one.
 #[derive(Debug, Error)]
-#[non_exhaustive]
 pub enum FormatError {
     /// An operating-system error while reading or writing `path`.
     #[error("{path}: {source}")]

@@ -28,8 +28,8 @@ pub use cloud::{
     MeshTexture, MeshVertex, MAX_TEXTURE_SIDE, NO_INDEX,
 };
 pub use container::{
-    from_bytes, read_file, to_bytes, valid_tag, write_atomic, write_atomic_parts, Chunk, Container,
-    ElemType, CHUNK_HEADER_LEN, TAG_END, TAG_HEAD,
+    from_bytes, read_file, read_regular, to_bytes, valid_tag, write_atomic, write_atomic_parts,
+    Chunk, Container, ElemType, CHUNK_HEADER_LEN, MAX_ASSET_BYTES, TAG_END, TAG_HEAD,
 };
 pub use error::{tag_str, FormatError};
 pub use header::{

@@ -339,10 +339,7 @@ impl VolumeAsset {
 
     /// Read a volume asset file. Errors carry the path.
     pub fn read(path: &Path) -> Result<Self, FormatError> {
-        let bytes = std::fs::read(path).map_err(|source| FormatError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let bytes = crate::container::read_regular(path)?;
         Self::from_bytes(&bytes).map_err(|e| e.in_file(path))
     }
 

@@ -4,7 +4,6 @@
 //! allocated: an accessor can never produce more elements than its bufferView can hold
 //! (accessors without a bufferView are capped at [`MAX_ZERO_FILLED`]).
 
-use std::fs::File;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
@@ -64,8 +63,8 @@ impl<'a> Buffers<'a> {
                 Some(uri) => {
                     let p: PathBuf = resolve_relative(self.base, &percent_decode(uri));
                     let mut v = Vec::new();
-                    File::open(&p)
-                        .and_then(|f| f.take(declared).read_to_end(&mut v))
+                    crate::import::open_input(&p)
+                        .and_then(|(f, _)| f.take(declared).read_to_end(&mut v))
                         .map_err(|e| ctx.io(&p, e))?;
                     ctx.read_from(&p);
                     v

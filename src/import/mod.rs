@@ -26,6 +26,59 @@ use crate::scene::{Aabb, MeshInfo, Scene, Triangle, Warning};
 /// costs ~150 bytes, so the cap is ~10 GB).
 pub const MAX_TRIANGLES: usize = 64 << 20;
 
+/// Largest file billow reads as an input (a mesh, an MTL library, a glTF buffer or image,
+/// an asset): 4 GiB. Checked on the file's size before reading and enforced while reading.
+pub const MAX_INPUT_BYTES: u64 = 4 << 30;
+
+/// Opens `path` for reading after checking that it is a regular file (not a FIFO, a
+/// device such as `/dev/zero`, a socket or a folder; checked before opening, which would
+/// block on a FIFO) of at most [`MAX_INPUT_BYTES`]. Returns the file and its size.
+/// Errors are `InvalidInput` (not a regular file) or `FileTooLarge`, with a message.
+pub fn open_input(path: &Path) -> std::io::Result<(std::fs::File, u64)> {
+    use std::io::{Error, ErrorKind};
+    let not_regular = || {
+        Error::new(
+            ErrorKind::InvalidInput,
+            "not a regular file (a device, FIFO, socket or folder); billow reads regular files only",
+        )
+    };
+    if !std::fs::metadata(path)?.is_file() {
+        return Err(not_regular());
+    }
+    let file = std::fs::File::open(path)?;
+    let meta = file.metadata()?;
+    if !meta.is_file() {
+        return Err(not_regular());
+    }
+    if meta.len() > MAX_INPUT_BYTES {
+        return Err(too_large(meta.len()));
+    }
+    Ok((file, meta.len()))
+}
+
+fn too_large(bytes: u64) -> std::io::Error {
+    std::io::Error::new(
+        std::io::ErrorKind::FileTooLarge,
+        format!(
+            "{bytes} bytes or more, over billow's input limit of {MAX_INPUT_BYTES} bytes (4 GiB)"
+        ),
+    )
+}
+
+/// Reads a whole input file through [`open_input`]'s checks, with a reader bounded by
+/// [`MAX_INPUT_BYTES`] (a file that grows while read is cut off with an error, not read
+/// without end).
+pub fn read_input(path: &Path) -> std::io::Result<Vec<u8>> {
+    use std::io::Read;
+    let (file, len) = open_input(path)?;
+    let mut bytes = Vec::with_capacity(len as usize);
+    file.take(MAX_INPUT_BYTES + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > MAX_INPUT_BYTES {
+        return Err(too_large(bytes.len() as u64));
+    }
+    Ok(bytes)
+}
+
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct ImportOptions {
     /// Treat every warning as an error ([`ImportError::Strict`]).

@@ -18,7 +18,6 @@
 
 use std::cell::RefCell;
 use std::collections::HashMap;
-use std::fs;
 use std::io::Cursor;
 use std::path::{Path, PathBuf};
 
@@ -28,7 +27,12 @@ use super::{face_normal, images, resolve_relative, Ctx, ImportError, SceneBuilde
 use crate::scene::{AlphaMode, Material, Texture, TextureReport, Triangle, Vertex};
 
 pub(super) fn load(path: &Path, ctx: &mut Ctx) -> Result<SceneBuilder, ImportError> {
-    let bytes = fs::read(path).map_err(|e| ctx.io(path, e))?;
+    let raw = super::read_input(path).map_err(|e| ctx.io(path, e))?;
+    // Real exporters write bytes that are not UTF-8 (a Latin-1 `©` in a 3ds Max comment or
+    // group name) and statements tobj refuses although they are harmless (a bare `usemtl`):
+    // both are made acceptable here; what is still refused is reported with its line.
+    let bytes = tolerate_obj(&String::from_utf8_lossy(&raw)).into_bytes();
+    drop(raw);
     let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
     // The index check and tobj's parse both read the whole file: run them side by side
     // (the check's error, when there is one, is the one reported, as before).
@@ -38,16 +42,10 @@ pub(super) fn load(path: &Path, ctx: &mut Ctx) -> Result<SceneBuilder, ImportErr
         || {
             // Load MTL files ourselves to learn their folders and report missing ones.
             let mtl_dirs: RefCell<HashMap<String, PathBuf>> = RefCell::new(HashMap::new());
-            let mtl_failures: RefCell<Vec<(PathBuf, tobj::LoadError)>> = RefCell::new(Vec::new());
-            let opts = tobj::LoadOptions {
-                triangulate: true,
-                single_index: true,
-                ignore_points: true,
-                ignore_lines: true,
-            };
-            let r = tobj::load_obj_buf(&mut Cursor::new(&bytes), &opts, |mtl: &Path| {
+            let mtl_failures: RefCell<Vec<(PathBuf, String)>> = RefCell::new(Vec::new());
+            let r = tobj::load_obj_buf(&mut Cursor::new(&bytes), &OBJ_OPTIONS, |mtl: &Path| {
                 let p = resolve_relative(&dir, &mtl.to_string_lossy());
-                let r = tobj::load_mtl(&p);
+                let (r, failure) = load_mtl(&p);
                 match &r {
                     Ok((mats, _)) => {
                         ctx.read_from(&p);
@@ -59,7 +57,9 @@ pub(super) fn load(path: &Path, ctx: &mut Ctx) -> Result<SceneBuilder, ImportErr
                                 .or_insert_with(|| d.clone());
                         }
                     }
-                    Err(e) => mtl_failures.borrow_mut().push((p, *e)),
+                    Err(e) => mtl_failures
+                        .borrow_mut()
+                        .push((p, failure.unwrap_or_else(|| e.to_string()))),
                 }
                 r
             });
@@ -68,13 +68,21 @@ pub(super) fn load(path: &Path, ctx: &mut Ctx) -> Result<SceneBuilder, ImportErr
     );
     checked?;
     let (parsed, mtl_dirs, mtl_failures) = parsed;
-    let (models, _materials_result) = parsed.map_err(|e| match e {
-        tobj::LoadError::FaceVertexOutOfBounds
-        | tobj::LoadError::FaceTexCoordOutOfBounds
-        | tobj::LoadError::FaceNormalOutOfBounds
-        | tobj::LoadError::FaceColorOutOfBounds
-        | tobj::LoadError::InvalidPolygon => ctx.invalid(e),
-        _ => ctx.parse(e),
+    let (models, _materials_result) = parsed.map_err(|e| {
+        let at = failing_line(&bytes, |prefix| {
+            tobj::load_obj_buf(&mut Cursor::new(prefix), &OBJ_OPTIONS, |_| {
+                Ok((Vec::new(), Default::default()))
+            })
+            .err()
+        });
+        match e {
+            tobj::LoadError::FaceVertexOutOfBounds
+            | tobj::LoadError::FaceTexCoordOutOfBounds
+            | tobj::LoadError::FaceNormalOutOfBounds
+            | tobj::LoadError::FaceColorOutOfBounds
+            | tobj::LoadError::InvalidPolygon => ctx.invalid(format!("{at}{e}")),
+            _ => ctx.parse(format!("{at}{e}")),
+        }
     })?;
     for (p, e) in mtl_failures {
         ctx.warn(format!(
@@ -285,7 +293,7 @@ fn load_texture(
     b: &mut SceneBuilder,
     ctx: &mut Ctx,
 ) -> Result<Option<Texture>, ImportError> {
-    let r = fs::read(path)
+    let r = super::read_input(path)
         .inspect(|_| ctx.read_from(path))
         .map_err(|e| format!("{}: {e}", path.display()))
         .and_then(|bytes| images::decode(&bytes, name, None));
@@ -333,6 +341,110 @@ fn strip_map_options(s: &str) -> &str {
         }
     }
     rest
+}
+
+const OBJ_OPTIONS: tobj::LoadOptions = tobj::LoadOptions {
+    triangulate: true,
+    single_index: true,
+    ignore_points: true,
+    ignore_lines: true,
+};
+
+/// Name given to an unnamed material (a bare `newmtl`, as Blender 2.61 writes for a
+/// material without a name); a bare `usemtl` selects it.
+const UNNAMED_MATERIAL: &str = "(unnamed)";
+
+/// The OBJ text with the harmless statements tobj would refuse rewritten: a bare
+/// `usemtl` selects [`UNNAMED_MATERIAL`] (tobj requires a name).
+fn tolerate_obj(text: &str) -> String {
+    let mut out = String::with_capacity(text.len() + 16);
+    for line in text.split_inclusive('\n') {
+        let body = line.trim_end_matches(['\n', '\r']);
+        if body.trim() == "usemtl" {
+            out.push_str("usemtl ");
+            out.push_str(UNNAMED_MATERIAL);
+            out.push_str(&line[body.len()..]);
+        } else {
+            out.push_str(line);
+        }
+    }
+    out
+}
+
+/// The MTL text with the harmless statements tobj would refuse rewritten or dropped: a
+/// bare `newmtl` names [`UNNAMED_MATERIAL`]; a texture statement (`map_Kd`, `bump`, ...)
+/// without a file name and an `illum` without a number are dropped (they say nothing).
+fn tolerate_mtl(text: &str) -> String {
+    const MAPS: [&str; 11] = [
+        "map_Ka", "map_Kd", "map_Ks", "map_Bump", "map_bump", "map_Ns", "map_ns", "map_NS", "bump",
+        "map_d", "illum",
+    ];
+    let mut out = String::with_capacity(text.len() + 16);
+    for line in text.split_inclusive('\n') {
+        let body = line.trim_end_matches(['\n', '\r']);
+        let t = body.trim();
+        if t == "newmtl" {
+            out.push_str("newmtl ");
+            out.push_str(UNNAMED_MATERIAL);
+            out.push_str(&line[body.len()..]);
+        } else if MAPS.contains(&t) {
+            out.push_str(&line[body.len()..]);
+        } else {
+            out.push_str(line);
+        }
+    }
+    out
+}
+
+/// Reads and parses one MTL library; an error is one line naming the line number and the
+/// problem (the caller names the file).
+fn load_mtl(p: &Path) -> (tobj::MTLLoadResult, Option<String>) {
+    let raw = match super::read_input(p) {
+        Ok(raw) => raw,
+        Err(e) => return (Err(tobj::LoadError::OpenFileFailed), Some(e.to_string())),
+    };
+    let text = tolerate_mtl(&String::from_utf8_lossy(&raw)).into_bytes();
+    match tobj::load_mtl_buf(&mut Cursor::new(&text)) {
+        Ok(r) => (Ok(r), None),
+        Err(e) => {
+            let at = failing_line(&text, |prefix| {
+                tobj::load_mtl_buf(&mut Cursor::new(prefix)).err()
+            });
+            (Err(e), Some(format!("{at}{e}")))
+        }
+    }
+}
+
+/// `"line N: '<text>': "` for the first line of `text` at which `parse` (run on a prefix
+/// of whole lines) fails, found by bisection over the line count; empty if no prefix
+/// fails (an error found only at the end of the file). Only run on the error path.
+fn failing_line<E>(text: &[u8], parse: impl Fn(&[u8]) -> Option<E>) -> String {
+    let ends: Vec<usize> = text
+        .iter()
+        .enumerate()
+        .filter(|(_, &b)| b == b'\n')
+        .map(|(i, _)| i + 1)
+        .chain((text.last() != Some(&b'\n')).then_some(text.len()))
+        .collect();
+    // Smallest k such that the first k lines fail.
+    let (mut lo, mut hi) = (1usize, ends.len());
+    if ends.is_empty() || parse(&text[..ends[hi - 1]]).is_none() {
+        return String::new();
+    }
+    while lo < hi {
+        let mid = (lo + hi) / 2;
+        if parse(&text[..ends[mid - 1]]).is_some() {
+            hi = mid;
+        } else {
+            lo = mid + 1;
+        }
+    }
+    let start = if lo >= 2 { ends[lo - 2] } else { 0 };
+    let line = String::from_utf8_lossy(&text[start..ends[lo - 1]]);
+    let line = line.trim();
+    let shown: String = line.chars().take(60).collect();
+    let more = if line.chars().count() > 60 { "…" } else { "" };
+    format!("line {lo}: '{shown}{more}': ")
 }
 
 /// Checks every face index before `tobj` sees it: 0, negative indices that resolve

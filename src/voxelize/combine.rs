@@ -152,6 +152,16 @@ pub enum CombineParseError {
     Expr(ExprError),
 }
 
+impl CombineParseError {
+    /// Whether the argument parses but is over a size limit (see [`ExprError::too_large`]).
+    pub fn too_large(&self) -> bool {
+        match self {
+            CombineParseError::Unknown(_) => false,
+            CombineParseError::Expr(e) => e.too_large,
+        }
+    }
+}
+
 impl FromStr for CombineFn {
     type Err = CombineParseError;
     /// `mean | max | min | opaque | expr:<expression>`.

@@ -13,7 +13,9 @@
 //! The result is clamped to a valid premultiplied colour
 //! ([`super::combine::clamp_premultiplied`]): NaN → 0, `0 ≤ a ≤ 1`, `0 ≤ rgb ≤ a`.
 //! The source is parsed once into an AST and evaluated per voxel. Errors give the 1-based
-//! column (in characters) of the offending token.
+//! column (in characters) of the offending token. An expression is at most
+//! [`MAX_TOKENS`] tokens long and nested at most [`MAX_DEPTH`] levels deep, which bounds the
+//! tree's size and height (the parser and evaluator recurse over it).
 
 use std::fmt;
 
@@ -26,6 +28,9 @@ use super::combine::Combine;
 pub struct ExprError {
     pub column: usize,
     pub message: String,
+    /// The expression is well-formed as far as it was read but over a size limit
+    /// ([`MAX_TOKENS`], [`MAX_DEPTH`]) rather than unparsable.
+    pub too_large: bool,
 }
 
 impl fmt::Display for ExprError {
@@ -105,6 +110,7 @@ fn lex(src: &str) -> Result<Vec<(Tok, usize)>, ExprError> {
             let v = text.parse::<f32>().map_err(|_| ExprError {
                 column: col,
                 message: format!("bad number '{text}'"),
+                too_large: false,
             })?;
             out.push((Tok::Num(v), col));
         } else if c.is_ascii_alphabetic() || c == '_' {
@@ -120,6 +126,7 @@ fn lex(src: &str) -> Result<Vec<(Tok, usize)>, ExprError> {
             return Err(ExprError {
                 column: col,
                 message: format!("unexpected character '{c}'"),
+                too_large: false,
             });
         }
     }
@@ -134,7 +141,12 @@ struct Parser {
 }
 
 /// Deepest nesting accepted (keeps the recursive parser and evaluator off the stack limit).
-const MAX_DEPTH: usize = 64;
+pub const MAX_DEPTH: usize = 64;
+
+/// Most tokens accepted. Every tree node consumes at least one token, so this bounds the
+/// node count and the height of a long flat chain (`px+px+…` is left-deep), which the
+/// nesting limit does not see; the evaluator and `Drop` recurse over that height.
+pub const MAX_TOKENS: usize = 1024;
 
 fn describe(t: &Tok) -> String {
     match t {
@@ -156,6 +168,7 @@ impl Parser {
         Err(ExprError {
             column: self.col(),
             message,
+            too_large: false,
         })
     }
     fn expect(&mut self, c: char) -> Result<(), ExprError> {
@@ -185,7 +198,11 @@ impl Parser {
     fn unary(&mut self) -> Result<Node, ExprError> {
         self.depth += 1;
         if self.depth > MAX_DEPTH {
-            return self.err(format!("expression nested deeper than {MAX_DEPTH} levels"));
+            let mut e = self
+                .err::<()>(format!("expression nested deeper than {MAX_DEPTH} levels"))
+                .unwrap_err();
+            e.too_large = true;
+            return Err(e);
         }
         let r = self.unary_inner();
         self.depth -= 1;
@@ -257,6 +274,7 @@ impl Parser {
                             message: format!(
                                 "unknown name '{name}': variables are px nx py ny pz nz, functions min max mean sum abs clamp mix rgba"
                             ),
+                            too_large: false,
                         })
                     }
                 };
@@ -275,6 +293,7 @@ impl Parser {
                         return Err(ExprError {
                             column: col,
                             message: format!("'{name}' takes {n} argument(s), got {}", args.len()),
+                            too_large: false,
                         });
                     }
                 }
@@ -335,6 +354,16 @@ impl Expr {
         };
         if p.toks.len() == 1 {
             return p.err("empty expression".into());
+        }
+        if p.toks.len() - 1 > MAX_TOKENS {
+            return Err(ExprError {
+                column: p.toks[MAX_TOKENS].1,
+                message: format!(
+                    "expression longer than {MAX_TOKENS} tokens ({} given)",
+                    p.toks.len() - 1
+                ),
+                too_large: true,
+            });
         }
         let root = p.expr()?;
         if *p.peek() != Tok::End {

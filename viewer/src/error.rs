@@ -10,6 +10,9 @@ pub enum ViewError {
     /// No GPU adapter (no Vulkan/Metal/DX12/GL driver found).
     #[error("no GPU adapter found ({0}); {DRIVER_HINT}")]
     NoAdapter(String),
+    /// No window system to open a window on (no display server).
+    #[error("no window system ({0}); render without one: --headless --screenshot OUT.png")]
+    NoDisplay(String),
     /// The adapter refused to create a device, or a GPU operation failed.
     #[error("GPU: {0}")]
     Gpu(String),
@@ -27,4 +30,8 @@ pub enum ViewError {
     /// A scene file problem: the file and the field or value at fault.
     #[error("{file}: {problem}")]
     Scene { file: String, problem: String },
+    /// A file a scene needs could not be read: the scene file itself, or an asset or
+    /// mesh it names that does not exist.
+    #[error("{file}: {problem}")]
+    SceneInput { file: String, problem: String },
 }

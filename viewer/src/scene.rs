@@ -203,13 +203,18 @@ impl SceneFile {
             file: file.clone(),
             problem,
         };
-        let text = std::fs::read_to_string(path).map_err(|e| err(format!("cannot read: {e}")))?;
+        let missing = |problem: String| ViewError::SceneInput {
+            file: file.clone(),
+            problem,
+        };
+        let text =
+            std::fs::read_to_string(path).map_err(|e| missing(format!("cannot read: {e}")))?;
         let mut scene = Self::parse(&text).map_err(&err)?;
         let dir = path.parent().unwrap_or(Path::new("."));
         for (i, v) in scene.volumes.iter_mut().enumerate() {
             v.asset = dir.join(&v.asset);
             if !v.asset.is_file() {
-                return Err(err(format!(
+                return Err(missing(format!(
                     "volumes[{i}].asset: {} does not exist",
                     v.asset.display()
                 )));
@@ -218,7 +223,7 @@ impl SceneFile {
         for (i, c) in scene.clouds.iter_mut().enumerate() {
             c.asset = dir.join(&c.asset);
             if !c.asset.is_file() {
-                return Err(err(format!(
+                return Err(missing(format!(
                     "clouds[{i}].asset: {} does not exist",
                     c.asset.display()
                 )));
@@ -227,7 +232,7 @@ impl SceneFile {
         for (i, m) in scene.meshes.iter_mut().enumerate() {
             m.path = dir.join(&m.path);
             if !m.path.is_file() {
-                return Err(err(format!(
+                return Err(missing(format!(
                     "meshes[{i}].path: {} does not exist",
                     m.path.display()
                 )));

@@ -378,7 +378,7 @@ impl ApplicationHandler for App {
 /// Opens a window showing `content` until the user closes it (or `max_frames`).
 /// Returns the stats of the last frame.
 pub fn run(content: Content, opts: WindowOptions) -> Result<FrameStats, ViewError> {
-    let el = EventLoop::new().map_err(|e| ViewError::Gpu(format!("no window system: {e}")))?;
+    let el = EventLoop::new().map_err(|e| ViewError::NoDisplay(e.to_string()))?;
     let sphere = match content.bounds() {
         Some((lo, hi)) => (0.5 * (lo + hi), (0.5 * (hi - lo).length()).max(1e-6)),
         None => (Vec3::ZERO, 1.0),

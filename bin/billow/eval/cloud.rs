@@ -14,11 +14,10 @@ use billow_format::{CloudAsset, Container};
 use serde::Serialize;
 
 use super::{
-    bad, create_out, eval_code, finish_out, parse_distances, parse_size, parse_views, print_rows,
-    source_note, spp_per_axis, stage_png, Args, LightingArg, LightingJson, Means, Seconds,
+    bad, create_out, finish_out, parse_distances, parse_size, parse_views, print_rows, source_note,
+    spp_per_axis, stage_png, Args, LightingArg, LightingJson, Means, Seconds,
 };
 use crate::exit::{CliError, Code};
-use crate::info::format_code;
 use crate::output::{print_json, progress};
 use crate::Ctx;
 
@@ -73,15 +72,10 @@ pub(super) fn run(
     let views = parse_views(&args.views, &parse_distances(&args.distances)?)?;
     let source_shown = args.source.display().to_string();
     let asset_shown = args.asset.display().to_string();
-    let asset = CloudAsset::from_container(container).map_err(|e| {
-        let code = match &e {
-            billow_format::CloudError::Format(f) => format_code(f),
-            billow_format::CloudError::Invalid(_) => Code::InvalidInput,
-        };
-        CliError::new(code, format!("{asset_shown}: {e}"))
-    })?;
+    let asset = CloudAsset::from_container(container)
+        .map_err(|e| CliError::new(Code::from(&e), format!("{asset_shown}: {e}")))?;
     let prepared = PreparedCloud::new(&asset)
-        .map_err(|e| CliError::new(eval_code(&e), format!("{asset_shown}: {e}")))?;
+        .map_err(|e| CliError::new(Code::from(&e), format!("{asset_shown}: {e}")))?;
     let read_s = t.elapsed().as_secs_f64();
     let lods: Vec<usize> = match args.lod {
         Some(k) if k < prepared.level_count() => vec![k],
@@ -126,7 +120,7 @@ pub(super) fn run(
     let evaluator = Evaluator::new(scene, options)
         .map_err(|e| CliError::new(Code::InvalidInput, format!("{source_shown}: {e}")))?;
     let renderer = CloudRenderer::new(&prepared, lighting)
-        .map_err(|e| CliError::new(eval_code(&e), format!("{asset_shown}: {e}")))?;
+        .map_err(|e| CliError::new(Code::from(&e), format!("{asset_shown}: {e}")))?;
     let mut stage = create_out(args)?;
     let mismatch = source_note(ctx, args, scene, asset.header.source.as_ref());
 
@@ -140,13 +134,13 @@ pub(super) fn run(
         bar.set_message(spec.name.clone());
         let reference = evaluator
             .reference(spec)
-            .map_err(|e| CliError::new(eval_code(&e), format!("{source_shown}: {e}")))?;
+            .map_err(|e| CliError::new(Code::from(&e), format!("{source_shown}: {e}")))?;
         reference_s += reference.seconds;
         let mut panels = Vec::new();
         for (i, &lod) in lods.iter().enumerate() {
             let (result, image) = evaluator
                 .cloud(&renderer, &prepared, lod, &reference)
-                .map_err(|e| CliError::new(eval_code(&e), format!("{asset_shown}: {e}")))?;
+                .map_err(|e| CliError::new(Code::from(&e), format!("{asset_shown}: {e}")))?;
             per_lod[i].push(result);
             panels.push(image);
             bar.inc(1);
@@ -217,7 +211,7 @@ pub(super) fn run(
 }
 
 fn print_table(s: &CloudSummary) {
-    println!(
+    outln!(
         "{} vs {} (billboard cloud, {} LOD level(s) evaluated), {}x{} px, {} spp, lighting {}",
         s.asset,
         s.source,
@@ -228,10 +222,10 @@ fn print_table(s: &CloudSummary) {
         s.lighting.reference
     );
     for n in &s.notes {
-        println!("note: {n}");
+        outln!("note: {n}");
     }
     for l in &s.levels {
-        println!(
+        outln!(
             "\nLOD {}: {} billboards, ε {:.4}, {:.3} texels/unit, {:.2} MiB of atlases",
             l.lod,
             l.billboards,
@@ -247,7 +241,7 @@ fn print_table(s: &CloudSummary) {
         let totals = (s.seconds.reference, l.seconds, hit, l.fragments);
         print_rows(&l.views, &l.by_distance, &mean, totals, "bboard");
     }
-    println!(
+    outln!(
         "\nRMSE/PSNR on premultiplied linear RGBA; cov% = asset coverage vs reference; SSIM on \
          luma; FLIP over black; bboard = billboards hit. Total {:.2} s.",
         s.seconds.total

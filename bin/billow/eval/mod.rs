@@ -15,14 +15,11 @@ use billow::eval::suite::{
     mean_errors, means_by_distance, reference_lighting, view_file_stem, DistanceMeans, EvalOptions,
     Evaluator, MeanErrors, PreparedAsset, ViewResult, EVAL_FOV_Y,
 };
-use billow::eval::EvalError;
 use billow::import::{import, ImportOptions};
 use billow_format::{read_file, AssetKind, Container, VolumeAsset};
 use serde::Serialize;
 
-use crate::exit::{CliError, Code};
-use crate::info::format_code;
-use crate::inspect::import_code;
+use crate::exit::{usage, CliError, Code};
 use crate::output::{print_json, progress, refuse_file_as_folder, warn};
 use crate::staged::{out_err, Staged};
 use crate::Ctx;
@@ -42,10 +39,10 @@ pub struct Args {
     #[arg(long, default_value = "axes")]
     views: String,
     /// Distance factors: multiples of the framed distance (the mesh's bounding sphere just
-    /// fills the image); the image size stays the same.
+    /// fills the image), each in (0, 1000]; the image size stays the same.
     #[arg(long, default_value = "1,4,16")]
     distances: String,
-    /// Image size WxH in pixels.
+    /// Image size WxH in pixels, each side 1–4096.
     #[arg(long, default_value = "128x128")]
     size: String,
     /// Reference samples per pixel: a square number (1, 4, 9, 16, …, 256), stratified.
@@ -64,7 +61,7 @@ pub struct Args {
     /// at each hit point, or unlit) or unlit.
     #[arg(long, value_enum, default_value_t = LightingArg::Auto)]
     lighting: LightingArg,
-    /// Billboard clouds: evaluate only this LOD level (0 = finest); default all levels.
+    /// Billboard clouds: evaluate only this LOD level, 0–(levels − 1) (0 = finest); default all levels.
     #[arg(long, value_name = "K")]
     lod: Option<usize>,
     /// Treat import warnings (e.g. a missing texture) as errors.
@@ -136,12 +133,12 @@ pub(crate) fn bad(flag: &str, e: impl std::fmt::Display) -> CliError {
 pub fn parse_size(s: &str) -> Result<(u32, u32), CliError> {
     let (w, h) = s
         .split_once(['x', 'X'])
-        .ok_or_else(|| bad("--size", format!("'{s}': expected WxH, e.g. 128x128")))?;
+        .ok_or_else(|| usage("--size", format!("'{s}': expected WxH, e.g. 128x128")))?;
     let p = |v: &str| -> Result<u32, CliError> {
         let n: u32 = v
             .trim()
             .parse()
-            .map_err(|e| bad("--size", format!("'{s}': {e}")))?;
+            .map_err(|e| usage("--size", format!("'{s}': {e}")))?;
         if !(1..=4096).contains(&n) {
             return Err(bad(
                 "--size",
@@ -160,7 +157,7 @@ pub fn parse_distances(s: &str) -> Result<Vec<f32>, CliError> {
         let f: f32 = part
             .trim()
             .parse()
-            .map_err(|e| bad("--distances", format!("'{part}': {e}")))?;
+            .map_err(|e| usage("--distances", format!("'{part}': {e}")))?;
         if !(f.is_finite() && f > 0.0 && f <= 1000.0) {
             return Err(bad(
                 "--distances",
@@ -196,7 +193,7 @@ pub fn parse_views(s: &str, distances: &[f32]) -> Result<Vec<ViewSpec>, CliError
             continue;
         }
         let unknown = || {
-            bad(
+            usage(
                 "--views",
                 format!(
                     "unknown view '{item}': expected axes, diagonals, all, a direction like +x or \
@@ -207,7 +204,14 @@ pub fn parse_views(s: &str, distances: &[f32]) -> Result<Vec<ViewSpec>, CliError
         let (dir_name, factor) = match item.split_once('@') {
             Some((d, f)) => {
                 let f = f.strip_suffix('x').ok_or_else(unknown)?;
-                let f = parse_distances(f).map_err(|_| unknown())?;
+                // A factor out of range is that (8); anything else does not parse (2).
+                let f = parse_distances(f).map_err(|e| {
+                    if e.code == Code::BadParameter {
+                        e
+                    } else {
+                        unknown()
+                    }
+                })?;
                 (d, Some(f[0]))
             }
             None => (item, None),
@@ -231,7 +235,7 @@ pub fn parse_spacing(s: &str, voxel: Option<f32>) -> Result<Spacing, CliError> {
         let Some(a) = a else { return Ok(1.0) };
         let v: f32 = a
             .parse()
-            .map_err(|e| bad("--spacing", format!("'{s}': {e}")))?;
+            .map_err(|e| usage("--spacing", format!("'{s}': {e}")))?;
         if !(v.is_finite() && (0.01..=100.0).contains(&v)) {
             return Err(bad(
                 "--spacing",
@@ -248,7 +252,7 @@ pub fn parse_spacing(s: &str, voxel: Option<f32>) -> Result<Spacing, CliError> {
                 spacing: v * voxel.unwrap_or(1.0),
             })
         }
-        _ => Err(bad(
+        _ => Err(usage(
             "--spacing",
             format!("'{s}': expected adaptive, adaptive:BIAS, uniform or uniform:VOXELS"),
         )),
@@ -265,18 +269,9 @@ pub(crate) fn spp_per_axis(spp: u32) -> Result<u32, CliError> {
     })
 }
 
-pub(crate) fn eval_code(e: &EvalError) -> Code {
-    match e {
-        EvalError::Io { .. } | EvalError::Encode { .. } => Code::OutputIo,
-        EvalError::InvalidAsset(_) => Code::InvalidInput,
-        EvalError::TooManySlices { .. } | EvalError::InvalidParam(_) => Code::BadParameter,
-        _ => Code::Internal,
-    }
-}
-
 /// Reads an asset's container (Volume or Cloud; a newer format is exit 5).
 pub fn read_asset(path: &Path) -> Result<Container, CliError> {
-    read_file(path).map_err(|e| CliError::new(format_code(&e), e))
+    read_file(path).map_err(|e| CliError::new(Code::from(&e), e))
 }
 
 /// The source mesh, imported (warnings printed).
@@ -287,7 +282,7 @@ pub(crate) fn import_source(args: &Args, ctx: &Ctx) -> Result<billow::scene::Sce
             strict: args.strict,
         },
     )
-    .map_err(|e| CliError::new(import_code(&e), &e))?;
+    .map_err(|e| CliError::new(Code::from(&e), &e))?;
     for w in &scene.warnings {
         warn(ctx, &format!("{}: {}", args.source.display(), w.message));
     }
@@ -319,7 +314,7 @@ pub(crate) fn stage_png(
 ) -> Result<(), CliError> {
     if let Some(stage) = stage {
         let png = comparisons_png_bytes(reference, tests, DIFF_GAIN, path)
-            .map_err(|e| CliError::new(eval_code(&e), e))?;
+            .map_err(|e| CliError::new(Code::from(&e), e))?;
         stage.stage(path, &png).map_err(|e| out_err(path, e))?;
     }
     Ok(())
@@ -450,14 +445,14 @@ fn run_volume(
     let source_shown = args.source.display().to_string();
     let asset_shown = args.asset.display().to_string();
     let asset = VolumeAsset::from_container(container)
-        .map_err(|e| CliError::new(format_code(&e), format!("{asset_shown}: {e}")))?;
+        .map_err(|e| CliError::new(Code::from(&e), format!("{asset_shown}: {e}")))?;
     let prepared = PreparedAsset::new(&asset)
-        .map_err(|e| CliError::new(eval_code(&e), format!("{asset_shown}: {e}")))?;
+        .map_err(|e| CliError::new(Code::from(&e), format!("{asset_shown}: {e}")))?;
     let read_s = t.elapsed().as_secs_f64();
     let spacing = parse_spacing(&args.spacing, prepared.voxel_size())?;
     let (lighting, lighting_note) = match args.lighting {
         LightingArg::Auto => reference_lighting(&asset)
-            .map_err(|e| CliError::new(eval_code(&e), format!("{asset_shown}: {e}")))?,
+            .map_err(|e| CliError::new(Code::from(&e), format!("{asset_shown}: {e}")))?,
         LightingArg::Unlit => {
             let note = asset
                 .header
@@ -498,10 +493,10 @@ fn run_volume(
         bar.set_message(spec.name.clone());
         let reference = evaluator
             .reference(spec)
-            .map_err(|e| CliError::new(eval_code(&e), format!("{source_shown}: {e}")))?;
+            .map_err(|e| CliError::new(Code::from(&e), format!("{source_shown}: {e}")))?;
         let (result, image) = evaluator
             .asset(&prepared, &reference)
-            .map_err(|e| CliError::new(eval_code(&e), format!("{asset_shown}: {e}")))?;
+            .map_err(|e| CliError::new(Code::from(&e), format!("{asset_shown}: {e}")))?;
         if let Some(dir) = &args.out {
             let path = dir.join(format!("{}.png", view_file_stem(&spec.name)));
             let mut tests = vec![&image];
@@ -567,16 +562,24 @@ fn run_volume(
 
 fn print_table(s: &Summary) {
     let d = s.asset_dims;
-    println!(
+    outln!(
         "{} vs {} ({}x{}x{}), {}x{} px, {} spp reference, spacing {}",
-        s.asset, s.source, d[0], d[1], d[2], s.size[0], s.size[1], s.reference_spp, s.spacing
+        s.asset,
+        s.source,
+        d[0],
+        d[1],
+        d[2],
+        s.size[0],
+        s.size[1],
+        s.reference_spp,
+        s.spacing
     );
     for n in &s.notes {
-        println!("note: {n}");
+        outln!("note: {n}");
     }
     let totals = (s.seconds.reference, s.seconds.asset, s.slices, s.fragments);
     print_rows(&s.views, &s.by_distance, &s.mean, totals, "slices");
-    println!(
+    outln!(
         "RMSE/PSNR on premultiplied linear RGBA; cov% = asset coverage vs reference; SSIM on luma; \
          FLIP over black. Total {:.2} s.",
         s.seconds.total
@@ -592,7 +595,7 @@ pub(crate) fn print_rows(
     totals: (f64, f64, usize, u64),
     count: &str,
 ) {
-    println!(
+    outln!(
         "{:<14} {:>7} {:>6} {:>6} {:>7} {:>6} {:>6} | {:>7} {:>6} {:>6} | {:>7} {:>7} {:>6} {:>9}",
         "view",
         "RMSE",
@@ -610,7 +613,7 @@ pub(crate) fn print_rows(
         "fragments"
     );
     let row = |name: &str, a: &MeanErrors, r: &MeanErrors, tail: String| {
-        println!(
+        outln!(
             "{:<14} {:>7.4} {:>6.2} {:>6.4} {:>+7.2} {:>6.3} {:>6.4} | {:>7.4} {:>6.2} {:>6.3} |{}",
             name,
             a.rmse,

@@ -9,7 +9,7 @@ use super::{
     MeshTexture, MeshVertex, NO_INDEX,
 };
 use crate::container::{encode, ChunkRef};
-use crate::{from_bytes, write_atomic, AssetKind, Container, ElemType, FormatError};
+use crate::{from_bytes, write_atomic, AssetKind, Container, ElemType};
 
 fn put_f32(out: &mut Vec<u8>, v: &[f32]) {
     v.iter()
@@ -350,10 +350,7 @@ impl CloudAsset {
 
     /// Read a cloud asset file.
     pub fn read(path: &Path) -> Result<Self, CloudError> {
-        let bytes = std::fs::read(path).map_err(|source| FormatError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let bytes = crate::container::read_regular(path)?;
         Self::from_bytes(&bytes).map_err(|e| match e {
             CloudError::Format(f) => CloudError::Format(f.in_file(path)),
             CloudError::Invalid(m) => CloudError::Invalid(format!("{}: {m}", path.display())),

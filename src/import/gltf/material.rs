@@ -1,7 +1,5 @@
 //! glTF materials and their base colour textures.
 
-use std::fs;
-
 use ::gltf::json;
 use glam::{Mat2, Vec2, Vec4};
 use json::validation::Checked;
@@ -143,7 +141,8 @@ impl Importer<'_> {
                     Err(format!("external URI {uri} is not fetched"))
                 } else {
                     let p = resolve_relative(self.base, &percent_decode(uri));
-                    let bytes = fs::read(&p).map_err(|e| format!("{}: {e}", p.display()))?;
+                    let bytes = crate::import::read_input(&p)
+                        .map_err(|e| format!("{}: {e}", p.display()))?;
                     ctx.read_from(&p);
                     images::decode(&bytes, &name, mime)
                 }

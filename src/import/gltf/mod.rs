@@ -13,7 +13,6 @@
 //! UVs, and its `texCoord` picks which `TEXCOORD_n` becomes the vertex UV.
 
 use std::collections::HashMap;
-use std::fs;
 use std::path::Path;
 
 use ::gltf::json;
@@ -38,7 +37,7 @@ pub const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] = &[
 ];
 
 pub(super) fn load(path: &Path, ctx: &mut Ctx) -> Result<SceneBuilder, ImportError> {
-    let bytes = fs::read(path).map_err(|e| ctx.io(path, e))?;
+    let bytes = crate::import::read_input(path).map_err(|e| ctx.io(path, e))?;
     let base = path.parent().unwrap_or(Path::new("."));
     let (json_bytes, blob) = if bytes.starts_with(b"glTF") {
         let (j, b) = split_glb(&bytes).map_err(|e| match e {
@@ -51,7 +50,13 @@ pub(super) fn load(path: &Path, ctx: &mut Ctx) -> Result<SceneBuilder, ImportErr
     } else {
         (&bytes[..], None)
     };
-    let root = parse_json(json_bytes).map_err(|e| ctx.parse(format!("glTF JSON: {e}")))?;
+    let root = parse_json(json_bytes).map_err(|e| match e {
+        JsonProblem::Json(e) => ctx.parse(format!("glTF JSON: {e}")),
+        JsonProblem::Version(v) => ctx.unsupported(format!(
+            "glTF version {v} (only glTF 2.0 is supported; convert older files, e.g. with \
+             the Khronos glTF 1.0 to 2.0 converter or Blender)"
+        )),
+    })?;
     drop(bytes);
     for ext in &root.extensions_required {
         if !SUPPORTED_REQUIRED_EXTENSIONS.contains(&ext.as_str()) {
@@ -368,7 +373,14 @@ impl Importer<'_> {
 /// about than the glTF spec in parts billow does not use: animations are dropped
 /// (never imported), a scene without `nodes` gets an empty list, and integral numbers
 /// written as floats (`1.0`) become integers.
-fn parse_json(bytes: &[u8]) -> Result<json::Root, serde_json::Error> {
+/// Why the document could not be read as glTF 2.0.
+enum JsonProblem {
+    Json(serde_json::Error),
+    /// `asset.version` says another major version (glTF 1.0 has a different schema).
+    Version(String),
+}
+
+fn parse_json(bytes: &[u8]) -> Result<json::Root, JsonProblem> {
     fn integral(v: &mut serde_json::Value) {
         match v {
             serde_json::Value::Number(n) if !n.is_i64() && !n.is_u64() => {
@@ -381,7 +393,17 @@ fn parse_json(bytes: &[u8]) -> Result<json::Root, serde_json::Error> {
             _ => {}
         }
     }
-    let mut v: serde_json::Value = serde_json::from_slice(bytes)?;
+    let mut v: serde_json::Value = serde_json::from_slice(bytes).map_err(JsonProblem::Json)?;
+    let version = match v.pointer("/asset/version") {
+        Some(serde_json::Value::String(s)) => Some(s.clone()),
+        Some(n @ serde_json::Value::Number(_)) => Some(n.to_string()),
+        _ => None,
+    };
+    if let Some(version) = version {
+        if version.split('.').next().map(str::trim) != Some("2") {
+            return Err(JsonProblem::Version(version));
+        }
+    }
     if let Some(o) = v.as_object_mut() {
         o.remove("animations");
         if let Some(scenes) = o.get_mut("scenes").and_then(|s| s.as_array_mut()) {
@@ -392,7 +414,7 @@ fn parse_json(bytes: &[u8]) -> Result<json::Root, serde_json::Error> {
         }
     }
     integral(&mut v);
-    serde_json::from_value(v)
+    serde_json::from_value(v).map_err(JsonProblem::Json)
 }
 
 /// The node's local transform, `None` when not finite.
