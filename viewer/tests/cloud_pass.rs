@@ -12,7 +12,10 @@
 //!   the billboard normal, against it and at 60° gives `ambient + (1 − ambient)·|N·L|`
 //!   (1, 1, 0.65 for ambient 0.3); a tilted normal map turns the lit direction the way
 //!   SPEC §9.4's tangent frame says (front and back); a baked-lighting asset is not
-//!   relit.
+//!   relit;
+//! - the oak baked with `--normal-map --unlit` (billboards only): lit from L and −L the
+//!   frame is the same (two-sided Lambert, as meshes), a side light relights it; baked
+//!   lit, it does not change with the light.
 
 mod common;
 
@@ -400,4 +403,108 @@ fn unlit_normal_mapped_billboards_are_lit_like_meshes() {
     check("baked, light at 60°", &baked, sixty, false, 1.0);
     let plain = asset(opaque, None, true);
     check("unlit without normals, 60°", &plain, sixty, false, 1.0);
+}
+
+/// Mean linear RGB over the covered pixels, and their count.
+fn covered_mean(img: &RgbaImage) -> ([f32; 3], usize) {
+    let mut s = [0.0f32; 3];
+    let mut n = 0;
+    for p in img.data.iter().filter(|p| p[3] > 0.0) {
+        for c in 0..3 {
+            s[c] += p[c];
+        }
+        n += 1;
+    }
+    (s.map(|v| v / n.max(1) as f32), n)
+}
+
+#[test]
+fn the_oak_baked_unlit_with_normal_maps_is_lit_by_the_viewer() {
+    use billow::bbcloud::bake::Shading;
+    use billow::bbcloud::{bake, BbcloudOptions};
+    use billow::import::{import, ImportOptions};
+    let name = "the_oak_baked_unlit_with_normal_maps_is_lit_by_the_viewer";
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../fixtures/oak/eztree_oak_medium.gltf");
+    let scene = import(&path, &ImportOptions::default()).expect("oak");
+    let opts = |unlit: bool| BbcloudOptions {
+        samples: 30,
+        lods: 1,
+        atlas_size: 512,
+        supersample: 1,
+        normal_map: true,
+        shading: Shading {
+            light: if unlit {
+                None
+            } else {
+                Some(Vec3::new(0.3, 1.0, 0.2).normalize())
+            },
+            ambient: 0.3,
+        },
+        ..Default::default()
+    };
+    // Level 1 (the billboards) seen from the side, lit from `light`.
+    let frame = |asset: &CloudAsset, light: Vec3| -> Option<RgbaImage> {
+        let gpu = common::gpu_or_skip(name)?;
+        let mut r = Renderer::new(gpu);
+        r.add_cloud(asset, vec![Mat4::IDENTITY], Some(vec![1.0]), 0.0, 0.8)
+            .expect("upload");
+        r.lod_distance_override = Some(10.0);
+        r.ambient = 0.3;
+        r.light_dir = light.normalize();
+        let b = &asset.header.bounds;
+        let c = 0.5 * (Vec3::from(b.min) + Vec3::from(b.max));
+        let rad = 0.5 * (Vec3::from(b.max) - Vec3::from(b.min)).length();
+        let eye = c + Vec3::new(1.0, 0.2, 0.6).normalize() * 2.5 * rad;
+        let cam = ViewCamera::look_at(eye, c, Vec3::Y, 0.8, 96, 96, 0.1 * rad, 10.0 * rad);
+        Some(r.render_image(&cam).expect("render").0)
+    };
+    // Billboards only: the kept mesh (trunk) is the mesh pass's, lit at runtime anyway.
+    let (mut unlit, _) = bake(&scene, &opts(true), "test", None, &|_, _| {}).expect("bake");
+    unlit.trunk = Mesh::default();
+    assert!(unlit.atlases.iter().all(|a| a.normals.is_some()));
+    let l = Vec3::new(0.4, 0.8, 0.45);
+    let Some(a) = frame(&unlit, l) else {
+        return;
+    };
+    let b = frame(&unlit, -l).expect("adapter");
+    let side = frame(&unlit, Vec3::new(0.45, 0.0, -0.4)).expect("adapter");
+    let (ma, n) = covered_mean(&a);
+    let (mb, _) = covered_mean(&b);
+    let (ms, _) = covered_mean(&side);
+    assert!(n > 150, "the oak is visible ({n} pixels)");
+    // Two-sided Lambert, as the mesh pass: opposite lights give the same frame.
+    let differ = a.data.iter().zip(&b.data).filter(|(p, q)| p != q).count();
+    assert_eq!(
+        differ, 0,
+        "L and -L differ on {differ} pixels ({ma:?} vs {mb:?})"
+    );
+    // Another direction relights it: some pixels change, by a Lambert factor in
+    // [ambient, 1] of the albedo (so the ratio of the two frames stays within it).
+    let changed = a
+        .data
+        .iter()
+        .zip(&side.data)
+        .filter(|(p, q)| p != q)
+        .count();
+    assert!(
+        changed > n / 4,
+        "a side light changes only {changed} of {n} pixels"
+    );
+    for c in 0..3 {
+        let ratio = ms[c] / ma[c];
+        assert!(
+            (0.3 / 1.0..=1.0 / 0.3).contains(&ratio),
+            "channel {c}: side / top mean {ratio}"
+        );
+    }
+    // The same oak baked lit (the default) is not relit.
+    let (mut lit_asset, _) = bake(&scene, &opts(false), "test", None, &|_, _| {}).expect("bake");
+    lit_asset.trunk = Mesh::default();
+    let la = frame(&lit_asset, l).expect("adapter");
+    let ls = frame(&lit_asset, Vec3::new(0.45, 0.0, -0.4)).expect("adapter");
+    assert!(
+        la.data == ls.data,
+        "baked lighting must not change with the light"
+    );
 }
