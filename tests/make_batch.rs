@@ -40,9 +40,9 @@ fn write_leaves(d: &Path) {
     std::fs::write(d.join("leaves.bin"), &bin).unwrap();
     let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
     for p in pos.chunks(3) {
-        for i in 0..3 {
-            lo[i] = lo[i].min(p[i]);
-            hi[i] = hi[i].max(p[i]);
+        for ((l, h), &x) in lo.iter_mut().zip(hi.iter_mut()).zip(p) {
+            *l = l.min(x);
+            *h = h.max(x);
         }
     }
     let gltf = format!(
