@@ -111,6 +111,7 @@ fn opaque(name: &str, rgb: Vec3, double_sided: bool) -> Material {
         base_color_texture: None,
         alpha_mode: AlphaMode::Opaque,
         double_sided,
+        unlit: false,
     }
 }
 
