@@ -38,7 +38,7 @@ CLOUDS  := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.cloud.done,$(MESHES))
 BATCH_RES ?= 128
 BATCH_CLOUD_ARGS ?=
 
-.PHONY: all build demo test lint fmt batch clean fixtures accuracy accuracy-emptyspace bench bench-bbcloud gallery bench-view bench-particles check-gltf check-ktx2 lod-sweep
+.PHONY: all build demo test lint fmt batch clean fixtures accuracy accuracy-emptyspace bench bench-bbcloud gallery bench-view bench-particles check-gltf check-ktx2 check-threejs lod-sweep
 
 all: build
 
@@ -249,3 +249,17 @@ check-ktx2: build
 	$(BILLOW) voxelize $(SAMPLE) -o $(OUT)/ktx-parse/oak.billow --res 128 --align 8 --ktx2 $(OUT)/ktx-parse/oak.ktx2 -q
 	$(BILLOW) voxelize $(SAMPLE) -o $(OUT)/ktx-parse/odd.billow --res 45x17x30 --ktx2 $(OUT)/ktx-parse/odd.ktx2 -q
 	node tests/ktx2_reader/check.mjs $(OUT)/ktx-parse/node_modules $(OUT)/ktx-parse/oak.ktx2 $(OUT)/ktx-parse/odd.ktx2
+
+## The oak's cloud export rendered by a real glTF client: three.js (GLTFLoader) in headless
+## Chromium (Debian's chromium, driven by playwright-core; WebGL on SwiftShader, no network)
+## against billow's CPU cloud renderer from the same camera, compared with `billow compare`
+## within a stated RMSE and coverage tolerance (tests/threejs/check.sh, docs/bbcloud.md).
+## Needs Node.js, npm (three and playwright-core installed under $(OUT)) and chromium
+## (installed with apt-get when missing and run as root); otherwise it prints
+## `SKIP: check-threejs: ...` and succeeds, unless BILLOW_REQUIRE=all.
+## `make check-threejs FIGURE=docs/bbcloud/threejs_oak.png` also updates the docs' picture.
+THREE ?= 0.187.0
+PLAYWRIGHT_CORE ?= 1.65.1
+check-threejs: build
+	BILLOW=$(BILLOW) CARGO=$(CARGO) OUT=$(OUT) THREE=$(THREE) PLAYWRIGHT_CORE=$(PLAYWRIGHT_CORE) \
+		FIGURE=$(FIGURE) sh tests/threejs/check.sh

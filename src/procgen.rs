@@ -114,6 +114,7 @@ fn opaque(name: &str, rgb: Vec3, double_sided: bool) -> Material {
         base_color_texture: None,
         alpha_mode: AlphaMode::Opaque,
         double_sided,
+        unlit: false,
     }
 }
 
@@ -370,6 +371,7 @@ pub fn leafy_tree(leaves: u32, branches: u32, seed: u64) -> Scene {
         base_color_texture: Some(0),
         alpha_mode: AlphaMode::Mask { cutoff: 0.5 },
         double_sided: true,
+        unlit: false,
     });
     let trunk_mesh = sb.mesh("trunk");
     let leaf_mesh = sb.mesh("leaves");

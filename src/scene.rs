@@ -68,6 +68,9 @@ pub struct Material {
     pub base_color_texture: Option<u32>,
     pub alpha_mode: AlphaMode,
     pub double_sided: bool,
+    /// Shade without lighting (glTF `KHR_materials_unlit`: base colour × texture is the
+    /// final colour, e.g. billboards whose lighting is baked in). Only glTF sets it.
+    pub unlit: bool,
 }
 
 impl Default for Material {
@@ -78,6 +81,7 @@ impl Default for Material {
             base_color_texture: None,
             alpha_mode: AlphaMode::Opaque,
             double_sided: false,
+            unlit: false,
         }
     }
 }

@@ -22,6 +22,7 @@ fn material(color: Vec4, texture: Option<u32>, mode: AlphaMode, double_sided: bo
         base_color_texture: texture,
         alpha_mode: mode,
         double_sided,
+        unlit: false,
     }
 }
 

@@ -95,6 +95,7 @@ fn cube_mesh() -> Scene {
         base_color_texture: None,
         alpha_mode: AlphaMode::Opaque,
         double_sided: false,
+        unlit: false,
     });
     let mesh = sb.mesh("cube");
     let c = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);

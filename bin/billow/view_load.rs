@@ -84,7 +84,12 @@ pub fn mesh_data(s: &Scene, t: &Transform) -> MeshData {
         for v in &tri.v {
             data.vertices.push(MeshVertex {
                 pos: mat.transform_point3(v.position).to_array(),
-                normal: nmat.transform_vector3(v.normal).to_array(),
+                // The mesh pass draws zero-normal vertices unlit (KHR_materials_unlit).
+                normal: if m.unlit {
+                    [0.0; 3]
+                } else {
+                    nmat.transform_vector3(v.normal).to_array()
+                },
                 uv: v.uv.to_array(),
                 color: (m.base_color_factor * v.color).to_array(),
             });

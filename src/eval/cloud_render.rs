@@ -157,6 +157,7 @@ pub fn trunk_scene(asset: &CloudAsset) -> Scene {
                 _ => AlphaMode::Opaque,
             },
             double_sided: m.double_sided,
+            unlit: false,
         })
         .collect();
     let textures = asset

@@ -281,6 +281,7 @@ fn convert_material(
         base_color_texture: texture,
         alpha_mode,
         double_sided,
+        unlit: false,
     })
 }
 

@@ -3,7 +3,9 @@
 //! colour × base-colour texture (sRGB, MIP-mapped, repeat), alpha-masked materials
 //! discard below their cut-off. Blended materials are drawn as masked at 0.5 (the
 //! viewer sorts no mesh triangles). One directional light (two-sided Lambert) plus
-//! ambient, shadowed when the scene has a shadow map.
+//! ambient, shadowed when the scene has a shadow map. Vertices with a zero normal are
+//! unlit: base colour × texture as it is, neither Lambert nor shadow (how glTF
+//! `KHR_materials_unlit` materials, whose lighting is baked in, are drawn).
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -13,7 +15,8 @@ use crate::target::COLOR_FORMAT;
 use crate::texture::{repeat_sampler, upload_rgba8_mips, TextureData};
 use crate::{Gpu, ViewError};
 
-/// A vertex: world position, normal (any length; zero = unlit), uv, linear RGBA colour.
+/// A vertex: world position, normal (any length; zero = unlit: no Lambert, no shadow), uv,
+/// linear RGBA colour.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct MeshVertex {

@@ -88,6 +88,7 @@ impl Importer<'_> {
             base_color_texture: texture,
             alpha_mode,
             double_sided: m.double_sided,
+            unlit: m.extensions.as_ref().is_some_and(|e| e.unlit.is_some()),
         });
         info.index = (s.materials.len() - 1) as u32;
         self.materials.insert(mi, info);

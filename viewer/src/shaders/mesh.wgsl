@@ -1,6 +1,7 @@
 // Opaque meshes: base colour × vertex colour × texture, alpha-masked materials discard;
 // one directional light (two-sided Lambert) plus ambient, linear colour, shadowed when
-// the frame has a shadow map (shadow_lookup.wgsl is prepended).
+// the frame has a shadow map (shadow_lookup.wgsl is prepended). A zero normal marks an
+// unlit vertex: its base colour is drawn as it is, no Lambert, no shadow.
 
 struct MeshFrame {
     view_proj: mat4x4<f32>,
@@ -62,10 +63,12 @@ fn fs_main(i: VOut) -> @location(0) vec4<f32> {
         discard;
     }
     let len = length(i.normal);
-    var lambert = 1.0;
-    if len > 0.0 {
-        lambert = abs(dot(i.normal / len, mf.light.xyz));
+    if len == 0.0 {
+        // Unlit (e.g. glTF KHR_materials_unlit, lighting baked in): neither Lambert nor
+        // shadow, the base colour is the final colour.
+        return vec4<f32>(c.rgb, 1.0);
     }
+    var lambert = abs(dot(i.normal / len, mf.light.xyz));
     if mf.flags.x > 0.5 {
         lambert = lambert * shadow_visibility(i.shadow_clip, mf.flags.z);
     }
