@@ -18,7 +18,7 @@ PRUNED  := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.pruned.billow,$(MESHES))
 CLOUDS  := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.cloud.billow,$(MESHES))
 BATCH_RES ?= 128
 
-.PHONY: all build demo test lint fmt batch clean fixtures accuracy accuracy-emptyspace bench bench-bbcloud gallery bench-view bench-particles check-gltf check-ktx2
+.PHONY: all build demo test lint fmt batch clean fixtures accuracy accuracy-emptyspace bench bench-bbcloud gallery bench-view bench-particles check-gltf check-ktx2 fuzz
 
 all: build
 
@@ -199,3 +199,16 @@ check-ktx2: build
 	$(BILLOW) voxelize $(SAMPLE) -o $(OUT)/ktx-parse/oak.billow --res 128 --align 8 --ktx2 $(OUT)/ktx-parse/oak.ktx2 -q
 	$(BILLOW) voxelize $(SAMPLE) -o $(OUT)/ktx-parse/odd.billow --res 45x17x30 --ktx2 $(OUT)/ktx-parse/odd.ktx2 -q
 	node tests/ktx2_reader/check.mjs $(OUT)/ktx-parse/node_modules $(OUT)/ktx-parse/oak.ktx2 $(OUT)/ktx-parse/odd.ktx2
+
+## Coverage-guided fuzzing (docs/robustness.md, "Fuzzing"): runs each target of fuzz/ in
+## turn for FUZZ_TIME seconds with cargo-fuzz on the nightly toolchain
+## (`cargo install cargo-fuzz --locked`). New inputs land in fuzz/corpus/<target>/, crashes
+## in fuzz/artifacts/<target>/. CI does not fuzz: `cargo test --test fuzz_corpus_replay`
+## replays the committed corpora.
+FUZZ_TARGETS ?= asset_reader gltf_import obj_import combine_expr scene_ron
+FUZZ_TIME    ?= 600
+fuzz:
+	for t in $(FUZZ_TARGETS); do \
+		$(CARGO) +nightly fuzz run $$t -- -max_total_time=$(FUZZ_TIME) -timeout=10 \
+			-rss_limit_mb=2048 -malloc_limit_mb=1024 || exit 1; \
+	done
