@@ -51,7 +51,10 @@ fn replay_one(target: &'static str, path: &Path) -> Result<Duration, String> {
 }
 
 fn replay(target: &'static str) {
-    assert!(harness::TARGETS.contains(&target), "{target} is not in TARGETS");
+    assert!(
+        harness::TARGETS.contains(&target),
+        "{target} is not in TARGETS"
+    );
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz");
     let corpus = files(&root.join("corpus").join(target));
     assert!(
@@ -121,5 +124,47 @@ fn every_target_is_replayed() {
     on_disk.sort();
     let mut listed: Vec<String> = harness::TARGETS.iter().map(|s| s.to_string()).collect();
     listed.sort();
-    assert_eq!(on_disk, listed, "fuzz/fuzz_targets/ and harness::TARGETS differ");
+    assert_eq!(
+        on_disk, listed,
+        "fuzz/fuzz_targets/ and harness::TARGETS differ"
+    );
+}
+
+/// The fuzzer's first find (`fuzz/regressions/obj_import/`): tobj 4.0.5 panics on an MTL
+/// colour line with fewer than three values (`Kd 1`). The import now loads the mesh with
+/// default materials and a warning (an error with `strict`), as for any unreadable MTL.
+#[test]
+fn short_mtl_colour_line_is_a_warning() {
+    use billow::import::{import, ImportErrorKind, ImportOptions};
+    let dir = tempfile::tempdir().expect("temp dir");
+    let obj = dir.path().join("tri.obj");
+    std::fs::write(
+        &obj,
+        "mtllib tri.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n",
+    )
+    .expect("write tri.obj");
+    for colour in ["Ka", "Kd", "Ks", "Ke"] {
+        std::fs::write(
+            dir.path().join("tri.mtl"),
+            format!("newmtl a\n{colour} 1 0.5\n"),
+        )
+        .expect("write tri.mtl");
+        let scene = import(&obj, &ImportOptions::default())
+            .unwrap_or_else(|e| panic!("{colour}: import refused: {e}"));
+        assert_eq!(scene.triangles.len(), 1, "{colour}");
+        assert!(
+            scene
+                .warnings
+                .iter()
+                .any(|w| w.message.contains("tri.mtl") && w.message.contains("not loaded")),
+            "{colour}: no warning about the MTL: {:?}",
+            scene.warnings
+        );
+        let strict = import(&obj, &ImportOptions { strict: true }).expect_err("strict");
+        assert_eq!(strict.kind(), ImportErrorKind::Strict, "{colour}: {strict}");
+    }
+    // Three values are still read.
+    std::fs::write(dir.path().join("tri.mtl"), "newmtl a\nKd 1 0.5 0.25\n").expect("write");
+    let scene = import(&obj, &ImportOptions { strict: true }).expect("a valid MTL");
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
 }

@@ -47,7 +47,7 @@ pub(super) fn load(path: &Path, ctx: &mut Ctx) -> Result<SceneBuilder, ImportErr
             };
             let r = tobj::load_obj_buf(&mut Cursor::new(&bytes), &opts, |mtl: &Path| {
                 let p = resolve_relative(&dir, &mtl.to_string_lossy());
-                let r = tobj::load_mtl(&p);
+                let r = load_mtl(&p);
                 match &r {
                     Ok((mats, _)) => {
                         ctx.read_from(&p);
@@ -274,6 +274,24 @@ fn convert_material(
         alpha_mode,
         double_sided,
     })
+}
+
+/// `tobj::load_mtl` without its panic: tobj 4.0.5 unwraps when a `Ka`, `Kd`, `Ks` or `Ke`
+/// line has fewer than three numbers (found by fuzzing, `fuzz/regressions/obj_import/`).
+/// Such a file is refused as a material parse error instead, like any other bad MTL.
+fn load_mtl(path: &Path) -> tobj::MTLLoadResult {
+    let bytes = fs::read(path).map_err(|_| tobj::LoadError::OpenFileFailed)?;
+    if bytes.split(|&b| b == b'\n').any(short_colour_line) {
+        return Err(tobj::LoadError::MaterialParseError);
+    }
+    tobj::load_mtl_buf(&mut Cursor::new(bytes))
+}
+
+/// A colour statement (`Ka`, `Kd`, `Ks`, `Ke`) with fewer than three values.
+fn short_colour_line(line: &[u8]) -> bool {
+    let line = String::from_utf8_lossy(line);
+    let mut words = line.split_whitespace();
+    matches!(words.next(), Some("Ka" | "Kd" | "Ks" | "Ke")) && words.count() < 3
 }
 
 /// Loads and decodes one MTL texture; a failure is a warning and `None`.
