@@ -38,7 +38,7 @@ CLOUDS  := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.cloud.done,$(MESHES))
 BATCH_RES ?= 128
 BATCH_CLOUD_ARGS ?=
 
-.PHONY: all build demo test lint fmt batch clean fixtures accuracy accuracy-emptyspace bench bench-bbcloud gallery bench-view bench-particles check-gltf check-ktx2 check-threejs lod-sweep
+.PHONY: all build demo test lint fmt batch clean fixtures accuracy accuracy-emptyspace bench bench-bbcloud gallery bench-view bench-particles check-gltf check-ktx2 check-threejs fuzz lod-sweep
 
 all: build
 
@@ -263,3 +263,16 @@ PLAYWRIGHT_CORE ?= 1.65.1
 check-threejs: build
 	BILLOW=$(BILLOW) CARGO=$(CARGO) OUT=$(OUT) THREE=$(THREE) PLAYWRIGHT_CORE=$(PLAYWRIGHT_CORE) \
 		FIGURE=$(FIGURE) sh tests/threejs/check.sh
+
+## Coverage-guided fuzzing (docs/robustness.md, "Fuzzing"): runs each target of fuzz/ in
+## turn for FUZZ_TIME seconds with cargo-fuzz on the nightly toolchain
+## (`cargo install cargo-fuzz --locked`). New inputs land in fuzz/corpus/<target>/, crashes
+## in fuzz/artifacts/<target>/. CI does not fuzz: `cargo test --test fuzz_corpus_replay`
+## replays the committed corpora.
+FUZZ_TARGETS ?= asset_reader gltf_import obj_import combine_expr scene_ron
+FUZZ_TIME    ?= 600
+fuzz:
+	for t in $(FUZZ_TARGETS); do \
+		ASAN_OPTIONS=detect_odr_violation=0 $(CARGO) +nightly fuzz run $$t -- -max_total_time=$(FUZZ_TIME) -timeout=10 \
+			-rss_limit_mb=2048 -malloc_limit_mb=1024 || exit 1; \
+	done

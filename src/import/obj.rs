@@ -285,6 +285,16 @@ fn convert_material(
     })
 }
 
+/// `tobj::load_mtl` without its panic: tobj 4.0.5 unwraps when a `Ka`, `Kd`, `Ks` or `Ke`
+/// line has fewer than three numbers (found by fuzzing, `fuzz/regressions/obj_import/`).
+/// Such a file is refused as a material parse error instead, like any other bad MTL.
+/// A colour statement (`Ka`, `Kd`, `Ks`, `Ke`) with fewer than three values.
+fn short_colour_line(line: &[u8]) -> bool {
+    let line = String::from_utf8_lossy(line);
+    let mut words = line.split_whitespace();
+    matches!(words.next(), Some("Ka" | "Kd" | "Ks" | "Ke")) && words.count() < 3
+}
+
 /// Loads and decodes one MTL texture; a failure is a warning and `None`.
 fn load_texture(
     name: &str,
@@ -405,6 +415,24 @@ fn load_mtl(p: &Path) -> (tobj::MTLLoadResult, Option<String>) {
         Err(e) => return (Err(tobj::LoadError::OpenFileFailed), Some(e.to_string())),
     };
     let text = tolerate_mtl(&String::from_utf8_lossy(&raw)).into_bytes();
+    // tobj panics on a colour statement with fewer than three values (found by the
+    // obj_import fuzzer): refuse it here, naming the line.
+    if let Some((n, line)) = text
+        .split(|&b| b == b'\n')
+        .enumerate()
+        .find(|(_, l)| short_colour_line(l))
+    {
+        let shown = String::from_utf8_lossy(line);
+        return (
+            Err(tobj::LoadError::MaterialParseError),
+            Some(format!(
+                "line {}: '{}': a colour needs three values: {}",
+                n + 1,
+                shown.trim(),
+                tobj::LoadError::MaterialParseError
+            )),
+        );
+    }
     match tobj::load_mtl_buf(&mut Cursor::new(&text)) {
         Ok(r) => (Ok(r), None),
         Err(e) => {
