@@ -34,39 +34,36 @@ pub(super) fn load(path: &Path, ctx: &mut Ctx) -> Result<SceneBuilder, ImportErr
     let bytes = tolerate_obj(&String::from_utf8_lossy(&raw)).into_bytes();
     drop(raw);
     let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
-    // The index check and tobj's parse both read the whole file: run them side by side
-    // (the check's error, when there is one, is the one reported, as before).
-    let shared: &Ctx = ctx;
-    let (checked, parsed) = rayon::join(
-        || check_face_indices(&String::from_utf8_lossy(&bytes), shared),
-        || {
-            // Load MTL files ourselves to learn their folders and report missing ones.
-            let mtl_dirs: RefCell<HashMap<String, PathBuf>> = RefCell::new(HashMap::new());
-            let mtl_failures: RefCell<Vec<(PathBuf, String)>> = RefCell::new(Vec::new());
-            let r = tobj::load_obj_buf(&mut Cursor::new(&bytes), &OBJ_OPTIONS, |mtl: &Path| {
-                let p = resolve_relative(&dir, &mtl.to_string_lossy());
-                let (r, failure) = load_mtl(&p);
-                match &r {
-                    Ok((mats, _)) => {
-                        ctx.read_from(&p);
-                        let d = p.parent().unwrap_or(Path::new(".")).to_path_buf();
-                        for m in mats {
-                            mtl_dirs
-                                .borrow_mut()
-                                .entry(m.name.clone())
-                                .or_insert_with(|| d.clone());
-                        }
+    // The index check runs before tobj's parse, not beside it: tobj overflows on some
+    // out-of-range indices (`vt * 2` on a negative index past the start, a panic with
+    // overflow checks; found by the obj_import fuzzer), and only the check reports them.
+    check_face_indices(&String::from_utf8_lossy(&bytes), ctx)?;
+    let parsed = {
+        // Load MTL files ourselves to learn their folders and report missing ones.
+        let mtl_dirs: RefCell<HashMap<String, PathBuf>> = RefCell::new(HashMap::new());
+        let mtl_failures: RefCell<Vec<(PathBuf, String)>> = RefCell::new(Vec::new());
+        let r = tobj::load_obj_buf(&mut Cursor::new(&bytes), &OBJ_OPTIONS, |mtl: &Path| {
+            let p = resolve_relative(&dir, &mtl.to_string_lossy());
+            let (r, failure) = load_mtl(&p);
+            match &r {
+                Ok((mats, _)) => {
+                    ctx.read_from(&p);
+                    let d = p.parent().unwrap_or(Path::new(".")).to_path_buf();
+                    for m in mats {
+                        mtl_dirs
+                            .borrow_mut()
+                            .entry(m.name.clone())
+                            .or_insert_with(|| d.clone());
                     }
-                    Err(e) => mtl_failures
-                        .borrow_mut()
-                        .push((p, failure.unwrap_or_else(|| e.to_string()))),
                 }
-                r
-            });
-            (r, mtl_dirs.into_inner(), mtl_failures.into_inner())
-        },
-    );
-    checked?;
+                Err(e) => mtl_failures
+                    .borrow_mut()
+                    .push((p, failure.unwrap_or_else(|| e.to_string()))),
+            }
+            r
+        });
+        (r, mtl_dirs.into_inner(), mtl_failures.into_inner())
+    };
     let (parsed, mtl_dirs, mtl_failures) = parsed;
     let (models, _materials_result) = parsed.map_err(|e| {
         let at = failing_line(&bytes, |prefix| {
