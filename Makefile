@@ -187,7 +187,7 @@ bench-particles: build
 
 ## Benchmark: `billow voxelize` vs. the raster floor on the 200k-triangle tree, side by side,
 ## medians of BENCH_RUNS runs at each of BENCH_RES; writes docs/benchmarks.md. Needs python3 and cc.
-BENCH_SRC  ?= /work/shared/bench
+BENCH_SRC  ?= ../shared/bench
 BENCH_DIR  ?= $(OUT)/bench
 BENCH_RES  ?= 128 256 512
 BENCH_RUNS ?= 5

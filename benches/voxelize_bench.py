@@ -118,7 +118,7 @@ def main():
         "# Benchmarks: `billow voxelize` vs. the raster floor",
         "",
         f"Regenerate with `{a.command}` (writes this file). Input: the 200,000-triangle synthetic tree",
-        "from `/work/shared/bench/gen_tree.py`; `raster_floor` is `/work/shared/bench/raster_floor.c`",
+        "from `../shared/bench/gen_tree.py`; `raster_floor` is `../shared/bench/raster_floor.c`",
         "built with `cc -O3 -march=native` (one core, one sample per voxel column, nearest texel,",
         "no compositing/MIP/combine/write). `billow voxelize MESH -o OUT --res R --json"
         + (f" {a.extra}" if a.extra else "") + "` (release build,",
