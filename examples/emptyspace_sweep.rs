@@ -561,7 +561,7 @@ fn main() {
     if cow.exists() {
         vols.push(run("spot cow 128³", &load(&cow), 128, quick, false));
     } else {
-        eprintln!("{} not found: the cow is skipped", cow.display());
+        eprintln!("SKIP: spot cow: {} not found", cow.display());
     }
     let total = start.elapsed().as_secs_f64();
     std::fs::write(&sweep_path, sweep_md(&vols, quick, total)).expect("write sweep");

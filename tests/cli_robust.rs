@@ -124,7 +124,10 @@ fn a_closed_stdout_ends_quietly() {
 #[test]
 fn a_full_stdout_is_an_output_error() {
     let Ok(full) = std::fs::OpenOptions::new().write(true).open("/dev/full") else {
-        eprintln!("SKIP: no /dev/full on this system");
+        common::skip(
+            "a_full_stdout_is_an_output_error",
+            "no /dev/full on this system",
+        );
         return;
     };
     let dir = tempfile::tempdir().unwrap();
@@ -282,7 +285,10 @@ fn non_regular_inputs_are_refused_before_reading() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     if !Path::new("/dev/zero").exists() {
-        eprintln!("SKIP: no /dev/zero on this system");
+        common::skip(
+            "non_regular_inputs_are_refused_before_reading",
+            "no /dev/zero on this system",
+        );
         return;
     }
     std::os::unix::fs::symlink("/dev/zero", d.join("zero.obj")).unwrap();
@@ -318,7 +324,10 @@ fn non_regular_inputs_are_refused_before_reading() {
             assert_eq!(r.code, Some(3), "{}", r.stderr);
             assert!(r.error_line().unwrap().contains("not a regular file"));
         }
-        _ => eprintln!("SKIP: mkfifo not available; FIFO case not run"),
+        _ => common::skip(
+            "non_regular_inputs_are_refused_before_reading",
+            "mkfifo not available; FIFO case not run",
+        ),
     }
 }
 

@@ -2,17 +2,14 @@
 
 use std::path::{Path, PathBuf};
 
+mod common;
+
 use billow::import::{import, ImportErrorKind, ImportOptions};
 use billow::inspect::inspect;
 use billow::scene::{AlphaMode, Scene};
 
 fn asset(rel: &str) -> Option<PathBuf> {
-    let root = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/assets"));
-    if !root.is_dir() {
-        println!("skipping: ../shared/assets not found");
-        return None;
-    }
-    Some(root.join(rel))
+    common::shared_assets(&format!("import_assets ({rel})")).map(|root| root.join(rel))
 }
 
 fn ok(p: &Path) -> Scene {

@@ -5,16 +5,12 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+mod common;
+
 use billow::import::{import, ImportOptions};
 
 fn assets() -> Option<PathBuf> {
-    let p = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/assets"));
-    if p.is_dir() {
-        Some(p.to_path_buf())
-    } else {
-        println!("skipping: ../shared/assets not found");
-        None
-    }
+    common::shared_assets("import_corpus")
 }
 
 fn collect(dir: &Path, exts: &[&str], out: &mut Vec<PathBuf>) {

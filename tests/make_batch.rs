@@ -146,7 +146,10 @@ fn touch(p: &Path) {
 #[test]
 fn batch_is_up_to_date_after_a_batch_and_rebakes_exactly_what_changed() {
     if Command::new("make").arg("--version").output().is_err() {
-        eprintln!("SKIP: GNU make not found");
+        common::skip(
+            "batch_is_up_to_date_after_a_batch_and_rebakes_exactly_what_changed",
+            "GNU make not found",
+        );
         return;
     }
     let tmp = tempfile::tempdir().unwrap();

@@ -23,7 +23,7 @@ fn python() -> Option<&'static str> {
         .output()
         .is_ok_and(|o| o.status.success());
     if !ok {
-        println!("skipping spec_reader: python3 not found");
+        common::skip("spec_reader", "python3 not found");
     }
     ok.then_some("python3")
 }

@@ -57,12 +57,7 @@ fn sweep_of(test: &str, mesh: &Path, dir: &Path) -> Option<serde_json::Value> {
         dir,
     );
     if r.code != Some(0) && r.stderr.contains("no GPU adapter") {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI is set but no GPU adapter is available: {}",
-            r.stderr
-        );
-        eprintln!("SKIP: {test}: {}", r.stderr);
+        common::skip(test, r.stderr.trim());
         return None;
     }
     assert_eq!(r.code, Some(0), "view --lod-sweep: {}", r.stderr);

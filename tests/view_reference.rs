@@ -75,12 +75,7 @@ fn render(t: &str, dir: &Path) -> Option<image::RgbaImage> {
         dir,
     );
     if r.code != Some(0) && r.stderr.contains("no GPU adapter") {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI is set but no GPU adapter is available: {}",
-            r.stderr
-        );
-        println!("skipping the explosion reference test: {}", r.stderr.trim());
+        common::skip("the explosion reference test", r.stderr.trim());
         return None;
     }
     assert_eq!(r.code, Some(0), "{}", r.stderr);

@@ -13,13 +13,26 @@ pub fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// `../shared/assets`, or `None` (and a plain line saying the test skips) when absent.
+/// A test that cannot run says so on stderr (`SKIP: <test>: <reason>`, shown even when
+/// the runner captures stdout), and fails instead under CI (`CI` set) or
+/// `BILLOW_REQUIRE=all`, where every resource it needs must be there.
+pub fn skip(test: &str, reason: &str) {
+    let required = std::env::var_os("CI").is_some()
+        || std::env::var("BILLOW_REQUIRE").is_ok_and(|v| v == "all");
+    assert!(
+        !required,
+        "{test}: {reason} (required under CI / BILLOW_REQUIRE=all)"
+    );
+    eprintln!("SKIP: {test}: {reason}");
+}
+
+/// `../shared/assets`, or `None` (after [`skip`]) when absent.
 pub fn shared_assets(test: &str) -> Option<PathBuf> {
     let p = repo().join("../shared/assets");
     if p.is_dir() {
         Some(p)
     } else {
-        println!("skipping {test}: ../shared/assets not found");
+        skip(test, "../shared/assets not found");
         None
     }
 }

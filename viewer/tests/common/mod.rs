@@ -7,7 +7,8 @@ use std::path::PathBuf;
 use billow_format::{full_mip_count, mip_dims, ColourSpace, Header, Prism, VolumeAsset};
 use billow_view::Gpu;
 
-/// The headless device, or `None` with a plain "skipping" line when no adapter exists.
+/// The headless device, or `None` with a `SKIP: <test>: <reason>` line on stderr when no
+/// adapter exists.
 /// Under CI (env `CI` set) a missing adapter fails the test instead: rendering must be
 /// possible there (`.ci/ensure-vulkan` installs lavapipe).
 pub fn gpu_or_skip(test: &str) -> Option<Gpu> {
@@ -17,7 +18,9 @@ pub fn gpu_or_skip(test: &str) -> Option<Gpu> {
             if std::env::var_os("CI").is_some() {
                 panic!("{test}: CI is set but no GPU adapter is available: {e}");
             }
-            println!("skipping {test}: {e}");
+            // Straight to the process's stderr: the test harness captures `eprintln!`.
+            use std::io::Write;
+            let _ = writeln!(std::io::stderr(), "SKIP: {test}: {e}");
             None
         }
     }
