@@ -169,6 +169,29 @@ fn preserve_coverage(level: &mut [u8], cutoff: f32, target: f64) {
     }
 }
 
+/// Writes level `level` (`w`×`h` RGBA8 texels, tightly packed) of a 2D texture.
+pub fn write_level(gpu: &Gpu, tex: &wgpu::Texture, level: u32, texels: &[u8], (w, h): (u32, u32)) {
+    gpu.queue.write_texture(
+        wgpu::TexelCopyTextureInfo {
+            texture: tex,
+            mip_level: level,
+            origin: wgpu::Origin3d::ZERO,
+            aspect: wgpu::TextureAspect::All,
+        },
+        texels,
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(4 * w),
+            rows_per_image: Some(h),
+        },
+        wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+    );
+}
+
 /// Uploads `t` as an `Rgba8UnormSrgb` texture: with its stored MIP chain when it brings
 /// one (premultiplied atlases cap their chain where coarser levels would mix
 /// neighbouring billboards, SPEC §9.4: sampling clamps to the last stored level), else
@@ -197,25 +220,7 @@ pub fn upload_rgba8_mips(gpu: &Gpu, t: &TextureData, label: &str) -> wgpu::Textu
     let mut level = t.texels.clone();
     let (mut w, mut h) = (t.width, t.height);
     for l in 0..levels {
-        gpu.queue.write_texture(
-            wgpu::TexelCopyTextureInfo {
-                texture: &tex,
-                mip_level: l,
-                origin: wgpu::Origin3d::ZERO,
-                aspect: wgpu::TextureAspect::All,
-            },
-            &level,
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(4 * w),
-                rows_per_image: Some(h),
-            },
-            wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-        );
+        write_level(gpu, &tex, l, &level, (w, h));
         if l + 1 == levels {
             break;
         }

@@ -8,7 +8,7 @@ use glam::Vec3;
 
 use super::{CloudPass, CloudVertex, DrawUniform, BILLBOARD_CUTOFF};
 use crate::mesh_pass::{MeshData, MeshMaterial, MeshVertex};
-use crate::texture::{upload_rgba8_mips, TextureData};
+use crate::texture::{upload_rgba8_mips, write_level, TextureData};
 use crate::{Gpu, ViewError};
 
 /// A foliage-mesh material's vertex range.
@@ -82,25 +82,7 @@ pub(super) fn linear_texture(
     });
     for (l, texels) in levels.iter().enumerate() {
         let (w, h) = ((width >> l).max(1), (height >> l).max(1));
-        gpu.queue.write_texture(
-            wgpu::TexelCopyTextureInfo {
-                texture: &tex,
-                mip_level: l as u32,
-                origin: wgpu::Origin3d::ZERO,
-                aspect: wgpu::TextureAspect::All,
-            },
-            texels,
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(4 * w),
-                rows_per_image: Some(h),
-            },
-            wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-        );
+        write_level(gpu, &tex, l as u32, texels, (w, h));
     }
     tex
 }
