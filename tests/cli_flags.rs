@@ -191,6 +191,7 @@ fn case(command: &str, flag: &str) -> Option<Case> {
         }
         ("view", "time") => both("abc", "inf"),
         ("view", "lod-distance") => both("abc", "0"),
+        ("view", "dissolve") => both("abc", "5"),
         ("view", "frames") => both("abc", "0"),
         ("view", "background") => both("a", "2,0,0"),
 

@@ -47,6 +47,8 @@ pub struct Step {
     pub z: [f32; 2],
     /// (level, morph) the viewer chose in each frame.
     pub lods: [(usize, f32); 2],
+    /// How far each frame had dissolved into the next level (0: one level shown).
+    pub dissolve: [f32; 2],
     pub rmse: f64,
     pub flip: f64,
 }
@@ -146,7 +148,7 @@ impl Dolly<'_> {
         z: f32,
         d: f32,
         lod: Option<f32>,
-    ) -> Result<(ImageF32, (usize, f32)), CliError> {
+    ) -> Result<(ImageF32, (usize, f32), f32), CliError> {
         let tan_half = match self.fill {
             Some(f) => self.radius / (f * z),
             None => self.tan_half * d / z,
@@ -171,9 +173,12 @@ impl Dolly<'_> {
             far,
         );
         self.r.lod_distance_override = lod;
+        // A forced level is shown alone (coverage frames), not dissolving.
+        self.r.dissolve_override = lod.map(|_| 0.0);
         let stats = self.r.render(&self.target, &cam).map_err(internal)?;
         let img = self.target.read(&self.r.gpu).map_err(internal)?;
         let lods = stats.cloud_lods.first().copied().unwrap_or((0, 0.0));
+        let dissolve = stats.cloud_dissolves.first().copied().unwrap_or(0.0);
         Ok((
             ImageF32 {
                 width: img.width,
@@ -181,6 +186,7 @@ impl Dolly<'_> {
                 data: img.data.iter().map(|p| Vec4::from_array(*p)).collect(),
             },
             lods,
+            dissolve,
         ))
     }
 }
@@ -242,12 +248,13 @@ pub fn sweep(
         let crossing = (FRAMES / 2 - 1) as usize;
         let mut steps = Vec::new();
         for i in 0..frames.len() - 1 {
-            let (a, la) = &frames[i];
-            let (b, lb) = &frames[i + 1];
+            let (a, la, da) = &frames[i];
+            let (b, lb, db) = &frames[i + 1];
             let e = metrics::compare(a, b).map_err(internal)?;
             steps.push(Step {
                 z: [zs[i], zs[i + 1]],
                 lods: [*la, *lb],
+                dissolve: [*da, *db],
                 rmse: e.rmse,
                 flip: e.flip,
             });
@@ -279,8 +286,10 @@ pub fn sweep(
             1.0
         };
         switches.push(Switch {
-            from: s.lods[0].0,
-            to: s.lods[1].0,
+            // Switch k replaces level k by k + 1 (while dissolving, both frames of the
+            // crossing step report the outgoing level k).
+            from: k,
+            to: k + 1,
             distance: dist,
             crossing,
             step_rmse: s.rmse,
@@ -297,8 +306,8 @@ pub fn sweep(
     }
     let mut levels = Vec::new();
     for (k, &dist) in distances.iter().enumerate() {
-        let (mesh, _) = d.frame(dist, dist, Some(0.0))?;
-        let (lvl, lods) = d.frame(dist, dist, Some(dist))?;
+        let (mesh, _, _) = d.frame(dist, dist, Some(0.0))?;
+        let (lvl, lods, _) = d.frame(dist, dist, Some(dist))?;
         let (mo, ma) = opaque(&mesh);
         let (lo, la) = opaque(&lvl);
         let opaque_rel = rel(lo as f64, mo as f64);
@@ -315,6 +324,7 @@ pub fn sweep(
         });
     }
     d.r.lod_distance_override = None;
+    d.r.dissolve_override = None;
     let pass = switches.iter().all(|s| s.pass) && levels.iter().all(|l| l.pass);
     Ok(Sweep {
         width,

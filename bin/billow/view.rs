@@ -88,6 +88,11 @@ pub struct Args {
     /// Choose cloud LODs as if every instance were this far from the eye (inspection), > 0.
     #[arg(long, value_name = "DISTANCE")]
     lod_distance: Option<f32>,
+    /// Half-width, in octaves of distance, of the dithered dissolve around each cloud LOD
+    /// switch, in [0, 4] (overrides the scene's `dissolve`; default 0.375; 0 = switch in
+    /// one frame).
+    #[arg(long, value_name = "OCTAVES")]
+    dissolve: Option<f32>,
     /// Sweep the LOD switches of the scene's one billboard cloud: dolly along --view at
     /// constant screen size across every switch distance, write the frames on either side
     /// of each switch (DIR/switch_K.png), DIR/sweep.json and DIR/sweep.md, and print the
@@ -234,7 +239,12 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     }
     override_particles(&mut scene, &args)?;
     let mut read = Vec::new();
-    let content = load_content(&scene, &mut read)?;
+    let mut content = load_content(&scene, &mut read)?;
+    if let Some(o) = args.dissolve {
+        for c in &mut content.clouds {
+            c.dissolve = o;
+        }
+    }
     if let Some(shot) = &args.screenshot {
         refuse_clobbering_read(&args.target, &read, &[("--screenshot", shot)])?;
     }
@@ -269,6 +279,11 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     if let Some(d) = args.lod_distance {
         if !(d > 0.0 && d.is_finite()) {
             return Err(bad("--lod-distance", format!("{d}: must be > 0")));
+        }
+    }
+    if let Some(o) = args.dissolve {
+        if !(0.0..=4.0).contains(&o) {
+            return Err(bad("--dissolve", format!("{o}: must be in [0, 4] octaves")));
         }
     }
     if !args.time.is_finite() {

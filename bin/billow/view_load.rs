@@ -39,6 +39,7 @@ pub fn load_scene(target: &Path) -> Result<SceneFile, CliError> {
                 instances: vec![Transform::default()],
                 lod_distances: None,
                 transition: 0.25,
+                dissolve: billow_view::cloud_pass::DEFAULT_DISSOLVE,
             }),
             _ => s.volumes.push(VolumeDesc {
                 asset: target.to_path_buf(),
@@ -142,6 +143,7 @@ pub fn load_content(scene: &SceneFile, read: &mut Vec<PathBuf>) -> Result<Conten
             instances: d.instances.iter().map(|t| t.matrix()).collect(),
             lod_distances: d.lod_distances.clone(),
             transition: d.transition,
+            dissolve: d.dissolve,
         });
     }
     for m in &scene.meshes {

@@ -3,11 +3,13 @@
 //! API, so the same file builds against older revisions for before/after tables.
 //!
 //! `cargo run --release -p billow-view --example cloud_frame_times -- CLOUD.billow
-//! [SIZE] [FRAMES] [shadows|noshadows] [LEVEL]` (run with `NODEVICE_SELECT=1` on Mesa). Per instance count: the
+//! [SIZE] [FRAMES] [shadows|noshadows] [LEVEL] [dissolve]` (run with `NODEVICE_SELECT=1` on Mesa). Per instance count: the
 //! instances on a square grid 2.5 bounding-sphere radii apart, the camera fitting all of
 //! them, LOD distances the viewer's default, shadows on unless `noshadows`, every instance at
 //! billboard level `LEVEL` when given (the LOD distance forced just past its switch,
-//! no morph); 5 warm-up frames, then
+//! no morph; with `dissolve`, forced to the switch itself instead, where every instance
+//! is half way through its dithered dissolve from level `LEVEL − 1`: both levels drawn, the
+//! dissolve's worst case); 5 warm-up frames, then
 //! `FRAMES` frames, each timed as CPU = `Renderer::render` (plan, encode, submit) and
 //! GPU = the wait for the queue right after (submit→idle wall time: the adapter's
 //! timestamp queries are not enabled by the viewer). The asset's kept mesh (trunk) is
@@ -41,6 +43,7 @@ fn main() {
     let frames: usize = args.get(3).map_or(15, |s| s.parse().expect("FRAMES"));
     let shadows = args.get(4).is_none_or(|s| s != "noshadows");
     let level: Option<usize> = args.get(5).map(|s| s.parse().expect("LEVEL"));
+    let dissolving = args.get(6).is_some_and(|s| s == "dissolve");
     let mut asset = CloudAsset::read(std::path::Path::new(path)).expect("read the cloud");
     // The kept mesh (trunk) is left out: `add_cloud` gives the mesh pass a copy of it, with
     // its textures, per instance (1,000 oak trunks exhaust 24 GB), and it is not the
@@ -73,7 +76,13 @@ fn main() {
         r.set_shadows(shadows);
         if let Some(k) = level {
             let d = billow_view::render::default_lod_distances(radius, fov, asset.levels.len() + 1);
-            r.lod_distance_override = Some(1.01 * d[k - 1]);
+            if dissolving {
+                r.lod_distance_override = Some(d[k - 1]);
+            } else {
+                r.lod_distance_override = Some(1.01 * d[k - 1]);
+                // One level at a time, not dissolving.
+                r.dissolve_override = Some(0.0);
+            }
         }
         // Seen from above at 45°, far enough for the whole grid.
         let extent = 0.5 * side as f32 * step + radius;

@@ -19,6 +19,8 @@ pub struct CloudContent {
     pub instances: Vec<Mat4>,
     pub lod_distances: Option<Vec<f32>>,
     pub transition: f32,
+    /// Dissolve half-width around each switch, in octaves (`cloud_pass` module docs).
+    pub dissolve: f32,
 }
 
 /// Which kinds of content a frame draws (what decides its passes).
@@ -179,6 +181,7 @@ impl Content {
                 c.transition,
                 fov_y,
             )?;
+            r.set_cloud_dissolve(r.cloud_count() - 1, c.dissolve)?;
         }
         for v in &self.volumes {
             r.add_animated_volume(&v.asset, v.instances.clone(), v.animation)?;

@@ -13,7 +13,9 @@
 use billow_format::{CloudAsset, Prism, VolumeAsset};
 use glam::{Mat4, Vec3};
 
-use crate::cloud_pass::{select_level, CloudDraw, CloudFrame, CloudPass, GpuCloud, View};
+use crate::cloud_pass::{
+    choose_lod, CloudDraw, CloudFrame, CloudPass, GpuCloud, LodChoice, View, DEFAULT_DISSOLVE,
+};
 use crate::mesh_pass::{GpuMesh, MeshData, MeshFrame, MeshPass};
 use crate::shadow::{self, ShadowMap, SHADOW_MAP_SIZE};
 use crate::target::{RgbaImage, Target};
@@ -44,6 +46,9 @@ pub struct FrameStats {
     pub max_spacing: f32,
     /// Per cloud instance: its level (0 = foliage mesh) and morph factor.
     pub cloud_lods: Vec<(usize, f32)>,
+    /// Per cloud instance: how far it has dissolved into the next level (0: not
+    /// dissolving; `cloud_pass` module docs).
+    pub cloud_dissolves: Vec<f32>,
     /// Slices of the volumes' shadow pass (0 without shadows).
     pub shadow_slices: usize,
     /// Billboard quads (sides) drawn.
@@ -84,6 +89,8 @@ struct CloudEntry {
     /// Transition distances (one per level change) and the transition fraction.
     distances: Vec<f32>,
     transition: f32,
+    /// Dissolve half-width around each switch, in octaves of distance.
+    dissolve: f32,
 }
 
 /// Owns the device, the passes the content needs, and the uploaded content.
@@ -106,6 +113,9 @@ pub struct Renderer {
     pub ambient: f32,
     /// Force a camera distance for LOD selection (tests); `None`: the eye's distance.
     pub lod_distance_override: Option<f32>,
+    /// Force every cloud's dissolve half-width (`Some(0.0)`: levels shown alone, as the
+    /// LOD sweep's coverage frames need); `None`: each cloud's own.
+    pub dissolve_override: Option<f32>,
     /// The cell wireframe, when on ([`Renderer::set_wireframe`]).
     lines: Option<crate::lines::LinePass>,
     /// Scene time in seconds (animated cells, particles).
@@ -140,6 +150,7 @@ impl Renderer {
             light_dir: Vec3::new(0.3, 1.0, 0.5).normalize(),
             ambient: 0.3,
             lod_distance_override: None,
+            dissolve_override: None,
             lines: None,
             time: 0.0,
             texture_batch: crate::volume_pass::MAX_TEXTURES_PER_BATCH,
@@ -336,7 +347,31 @@ impl Renderer {
             instances,
             distances,
             transition,
+            dissolve: DEFAULT_DISSOLVE,
         });
+        Ok(())
+    }
+
+    /// Clouds added so far.
+    pub fn cloud_count(&self) -> usize {
+        self.clouds.len()
+    }
+
+    /// Sets cloud `index`'s dissolve half-width around each switch, in octaves of distance
+    /// (`cloud_pass` module docs; 0 = switch in one frame).
+    pub fn set_cloud_dissolve(&mut self, index: usize, octaves: f32) -> Result<(), ViewError> {
+        if !(0.0..=4.0).contains(&octaves) {
+            return Err(ViewError::InvalidParam(format!(
+                "dissolve {octaves} must be in [0, 4] octaves"
+            )));
+        }
+        let Some(c) = self.clouds.get_mut(index) else {
+            return Err(ViewError::InvalidParam(format!(
+                "no cloud {index} (there are {})",
+                self.clouds.len()
+            )));
+        };
+        c.dissolve = octaves;
         Ok(())
     }
 
@@ -416,8 +451,8 @@ impl Renderer {
         (0.5 * (lo + hi), 0.5 * (hi - lo).length())
     }
 
-    /// Per cloud instance (cloud-major): level and morph factor for `camera`.
-    fn cloud_levels(&self, camera: &ViewCamera) -> Vec<(usize, f32)> {
+    /// Per cloud instance (cloud-major): what it shows for `camera`.
+    fn cloud_levels(&self, camera: &ViewCamera) -> Vec<LodChoice> {
         let eye = camera.eye();
         let mut out = Vec::new();
         for c in &self.clouds {
@@ -425,24 +460,27 @@ impl Renderer {
                 let z = self
                     .lod_distance_override
                     .unwrap_or_else(|| (m.transform_point3(c.gpu.centre) - eye).length());
-                out.push(select_level(z, &c.distances, c.transition));
+                let dissolve = self.dissolve_override.unwrap_or(c.dissolve);
+                out.push(choose_lod(z, &c.distances, c.transition, dissolve));
             }
         }
         out
     }
 
     /// One draw per cloud instance, at the levels `levels` ([`Renderer::cloud_levels`]).
-    fn cloud_draws(&self, levels: &[(usize, f32)]) -> Vec<CloudDraw<'_>> {
+    fn cloud_draws(&self, levels: &[LodChoice]) -> Vec<CloudDraw<'_>> {
         let mut out = Vec::new();
         let mut k = 0;
         for c in &self.clouds {
             for m in &c.instances {
-                let (level, morph) = levels[k];
+                let l = levels[k];
                 out.push(CloudDraw {
                     cloud: &c.gpu,
                     model: *m,
-                    level,
-                    morph,
+                    level: l.level,
+                    morph: l.morph,
+                    dissolve: l.dissolve,
+                    next_morph: l.next_morph,
                 });
                 k += 1;
             }
@@ -463,7 +501,8 @@ impl Renderer {
         let mut stats = FrameStats::default();
         let device = &self.gpu.device;
         let levels = self.cloud_levels(camera);
-        stats.cloud_lods = levels.clone();
+        stats.cloud_lods = levels.iter().map(|l| (l.level, l.morph)).collect();
+        stats.cloud_dissolves = levels.iter().map(|l| l.dissolve).collect();
         let cloud_draws = self.cloud_draws(&levels);
         // The instance data serves the shadow and the main pass (it does not depend on
         // the view): written once, before anything is encoded.

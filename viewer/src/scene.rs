@@ -124,10 +124,18 @@ pub struct CloudDesc {
     /// (0 = switch abruptly).
     #[serde(default = "quarter")]
     pub transition: f32,
+    /// Half-width, in octaves of distance, of the dithered dissolve around each switch
+    /// (0 = switch in one frame; `cloud_pass` module docs).
+    #[serde(default = "default_dissolve")]
+    pub dissolve: f32,
 }
 
 fn quarter() -> f32 {
     0.25
+}
+
+fn default_dissolve() -> f32 {
+    crate::cloud_pass::DEFAULT_DISSOLVE
 }
 
 #[derive(Clone, Debug, Deserialize, PartialEq)]
@@ -343,6 +351,12 @@ impl SceneFile {
                         "clouds[{i}].lod_distances: {d:?} must be positive and increasing"
                     ));
                 }
+            }
+            if !(0.0..=4.0).contains(&c.dissolve) {
+                return Err(format!(
+                    "clouds[{i}].dissolve: {} must be in [0, 4] octaves",
+                    c.dissolve
+                ));
             }
             if !(0.0..=1.0).contains(&c.transition) {
                 return Err(format!(

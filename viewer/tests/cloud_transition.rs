@@ -11,7 +11,11 @@
 //!   as level 1 unmorphed does, and the frame mid-transition (a = 0.5) lies in between;
 //! - the foliage mesh (level 0) at the end of its transition covers what level 1 covers
 //!   (mean block difference < 0.035);
-//! - the trunk is drawn by the mesh pass.
+//! - the trunk is drawn by the mesh pass;
+//! - with the dithered dissolve on (`cloud_pass` module docs), an instance at a switch
+//!   distance draws both levels with complementary masks: every pixel shows one of the two
+//!   levels (no holes where both cover, no z-fighting), in the proportion `t`, and the band's
+//!   ends show the levels alone.
 //!
 //! Diff images (A | B | heat map) are written on failure.
 
@@ -84,6 +88,8 @@ fn a_cloud_mid_transition_morphs_instead_of_popping() {
     let mut r = Renderer::new(gpu);
     r.add_cloud(&asset, vec![Mat4::IDENTITY], Some(vec![d0, d1]), 0.5, 0.8)
         .expect("upload");
+    // The morph alone first (switch in one frame); the dissolve is checked at the end.
+    r.set_cloud_dissolve(0, 0.0).expect("dissolve");
     assert_eq!(r.passes(), ["mesh", "cloud", "resolve"], "trunk + cloud");
     let b = &asset.header.bounds;
     let bounds = Aabb {
@@ -97,6 +103,11 @@ fn a_cloud_mid_transition_morphs_instead_of_popping() {
         r.lod_distance_override = Some(z);
         let (img, stats) = r.render_image(&cam).expect("render");
         (img, stats.cloud_lods[0])
+    };
+    let mut dissolving = |r: &mut Renderer, z: f32| {
+        r.lod_distance_override = Some(z);
+        let (img, stats) = r.render_image(&cam).expect("render");
+        (img, stats.cloud_dissolves[0], stats.cloud_quads)
     };
     let (mesh0, l) = at(10.0);
     assert_eq!(l, (0, 0.0));
@@ -146,4 +157,61 @@ fn a_cloud_mid_transition_morphs_instead_of_popping() {
         fail("mesh-end_vs_level1", &mesh_end, &lv1)
     );
     assert!(lv2.data.iter().any(|p| p[3] > 0.5), "the cloud is visible");
+
+    // The dissolve around d1: the morph now ends where the band begins, so level 1 there
+    // is `lv1_end` (every vertex on its parent's plane), and level 2 past it is `lv2`.
+    let h = 0.375f32;
+    r.set_cloud_dissolve(0, h).expect("dissolve");
+    let (start, t0, _) = dissolving(&mut r, d1 * (-h + 1e-3).exp2());
+    let (end, t1, _) = dissolving(&mut r, d1 * (h - 1e-3).exp2());
+    let (half, t, quads) = dissolving(&mut r, d1);
+    let (_, _, quads2) = dissolving(&mut r, 2.0 * d1);
+    assert!(
+        t0 < 0.01 && t1 > 0.99 && (t - 0.5).abs() < 1e-4,
+        "{t0} {t} {t1}"
+    );
+    assert!(
+        quads > quads2,
+        "both levels drawn: {quads} quads, level 2 alone {quads2}"
+    );
+    let same = |a: [f32; 4], b: [f32; 4]| (0..4).all(|i| (a[i] - b[i]).abs() <= 2e-3);
+    let (mut holes, mut neither, mut from2, mut differ) = (0, 0, 0, 0);
+    for i in 0..half.data.len() {
+        // The band's ends as the two levels: the same geometry as mid-band (level 1 fully
+        // morphed; `lv1_end` is a hair short of it), each with under 0.1 % of the other.
+        let (p, a, b) = (half.data[i], start.data[i], end.data[i]);
+        if a[3] > 0.99 && b[3] > 0.99 && p[3] < 0.5 {
+            holes += 1;
+        }
+        if !same(p, a) && !same(p, b) {
+            neither += 1;
+        }
+        if !same(a, b) {
+            differ += 1;
+            if same(p, b) {
+                from2 += 1;
+            }
+        }
+    }
+    let n = half.data.len();
+    let share = from2 as f64 / differ.max(1) as f64;
+    println!(
+        "dissolve at t = 0.5: {holes} holes, {neither} pixels from neither level, \
+         {share:.3} of the {differ} differing pixels from level 2"
+    );
+    let band_ends = coverage_diff(&start, &lv1_end).max(coverage_diff(&end, &lv2));
+    assert!(
+        band_ends < 0.01,
+        "the band's ends must show one level each ({band_ends:.4}); {}",
+        fail("band-start_vs_level1-end", &start, &lv1_end)
+    );
+    assert!(
+        holes == 0 && (neither as f64) < 0.005 * n as f64,
+        "complementary masks: {holes} holes, {neither} of {n} pixels from neither level; {}",
+        fail("dissolve-half_vs_level2", &half, &lv2)
+    );
+    assert!(
+        differ > 100 && (share - 0.5).abs() < 0.15,
+        "half the differing pixels must come from level 2 at t = 0.5: {share:.3} of {differ}"
+    );
 }

@@ -11,6 +11,17 @@
 //! At `a = 1` every vertex lies in its parent billboard's plane, so the silhouette does
 //! not pop when the parent replaces it (only the texture changes).
 //!
+//! **Dissolve.** The texture change is not made in one frame either: around each switch
+//! `D_k`, over `log₂(z/D_k) ∈ (−h, h)` (`h` octaves, [`DEFAULT_DISSOLVE`]; a scene's
+//! `dissolve`), both levels are drawn with complementary screen-space dither masks: with
+//! `t = (log₂(z/D_k) + h)/(2h)` a pixel whose threshold (interleaved gradient noise,
+//! fixed per pixel) is below `t` shows level `k + 1`, the others level `k`, so each pixel
+//! changes once, at its own distance, and the two levels never z-fight. The morph then
+//! ends where the dissolve begins (`D_k·2^(−h)` in place of `D_k` above): by the time the
+//! parent starts to show, every vertex lies on its plane. Bands never overlap (`h` is
+//! capped at half the octave gap to the neighbouring switches); `h = 0` is the abrupt
+//! switch of before. A dissolving instance costs both levels' draws.
+//!
 //! The foliage mesh and the billboards are alpha-tested and write depth, so nothing is
 //! sorted and nothing is blended (the paper alpha-tests its billboards, §6). The foliage
 //! mesh uses its materials' cut-off and is lit like meshes. A billboard texel passes
@@ -67,8 +78,92 @@ pub struct CloudVertex {
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct CloudInstance {
     pub model: [[f32; 4]; 4],
-    /// x: morph factor a.
+    /// x: morph factor a, y: dissolve `t` (0: not dissolving), z: 0 = the outgoing level
+    /// (drawn where the pixel's threshold is ≥ `t`), 1 = the incoming one (< `t`).
     pub morph: [f32; 4],
+}
+
+/// Half-width of the dithered dissolve around each switch, in octaves of distance (module
+/// docs): the sweep of docs/bbcloud.md ("LOD switches") takes 8 frames per octave, so the
+/// change is spread over 6 of them.
+pub const DEFAULT_DISSOLVE: f32 = 0.375;
+
+/// What an instance shows at a distance: `level`, its morph factor, and while
+/// dissolving into `level + 1` the dissolve fraction `dissolve ∈ (0, 1)` and the next
+/// level's own morph factor (module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LodChoice {
+    pub level: usize,
+    pub morph: f32,
+    pub dissolve: f32,
+    pub next_morph: f32,
+}
+
+/// The dissolve half-width at switch `i`: `h`, capped at half the octave gap to the
+/// neighbouring switches so bands never overlap.
+fn half_band(distances: &[f32], i: usize, h: f32) -> f32 {
+    let mut h = if h.is_finite() { h.max(0.0) } else { 0.0 };
+    let d = distances[i];
+    if i > 0 && distances[i - 1] > 0.0 {
+        h = h.min(0.5 * (d / distances[i - 1]).log2());
+    }
+    if let Some(&next) = distances.get(i + 1) {
+        if d > 0.0 {
+            h = h.min(0.5 * (next / d).log2());
+        }
+    }
+    h.max(0.0)
+}
+
+/// Morph factor of a level whose morph ends at `end`, over the fraction `w` before it.
+fn morph_toward(z: f32, end: f32, w: f32) -> f32 {
+    if w <= 0.0 || end <= 0.0 {
+        return 0.0;
+    }
+    let start = end * (1.0 - w);
+    if z < start {
+        return 0.0;
+    }
+    ((z - start) / (end * w)).clamp(0.0, 1.0)
+}
+
+/// What an instance at distance `z` shows (module docs): `distances` the switches,
+/// `transition` the morph fraction, `dissolve` the dissolve half-width in octaves.
+pub fn choose_lod(z: f32, distances: &[f32], transition: f32, dissolve: f32) -> LodChoice {
+    let w = transition.clamp(0.0, 1.0);
+    let h: Vec<f32> = (0..distances.len())
+        .map(|i| half_band(distances, i, dissolve))
+        .collect();
+    // Where each level's morph ends: where the dissolve into its parent begins.
+    let end = |i: usize| distances[i] * (-h[i]).exp2();
+    for (i, &d) in distances.iter().enumerate() {
+        if h[i] > 0.0 && d > 0.0 && z > 0.0 {
+            let u = (z / d).log2();
+            if u > -h[i] && u < h[i] {
+                return LodChoice {
+                    level: i,
+                    morph: morph_toward(z, end(i), w),
+                    dissolve: ((u + h[i]) / (2.0 * h[i])).clamp(0.0, 1.0),
+                    next_morph: if i + 1 < distances.len() {
+                        morph_toward(z, end(i + 1), w)
+                    } else {
+                        0.0
+                    },
+                };
+            }
+        }
+    }
+    let k = distances.iter().take_while(|&&d| z >= d).count();
+    LodChoice {
+        level: k,
+        morph: if k < distances.len() {
+            morph_toward(z, end(k), w)
+        } else {
+            0.0
+        },
+        dissolve: 0.0,
+        next_morph: 0.0,
+    }
 }
 
 #[repr(C)]
@@ -81,18 +176,11 @@ struct DrawUniform {
     color: [f32; 4],
 }
 
-/// Which level an instance at distance `z` shows, and its morph factor (module docs).
+/// Which level an instance at distance `z` shows, and its morph factor, without a
+/// dissolve (module docs; [`choose_lod`] with `dissolve` 0).
 pub fn select_level(z: f32, distances: &[f32], transition: f32) -> (usize, f32) {
-    let k = distances.iter().take_while(|&&d| z >= d).count();
-    let Some(&d) = distances.get(k) else {
-        return (k, 0.0);
-    };
-    let w = transition.clamp(0.0, 1.0);
-    let start = d * (1.0 - w);
-    if w <= 0.0 || z < start {
-        return (k, 0.0);
-    }
-    (k, ((z - start) / (d * w)).clamp(0.0, 1.0))
+    let c = choose_lod(z, distances, transition, 0.0);
+    (c.level, c.morph)
 }
 
 /// One cloud instance to draw this frame.
@@ -101,6 +189,9 @@ pub struct CloudDraw<'a> {
     pub model: Mat4,
     pub level: usize,
     pub morph: f32,
+    /// Dissolve fraction into `level + 1` (0: none) and that level's morph factor.
+    pub dissolve: f32,
+    pub next_morph: f32,
 }
 
 /// A frame's cloud work: the instance ranges of each (cloud, level) in the persistent
@@ -288,8 +379,15 @@ impl CloudPass {
                     clouds.len() - 1
                 }
             };
+            let dissolving = d.dissolve > 0.0 && d.level + 1 < d.cloud.level_count();
+            let t = if dissolving { d.dissolve } else { 0.0 };
             if let Some(level) = clouds[i].1.get_mut(d.level) {
-                level.push(instance(d.model, d.morph));
+                level.push(instance_dissolving(d.model, d.morph, t, false));
+            }
+            if dissolving {
+                if let Some(next) = clouds[i].1.get_mut(d.level + 1) {
+                    next.push(instance_dissolving(d.model, d.next_morph, t, true));
+                }
             }
         }
         let mut data: Vec<CloudInstance> = Vec::with_capacity(draws.len());
@@ -383,15 +481,21 @@ impl CloudPass {
 
 /// The instance data of a cloud instance (`model` transform, morph factor).
 pub fn instance(model: Mat4, morph: f32) -> CloudInstance {
+    instance_dissolving(model, morph, 0.0, false)
+}
+
+/// The instance data of a cloud instance dissolving at `t` (module docs): the outgoing
+/// level, or the incoming one when `incoming`.
+pub fn instance_dissolving(model: Mat4, morph: f32, t: f32, incoming: bool) -> CloudInstance {
     CloudInstance {
         model: model.to_cols_array_2d(),
-        morph: [morph, 0.0, 0.0, 0.0],
+        morph: [morph, t, if incoming { 1.0 } else { 0.0 }, 0.0],
     }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::select_level;
+    use super::{choose_lod, select_level};
 
     #[test]
     fn levels_and_morph_factors() {
@@ -408,5 +512,45 @@ mod tests {
         // Morph factor is continuous and reaches 1 at the switch.
         let (_, a) = select_level(19.9999, &d, 0.5);
         assert!(a > 0.999);
+    }
+
+    #[test]
+    fn dissolve_bands_are_centred_on_the_switches() {
+        let d = [10.0, 20.0, 40.0];
+        let h = 0.375;
+        // Outside every band: one level, as without a dissolve, except that the morph
+        // ends where the band begins (10·2^−0.375 ≈ 7.71).
+        let c = choose_lod(5.0, &d, 0.25, h);
+        assert_eq!((c.level, c.dissolve), (0, 0.0));
+        let end = 10.0 * (-h).exp2();
+        let c = choose_lod(end * 0.999, &d, 0.25, h);
+        assert!(c.morph > 0.99 && c.dissolve == 0.0, "{c:?}");
+        // At the switch itself: half dissolved, the outgoing level on its parent's planes.
+        let c = choose_lod(10.0, &d, 0.25, h);
+        assert_eq!(c.level, 0);
+        assert!((c.dissolve - 0.5).abs() < 1e-6 && c.morph == 1.0, "{c:?}");
+        // Linear in log distance across the band.
+        let c = choose_lod(10.0 * (0.5 * h).exp2(), &d, 0.25, h);
+        assert!((c.dissolve - 0.75).abs() < 1e-5, "{c:?}");
+        // Past the band: the next level alone.
+        let c = choose_lod(10.0 * (h + 0.01).exp2(), &d, 0.25, h);
+        assert_eq!((c.level, c.dissolve), (1, 0.0));
+        // The last switch dissolves into the last level, which never morphs.
+        let c = choose_lod(40.0, &d, 0.25, h);
+        assert_eq!((c.level, c.next_morph), (2, 0.0));
+        assert!(c.dissolve > 0.0);
+        assert_eq!(choose_lod(1000.0, &d, 0.25, h).level, 3);
+        // Bands are capped at half the gap to the neighbouring switch (here ±0.069 octave
+        // around 10 and 11, meeting at 10.488): never two at once.
+        let close = [10.0, 11.0];
+        let c = choose_lod(10.48, &close, 0.25, 1.0);
+        assert!(c.dissolve > 0.9 && c.level == 0, "{c:?}");
+        assert_eq!(choose_lod(10.5, &close, 0.25, 1.0).level, 1);
+        // dissolve 0 is the abrupt switch of select_level.
+        for z in [1.0, 7.5, 8.75, 9.99, 10.0, 19.9999, 100.0] {
+            let c = choose_lod(z, &d, 0.25, 0.0);
+            assert_eq!((c.level, c.morph), select_level(z, &d, 0.25));
+            assert_eq!(c.dissolve, 0.0);
+        }
     }
 }

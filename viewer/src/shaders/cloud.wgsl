@@ -37,6 +37,7 @@ struct VIn {
     @location(6) m1: vec4<f32>,
     @location(7) m2: vec4<f32>,
     @location(8) m3: vec4<f32>,
+    // x: morph factor, y: dissolve t (0: none), z: 1 = the incoming level
     @location(9) morph: vec4<f32>,
 }
 
@@ -46,6 +47,8 @@ struct VOut {
     @location(1) normal: vec3<f32>,
     @location(2) shadow_clip: vec4<f32>,
     @location(3) tangent: vec4<f32>,
+    // x: dissolve t, y: 1 = incoming level (cloud_pass module docs, "Dissolve")
+    @location(4) @interpolate(flat) dissolve: vec2<f32>,
 }
 
 @vertex
@@ -59,7 +62,29 @@ fn vs_main(v: VIn) -> VOut {
     o.uv = v.uv;
     o.normal = (model * vec4<f32>(v.normal, 0.0)).xyz;
     o.tangent = vec4<f32>((model * vec4<f32>(v.tangent.xyz, 0.0)).xyz, v.tangent.w);
+    o.dissolve = v.morph.yz;
     return o;
+}
+
+// Interleaved gradient noise (Jimenez 2014): a per-pixel threshold in [0, 1), fixed on
+// screen, evenly spread over every small neighbourhood.
+fn dither_threshold(p: vec2<f32>) -> f32 {
+    let q = floor(p);
+    return fract(52.9829189 * fract(0.06711056 * q.x + 0.00583715 * q.y));
+}
+
+// While an instance dissolves between two levels (t > 0), a pixel shows the incoming level
+// where its threshold is below t and the outgoing one elsewhere: complementary masks.
+fn dissolved(i: VOut) -> bool {
+    let t = i.dissolve.x;
+    if t <= 0.0 {
+        return false;
+    }
+    let below = dither_threshold(i.clip.xy) < t;
+    if i.dissolve.y > 0.5 {
+        return !below;
+    }
+    return below;
 }
 
 fn texel(i: VOut) -> vec4<f32> {
@@ -91,7 +116,7 @@ fn lambert_factor(n: vec3<f32>, i: VOut) -> f32 {
 @fragment
 fn fs_foliage(i: VOut) -> @location(0) vec4<f32> {
     let c = texel(i);
-    if c.a < dr.params.x {
+    if c.a < dr.params.x || dissolved(i) {
         discard;
     }
     return vec4<f32>(c.rgb * lambert_factor(i.normal, i), 1.0);
@@ -104,7 +129,7 @@ fn fs_foliage(i: VOut) -> @location(0) vec4<f32> {
 fn fs_billboard(i: VOut) -> @location(0) vec4<f32> {
     let c = texel(i);
     let t = textureSample(nrm, smp, i.uv).xyz * 2.0 - 1.0;
-    if c.a < dr.params.x {
+    if c.a < dr.params.x || dissolved(i) {
         discard;
     }
     let albedo = c.rgb / c.a;
@@ -120,7 +145,7 @@ fn fs_billboard(i: VOut) -> @location(0) vec4<f32> {
 
 @fragment
 fn fs_shadow(i: VOut) {
-    if texel(i).a < dr.params.x {
+    if texel(i).a < dr.params.x || dissolved(i) {
         discard;
     }
 }
