@@ -106,7 +106,7 @@ fn case(command: &str, flag: &str) -> Option<Case> {
             out_of_range: Some(LONG_EXPR),
             extra: &[],
         },
-        ("voxelize", "normals") => SWITCH,
+        ("voxelize", "normals") => keyword("bogus"),
         ("voxelize", "mips") => both("abc", "99"),
         ("voxelize", "margin") => both("abc", "100"),
         ("voxelize", "align") => both("abc", "0"),
@@ -132,6 +132,7 @@ fn case(command: &str, flag: &str) -> Option<Case> {
 
         ("shell", "height") => both("abc", "0"),
         ("shell", "tiles") => both("a,b", "0,1"),
+        ("shell", "surface-normals") => SWITCH,
 
         ("bbcloud", "epsilon") => both("abc", "0"),
         ("bbcloud", "samples") => both("abc", "0"),

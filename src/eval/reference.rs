@@ -28,7 +28,7 @@ use obvhs::ray::{Ray, RayHit};
 use rayon::prelude::*;
 
 use super::compositing::under;
-use super::lighting::{diffuse_factor, voxel_stream, Lighting};
+use super::lighting::{diffuse_factor, volume_diffuse_factor, voxel_stream, Lighting};
 use super::ray_triangle::{TriangleHit, WatertightRay};
 use super::{EvalError, ImageF32};
 use crate::bvh::scene_bvh;
@@ -240,6 +240,18 @@ impl<'a> ReferenceRenderer<'a> {
                     .normalize_or(face.normalize_or_zero());
                 let n = if n.dot(dir) > 0.0 { -n } else { n };
                 diffuse_factor(n, light, ambient)
+            }
+            Lighting::Volume { light, ambient } => {
+                // The shading normal as the voxelizer captures it: interpolated (the face
+                // normal where it cancels), flipped on the back face of a double-sided
+                // triangle (a single-sided one is only hit from the front).
+                let v = &self.scene.triangles[tri].v;
+                let face = (v[1].position - v[0].position).cross(v[2].position - v[0].position);
+                let back = face.dot(dir) > 0.0;
+                let n = (v[0].normal * bary[0] + v[1].normal * bary[1] + v[2].normal * bary[2])
+                    .normalize_or(face.normalize_or_zero());
+                let n = if back { -n } else { n };
+                volume_diffuse_factor(n, light, ambient, 1.0)
             }
         };
         (c.truncate() * f).extend(c.w)

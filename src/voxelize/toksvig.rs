@@ -70,6 +70,30 @@ pub fn toksvig_variance(len: f32) -> f32 {
     (1.0 - len) / len
 }
 
+/// Below this [`normal_coherence`], `voxelize --normals auto` drops the normals: the
+/// surface is thin or fuzzy (docs/voxelize.md, "Normals").
+pub const AUTO_NORMALS_MIN_COHERENCE: f32 = 0.5;
+
+/// How much one normal per voxel says about a volume's surface: the opacity-weighted mean
+/// length of its level-0 Toksvig normals, `Σ α·|n̄| / Σ α` (`rgba`: RGBA8 texels, alpha
+/// last; `normals`: snorm8 texels, SPEC §8.4, same order). Near 1 for a smooth closed
+/// surface (each voxel sees one side of it); near 0 for thin double-sided sheets, fur and
+/// foliage, whose two faces (normals flipped towards each camera) cancel in the six-
+/// direction average. `None` for an empty volume.
+pub fn normal_coherence(rgba: &[u8], normals: &[u8]) -> Option<f32> {
+    let (mut num, mut den) = (0.0f64, 0.0f64);
+    for (c, n) in rgba.chunks_exact(4).zip(normals.chunks_exact(4)) {
+        if c[3] == 0 {
+            continue;
+        }
+        let a = f64::from(c[3]) / 255.0;
+        let len = super::quantize::decode_normal([n[0], n[1], n[2], n[3]]).length();
+        num += a * f64::from(len.min(1.0));
+        den += a;
+    }
+    (den > 0.0).then(|| (num / den) as f32)
+}
+
 /// Running sums `(Σ Nw, Σ α)` of one MIP level over the six directions.
 pub(crate) struct NormalAccum {
     pub levels: Vec<Vec<[f16; 4]>>,
