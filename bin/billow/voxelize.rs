@@ -347,13 +347,17 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;
     bar.finish();
     // auto: keep the normals only where one normal per voxel describes the surface.
-    let mut normal_coherence = None;
+    let mut coherence = None;
     if args.normals == NormalsArg::Auto {
-        if let (Some(n), Some(c)) = (volume.normals.as_ref(), volume.levels.first()) {
-            let k = n
-                .first()
-                .and_then(|n0| billow::voxelize::toksvig::normal_coherence(c, n0));
-            normal_coherence = k;
+        use billow::voxelize::toksvig::{normal_coherence, AUTO_NORMALS_LEVEL};
+        if let Some(n) = volume.normals.as_ref() {
+            let l = AUTO_NORMALS_LEVEL.min(volume.levels.len().saturating_sub(1));
+            let k = volume
+                .levels
+                .get(l)
+                .zip(n.get(l))
+                .and_then(|(c, n)| normal_coherence(c, n));
+            coherence = k;
             if k.is_none_or(|k| k < billow::voxelize::toksvig::AUTO_NORMALS_MIN_COHERENCE) {
                 volume.normals = None;
                 opts.normals = false;
@@ -364,7 +368,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let stats = volume.stats;
     let (dims, mip_count) = (volume.dims(), volume.mip_count());
     let mut extra = BTreeMap::new();
-    if let Some(k) = normal_coherence {
+    if let Some(k) = coherence {
         extra.insert("normal_coherence".to_string(), format!("{k:.3}"));
     }
     let params = bake_params(&volume, &opts, &extra);
@@ -416,7 +420,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         combine: opts.combine.to_string(),
         supersample: opts.supersample,
         normals: opts.normals,
-        normal_coherence,
+        normal_coherence: coherence,
         triangles: stats.triangles,
         non_empty_voxels: stats.non_empty_voxels,
         fragments: stats.fragments,

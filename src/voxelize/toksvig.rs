@@ -70,16 +70,23 @@ pub fn toksvig_variance(len: f32) -> f32 {
     (1.0 - len) / len
 }
 
-/// Below this [`normal_coherence`], `voxelize --normals auto` drops the normals: the
-/// surface is thin or fuzzy (docs/voxelize.md, "Normals").
-pub const AUTO_NORMALS_MIN_COHERENCE: f32 = 0.5;
+/// Below this [`normal_coherence`] at MIP level [`AUTO_NORMALS_LEVEL`],
+/// `voxelize --normals auto` drops the normals: the surface is thin or fuzzy at the scale
+/// the MIP filter averages over (docs/voxelize.md, "Normals").
+pub const AUTO_NORMALS_MIN_COHERENCE: f32 = 0.8;
 
-/// How much one normal per voxel says about a volume's surface: the opacity-weighted mean
-/// length of its level-0 Toksvig normals, `Σ α·|n̄| / Σ α` (`rgba`: RGBA8 texels, alpha
-/// last; `normals`: snorm8 texels, SPEC §8.4, same order). Near 1 for a smooth closed
-/// surface (each voxel sees one side of it); near 0 for thin double-sided sheets, fur and
-/// foliage, whose two faces (normals flipped towards each camera) cancel in the six-
-/// direction average. `None` for an empty volume.
+/// The MIP level whose coherence `--normals auto` judges (clamped to the last level):
+/// 4³ voxels per texel, where Toksvig's filter starts to average (the LOD at 4× the
+/// distance where level 0 is magnified).
+pub const AUTO_NORMALS_LEVEL: usize = 2;
+
+/// How much one normal per texel says about a volume's surface at one MIP level: the
+/// opacity-weighted mean length of the level's Toksvig normals, `Σ α·|n̄| / Σ α` (`rgba`:
+/// RGBA8 texels, alpha last; `normals`: snorm8 texels, SPEC §8.4, same order). Near 1 for a
+/// smooth closed surface (each texel sees one side of it, and its normals agree); small
+/// for thin double-sided sheets, thin beams, fur and foliage, whose two faces (normals
+/// flipped towards each camera) cancel in the six-direction average, or whose normals
+/// point every way within one texel. `None` for an empty level.
 pub fn normal_coherence(rgba: &[u8], normals: &[u8]) -> Option<f32> {
     let (mut num, mut den) = (0.0f64, 0.0f64);
     for (c, n) in rgba.chunks_exact(4).zip(normals.chunks_exact(4)) {
