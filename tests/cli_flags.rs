@@ -268,7 +268,9 @@ fn flags(help: &str) -> Vec<(String, bool)> {
             .chars()
             .take_while(|c| c.is_ascii_alphanumeric() || *c == '-')
             .collect();
-        let takes_value = rest[name.len()..].starts_with(" <");
+        // `--normals [<WHEN>]`: an optional value (a bare flag means a default) still takes one.
+        let takes_value =
+            rest[name.len()..].starts_with(" <") || rest[name.len()..].starts_with(" [<");
         out.push((name, takes_value));
     }
     out

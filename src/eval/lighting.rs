@@ -69,8 +69,14 @@ impl Default for VolumeLight {
 pub enum Lighting {
     #[default]
     Unlit,
-    /// Baked AO of a volume on `grid` (its level-0 voxel grid).
-    Ao { rays: AoRays, grid: GridSpec },
+    /// Baked AO of a volume on `grid` (its level-0 voxel grid); `shaded`: the volume also
+    /// stores normals, so the AO-darkened albedo is shaded at runtime too
+    /// ([`Lighting::Volume`]'s factor, multiplied).
+    Ao {
+        rays: AoRays,
+        grid: GridSpec,
+        shaded: Option<VolumeLight>,
+    },
     /// Ambient + diffuse with `light` the unit direction towards the light.
     Diffuse { light: Vec3, ambient: f32 },
     /// Ambient + one-sided diffuse: a volume with normals, shaded at runtime.
@@ -139,9 +145,15 @@ impl Lighting {
     pub fn describe(&self) -> String {
         match self {
             Lighting::Unlit => "unlit".into(),
-            Lighting::Ao { rays, .. } => format!(
-                "ambient occlusion at the hit point ({} rays, distance {}, seed {})",
-                rays.rays, rays.t_max, rays.seed
+            Lighting::Ao { rays, shaded, .. } => format!(
+                "ambient occlusion at the hit point ({} rays, distance {}, seed {}){}",
+                rays.rays,
+                rays.t_max,
+                rays.seed,
+                shaded.map_or(String::new(), |l| format!(
+                    " × ambient {} + one-sided diffuse, light towards ({}, {}, {})",
+                    l.ambient, l.dir.x, l.dir.y, l.dir.z
+                ))
             ),
             Lighting::Diffuse { light, ambient } => format!(
                 "ambient {ambient} + diffuse, light towards ({}, {}, {})",
@@ -157,10 +169,9 @@ impl Lighting {
 
     /// The reference lighting of a volume asset: its header `params`, its bounds (the voxel
     /// grid's box), level-0 `dims` and whether it stores normals (then its colour is albedo
-    /// shaded at runtime: [`Lighting::Volume`] with the default light). Returns a note when
-    /// the asset's `bake` is not one the reference reproduces (the reference then stays
-    /// unlit), or when baked AO and runtime shading would both apply (the reference then
-    /// reproduces the AO only).
+    /// shaded at runtime: [`Lighting::Volume`] with the default light, or on top of baked
+    /// AO). Returns a note when the asset's `bake` is not one the reference reproduces (the
+    /// reference then stays unlit).
     pub fn for_volume(
         params: &BTreeMap<String, String>,
         min: Vec3,
@@ -209,12 +220,14 @@ impl Lighting {
                 }
                 let mut ao = AoRays::for_grid(&grid, rays, distance);
                 ao.seed = num(params, "ao_seed")?.unwrap_or(AO_SEED);
-                let note = normals.then(|| {
-                    "the asset has baked AO and normals: the reference reproduces the AO, not \
-                     the runtime shading, so the errors include the shading"
-                        .to_string()
-                });
-                Ok((Lighting::Ao { rays: ao, grid }, note))
+                Ok((
+                    Lighting::Ao {
+                        rays: ao,
+                        grid,
+                        shaded: normals.then(VolumeLight::default),
+                    },
+                    None,
+                ))
             }
             other => Ok((
                 Lighting::Unlit,
@@ -276,14 +289,23 @@ mod tests {
         p.insert("ao_distance".into(), "1.5".into());
         let (l, note) = Lighting::for_volume(&p, min, max, [2, 4, 8], false).unwrap();
         assert!(note.is_none());
-        let Lighting::Ao { rays, grid } = l else {
+        let Lighting::Ao { rays, grid, shaded } = l else {
             panic!("{l:?}")
         };
         assert_eq!((rays.rays, rays.t_max, rays.seed), (7, 1.5, AO_SEED));
         assert_eq!(grid.voxel, Vec3::ONE);
+        assert_eq!(shaded, None);
         assert!((rays.t_min - 0.5 * 3f32.sqrt()).abs() < 1e-6);
         let (l, note) = Lighting::for_volume(&p, min, max, [2, 4, 8], true).unwrap();
-        assert!(matches!(l, Lighting::Ao { .. }) && note.unwrap().contains("normals"));
+        assert!(
+            matches!(
+                l,
+                Lighting::Ao {
+                    shaded: Some(_),
+                    ..
+                }
+            ) && note.is_none()
+        );
         p.insert("ao_rays".into(), "many".into());
         assert!(Lighting::for_volume(&p, min, max, [2, 4, 8], false).is_err());
         p.insert("bake".into(), "gi".into());
