@@ -164,7 +164,7 @@ gallery: build
 	$(BILLOW) voxelize $(OUT)/procedural/furry_torus.obj -o $(GA)/furry_ball.billow --res 64 -q
 	$(BILLOW) voxelize $(OUT)/procedural/fur_tile.obj -o $(GA)/fur_tile.billow --res 64 --bounds 0,0,0,1,1,1 -q
 	cp $(OUT)/procedural/torus.obj $(OUT)/procedural/torus.mtl $(GA)/
-	$(BILLOW) shell $(GA)/torus.obj $(GA)/fur_tile.billow -o $(GA)/furry_torus_shell.billow --height 0.25 --tiles 12,4
+	$(BILLOW) shell $(GA)/torus.obj $(GA)/fur_tile.billow -o $(GA)/furry_torus_shell.billow --height 0.25 --tiles 12,4 --surface-normals
 	$(BILLOW) bbcloud $(SAMPLE) -o $(GA)/oak_cloud.billow --lods 4 -q
 	sh .ci/ensure-vulkan
 	for s in oak_trees field asteroid_belt furry_torus oak_clouds; do \

@@ -11,9 +11,19 @@
 //! - [`dust`]: a dust cloud — density `max(0, fBm − threshold)` under a spherical
 //!   fall-off, low opacity per voxel, a pale warm tint.
 //!
+//! - [`sphere`]: a plain opaque ball of one albedo, the runtime-shading test subject.
+//!
 //! Both give level 0 as premultiplied linear RGBA and go through the same per-direction
 //! MIP and combine as baked volumes ([`crate::voxelize::dense`], `mean` combine), so the
 //! asset is an ordinary volume with one box cell.
+//!
+//! The rock and the sphere are closed surfaces and carry **normals** (SPEC §8.4): the
+//! outward unit normal of their implicit surface (the gradient of `surface − r`, by
+//! central differences for the rock) in every non-empty voxel, MIP-mapped with Toksvig's
+//! filter as the voxelizer does (`src/voxelize/toksvig.rs`: the alpha-weighted mean of
+//! the children's normals, not renormalised), so viewers shade them at runtime with the
+//! scene light and their colour is albedo. The dust stays unshaded (fuzzy: the VB paper,
+//! §3.2, keeps such objects' lighting precomputed).
 
 use std::collections::BTreeMap;
 
@@ -112,6 +122,78 @@ impl Perlin {
     }
 }
 
+/// Level 0 of a normal field: `normal(c)` (unit) where `level0` has alpha, else zero,
+/// as `(α·n, α)`.
+fn dense_normals(
+    res: u32,
+    level0: &Grid3<[f32; 4]>,
+    normal: impl Fn(Vec3) -> Vec3 + Sync,
+) -> Vec<Vec4> {
+    let n = res.max(1) as usize;
+    let mut out = vec![Vec4::ZERO; n * n * n];
+    out.par_chunks_mut(n * n)
+        .enumerate()
+        .for_each(|(z, plane)| {
+            for y in 0..n {
+                for x in 0..n {
+                    let a = level0.data[x + n * (y + n * z)][3];
+                    if a > 0.0 {
+                        let p = Vec3::new(x as f32, y as f32, z as f32) + 0.5;
+                        let c = (p / n as f32) * 2.0 - 1.0;
+                        plane[x + n * y] = (normal(c).normalize_or_zero() * a).extend(a);
+                    }
+                }
+            }
+        });
+    out
+}
+
+/// Toksvig MIP levels of `(α·n, α)` texels of a `res`³ level 0 (`levels` in all): each
+/// parent is the mean of its (up to 8) children, then `n̄ = α·n / α` (not renormalised)
+/// is encoded as snorm8 (SPEC §8.4).
+fn normal_levels(res: u32, level0: Vec<Vec4>, levels: usize) -> Vec<Vec<u8>> {
+    use crate::voxelize::quantize::encode_normal;
+    use crate::voxelize::toksvig::average_normal;
+    let encode = |l: &[Vec4]| -> Vec<u8> {
+        l.iter()
+            .flat_map(|t| encode_normal(average_normal(t.truncate(), t.w)))
+            .collect()
+    };
+    let mut out = vec![encode(&level0)];
+    let mut cur = level0;
+    let mut dims = [res.max(1); 3];
+    for l in 1..levels {
+        let nd = billow_format::mip_dims([res.max(1); 3], l as u32);
+        let (w, h) = (dims[0] as usize, dims[1] as usize);
+        let (nw, nh, nz) = (nd[0] as usize, nd[1] as usize, nd[2] as usize);
+        let mut next = vec![Vec4::ZERO; nw * nh * nz];
+        for z in 0..nz {
+            for y in 0..nh {
+                for x in 0..nw {
+                    let mut acc = Vec4::ZERO;
+                    let mut k = 0.0;
+                    for dz in 0..2 {
+                        for dy in 0..2 {
+                            for dx in 0..2 {
+                                let (cx, cy, cz) = (2 * x + dx, 2 * y + dy, 2 * z + dz);
+                                if cx < w && cy < h && cz < dims[2] as usize {
+                                    acc += cur[cx + w * (cy + h * cz)];
+                                    k += 1.0;
+                                }
+                            }
+                        }
+                    }
+                    next[x + nw * (y + nh * z)] = acc / f32::max(k, 1.0);
+                }
+            }
+        }
+        out.push(encode(&next));
+        cur = next;
+        dims = nd;
+    }
+    out
+}
+
 fn dense(res: u32, voxel: impl Fn(Vec3) -> Vec4 + Sync) -> Grid3<[f32; 4]> {
     let n = res.max(1) as usize;
     let mut g = Grid3::<[f32; 4]>::new([n; 3]);
@@ -130,8 +212,15 @@ fn dense(res: u32, voxel: impl Fn(Vec3) -> Vec4 + Sync) -> Grid3<[f32; 4]> {
     g
 }
 
-fn asset(res: u32, level0: &Grid3<[f32; 4]>, kind: &str, seed: u64) -> VolumeAsset {
+fn asset(
+    res: u32,
+    level0: &Grid3<[f32; 4]>,
+    normals0: Option<Vec<Vec4>>,
+    kind: &str,
+    seed: u64,
+) -> VolumeAsset {
     let levels = pyramid_from_dense(level0, &CombineFn::Preset(Preset::Mean));
+    let normals = normals0.map(|n| normal_levels(res, n, levels.len()));
     let (lo, hi) = (Vec3::splat(-1.0), Vec3::splat(1.0));
     let mut params = BTreeMap::new();
     params.insert(
@@ -151,11 +240,11 @@ fn asset(res: u32, level0: &Grid3<[f32; 4]>, kind: &str, seed: u64) -> VolumeAss
                 ColourSpace::SrgbPremultiplied,
                 [res; 3],
                 levels.len() as u32,
-                false,
+                normals.is_some(),
             )
         },
         levels,
-        normals: None,
+        normals,
         cells: box_prisms(lo, hi).to_vec(),
         bands: Vec::new(),
     }
@@ -166,9 +255,10 @@ pub fn asteroid(res: u32, seed: u64) -> VolumeAsset {
     let shape = Perlin::new(seed);
     let tone = Perlin::new(seed ^ 0x9e37_79b9);
     let edge = 2.0 / res.max(1) as f32; // one voxel, in box units
+    let surface = |c: Vec3| 0.55 * (1.0 + 0.35 * shape.fbm(c, 1.6, 4));
     let g = dense(res, |c| {
         let r = c.length();
-        let surface = 0.55 * (1.0 + 0.35 * shape.fbm(c, 1.6, 4));
+        let surface = surface(c);
         let a = ((surface - r) / edge + 0.5).clamp(0.0, 1.0);
         if a <= 0.0 {
             return Vec4::ZERO;
@@ -178,7 +268,30 @@ pub fn asteroid(res: u32, seed: u64) -> VolumeAsset {
         let albedo = Vec3::new(0.34, 0.30, 0.27) * (0.6 + 0.6 * t) * (1.0 - 0.4 * crater);
         (albedo * a).extend(a)
     });
-    asset(res, &g, "asteroid", seed)
+    // Outward normal: −∇(surface − r), central differences of a tenth of a voxel.
+    let h = 0.1 * edge;
+    let f = |c: Vec3| surface(c) - c.length();
+    let n = dense_normals(res, &g, |c| {
+        -Vec3::new(
+            f(c + Vec3::X * h) - f(c - Vec3::X * h),
+            f(c + Vec3::Y * h) - f(c - Vec3::Y * h),
+            f(c + Vec3::Z * h) - f(c - Vec3::Z * h),
+        )
+    });
+    asset(res, &g, Some(n), "asteroid", seed)
+}
+
+/// An opaque ball of radius 0.8 in the `[-1, 1]³` box, `res`³ voxels, one linear
+/// `albedo`, a one-voxel soft edge, radial normals: the subject of the shading tests
+/// (a ball lit from +x is brighter on its +x side by the Lambert ratio).
+pub fn sphere(res: u32, albedo: Vec3) -> VolumeAsset {
+    let edge = 2.0 / res.max(1) as f32;
+    let g = dense(res, |c| {
+        let a = ((0.8 - c.length()) / edge + 0.5).clamp(0.0, 1.0);
+        (albedo * a).extend(a)
+    });
+    let n = dense_normals(res, &g, |c| c);
+    asset(res, &g, Some(n), "sphere", 0)
 }
 
 /// A dust cloud of `res`³ voxels (module docs).
@@ -191,7 +304,7 @@ pub fn dust(res: u32, seed: u64) -> VolumeAsset {
         let a = (d * per_voxel).clamp(0.0, 1.0);
         (Vec3::new(0.75, 0.68, 0.58) * a).extend(a)
     });
-    asset(res, &g, "dust", seed)
+    asset(res, &g, None, "dust", seed)
 }
 
 #[cfg(test)]

@@ -232,6 +232,38 @@ pub fn shell_asset(volume: &VolumeAsset, shell: Shell) -> VolumeAsset {
     }
 }
 
+/// Gives a shell asset the **surface's normal** as its stored normal (VB §3.2: "we might
+/// approximate the lighting as a separable low-frequency and high-frequency lighting,
+/// precalculating the local high-frequency lighting and storing a low-frequency normal for
+/// runtime shading"; the paper's fur, Figure 11, has no usable per-voxel normal): every
+/// texel with opacity, at every level, gets the tile's up axis `(0, 1, 0)` (snorm8 `[0,
+/// 127, 0, 0]`), empty texels zero. Renderers take a shell's normals to world space with
+/// each prism's uvw Jacobian, which turns +Y (height) into the surface normal, so fur on a
+/// torus is lit by the torus' own terminator. Replaces any normals the tile had.
+pub fn with_surface_normals(asset: &mut VolumeAsset) {
+    let up = |levels: &[Vec<u8>]| -> Vec<Vec<u8>> {
+        levels
+            .iter()
+            .map(|l| {
+                l.chunks_exact(4)
+                    .flat_map(|c| if c[3] > 0 { [0, 127, 0, 0] } else { [0; 4] })
+                    .collect()
+            })
+            .collect()
+    };
+    asset.normals = Some(up(&asset.levels));
+    for b in &mut asset.bands {
+        b.normals = Some(up(&b.levels));
+    }
+    if let Some(v) = asset.header.volume.as_mut() {
+        v.normals = Some(billow_format::NormalEncoding::Rgba8Snorm);
+    }
+    asset
+        .header
+        .params
+        .insert("normals".into(), "surface".into());
+}
+
 /// World-space bounds of `prisms`' vertices; `None` when there are none.
 pub fn prism_bounds(prisms: &[Prism]) -> Option<Bounds> {
     let points = prisms

@@ -106,7 +106,7 @@ fn case(command: &str, flag: &str) -> Option<Case> {
             out_of_range: Some(LONG_EXPR),
             extra: &[],
         },
-        ("voxelize", "normals") => SWITCH,
+        ("voxelize", "normals") => keyword("bogus"),
         ("voxelize", "mips") => both("abc", "99"),
         ("voxelize", "margin") => both("abc", "100"),
         ("voxelize", "align") => both("abc", "0"),
@@ -132,6 +132,7 @@ fn case(command: &str, flag: &str) -> Option<Case> {
 
         ("shell", "height") => both("abc", "0"),
         ("shell", "tiles") => both("a,b", "0,1"),
+        ("shell", "surface-normals") => SWITCH,
 
         ("bbcloud", "epsilon") => both("abc", "0"),
         ("bbcloud", "samples") => both("abc", "0"),
@@ -268,7 +269,9 @@ fn flags(help: &str) -> Vec<(String, bool)> {
             .chars()
             .take_while(|c| c.is_ascii_alphanumeric() || *c == '-')
             .collect();
-        let takes_value = rest[name.len()..].starts_with(" <");
+        // `--normals [<WHEN>]`: an optional value (a bare flag means a default) still takes one.
+        let takes_value =
+            rest[name.len()..].starts_with(" <") || rest[name.len()..].starts_with(" [<");
         out.push((name, takes_value));
     }
     out

@@ -61,7 +61,11 @@ fn ao_next_to_a_wall_matches_the_analytic_fraction() {
         ..AoRays::for_grid(&grid, 1024, d)
     };
     let rr = ReferenceRenderer::new(&scene)
-        .with_lighting(Lighting::Ao { rays, grid })
+        .with_lighting(Lighting::Ao {
+            rays,
+            grid,
+            shaded: None,
+        })
         .unwrap();
     for h in [0.25f32, 0.5, 1.0, 1.5, 1.9, 2.5] {
         // 20 points in different voxels (independent direction sets), averaged.
@@ -135,7 +139,7 @@ fn ao_baked_volume_matches_the_lit_reference_better() {
     let asset = volume.into_asset("test", None, params);
     let (lighting, note) = reference_lighting(&asset).unwrap();
     assert!(note.is_none());
-    let Lighting::Ao { rays, grid } = lighting else {
+    let Lighting::Ao { rays, grid, .. } = lighting else {
         panic!("an AO asset selects the AO reference, got {lighting:?}");
     };
     assert_eq!(rays.rays, billow::voxelize::DEFAULT_AO_RAYS);

@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use billow::import::{import, ImportOptions};
-use billow::shell::{shell, shell_asset};
+use billow::shell::{shell, shell_asset, with_surface_normals};
 use billow_format::VolumeAsset;
 use glam::Vec2;
 use serde::Serialize;
@@ -30,6 +30,11 @@ pub struct Args {
     /// Volume tiles per unit of UV, `U,V` (e.g. `8,3`), each > 0.
     #[arg(long, default_value = "1,1")]
     tiles: String,
+    /// Shade the shell at runtime with the surface's normal (the VB paper's low-frequency
+    /// normal for fur, §3.2): the tile's normals become its up axis, which renderers turn
+    /// with each prism; the tile's colour is then albedo.
+    #[arg(long)]
+    surface_normals: bool,
     /// Treat import warnings as errors.
     #[arg(long)]
     strict: bool,
@@ -107,7 +112,10 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             &format!("{folded} prisms fold over (height exceeds the local curvature radius)"),
         );
     }
-    let asset = shell_asset(&volume, s);
+    let mut asset = shell_asset(&volume, s);
+    if args.surface_normals {
+        with_surface_normals(&mut asset);
+    }
     let bytes = asset
         .to_bytes()
         .map_err(|e| CliError::new(Code::Internal, e))?;

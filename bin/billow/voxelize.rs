@@ -43,9 +43,13 @@ pub struct Args {
     /// expr:<expression over px nx py ny pz nz> (see docs/voxelize.md).
     #[arg(long, default_value = "opaque")]
     combine: String,
-    /// Capture normals (Toksvig-filtered MIPs).
-    #[arg(long)]
-    normals: bool,
+    /// Normals (Toksvig-filtered MIPs) for runtime shading: auto (bake them, keep them only
+    /// for a smooth solid surface, drop them for thin or fuzzy ones such as foliage and fur;
+    /// see docs/voxelize.md), on (a bare --normals), or off. With normals the colour is
+    /// albedo and viewers shade it under the scene light.
+    #[arg(long, value_enum, value_name = "WHEN", default_value_t = NormalsArg::Auto,
+          num_args = 0..=1, default_missing_value = "on")]
+    normals: NormalsArg,
     /// Number of MIP levels, 1–the full chain (default: the full chain down to 1×1×1).
     #[arg(long)]
     mips: Option<u32>,
@@ -107,6 +111,14 @@ struct Seconds {
     total: f64,
 }
 
+/// `--normals`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NormalsArg {
+    Auto,
+    On,
+    Off,
+}
+
 #[derive(Serialize)]
 struct Summary {
     input: String,
@@ -116,6 +128,8 @@ struct Summary {
     combine: String,
     supersample: u32,
     normals: bool,
+    /// `--normals auto`: the coherence the choice was made on (see docs/voxelize.md).
+    normal_coherence: Option<f32>,
     triangles: usize,
     non_empty_voxels: u64,
     fragments: u64,
@@ -231,7 +245,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         &args.res,
         args.supersample,
         &args.combine,
-        args.normals,
+        args.normals != NormalsArg::Off,
         args.margin,
     )?;
     opts.mip_levels = args.mips;
@@ -319,13 +333,45 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             format!("{stage:?}").to_lowercase()
         });
     };
-    let volume = voxelize(&scene, &opts, &report)
+    let mut volume = voxelize(&scene, &opts, &report)
+        .or_else(|e| match e {
+            // auto: normals are an option, not a requirement; without them the bake may fit.
+            billow::voxelize::VoxelizeError::TooMuchMemory { .. }
+                if args.normals == NormalsArg::Auto =>
+            {
+                opts.normals = false;
+                voxelize(&scene, &opts, &report)
+            }
+            e => Err(e),
+        })
         .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;
     bar.finish();
+    // auto: keep the normals only where one normal per voxel describes the surface.
+    let mut coherence = None;
+    if args.normals == NormalsArg::Auto {
+        use billow::voxelize::toksvig::{normal_coherence, AUTO_NORMALS_LEVEL};
+        if let Some(n) = volume.normals.as_ref() {
+            let l = AUTO_NORMALS_LEVEL.min(volume.levels.len().saturating_sub(1));
+            let k = volume
+                .levels
+                .get(l)
+                .zip(n.get(l))
+                .and_then(|(c, n)| normal_coherence(c, n));
+            coherence = k;
+            if k.is_none_or(|k| k < billow::voxelize::toksvig::AUTO_NORMALS_MIN_COHERENCE) {
+                volume.normals = None;
+                opts.normals = false;
+            }
+        }
+    }
 
     let stats = volume.stats;
     let (dims, mip_count) = (volume.dims(), volume.mip_count());
-    let params = bake_params(&volume, &opts, &BTreeMap::new());
+    let mut extra = BTreeMap::new();
+    if let Some(k) = coherence {
+        extra.insert("normal_coherence".to_string(), format!("{k:.3}"));
+    }
+    let params = bake_params(&volume, &opts, &extra);
     let asset = volume.into_asset(&tool_version(), Some(source), params);
     let write_start = Instant::now();
     // All outputs go to temporary files first and are renamed into place together, -o last
@@ -374,6 +420,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         combine: opts.combine.to_string(),
         supersample: opts.supersample,
         normals: opts.normals,
+        normal_coherence: coherence,
         triangles: stats.triangles,
         non_empty_voxels: stats.non_empty_voxels,
         fragments: stats.fragments,

@@ -15,8 +15,21 @@
 //!   cards lit from either side; `viewer/src/shaders/mesh.wgsl`), so a mesh drawn by the
 //!   viewer and its billboards baked with the same light look alike.
 //!
+//! - [`Lighting::Volume`]: the runtime shading of a volume that carries normals
+//!   ([`volume_diffuse_factor`]): `albedo · (ambient + (1 − ambient) · max(n·L, 0))`, the
+//!   **one-sided** Lambert of the interpolated shading normal, turned towards the viewer on
+//!   the back face of a double-sided triangle (as the voxelizer captures it,
+//!   `src/voxelize/fragments.rs`). The CPU slicer ([`super::slicer`]) and the viewer's
+//!   volume pass (`viewer/src/shaders/volume.wgsl`) shade with the voxel's
+//!   Toksvig-filtered normal instead; see [`volume_diffuse_factor`].
+//!
 //! [`Lighting::for_volume`] and [`Lighting::for_cloud`] read the choice from an asset's
-//! header parameters (`bake`, `ao_rays`, `ao_distance`, `ao_seed`; `light`, `ambient`).
+//! header parameters (`bake`, `ao_rays`, `ao_distance`, `ao_seed`; `light`, `ambient`) and,
+//! for volumes, whether it stores normals.
+//!
+//! One light for everything without a scene file: [`DEFAULT_LIGHT`] and
+//! [`DEFAULT_AMBIENT`], the viewer's defaults (`viewer/src/render.rs`, checked by
+//! `viewer/tests/volume_shading.rs`).
 
 use std::collections::BTreeMap;
 
@@ -28,15 +41,46 @@ use crate::voxelize::{
 
 pub use crate::voxelize::voxel_stream;
 
+/// Direction towards the light (not normalised) when no scene names one: the viewer's default.
+pub const DEFAULT_LIGHT: Vec3 = Vec3::new(0.3, 1.0, 0.5);
+
+/// Ambient fraction when no scene names one: the viewer's default.
+pub const DEFAULT_AMBIENT: f32 = 0.3;
+
+/// The scene light a volume is shaded with: unit direction towards the light, ambient.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VolumeLight {
+    pub dir: Vec3,
+    pub ambient: f32,
+}
+
+impl Default for VolumeLight {
+    /// [`DEFAULT_LIGHT`] (normalised), [`DEFAULT_AMBIENT`].
+    fn default() -> Self {
+        VolumeLight {
+            dir: DEFAULT_LIGHT.normalize(),
+            ambient: DEFAULT_AMBIENT,
+        }
+    }
+}
+
 /// How the reference shades a hit (see the module docs).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub enum Lighting {
     #[default]
     Unlit,
-    /// Baked AO of a volume on `grid` (its level-0 voxel grid).
-    Ao { rays: AoRays, grid: GridSpec },
+    /// Baked AO of a volume on `grid` (its level-0 voxel grid); `shaded`: the volume also
+    /// stores normals, so the AO-darkened albedo is shaded at runtime too
+    /// ([`Lighting::Volume`]'s factor, multiplied).
+    Ao {
+        rays: AoRays,
+        grid: GridSpec,
+        shaded: Option<VolumeLight>,
+    },
     /// Ambient + diffuse with `light` the unit direction towards the light.
     Diffuse { light: Vec3, ambient: f32 },
+    /// Ambient + one-sided diffuse: a volume with normals, shaded at runtime.
+    Volume { light: Vec3, ambient: f32 },
 }
 
 /// `ambient + (1 − ambient) · |n·light|`: the one lighting model of billow — the
@@ -46,6 +90,27 @@ pub enum Lighting {
 #[inline]
 pub fn diffuse_factor(n: Vec3, light: Vec3, ambient: f32) -> f32 {
     ambient + (1.0 - ambient) * n.dot(light).abs()
+}
+
+/// The runtime shading of a volume voxel ([`Lighting::Volume`], the CPU slicer and the
+/// viewer's `volume.wgsl`): `ambient + (1 − ambient) · visibility · max(n̄·light, 0)`.
+///
+/// `n` is the voxel's **Toksvig-filtered** normal, the alpha-weighted mean of the unit
+/// normals it holds, *not* renormalised (`|n̄| ≤ 1`, `src/voxelize/toksvig.rs`); `light`
+/// is the unit direction towards the light. This is the *effective normal* reading of
+/// Toksvig: Lambert's cosine is linear in the normal, so `n̄·L` is exactly the mean of
+/// `n·L` over the voxel's normals, and the shorter (rougher) the mean, the weaker the
+/// directional term; clamping after the mean under-estimates only where the voxel's
+/// normals straddle the terminator. A voxel whose normals cancel (`n̄ = 0`: opposite
+/// faces, fuzz) gets the ambient term alone.
+///
+/// **One-sided**: volumes with normals are closed surfaces (`voxelize --normals auto`
+/// keeps normals only where they agree, docs/voxelize.md), whose far side must stay dark
+/// to show a terminator; the two-sided [`diffuse_factor`] of leaf cards would light it
+/// as brightly as the near side. `visibility` is the shadow map's (1 without shadows).
+#[inline]
+pub fn volume_diffuse_factor(n: Vec3, light: Vec3, ambient: f32, visibility: f32) -> f32 {
+    ambient + (1.0 - ambient) * visibility * n.dot(light).max(0.0)
 }
 
 fn num<T: std::str::FromStr>(
@@ -72,6 +137,7 @@ impl Lighting {
             Lighting::Unlit => "unlit",
             Lighting::Ao { .. } => "ao",
             Lighting::Diffuse { .. } => "diffuse",
+            Lighting::Volume { .. } => "volume",
         }
     }
 
@@ -79,28 +145,52 @@ impl Lighting {
     pub fn describe(&self) -> String {
         match self {
             Lighting::Unlit => "unlit".into(),
-            Lighting::Ao { rays, .. } => format!(
-                "ambient occlusion at the hit point ({} rays, distance {}, seed {})",
-                rays.rays, rays.t_max, rays.seed
+            Lighting::Ao { rays, shaded, .. } => format!(
+                "ambient occlusion at the hit point ({} rays, distance {}, seed {}){}",
+                rays.rays,
+                rays.t_max,
+                rays.seed,
+                shaded.map_or(String::new(), |l| format!(
+                    " × ambient {} + one-sided diffuse, light towards ({}, {}, {})",
+                    l.ambient, l.dir.x, l.dir.y, l.dir.z
+                ))
             ),
             Lighting::Diffuse { light, ambient } => format!(
                 "ambient {ambient} + diffuse, light towards ({}, {}, {})",
+                light.x, light.y, light.z
+            ),
+            Lighting::Volume { light, ambient } => format!(
+                "ambient {ambient} + one-sided diffuse (the volume's runtime shading), light \
+                 towards ({}, {}, {})",
                 light.x, light.y, light.z
             ),
         }
     }
 
     /// The reference lighting of a volume asset: its header `params`, its bounds (the voxel
-    /// grid's box) and level-0 `dims`. Returns a note when the asset's `bake` is not one
-    /// the reference reproduces (the reference then stays unlit).
+    /// grid's box), level-0 `dims` and whether it stores normals (then its colour is albedo
+    /// shaded at runtime: [`Lighting::Volume`] with the default light, or on top of baked
+    /// AO). Returns a note when the asset's `bake` is not one the reference reproduces (the
+    /// reference then stays unlit).
     pub fn for_volume(
         params: &BTreeMap<String, String>,
         min: Vec3,
         max: Vec3,
         dims: [u32; 3],
+        normals: bool,
     ) -> Result<(Lighting, Option<String>), String> {
         let bake = params.get("bake").map_or("none", |b| b.trim());
         match bake {
+            "" | "none" if normals => {
+                let l = VolumeLight::default();
+                Ok((
+                    Lighting::Volume {
+                        light: l.dir,
+                        ambient: l.ambient,
+                    },
+                    None,
+                ))
+            }
             "" | "none" => Ok((Lighting::Unlit, None)),
             "ao" => {
                 if dims.contains(&0)
@@ -130,7 +220,14 @@ impl Lighting {
                 }
                 let mut ao = AoRays::for_grid(&grid, rays, distance);
                 ao.seed = num(params, "ao_seed")?.unwrap_or(AO_SEED);
-                Ok((Lighting::Ao { rays: ao, grid }, None))
+                Ok((
+                    Lighting::Ao {
+                        rays: ao,
+                        grid,
+                        shaded: normals.then(VolumeLight::default),
+                    },
+                    None,
+                ))
             }
             other => Ok((
                 Lighting::Unlit,
@@ -182,26 +279,59 @@ mod tests {
         let mut p = BTreeMap::new();
         let (min, max) = (Vec3::ZERO, Vec3::new(2.0, 4.0, 8.0));
         assert_eq!(
-            Lighting::for_volume(&p, min, max, [2, 4, 8]).unwrap().0,
+            Lighting::for_volume(&p, min, max, [2, 4, 8], false)
+                .unwrap()
+                .0,
             Lighting::Unlit
         );
         p.insert("bake".into(), "ao".into());
         p.insert("ao_rays".into(), "7".into());
         p.insert("ao_distance".into(), "1.5".into());
-        let (l, note) = Lighting::for_volume(&p, min, max, [2, 4, 8]).unwrap();
+        let (l, note) = Lighting::for_volume(&p, min, max, [2, 4, 8], false).unwrap();
         assert!(note.is_none());
-        let Lighting::Ao { rays, grid } = l else {
+        let Lighting::Ao { rays, grid, shaded } = l else {
             panic!("{l:?}")
         };
         assert_eq!((rays.rays, rays.t_max, rays.seed), (7, 1.5, AO_SEED));
         assert_eq!(grid.voxel, Vec3::ONE);
+        assert_eq!(shaded, None);
         assert!((rays.t_min - 0.5 * 3f32.sqrt()).abs() < 1e-6);
+        let (l, note) = Lighting::for_volume(&p, min, max, [2, 4, 8], true).unwrap();
+        assert!(
+            matches!(
+                l,
+                Lighting::Ao {
+                    shaded: Some(_),
+                    ..
+                }
+            ) && note.is_none()
+        );
         p.insert("ao_rays".into(), "many".into());
-        assert!(Lighting::for_volume(&p, min, max, [2, 4, 8]).is_err());
+        assert!(Lighting::for_volume(&p, min, max, [2, 4, 8], false).is_err());
         p.insert("bake".into(), "gi".into());
-        let (l, note) = Lighting::for_volume(&p, min, max, [2, 4, 8]).unwrap();
+        let (l, note) = Lighting::for_volume(&p, min, max, [2, 4, 8], false).unwrap();
         assert_eq!(l, Lighting::Unlit);
         assert!(note.unwrap().contains("bake=gi"));
+    }
+
+    #[test]
+    fn volumes_with_normals_are_lit_one_sided() {
+        let p = BTreeMap::new();
+        let (l, note) = Lighting::for_volume(&p, Vec3::ZERO, Vec3::ONE, [2, 2, 2], true).unwrap();
+        assert!(note.is_none());
+        assert_eq!(
+            l,
+            Lighting::Volume {
+                light: DEFAULT_LIGHT.normalize(),
+                ambient: DEFAULT_AMBIENT
+            }
+        );
+        // One-sided, shortened normals attenuate, shadows scale the diffuse term only.
+        assert_eq!(volume_diffuse_factor(Vec3::Y, Vec3::Y, 0.25, 1.0), 1.0);
+        assert_eq!(volume_diffuse_factor(-Vec3::Y, Vec3::Y, 0.25, 1.0), 0.25);
+        assert_eq!(volume_diffuse_factor(Vec3::Y * 0.5, Vec3::Y, 0.2, 1.0), 0.6);
+        assert_eq!(volume_diffuse_factor(Vec3::ZERO, Vec3::Y, 0.2, 1.0), 0.2);
+        assert_eq!(volume_diffuse_factor(Vec3::Y, Vec3::Y, 0.2, 0.5), 0.6);
     }
 
     #[test]

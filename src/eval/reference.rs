@@ -28,7 +28,7 @@ use obvhs::ray::{Ray, RayHit};
 use rayon::prelude::*;
 
 use super::compositing::under;
-use super::lighting::{diffuse_factor, voxel_stream, Lighting};
+use super::lighting::{diffuse_factor, volume_diffuse_factor, voxel_stream, Lighting};
 use super::ray_triangle::{TriangleHit, WatertightRay};
 use super::{EvalError, ImageF32};
 use crate::bvh::scene_bvh;
@@ -226,12 +226,15 @@ impl<'a> ReferenceRenderer<'a> {
         let c = self.shade(tri, bary);
         let f = match self.lighting {
             Lighting::Unlit => return c,
-            Lighting::Ao { rays, grid } => {
+            Lighting::Ao { rays, grid, shaded } => {
                 let (Some(bvh), Some(shader)) = (&self.bvh, &self.shader) else {
                     return c;
                 };
                 let p = origin + dir * t;
-                rays.ambient_occlusion(self.scene, shader, bvh, p, voxel_stream(&grid, p))
+                let ao = rays.ambient_occlusion(self.scene, shader, bvh, p, voxel_stream(&grid, p));
+                ao * shaded.map_or(1.0, |l| {
+                    volume_diffuse_factor(self.volume_normal(tri, bary, dir), l.dir, l.ambient, 1.0)
+                })
             }
             Lighting::Diffuse { light, ambient } => {
                 let v = &self.scene.triangles[tri].v;
@@ -241,8 +244,26 @@ impl<'a> ReferenceRenderer<'a> {
                 let n = if n.dot(dir) > 0.0 { -n } else { n };
                 diffuse_factor(n, light, ambient)
             }
+            Lighting::Volume { light, ambient } => {
+                volume_diffuse_factor(self.volume_normal(tri, bary, dir), light, ambient, 1.0)
+            }
         };
         (c.truncate() * f).extend(c.w)
+    }
+
+    /// The shading normal as the voxelizer captures it: interpolated (the face normal where
+    /// it cancels), flipped on the back face of a double-sided triangle (a single-sided one
+    /// is only hit from the front) — what a volume's runtime shading reads.
+    fn volume_normal(&self, tri: usize, bary: [f32; 3], dir: Vec3) -> Vec3 {
+        let v = &self.scene.triangles[tri].v;
+        let face = (v[1].position - v[0].position).cross(v[2].position - v[0].position);
+        let n = (v[0].normal * bary[0] + v[1].normal * bary[1] + v[2].normal * bary[2])
+            .normalize_or(face.normalize_or_zero());
+        if face.dot(dir) > 0.0 {
+            -n
+        } else {
+            n
+        }
     }
 
     fn hit(&self, wr: &WatertightRay, tri: usize, t_min: f32, t_max: f32) -> Option<TriangleHit> {

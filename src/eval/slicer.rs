@@ -31,6 +31,10 @@
 //!   span every band's cells, `lod` is clamped to the asset's last level, and each slice
 //!   draws only the band with the largest `first_level ≤ lod`, sampling its texture at
 //!   `lod − first_level`; opacity correction uses the slice's `lod`.
+//! - **Runtime shading** ([`SlicerParams::light`]) of a volume that stores normals: its
+//!   colour is albedo, multiplied by [`volume_diffuse_factor`] of the Toksvig normal
+//!   sampled like the colour ([`DecodedVolume::sample_normal`]) and taken to view space
+//!   by [`normal_matrix`]. A volume without normals keeps its baked colour, untouched.
 
 // `!(a < b)` comparisons are deliberate: they also catch NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -42,6 +46,7 @@ use glam::{Mat3, Vec3, Vec4};
 use rayon::prelude::*;
 
 use super::compositing::{correct_premultiplied, over};
+use super::lighting::{volume_diffuse_factor, VolumeLight};
 use super::prism_plane::intersect_prism_plane;
 use super::reference::validate_camera;
 use super::volume_sampler::{DecodedVolume, MipFilter};
@@ -63,6 +68,9 @@ pub struct SlicerParams {
     pub mip_filter: MipFilter,
     /// Refuse to render more slices than this (guards hostile assets / tiny spacings).
     pub max_slices: usize,
+    /// The scene light volumes with normals are shaded with (`None`: drawn unlit, their
+    /// albedo as it is). World space, as the cells.
+    pub light: Option<VolumeLight>,
 }
 
 impl Default for SlicerParams {
@@ -71,6 +79,7 @@ impl Default for SlicerParams {
             spacing: Spacing::Adaptive { bias: 1.0 },
             mip_filter: MipFilter::Linear,
             max_slices: 100_000,
+            light: Some(VolumeLight::default()),
         }
     }
 }
@@ -121,6 +130,58 @@ pub fn voxel_size(cells: &[Prism], dims: [u32; 3]) -> Option<f32> {
     best
 }
 
+/// The matrix taking a volume's stored normals to view space, for one cell (`view_cell`:
+/// its vertices in view space, `uvw` its texture coordinates), shared with the viewer
+/// (`viewer/src/volume_plan.rs`):
+///
+/// - a box asset's normals are in its object space, which the cells' positions are given
+///   in: the normal matrix of `object_to_view` (the inverse transpose of its linear part;
+///   a rotation for the CPU slicer's camera, where objects are not transformed);
+/// - a shell's (`shell`: repeat addressing) are in the tile's space, which uvw addresses
+///   (a tile baked on the unit box, as `billow shell` expects): the inverse transpose of
+///   the cell's uvw → view Jacobian (from vertices 0, 1, 2, 3), so the fur of a torus
+///   turns with its surface.
+///
+/// Only the direction of the result matters ([`shade_normal`] keeps the Toksvig length).
+/// A degenerate map gives the zero matrix (unlit: the ambient term).
+pub fn normal_matrix(
+    object_to_view: Mat3,
+    shell: bool,
+    view_cell: &[[f32; 3]; 6],
+    uvw: &[[f32; 3]; 6],
+) -> Mat3 {
+    let m = if shell {
+        let p = |i: usize| Vec3::from(view_cell[i]) - Vec3::from(view_cell[0]);
+        let t = |i: usize| Vec3::from(uvw[i]) - Vec3::from(uvw[0]);
+        let pm = Mat3::from_cols(p(1), p(2), p(3));
+        let tm = Mat3::from_cols(t(1), t(2), t(3));
+        if tm.determinant().abs() < 1e-20 {
+            return Mat3::ZERO;
+        }
+        pm * tm.inverse()
+    } else {
+        object_to_view
+    };
+    let det = m.determinant();
+    if !(det.abs() > 1e-30 && det.is_finite()) {
+        return Mat3::ZERO;
+    }
+    m.inverse().transpose()
+}
+
+/// A stored-frame Toksvig normal `n` (`|n| ≤ 1`) in view space: the direction of
+/// `nmat · n` with the length of `n` (the roughness stays the stored one).
+#[inline]
+pub fn shade_normal(nmat: Mat3, n: Vec3) -> Vec3 {
+    let v = nmat * n;
+    let l = v.length();
+    if l > 0.0 && l.is_finite() {
+        v * (n.length() / l)
+    } else {
+        Vec3::ZERO
+    }
+}
+
 /// One polygon in screen space, ready to scan-convert.
 struct ScreenPoly {
     n: usize,
@@ -136,6 +197,9 @@ struct ScreenPoly {
     ratio: f32,
     /// Index of the band (0 = the base texture) whose texture this polygon samples.
     band: usize,
+    /// Normal frame → view space of the polygon's cell ([`normal_matrix`]), when it is
+    /// shaded.
+    nmat: Option<Mat3>,
 }
 
 /// The base texture or one LOD band: what a slice may draw.
@@ -257,6 +321,12 @@ pub fn render_decoded_in_depth_range(
     };
     stats.voxel_size = v0;
     let view = camera.view();
+    // Runtime shading: the light in view space, and per part (its volume has normals)
+    // the normal matrix of every cell.
+    let light_view = params.light.and_then(|l| {
+        let d = view.transform_vector3(l.dir).normalize_or_zero();
+        (d != Vec3::ZERO && (0.0..=1.0).contains(&l.ambient)).then_some((d, l.ambient))
+    });
     let cam_cells: Vec<Vec<[[f32; 3]; 6]>> = parts
         .iter()
         .map(|part| {
@@ -264,6 +334,20 @@ pub fn render_decoded_in_depth_range(
                 .iter()
                 .map(|c| c.pos.map(|p| to_view(&view, Vec3::from(p)).to_array()))
                 .collect()
+        })
+        .collect();
+    let object_to_view = Mat3::from_mat4(view);
+    let nmats: Vec<Option<Vec<Mat3>>> = parts
+        .iter()
+        .zip(&cam_cells)
+        .map(|(part, cc)| {
+            let shell = part.vol.repeat[0] || part.vol.repeat[2];
+            (light_view.is_some() && part.vol.has_normals()).then(|| {
+                cc.iter()
+                    .zip(part.cells)
+                    .map(|(c, cell)| normal_matrix(object_to_view, shell, c, &cell.uvw))
+                    .collect()
+            })
         })
         .collect();
     let (mut z_min, mut z_max) = (f32::INFINITY, f32::NEG_INFINITY);
@@ -296,7 +380,7 @@ pub fn render_decoded_in_depth_range(
             .data
             .par_chunks_mut(w)
             .enumerate()
-            .map(|(y, row)| raster_row(row, y, polys, &vols, params.mip_filter))
+            .map(|(y, row)| raster_row(row, y, polys, &vols, params.mip_filter, light_view))
             .sum();
         polys.clear();
         frags
@@ -323,6 +407,7 @@ pub fn render_decoded_in_depth_range(
             let sp = to_screen(camera, &poly.pos, &poly.uvw, poly.count, part_lod, ratio);
             if let Some(mut sp) = sp {
                 sp.band = band;
+                sp.nmat = nmats[band].as_ref().map(|m| m[ci]);
                 polys.push(sp);
                 stats.polygons += 1;
             }
@@ -386,6 +471,7 @@ fn to_screen(
         lod,
         ratio,
         band: 0,
+        nmat: None,
     })
 }
 
@@ -404,6 +490,7 @@ fn raster_row(
     polys: &[ScreenPoly],
     vols: &[&DecodedVolume],
     filter: MipFilter,
+    light: Option<(Vec3, f32)>,
 ) -> u64 {
     let yc = y as f32 + 0.5;
     let w = row.len() as i64;
@@ -438,7 +525,14 @@ fn raster_row(
             let xc = x as f32 + 0.5;
             let uvw = p.base + p.gx * (xc - p.origin[0]) + p.gy * dy;
             let s = vols[p.band].sample(p.lod, uvw, filter);
-            let s = correct_premultiplied(s, p.ratio);
+            let mut s = correct_premultiplied(s, p.ratio);
+            if let (Some(m), Some((l, ambient))) = (p.nmat, light) {
+                let n = vols[p.band]
+                    .sample_normal(p.lod, uvw, filter)
+                    .unwrap_or(Vec3::ZERO);
+                let k = volume_diffuse_factor(shade_normal(m, n), l, ambient, 1.0);
+                s = (s.truncate() * k).extend(s.w);
+            }
             let px = &mut row[x as usize];
             *px = over(s, *px);
             frags += 1;

@@ -191,7 +191,9 @@ pub fn means_by_distance(results: &[ViewResult]) -> Vec<DistanceMeans> {
 }
 
 /// The reference lighting that matches a volume asset's baked lighting (header `bake`,
-/// see [`Lighting::for_volume`]), and a note when its lighting cannot be reproduced.
+/// see [`Lighting::for_volume`]) or, for an asset with normals, its runtime shading
+/// ([`Lighting::Volume`], the light the slicer's [`SlicerParams::light`] defaults to), and
+/// a note when its lighting cannot be reproduced.
 pub fn reference_lighting(asset: &VolumeAsset) -> Result<(Lighting, Option<String>), EvalError> {
     let b = &asset.header.bounds;
     Lighting::for_volume(
@@ -199,6 +201,7 @@ pub fn reference_lighting(asset: &VolumeAsset) -> Result<(Lighting, Option<Strin
         Vec3::from(b.min),
         Vec3::from(b.max),
         asset.level_dims(0),
+        asset.normals.is_some(),
     )
     .map_err(EvalError::InvalidAsset)
 }

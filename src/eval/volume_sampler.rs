@@ -11,6 +11,14 @@
 //! (the surface's tiled UV) and clamp in y (the height) — GPU `REPEAT`/`CLAMP_TO_EDGE`.
 //! Wrapping happens per texel index, so a bilinear footprint straddling the tile edge
 //! blends the last and the first texel, as a GPU does.
+//!
+//! **Normals** (SPEC §8.4, when the asset stores them) are decoded to `(α·n̄, α)`: the
+//! Toksvig-shortened normal weighted by the texel's opacity (its colour alpha), next to
+//! that alpha. Filtered with the same weights as the colour, `xyz / w` of a sample is the
+//! alpha-weighted mean of the normals in the footprint, the filter the voxelizer's MIP
+//! levels use (`src/voxelize/toksvig.rs`): an empty neighbour does not shorten a surface's
+//! normal, unlike filtering `n̄` itself. The viewer uploads the same `(α·n̄, α)` texels
+//! (`Rgba16Float`, viewer/src/volume_pass.rs).
 
 use billow_format::{ColourSpace, VolumeAsset};
 use glam::{Vec3, Vec4};
@@ -40,6 +48,9 @@ pub struct DecodedVolume {
     pub levels: Vec<Level>,
     /// Per axis (x, y, z): repeat addressing (`true`) or clamp-to-edge.
     pub repeat: [bool; 3],
+    /// Per level (parallel to `levels`), the normals as `(α·n̄, α)` (module docs); empty
+    /// when the asset stores no normals.
+    pub normals: Vec<Level>,
     /// The asset's extra LOD bands (formats/SPEC.md §8.6), decoded; empty for an
     /// ordinary volume. The slicer draws them instead of the base levels on the slices
     /// whose LOD falls in their band.
@@ -77,18 +88,19 @@ impl DecodedVolume {
             .map(|b| DecodedBand {
                 first_level: b.first_level,
                 dims0: b.dims,
-                volume: Self::decode_levels(&b.levels, b.dims, srgb, repeat),
+                volume: Self::decode_levels(&b.levels, b.normals.as_deref(), b.dims, srgb, repeat),
                 cells: b.cells.clone(),
             })
             .collect();
         Ok(DecodedVolume {
             bands,
-            ..Self::decode_levels(&asset.levels, dims0, srgb, repeat)
+            ..Self::decode_levels(&asset.levels, asset.normals.as_deref(), dims0, srgb, repeat)
         })
     }
 
     fn decode_levels(
         levels: &[Vec<u8>],
+        normals: Option<&[Vec<u8>]>,
         dims0: [u32; 3],
         srgb: bool,
         repeat: [bool; 3],
@@ -116,9 +128,25 @@ impl DecodedVolume {
                     texels,
                 }
             })
-            .collect();
+            .collect::<Vec<Level>>();
+        let normals = normals
+            .map(|nl| {
+                nl.iter()
+                    .zip(&levels)
+                    .map(|(bytes, l)| Level {
+                        dims: l.dims,
+                        texels: bytes
+                            .chunks_exact(4)
+                            .zip(&l.texels)
+                            .map(|(t, c)| normal_texel([t[0], t[1], t[2], t[3]], c.w))
+                            .collect(),
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
         DecodedVolume {
             levels,
+            normals,
             repeat,
             bands: Vec::new(),
         }
@@ -128,9 +156,18 @@ impl DecodedVolume {
         self.levels.len()
     }
 
+    /// Whether the volume stores normals (and is shaded at runtime).
+    pub fn has_normals(&self) -> bool {
+        !self.normals.is_empty()
+    }
+
     /// Trilinear sample of level `level` (clamped to the last level) at `uvw`.
     pub fn sample_level(&self, level: usize, uvw: Vec3) -> Vec4 {
-        let l = &self.levels[level.min(self.levels.len() - 1)];
+        self.trilinear(&self.levels, level, uvw)
+    }
+
+    fn trilinear(&self, levels: &[Level], level: usize, uvw: Vec3) -> Vec4 {
+        let l = &levels[level.min(levels.len() - 1)];
         let [w, h, d] = l.dims.map(|v| v as i64);
         let f = |u: f32, n: i64, repeat: bool| {
             let u = if u.is_finite() { u } else { 0.0 };
@@ -161,25 +198,66 @@ impl DecodedVolume {
 
     /// Sample at fractional level `lod` (clamped to the stored levels).
     pub fn sample(&self, lod: f32, uvw: Vec3, filter: MipFilter) -> Vec4 {
-        let max = (self.levels.len() - 1) as f32;
+        self.filtered(&self.levels, lod, uvw, filter)
+    }
+
+    /// The Toksvig normal at `uvw` (fractional level `lod`, filtered like the colour): the
+    /// alpha-weighted mean of the texels' shortened normals, `|n̄| ≤ 1` (module docs);
+    /// `None` without normals, zero where the footprint is empty.
+    pub fn sample_normal(&self, lod: f32, uvw: Vec3, filter: MipFilter) -> Option<Vec3> {
+        if self.normals.is_empty() {
+            return None;
+        }
+        Some(normal_from_weighted(self.filtered(
+            &self.normals,
+            lod,
+            uvw,
+            filter,
+        )))
+    }
+
+    fn filtered(&self, levels: &[Level], lod: f32, uvw: Vec3, filter: MipFilter) -> Vec4 {
+        let max = (levels.len() - 1) as f32;
         let lod = if lod.is_finite() {
             lod.clamp(0.0, max)
         } else {
             0.0
         };
         match filter {
-            MipFilter::Nearest => self.sample_level(lod.round() as usize, uvw),
+            MipFilter::Nearest => self.trilinear(levels, lod.round() as usize, uvw),
             MipFilter::Linear => {
                 let l0 = lod.floor();
                 let t = lod - l0;
-                let a = self.sample_level(l0 as usize, uvw);
+                let a = self.trilinear(levels, l0 as usize, uvw);
                 if t <= 0.0 {
                     return a;
                 }
-                let b = self.sample_level(l0 as usize + 1, uvw);
+                let b = self.trilinear(levels, l0 as usize + 1, uvw);
                 a + (b - a) * t
             }
         }
+    }
+}
+
+/// A stored normal texel (snorm8, SPEC §8.4) and its colour alpha → `(α·n̄, α)`.
+#[inline]
+pub fn normal_texel(snorm: [u8; 4], alpha: f32) -> Vec4 {
+    (crate::voxelize::quantize::decode_normal(snorm) * alpha).extend(alpha)
+}
+
+/// A filtered `(α·n̄, α)` sample → the alpha-weighted mean normal (length clamped to 1,
+/// zero where `α` is 0): what `volume.wgsl`'s `toksvig_normal` computes.
+#[inline]
+pub fn normal_from_weighted(s: Vec4) -> Vec3 {
+    if s.w.is_nan() || s.w <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let n = s.truncate() / s.w;
+    let len = n.length();
+    if len > 1.0 {
+        n / len
+    } else {
+        n
     }
 }
 
@@ -205,6 +283,7 @@ mod tests {
         }
         DecodedVolume {
             levels: vec![Level { dims, texels }],
+            normals: Vec::new(),
             repeat,
             bands: Vec::new(),
         }

@@ -70,6 +70,37 @@ pub fn toksvig_variance(len: f32) -> f32 {
     (1.0 - len) / len
 }
 
+/// Below this [`normal_coherence`] at MIP level [`AUTO_NORMALS_LEVEL`],
+/// `voxelize --normals auto` drops the normals: the surface is thin or fuzzy at the scale
+/// the MIP filter averages over (docs/voxelize.md, "Normals").
+pub const AUTO_NORMALS_MIN_COHERENCE: f32 = 0.8;
+
+/// The MIP level whose coherence `--normals auto` judges (clamped to the last level):
+/// 4³ voxels per texel, where Toksvig's filter starts to average (the LOD at 4× the
+/// distance where level 0 is magnified).
+pub const AUTO_NORMALS_LEVEL: usize = 2;
+
+/// How much one normal per texel says about a volume's surface at one MIP level: the
+/// opacity-weighted mean length of the level's Toksvig normals, `Σ α·|n̄| / Σ α` (`rgba`:
+/// RGBA8 texels, alpha last; `normals`: snorm8 texels, SPEC §8.4, same order). Near 1 for a
+/// smooth closed surface (each texel sees one side of it, and its normals agree); small
+/// for thin double-sided sheets, thin beams, fur and foliage, whose two faces (normals
+/// flipped towards each camera) cancel in the six-direction average, or whose normals
+/// point every way within one texel. `None` for an empty level.
+pub fn normal_coherence(rgba: &[u8], normals: &[u8]) -> Option<f32> {
+    let (mut num, mut den) = (0.0f64, 0.0f64);
+    for (c, n) in rgba.chunks_exact(4).zip(normals.chunks_exact(4)) {
+        if c[3] == 0 {
+            continue;
+        }
+        let a = f64::from(c[3]) / 255.0;
+        let len = super::quantize::decode_normal([n[0], n[1], n[2], n[3]]).length();
+        num += a * f64::from(len.min(1.0));
+        den += a;
+    }
+    (den > 0.0).then(|| (num / den) as f32)
+}
+
 /// Running sums `(Σ Nw, Σ α)` of one MIP level over the six directions.
 pub(crate) struct NormalAccum {
     pub levels: Vec<Vec<[f16; 4]>>,

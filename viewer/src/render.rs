@@ -699,14 +699,14 @@ impl Renderer {
         let Some(pass) = &self.volume_pass else {
             return Ok(None);
         };
-        let receive = shadow.map(|(m, bias)| (m, bias, self.ambient));
         volume_plan::plan(
             &self.gpu,
             pass,
             &self.volumes,
             camera,
             params,
-            receive,
+            (self.light_dir, self.ambient),
+            shadow,
             shadow_cutoff,
             self.time,
         )

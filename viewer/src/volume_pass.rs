@@ -17,9 +17,19 @@
 //! Blending is premultiplied "over" into Rgba16Float; slices test against the depth of
 //! the opaque meshes and do not write it. The same pipeline with depth writes and an
 //! alpha test renders volumes into the shadow map ([`VolumePass::shadow_pipeline`]).
+//!
+//! **Runtime shading** (VB §3.2 "Reflectance"): an asset that stores normals (SPEC §8.4)
+//! gets a second 3D texture per band, in the normal slot of the same batch slot, holding
+//! `(α·n̄, α)` in `Rgba16Float` (the Toksvig normal weighted by the texel's colour alpha,
+//! so the sampler's filtering is the alpha-weighted mean the voxelizer's MIP levels use;
+//! src/eval/volume_sampler.rs decodes the same texels). The fragment shader multiplies
+//! the albedo by `ambient + (1 − ambient) · shadow · max(n̄·L, 0)` with the normal taken to
+//! view space by the cell's normal matrix (src/eval/lighting.rs::volume_diffuse_factor,
+//! src/eval/slicer.rs::normal_matrix). Assets without normals keep their baked colour.
 
 use billow_format::{ColourSpace, VolumeAsset};
 use bytemuck::{Pod, Zeroable};
+use glam::Mat3;
 
 use crate::layout::{color_target, entry, sampler, shader, storage, texture, uniform, Pipeline};
 use crate::target::COLOR_FORMAT;
@@ -28,11 +38,11 @@ use crate::{Gpu, ViewError};
 /// Most textures bound at once (the shaders switch over this many slots at most).
 pub const MAX_TEXTURES_PER_BATCH: usize = 32;
 
-/// Textures per batch on `gpu`: as many as the fragment stage may sample, keeping two
-/// for the shadow map and a spare, at most [`MAX_TEXTURES_PER_BATCH`].
+/// Textures per batch on `gpu`: as many colour + normal pairs as the fragment stage may
+/// sample, keeping two for the shadow map and a spare, at most [`MAX_TEXTURES_PER_BATCH`].
 pub fn batch_size(gpu: &Gpu) -> usize {
     let n = gpu.device.limits().max_sampled_textures_per_shader_stage as usize;
-    n.saturating_sub(2).clamp(1, MAX_TEXTURES_PER_BATCH)
+    (n.saturating_sub(2) / 2).clamp(1, MAX_TEXTURES_PER_BATCH)
 }
 
 /// The WGSL of the volume pass for `n` texture slots (prism/plane intersection +
@@ -40,19 +50,29 @@ pub fn batch_size(gpu: &Gpu) -> usize {
 pub fn shader_source(n: usize) -> String {
     let mut bindings = String::new();
     let mut switch = String::new();
+    let mut nswitch = String::new();
     for i in 0..n {
+        let j = n + i;
         bindings += &format!("@group(1) @binding({i}) var vol_tex{i}: texture_3d<f32>;\n");
+        bindings += &format!("@group(1) @binding({j}) var vol_nrm{i}: texture_3d<f32>;\n");
         switch += &format!(
             "        case {i}u: {{ if rep {{ return textureSampleLevel(vol_tex{i}, smp_repeat, uvw, lod); }} \
              return textureSampleLevel(vol_tex{i}, smp_clamp, uvw, lod); }}\n"
         );
+        nswitch += &format!(
+            "        case {i}u: {{ if rep {{ return textureSampleLevel(vol_nrm{i}, smp_repeat, uvw, lod); }} \
+             return textureSampleLevel(vol_nrm{i}, smp_clamp, uvw, lod); }}\n"
+        );
     }
     let sampler = format!(
-        "{bindings}@group(1) @binding({n}) var smp_clamp: sampler;\n\
+        "{bindings}@group(1) @binding({}) var smp_clamp: sampler;\n\
          @group(1) @binding({}) var smp_repeat: sampler;\n\
          fn sample_volume(slot: u32, rep: bool, uvw: vec3<f32>, lod: f32) -> vec4<f32> {{\n\
-             switch slot {{\n{switch}        default: {{ return vec4<f32>(0.0); }}\n    }}\n}}\n",
-        n + 1
+             switch slot {{\n{switch}        default: {{ return vec4<f32>(0.0); }}\n    }}\n}}\n\
+         fn sample_normals(slot: u32, rep: bool, uvw: vec3<f32>, lod: f32) -> vec4<f32> {{\n\
+             switch slot {{\n{nswitch}        default: {{ return vec4<f32>(0.0); }}\n    }}\n}}\n",
+        2 * n,
+        2 * n + 1
     );
     format!(
         "{}\n{}\n{}\n{}",
@@ -84,6 +104,22 @@ impl GpuCell {
         self.pos[0][3] = f32::from_bits(volume);
         self
     }
+    /// The cell's normal matrix (stored normals → view space), row by row in the free
+    /// `w` components: row 0 in `uvw[0..3].w`, row 1 in `uvw[3..6].w`, row 2 in
+    /// `pos[1..4].w` (`volume.wgsl`'s `normal_matrix`).
+    pub fn with_normal_matrix(mut self, m: Mat3) -> Self {
+        for r in 0..3 {
+            let row = m.row(r);
+            for c in 0..3 {
+                match r {
+                    0 => self.uvw[c][3] = row[c],
+                    1 => self.uvw[3 + c][3] = row[c],
+                    _ => self.pos[1 + c][3] = row[c],
+                }
+            }
+        }
+        self
+    }
 }
 
 /// Per-frame uniform of the volume pass.
@@ -95,7 +131,8 @@ pub struct FrameUniform {
     pub view_to_shadow: [[f32; 4]; 4],
     /// x: 1 = receive shadows, y: alpha cut-off of the shadow pipeline.
     pub flags: [f32; 4],
-    /// xyz unused, w: ambient (the unshadowed fraction of the light).
+    /// xyz: unit direction towards the light in view space (shading of volumes with
+    /// normals), w: ambient (the unshadowed fraction of the light).
     pub light: [f32; 4],
 }
 
@@ -107,7 +144,7 @@ pub struct GpuSlice {
 }
 
 /// Per (volume instance, LOD band): `p` = (the band's `v₀·2^f`, its max lod, texture
-/// slot, 1 = repeat addressing in x and z); `q` = (the instance's asset-wide `v₀`, the
+/// slot, flags: 1 = repeat addressing in x and z, + 2 = shaded from normals); `q` = (the instance's asset-wide `v₀`, the
 /// asset's largest LOD `L`, and the slice-LOD range `[f_b, f_{b+1})` the band draws).
 /// Without bands: `q = (v₀, levels − 1, −∞, ∞)` (SPEC §8.6).
 #[repr(C)]
@@ -142,6 +179,8 @@ pub struct GpuVolume {
     pub repeat: bool,
     pub texture: wgpu::Texture,
     pub view: wgpu::TextureView,
+    /// The `(α·n̄, α)` normal texture (module docs), when the asset stores normals.
+    pub normals: Option<(wgpu::Texture, wgpu::TextureView)>,
 }
 
 /// Volume pipelines and layouts.
@@ -185,11 +224,12 @@ impl VolumePass {
                 entry(5, vs, uniform(true)),
             ],
         });
-        let mut batch_entries: Vec<_> = (0..batch as u32)
+        // Colour slots 0..batch, their normal slots batch..2·batch, then the samplers.
+        let mut batch_entries: Vec<_> = (0..2 * batch as u32)
             .map(|i| entry(i, fs, texture(wgpu::TextureViewDimension::D3)))
             .collect();
         for i in 0..2 {
-            batch_entries.push(entry(batch as u32 + i, fs, sampler()));
+            batch_entries.push(entry(2 * batch as u32 + i, fs, sampler()));
         }
         let batch_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("volume textures"),
@@ -269,17 +309,30 @@ impl VolumePass {
         }
     }
 
-    /// The bind group of a batch: `views[i]` in slot `i`, the dummy in the others.
-    pub fn batch_bind_group(&self, gpu: &Gpu, views: &[&wgpu::TextureView]) -> wgpu::BindGroup {
-        let mut entries: Vec<wgpu::BindGroupEntry> = (0..self.batch)
-            .map(|i| wgpu::BindGroupEntry {
-                binding: i as u32,
-                resource: wgpu::BindingResource::TextureView(views.get(i).unwrap_or(&&self.dummy)),
+    /// The bind group of a batch: `views[i]` (colour, normals) in slot `i`, the dummy in
+    /// the others and where a texture has no normals.
+    pub fn batch_bind_group(
+        &self,
+        gpu: &Gpu,
+        views: &[(&wgpu::TextureView, Option<&wgpu::TextureView>)],
+    ) -> wgpu::BindGroup {
+        let mut entries: Vec<wgpu::BindGroupEntry> = (0..2 * self.batch)
+            .map(|i| {
+                let v = views.get(i % self.batch);
+                let view = match (i < self.batch, v) {
+                    (true, Some(v)) => v.0,
+                    (false, Some(v)) => v.1.unwrap_or(&self.dummy),
+                    _ => &self.dummy,
+                };
+                wgpu::BindGroupEntry {
+                    binding: i as u32,
+                    resource: wgpu::BindingResource::TextureView(view),
+                }
             })
             .collect();
         for (i, s) in self.samplers.iter().enumerate() {
             entries.push(wgpu::BindGroupEntry {
-                binding: (self.batch + i) as u32,
+                binding: (2 * self.batch + i) as u32,
                 resource: wgpu::BindingResource::Sampler(s),
             });
         }
@@ -303,12 +356,20 @@ impl VolumePass {
             gpu,
             asset.level_dims(0),
             &asset.levels,
+            asset.normals.as_deref(),
             cs,
             repeat,
         )?];
         for b in &asset.bands {
             // Bands address their textures with clamp-to-edge (SPEC §8.6).
-            out.push(upload_levels(gpu, b.dims, &b.levels, cs, false)?);
+            out.push(upload_levels(
+                gpu,
+                b.dims,
+                &b.levels,
+                b.normals.as_deref(),
+                cs,
+                false,
+            )?);
         }
         Ok(out)
     }
@@ -319,6 +380,7 @@ fn upload_levels(
     gpu: &Gpu,
     dims0: [u32; 3],
     levels: &[Vec<u8>],
+    normals: Option<&[Vec<u8>]>,
     colour_space: ColourSpace,
     repeat: bool,
 ) -> Result<GpuVolume, ViewError> {
@@ -334,8 +396,54 @@ fn upload_levels(
         ColourSpace::SrgbPremultiplied => wgpu::TextureFormat::Rgba8UnormSrgb,
         ColourSpace::LinearPremultiplied => wgpu::TextureFormat::Rgba8Unorm,
     };
+    let (texture, view) = texture_3d(gpu, "volume", dims0, format, levels.iter().map(|b| &b[..]));
+    // (α·n̄, α) per texel, f16: the colour alpha weights the stored snorm8 normal.
+    let normals = normals.map(|nl| {
+        let texels: Vec<Vec<u8>> = nl
+            .iter()
+            .zip(levels)
+            .map(|(n, c)| {
+                let mut out = Vec::with_capacity(n.len() * 2);
+                for (t, c) in n.chunks_exact(4).zip(c.chunks_exact(4)) {
+                    let a = f32::from(c[3]) / 255.0;
+                    let d = |b: u8| (b as i8 as f32 / 127.0).max(-1.0) * a;
+                    for v in [d(t[0]), d(t[1]), d(t[2]), a] {
+                        out.extend_from_slice(&half::f16::from_f32(v).to_le_bytes());
+                    }
+                }
+                out
+            })
+            .collect();
+        texture_3d(
+            gpu,
+            "volume normals",
+            dims0,
+            wgpu::TextureFormat::Rgba16Float,
+            texels.iter().map(|b| &b[..]),
+        )
+    });
+    Ok(GpuVolume {
+        dims0,
+        levels: count,
+        repeat,
+        texture,
+        view,
+        normals,
+    })
+}
+
+/// A 3D texture of `format` with one MIP level per item of `levels` (tightly packed).
+fn texture_3d<'a>(
+    gpu: &Gpu,
+    label: &str,
+    dims0: [u32; 3],
+    format: wgpu::TextureFormat,
+    levels: impl ExactSizeIterator<Item = &'a [u8]>,
+) -> (wgpu::Texture, wgpu::TextureView) {
+    let count = levels.len() as u32;
+    let bpp = format.block_copy_size(None).unwrap_or(4);
     let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("volume"),
+        label: Some(label),
         size: wgpu::Extent3d {
             width: dims0[0],
             height: dims0[1],
@@ -348,7 +456,7 @@ fn upload_levels(
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     });
-    for (l, bytes) in levels.iter().enumerate() {
+    for (l, bytes) in levels.enumerate() {
         let d = billow_format::mip_dims(dims0, l as u32);
         gpu.queue.write_texture(
             wgpu::TexelCopyTextureInfo {
@@ -360,7 +468,7 @@ fn upload_levels(
             bytes,
             wgpu::TexelCopyBufferLayout {
                 offset: 0,
-                bytes_per_row: Some(4 * d[0]),
+                bytes_per_row: Some(bpp * d[0]),
                 rows_per_image: Some(d[1]),
             },
             wgpu::Extent3d {
@@ -371,11 +479,5 @@ fn upload_levels(
         );
     }
     let view = texture.create_view(&Default::default());
-    Ok(GpuVolume {
-        dims0,
-        levels: count,
-        repeat,
-        texture,
-        view,
-    })
+    (texture, view)
 }

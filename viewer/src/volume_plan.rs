@@ -9,7 +9,7 @@
 
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use glam::{Mat4, Vec3};
+use glam::{Mat3, Mat4, Vec3};
 
 use crate::render::{FrameStats, VolumeEntry, VERTICES_PER_INSTANCE};
 use crate::slab::partition;
@@ -83,9 +83,13 @@ pub fn batch_bind_groups(
     gpu: &Gpu,
     volumes: &[VolumeEntry],
 ) -> Vec<wgpu::BindGroup> {
-    let views: Vec<&wgpu::TextureView> = volumes
+    let views: Vec<(&wgpu::TextureView, Option<&wgpu::TextureView>)> = volumes
         .iter()
-        .flat_map(|v| v.bands.iter().map(|b| &b.gpu.view))
+        .flat_map(|v| {
+            v.bands
+                .iter()
+                .map(|b| (&b.gpu.view, b.gpu.normals.as_ref().map(|n| &n.1)))
+        })
         .collect();
     views
         .chunks(pass.batch)
@@ -103,9 +107,11 @@ fn storage<T: bytemuck::Pod + Default>(gpu: &Gpu, label: &str, data: &[T]) -> wg
     )
 }
 
-/// Plans the volumes for `camera` at time `time` (animated cells). `receive`: (camera
-/// view → shadow clip, depth bias, ambient) when the slices receive shadows;
-/// `shadow_cutoff`: the alpha cut-off when this plan renders into the shadow map.
+/// Plans the volumes for `camera` at time `time` (animated cells). `light`: the world
+/// direction towards the light and the ambient fraction, which shade the volumes that
+/// store normals; `receive`: (camera view → shadow clip, depth bias) when the slices
+/// receive shadows; `shadow_cutoff`: the alpha cut-off when this plan renders into the
+/// shadow map.
 #[allow(clippy::too_many_arguments)]
 pub fn plan(
     gpu: &Gpu,
@@ -113,7 +119,8 @@ pub fn plan(
     volumes: &[VolumeEntry],
     camera: &ViewCamera,
     params: SliceParams,
-    receive: Option<(Mat4, f32, f32)>,
+    light: (Vec3, f32),
+    receive: Option<(Mat4, f32)>,
     shadow_cutoff: Option<f32>,
     time: f32,
 ) -> Result<Option<VolumePlan>, ViewError> {
@@ -161,8 +168,12 @@ pub fn plan(
                 continue; // no cell with a usable uvw mapping: nothing to draw
             };
             v0_all = Some(v0_all.map_or(v0, |b| b.min(v0)));
+            // Stored normals → view space (src/eval/slicer.rs::normal_matrix): box assets
+            // through the instance and the camera; shells per cell.
+            let object_to_view = Mat3::from_mat4(camera.view * *m);
             for (bi, (b, w)) in v.bands.iter().zip(&world).enumerate() {
                 let entry = vparams.len() as u32;
+                let shaded = b.gpu.normals.is_some();
                 let lo = if bi == 0 { -1.0 } else { b.first_level as f32 };
                 let hi = v.bands.get(bi + 1).map_or(1e30, |n| n.first_level as f32);
                 vparams.push(GpuVolumeParams {
@@ -170,7 +181,7 @@ pub fn plan(
                         v0 * (b.first_level as f32).exp2(),
                         (b.gpu.levels - 1) as f32,
                         (b.texture % pass.batch) as f32,
-                        f32::from(u8::from(b.gpu.repeat)),
+                        f32::from(u8::from(b.gpu.repeat) + 2 * u8::from(shaded)),
                     ],
                     q: [v0, v.max_lod as f32, lo, hi],
                 });
@@ -181,7 +192,17 @@ pub fn plan(
                         a = a.min(-p[2]);
                         z = z.max(-p[2]);
                     }
-                    cells.push(GpuCell::new(&pos, &c.uvw).with_volume(entry));
+                    let mut cell = GpuCell::new(&pos, &c.uvw).with_volume(entry);
+                    if shaded {
+                        let shell = b.gpu.repeat;
+                        cell = cell.with_normal_matrix(normal_matrix(
+                            object_to_view,
+                            shell,
+                            &pos,
+                            &c.uvw,
+                        ));
+                    }
+                    cells.push(cell);
                     ranges.push((a, z));
                     batch_of_cell.push((b.texture / pass.batch) as u32);
                     entry_of_cell.push(entry);
@@ -260,7 +281,9 @@ pub fn plan(
         }
     }
 
-    let (view_to_shadow, bias, ambient) = receive.unwrap_or((Mat4::IDENTITY, 0.0, 1.0));
+    let (view_to_shadow, bias) = receive.unwrap_or((Mat4::IDENTITY, 0.0));
+    let l = camera.view.transform_vector3(light.0).normalize_or(Vec3::Y);
+    let ambient = light.1.clamp(0.0, 1.0);
     let frame = FrameUniform {
         proj: camera.projection().to_cols_array_2d(),
         view_to_shadow: view_to_shadow.to_cols_array_2d(),
@@ -270,7 +293,7 @@ pub fn plan(
             bias,
             0.0,
         ],
-        light: [0.0, 0.0, 0.0, ambient],
+        light: [l.x, l.y, l.z, ambient],
     };
     let gpu_slices: Vec<GpuSlice> = slices
         .iter()
@@ -371,4 +394,33 @@ fn restrict_to_bands(
         let (far, near) = (slices[first].0, slices[last - 1].0);
         *r = (r.0.max(near), r.1.min(far));
     }
+}
+
+/// The matrix taking a volume's stored normals to view space for one cell: a port of
+/// `src/eval/slicer.rs::normal_matrix` (see there). `object_to_view`: the linear part of
+/// camera view × instance; `shell`: the asset repeats its tile (normals in tile space);
+/// `pos`: the cell in view space.
+pub fn normal_matrix(
+    object_to_view: Mat3,
+    shell: bool,
+    pos: &[[f32; 3]; 6],
+    uvw: &[[f32; 3]; 6],
+) -> Mat3 {
+    let m = if shell {
+        let p = |i: usize| Vec3::from(pos[i]) - Vec3::from(pos[0]);
+        let t = |i: usize| Vec3::from(uvw[i]) - Vec3::from(uvw[0]);
+        let pm = Mat3::from_cols(p(1), p(2), p(3));
+        let tm = Mat3::from_cols(t(1), t(2), t(3));
+        if tm.determinant().abs() < 1e-20 {
+            return Mat3::ZERO;
+        }
+        pm * tm.inverse()
+    } else {
+        object_to_view
+    };
+    let det = m.determinant();
+    if !(det.abs() > 1e-30 && det.is_finite()) {
+        return Mat3::ZERO;
+    }
+    m.inverse().transpose()
 }

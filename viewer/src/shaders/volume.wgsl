@@ -2,14 +2,16 @@
 // of a draw, a fixed budget of 9 vertices (a fan of 3 triangles covers the ≤ 5-gon);
 // the vertex shader intersects its cell with its slice plane (prism_plane.wgsl,
 // prepended, with shadow_lookup.wgsl and the texture-slot switch `sample_volume`).
-// Opacity correction and MIP choice as src/eval/slicer.rs.
+// Opacity correction and MIP choice as src/eval/slicer.rs. Volumes with normals are
+// shaded at runtime (VB §3.2): albedo × (ambient + (1 − ambient) · shadow · max(n̄·L, 0))
+// with n̄ the Toksvig normal (src/eval/lighting.rs::volume_diffuse_factor).
 
 struct Frame {
     proj: mat4x4<f32>,
     view_to_shadow: mat4x4<f32>,
     // x: 1 = receive shadows, y: alpha cut-off of the shadow pipeline, z: shadow bias
     flags: vec4<f32>,
-    // w: ambient
+    // xyz: unit direction towards the light (view space), w: ambient
     light: vec4<f32>,
 }
 
@@ -19,7 +21,8 @@ struct Slice {
 }
 
 struct VolumeParams {
-    // The band's: x: v0 · 2^first_level, y: its max lod, z: texture slot, w: 1 = repeat
+    // The band's: x: v0 · 2^first_level, y: its max lod, z: texture slot,
+    // w: flags (1 = repeat, + 2 = shaded from normals)
     p: vec4<f32>,
     // The asset's: x: v0, y: largest LOD L, z..w: slice-LOD range [f_b, f_{b+1}) of the band
     q: vec4<f32>,
@@ -44,9 +47,13 @@ struct VOut {
     @location(0) uvw: vec3<f32>,
     // x: lod, y: opacity-correction ratio d / d0
     @location(1) @interpolate(flat) lod_ratio: vec2<f32>,
-    // x: texture slot, y: 1 = repeat addressing
+    // x: texture slot, y: flags (1 = repeat addressing, 2 = shaded from normals)
     @location(2) @interpolate(flat) slot: vec2<u32>,
     @location(3) shadow_clip: vec4<f32>,
+    // Rows of the cell's normal matrix (stored normals → view space).
+    @location(4) @interpolate(flat) n0: vec3<f32>,
+    @location(5) @interpolate(flat) n1: vec3<f32>,
+    @location(6) @interpolate(flat) n2: vec3<f32>,
 }
 
 @vertex
@@ -71,6 +78,9 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
         out.lod_ratio = vec2<f32>(0.0);
         out.slot = vec2<u32>(0u);
         out.shadow_clip = vec4<f32>(0.0, 0.0, 0.0, 1.0);
+        out.n0 = vec3<f32>(0.0);
+        out.n1 = vec3<f32>(0.0);
+        out.n2 = vec3<f32>(0.0);
         return out;
     }
     let k = select(tri + corner, 0u, corner == 0u);
@@ -85,6 +95,10 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
     let d0 = params.q.x * exp2(lambda);
     out.lod_ratio = vec2<f32>(lod, d / d0);
     out.slot = vec2<u32>(u32(vol.z), u32(vol.w));
+    // The normal matrix rows (volume_pass.rs, GpuCell::with_normal_matrix).
+    out.n0 = vec3<f32>(c.uvw[0].w, c.uvw[1].w, c.uvw[2].w);
+    out.n1 = vec3<f32>(c.uvw[3].w, c.uvw[4].w, c.uvw[5].w);
+    out.n2 = vec3<f32>(c.pos[1].w, c.pos[2].w, c.pos[3].w);
     return out;
 }
 
@@ -131,15 +145,44 @@ fn correct_premultiplied(c: vec4<f32>, ratio: f32) -> vec4<f32> {
 }
 
 fn sample_corrected(in: VOut) -> vec4<f32> {
-    let s = sample_volume(in.slot.x, in.slot.y == 1u, in.uvw, in.lod_ratio.x);
+    let s = sample_volume(in.slot.x, (in.slot.y & 1u) != 0u, in.uvw, in.lod_ratio.x);
     return correct_premultiplied(s, in.lod_ratio.y);
+}
+
+// The Toksvig normal at the fragment in view space: the filtered (α·n̄, α) over α (the
+// alpha-weighted mean, length ≤ 1; src/eval/volume_sampler.rs::normal_from_weighted),
+// turned by the normal matrix, its length kept (src/eval/slicer.rs::shade_normal).
+fn toksvig_normal(in: VOut) -> vec3<f32> {
+    let s = sample_normals(in.slot.x, (in.slot.y & 1u) != 0u, in.uvw, in.lod_ratio.x);
+    if !(s.w > 0.0) {
+        return vec3<f32>(0.0);
+    }
+    var n = s.xyz / s.w;
+    let len = length(n);
+    if len > 1.0 {
+        n = n / len;
+    }
+    let v = vec3<f32>(dot(in.n0, n), dot(in.n1, n), dot(in.n2, n));
+    let lv = length(v);
+    if !(lv > 0.0) {
+        return vec3<f32>(0.0);
+    }
+    return v * (min(len, 1.0) / lv);
 }
 
 @fragment
 fn fs_main(in: VOut) -> @location(0) vec4<f32> {
     var c = sample_corrected(in);
+    var vis = 1.0;
     if frame.flags.x > 0.5 {
-        let vis = shadow_visibility(in.shadow_clip, frame.flags.z);
+        vis = shadow_visibility(in.shadow_clip, frame.flags.z);
+    }
+    if (in.slot.y & 2u) != 0u {
+        // Runtime shading (src/eval/lighting.rs::volume_diffuse_factor, one-sided).
+        let d = max(dot(toksvig_normal(in), frame.light.xyz), 0.0);
+        let k = frame.light.w + (1.0 - frame.light.w) * vis * d;
+        c = vec4<f32>(c.rgb * k, c.a);
+    } else if frame.flags.x > 0.5 {
         let k = frame.light.w + (1.0 - frame.light.w) * vis;
         c = vec4<f32>(c.rgb * k, c.a);
     }
