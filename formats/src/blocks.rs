@@ -5,6 +5,10 @@
 //! layout of a `BC7` 3D texture in Vulkan, WebGPU and KTX2). Sides that are not a multiple
 //! of 4 end in partial blocks whose texels beyond the level are ignored.
 //!
+//! Blocks whose 16 texels are all zero bytes (empty space: most of a volume, most of an
+//! atlas) are not stored: the chunk starts with a mask of one bit per block (set: stored),
+//! padded to 16 bytes, followed by the stored blocks in order ([`sparse_len`]).
+//!
 //! The reader decodes every compressed level into the raw texels of the 1.0 chunks, so
 //! the typed assets ([`crate::VolumeAsset`], [`crate::CloudAsset`]) look the same whether
 //! the file was compressed or not; [`VolumeBlocks`] and [`CloudBlocks`] keep the blocks
@@ -23,20 +27,103 @@ pub const TAG_ANB7: [u8; 4] = *b"ANB7";
 /// Cloud mesh texture, BC7 (replaces `MTEX`).
 pub const TAG_MTB7: [u8; 4] = *b"MTB7";
 
-/// Bytes of the BC7 blocks of a `w`×`h`×`d` level.
+/// A BC7 block that decodes to 16 zero texels (mode 6, every endpoint, p-bit and index
+/// zero): what an omitted block of a colour stream is, for a renderer that needs every
+/// block ([`expand_blocks`]).
+pub const ZERO_BLOCK: [u8; 16] = [0x40, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0];
+
+/// Bytes of all the BC7 blocks of a `w`×`h`×`d` level, dense.
 pub fn bc7_len(w: u32, h: u32, d: u32) -> u64 {
-    u64::from(w.div_ceil(4)) * u64::from(h.div_ceil(4)) * u64::from(d) * BC7_BLOCK_BYTES as u64
+    block_count([w, h, d]) * BC7_BLOCK_BYTES as u64
 }
 
-/// Decodes the BC7 blocks of a `dims` level into RGBA8 texels, x fastest, then y, then z.
-/// `blocks` must be exactly [`bc7_len`] bytes (callers check it first).
-pub fn decode_bc7(blocks: &[u8], dims: [u32; 3]) -> Vec<u8> {
+/// Number of 4×4 blocks of a `dims` level: `⌈w/4⌉·⌈h/4⌉·d`.
+pub fn block_count(dims: [u32; 3]) -> u64 {
+    u64::from(dims[0].div_ceil(4)) * u64::from(dims[1].div_ceil(4)) * u64::from(dims[2])
+}
+
+/// Bytes of the block mask of `n` blocks: one bit each, padded to a multiple of 16.
+pub fn mask_len(n: u64) -> u64 {
+    n.div_ceil(8).next_multiple_of(BC7_BLOCK_BYTES as u64)
+}
+
+/// Checks a compressed chunk payload of a `dims` level (SPEC §12.1): the mask, no bit set
+/// beyond the last block, and exactly 16 bytes per set bit after it. Returns the number
+/// of stored blocks.
+pub fn sparse_len(payload: &[u8], dims: [u32; 3]) -> Result<u64, String> {
+    let n = block_count(dims);
+    let m = mask_len(n);
+    if (payload.len() as u64) < m {
+        return Err(format!(
+            "{} bytes, shorter than the {m}-byte block mask of {n} blocks",
+            payload.len()
+        ));
+    }
+    let mask = &payload[..m as usize];
+    let stored: u64 = mask.iter().map(|b| u64::from(b.count_ones())).sum();
+    let beyond = (n..m * 8).any(|i| mask[(i / 8) as usize] >> (i % 8) & 1 == 1);
+    if beyond {
+        return Err(format!("block mask has bits set beyond its {n} blocks"));
+    }
+    let want = m + stored * BC7_BLOCK_BYTES as u64;
+    if payload.len() as u64 != want {
+        return Err(format!(
+            "{} bytes, expected {want} (a {m}-byte mask and {stored} stored blocks)",
+            payload.len()
+        ));
+    }
+    Ok(stored)
+}
+
+/// Packs dense blocks (`stored[i]`: block `i` is kept) into a chunk payload.
+pub fn pack_blocks(dense: &[u8], stored: &[bool]) -> Vec<u8> {
+    let n = stored.len() as u64;
+    let mut out = vec![0u8; mask_len(n) as usize];
+    for (i, (&s, b)) in stored
+        .iter()
+        .zip(dense.chunks_exact(BC7_BLOCK_BYTES))
+        .enumerate()
+    {
+        if s {
+            out[i / 8] |= 1 << (i % 8);
+            out.extend_from_slice(b);
+        }
+    }
+    out
+}
+
+/// The dense blocks of a checked payload ([`sparse_len`]), omitted blocks as `fill`.
+pub fn expand_blocks(payload: &[u8], dims: [u32; 3], fill: [u8; 16]) -> Vec<u8> {
+    let n = block_count(dims) as usize;
+    let m = mask_len(n as u64) as usize;
+    let mut stored = payload[m..].chunks_exact(BC7_BLOCK_BYTES);
+    let mut out = Vec::with_capacity(n * BC7_BLOCK_BYTES);
+    for i in 0..n {
+        if payload[i / 8] >> (i % 8) & 1 == 1 {
+            out.extend_from_slice(stored.next().expect("checked payload"));
+        } else {
+            out.extend_from_slice(&fill);
+        }
+    }
+    out
+}
+
+/// Decodes a checked compressed payload ([`sparse_len`]) of a `dims` level into RGBA8
+/// texels, x fastest, then y, then z; the texels of omitted blocks are `omitted` bytes
+/// (0, or 0x80 for normals before [`unorm_to_snorm_in_place`]).
+pub fn decode_bc7(payload: &[u8], dims: [u32; 3], omitted: u8) -> Vec<u8> {
     let [w, h, d] = dims.map(|v| v as usize);
     let (bw, bh) = (w.div_ceil(4), h.div_ceil(4));
-    debug_assert_eq!(blocks.len(), bw * bh * d * BC7_BLOCK_BYTES);
-    let mut out = vec![0u8; w * h * d * 4];
+    let n = bw * bh * d;
+    let m = mask_len(n as u64) as usize;
+    let mut out = vec![omitted; w * h * d * 4];
     let mut tile = [0u8; 64];
-    for (i, b) in blocks.chunks_exact(BC7_BLOCK_BYTES).enumerate() {
+    let mut stored = payload[m..].chunks_exact(BC7_BLOCK_BYTES);
+    for i in 0..n {
+        if payload[i / 8] >> (i % 8) & 1 == 0 {
+            continue;
+        }
+        let b = stored.next().expect("checked payload");
         let (bx, by, z) = (i % bw, (i / bw) % bh, i / (bw * bh));
         bcdec_rs::bc7(b, &mut tile, 16);
         for ty in 0..4 {
@@ -83,7 +170,7 @@ pub struct CloudBlocks {
     pub textures: Vec<Vec<u8>>,
 }
 
-/// Checks that `levels[i]` is exactly the blocks of `dims_of(i)`.
+/// Checks that `levels[i]` is a valid compressed payload of `dims_of(i)` ([`sparse_len`]).
 pub(crate) fn check_block_levels(
     what: &str,
     levels: &[Vec<u8>],
@@ -91,22 +178,21 @@ pub(crate) fn check_block_levels(
 ) -> Result<(), String> {
     for (i, l) in levels.iter().enumerate() {
         let [w, h, d] = dims_of(i as u32);
-        let want = bc7_len(w, h, d);
-        if l.len() as u64 != want {
-            return Err(format!(
-                "{what} level {i} is {} bytes, expected {want} (BC7 blocks of {w}x{h}x{d} texels)",
-                l.len()
-            ));
-        }
+        sparse_len(l, [w, h, d])
+            .map_err(|e| format!("{what} level {i} ({w}x{h}x{d} texels): {e}"))?;
     }
     Ok(())
 }
 
-/// Decodes a whole chain (`levels[i]` of `dims_of(i)`).
-pub(crate) fn decode_levels(levels: &[Vec<u8>], dims_of: impl Fn(u32) -> [u32; 3]) -> Vec<Vec<u8>> {
+/// Decodes a whole checked chain (`levels[i]` of `dims_of(i)`).
+pub(crate) fn decode_levels(
+    levels: &[Vec<u8>],
+    dims_of: impl Fn(u32) -> [u32; 3],
+    omitted: u8,
+) -> Vec<Vec<u8>> {
     levels
         .iter()
         .enumerate()
-        .map(|(i, l)| decode_bc7(l, dims_of(i as u32)))
+        .map(|(i, l)| decode_bc7(l, dims_of(i as u32), omitted))
         .collect()
 }

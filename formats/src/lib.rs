@@ -25,8 +25,9 @@ pub use bands::{
     LodBand, BAND_RECORD_BYTES, MAX_FIRST_LEVEL, TAG_BCEL, TAG_BLEV, TAG_BNRM, TAG_VBND,
 };
 pub use blocks::{
-    bc7_len, decode_bc7, snorm_to_unorm, unorm_to_snorm_in_place, CloudBlocks, VolumeBlocks,
-    BC7_BLOCK_BYTES, TAG_ANB7, TAG_ATB7, TAG_MTB7, TAG_VLB7, TAG_VNB7,
+    bc7_len, block_count, decode_bc7, expand_blocks, mask_len, pack_blocks, snorm_to_unorm,
+    sparse_len, unorm_to_snorm_in_place, CloudBlocks, VolumeBlocks, BC7_BLOCK_BYTES, TAG_ANB7,
+    TAG_ATB7, TAG_MTB7, TAG_VLB7, TAG_VNB7, ZERO_BLOCK,
 };
 pub use cloud::{
     Atlas, AtlasRect, Billboard, CloudAsset, CloudError, CloudLevel, Mesh, MeshMaterial,

@@ -389,7 +389,7 @@ impl VolumeAsset {
             };
             count("VLB7", bc_colour.len())?;
             check_block_levels("VLB7", &bc_colour, dims_of).map_err(FormatError::Volume)?;
-            levels = decode_levels(&bc_colour, dims_of);
+            levels = decode_levels(&bc_colour, dims_of, 0);
             let bc_normals = match v.normals {
                 None if bc_normals.is_empty() => None,
                 None => return bad("VNB7 chunks present but header.volume.normals is None".into()),
@@ -397,7 +397,7 @@ impl VolumeAsset {
                     count("VNB7", bc_normals.len())?;
                     check_block_levels("VNB7", &bc_normals, dims_of)
                         .map_err(FormatError::Volume)?;
-                    normals = decode_levels(&bc_normals, dims_of);
+                    normals = decode_levels(&bc_normals, dims_of, 0x80);
                     normals.iter_mut().for_each(|l| unorm_to_snorm_in_place(l));
                     Some(bc_normals)
                 }

@@ -24,12 +24,14 @@ const VOLUME_FIXTURE: &str = "v1_2_volume_bc7.billow";
 const CLOUD_FIXTURE: &str = "v1_2_cloud_bc7.billow";
 const CLOUD_1_1: &str = "v1_1_cloud_normals.billow";
 
-/// BC7 blocks of a `dims` level (the generator's encoder: edge texels repeated).
-fn encode(texels: &[u8], dims: [u32; 3]) -> Vec<u8> {
+/// The compressed payload of a `dims` level (the generator's encoder: edge texels
+/// repeated, tiles of all-`omit` texels omitted).
+fn encode(texels: &[u8], dims: [u32; 3], omit: u8) -> Vec<u8> {
     let [w, h, d] = dims.map(|v| v as usize);
     let (bw, bh) = (w.div_ceil(4), h.div_ceil(4));
     let (pw, ph) = (bw * 4, bh * 4);
     let mut out = Vec::new();
+    let mut keep = Vec::new();
     for z in 0..d {
         let mut padded = vec![0u8; pw * ph * 4];
         for y in 0..ph {
@@ -42,12 +44,23 @@ fn encode(texels: &[u8], dims: [u32; 3]) -> Vec<u8> {
         let mut b = vec![0u8; bw * bh * 16];
         compress_rgba8(v, &padded, &mut b, pw as u32, ph as u32, (pw * 4) as u32);
         out.extend(b);
+        for by in 0..bh {
+            for bx in 0..bw {
+                let tile = (0..4).flat_map(|ty| {
+                    let o = ((by * 4 + ty) * pw + bx * 4) * 4;
+                    padded[o..o + 16].to_vec()
+                });
+                keep.push(tile.collect::<Vec<u8>>().iter().any(|&b| b != omit));
+            }
+        }
     }
-    out
+    pack_blocks(&out, &keep)
 }
 
-/// The second decoder: `block_compression`'s, on the same blocks.
-fn other_decoder(blocks: &[u8], dims: [u32; 3]) -> Vec<u8> {
+/// The second decoder: `block_compression`'s, on the same blocks (omitted ones as
+/// [`ZERO_BLOCK`], which decodes to zero).
+fn other_decoder(payload: &[u8], dims: [u32; 3]) -> Vec<u8> {
+    let blocks = expand_blocks(payload, dims, ZERO_BLOCK);
     let [w, h, d] = dims.map(|v| v as usize);
     let (bw, bh) = (w.div_ceil(4), h.div_ceil(4));
     let mut out = vec![0u8; w * h * d * 4];
@@ -127,10 +140,17 @@ fn volume_source() -> VolumeAsset {
             [1.0, 1.0, 1.0],
         ],
     }];
+    // Slice z = 1's partial block (x = 4) is empty: omitted from both chunks.
+    let (mut c0, mut n0) = (colour(40, 0), normal(40));
+    for y in 0..4 {
+        let i = 4 * (4 + 5 * (y + 4));
+        c0[i..i + 4].fill(0);
+        n0[i..i + 4].fill(0);
+    }
     VolumeAsset {
         header,
-        levels: vec![colour(40, 0), colour(4, 3)],
-        normals: Some(vec![normal(40), normal(4)]),
+        levels: vec![c0, colour(4, 3)],
+        normals: Some(vec![n0, normal(4)]),
         cells,
         bands: Vec::new(),
     }
@@ -142,14 +162,14 @@ fn compress_volume(a: &mut VolumeAsset) -> VolumeBlocks {
     let mut b = VolumeBlocks::default();
     for (i, l) in a.levels.iter_mut().enumerate() {
         let d = mip_dims(dims, i as u32);
-        b.colour.push(encode(l, d));
-        *l = decode_bc7(b.colour.last().unwrap(), d);
+        b.colour.push(encode(l, d, 0));
+        *l = decode_bc7(b.colour.last().unwrap(), d, 0);
     }
     let mut nb = Vec::new();
     for (i, l) in a.normals.iter_mut().flatten().enumerate() {
         let d = mip_dims(dims, i as u32);
-        nb.push(encode(&snorm_to_unorm(l), d));
-        *l = decode_bc7(nb.last().unwrap(), d);
+        nb.push(encode(&snorm_to_unorm(l), d, 0x80));
+        *l = decode_bc7(nb.last().unwrap(), d, 0x80);
         unorm_to_snorm_in_place(l);
     }
     b.normals = Some(nb);
@@ -162,8 +182,8 @@ fn compress_cloud(a: &mut CloudAsset) -> CloudBlocks {
         let mut out = Vec::new();
         for (k, l) in levels.iter_mut().enumerate() {
             let d = mip_dims([w, h, 1], k as u32);
-            out.push(encode(l, d));
-            *l = decode_bc7(out.last().unwrap(), d);
+            out.push(encode(l, d, 0));
+            *l = decode_bc7(out.last().unwrap(), d, 0);
         }
         out
     };
@@ -175,8 +195,8 @@ fn compress_cloud(a: &mut CloudAsset) -> CloudBlocks {
     b.atlas_normals = Some(normals);
     for t in &mut a.textures {
         let d = [t.width, t.height, 1];
-        b.textures.push(encode(&t.texels, d));
-        t.texels = decode_bc7(b.textures.last().unwrap(), d);
+        b.textures.push(encode(&t.texels, d, 0));
+        t.texels = decode_bc7(b.textures.last().unwrap(), d, 0);
     }
     b
 }
@@ -229,17 +249,22 @@ fn decodes_frozen_v1_2_volume_fixture() {
     assert_eq!(tags(&bytes), "HEAD VLB7 VLB7 VNB7 VNB7 CELL END ");
     let c = from_bytes(&bytes).unwrap();
     let lens: Vec<usize> = c.chunks.iter().map(|ch| ch.data.len()).collect();
-    // 5×4×2: 2 blocks per slice, 2 slices; 2×2×1: one block.
-    assert_eq!(lens, [64, 16, 64, 16, 144]);
+    // 5×4×2: 2 blocks per slice, 2 slices, one omitted: a 16-byte mask and 3 blocks;
+    // 2×2×1: the mask and one block.
+    assert_eq!(lens, [64, 32, 64, 32, 144]);
+    assert_eq!(c.chunks[0].data[0], 0b0111, "the block mask of level 0");
     let (a, blocks) = VolumeAsset::from_bytes_with_blocks(&bytes).unwrap();
     let blocks = blocks.expect("a compressed volume");
     assert_eq!(blocks.colour.len(), 2);
     assert_eq!(a.level_dims(0), [5, 4, 2]);
     assert_eq!(a.levels[0].len(), 5 * 4 * 2 * 4);
     assert_eq!(a.levels[1].len(), 2 * 2 * 4);
-    // Decoded texels: (0,0,0), (4,3,1) (the last, in a partial block) and level 1's first.
+    // Decoded texels: (0,0,0), (4,3,0) (in a partial block) and level 1's first; (4,3,1)
+    // is in the omitted block: zero.
     assert_eq!(&a.levels[0][0..4], &VOLUME_TEXEL_000);
-    assert_eq!(&a.levels[0][156..160], &VOLUME_TEXEL_431);
+    assert_eq!(&a.levels[0][76..80], &VOLUME_TEXEL_430);
+    assert_eq!(&a.levels[0][156..160], &[0; 4]);
+    assert_eq!(&a.normals.as_ref().unwrap()[0][156..160], &[0; 4]);
     assert_eq!(&a.levels[1][0..4], &VOLUME_LEVEL1_TEXEL_0);
     // The normals' first texel, as signed bytes.
     let n = a.normals.as_ref().unwrap();
@@ -298,8 +323,13 @@ fn decodes_frozen_v1_2_cloud_fixture() {
             assert!(max_diff(p, q) <= 16, "atlas level {k}: {}", max_diff(p, q));
         }
     }
-    // Each 4×2 level-0 atlas is one block; 2×1 and 1×1 levels one block each.
-    assert!(blocks.atlases.iter().flatten().all(|b| b.len() == 16));
+    // Each 4×2 level-0 atlas is one block; 2×1 and 1×1 levels one block each: a 16-byte
+    // mask and at most one block.
+    assert!(blocks
+        .atlases
+        .iter()
+        .flatten()
+        .all(|b| b.len() == 16 || b.len() == 32));
     assert_eq!(&a.atlases[0].mips[0][0..4], &CLOUD_ATLAS0_TEXEL0);
     for (i, (b, at)) in blocks.atlases.iter().zip(&a.atlases).enumerate() {
         for (k, (bl, l)) in b.iter().zip(&at.mips).enumerate() {
@@ -311,14 +341,14 @@ fn decodes_frozen_v1_2_cloud_fixture() {
 }
 
 // Values of the frozen files (set when they were generated, never changed after).
-const VOLUME_FIXTURE_LEN: usize = 920;
-const VOLUME_FIXTURE_CRC: u32 = 0xc30d_950b;
+const VOLUME_FIXTURE_LEN: usize = 952;
+const VOLUME_FIXTURE_CRC: u32 = 0xd793_b179;
 const VOLUME_TEXEL_000: [u8; 4] = [20, 14, 1, 40];
-const VOLUME_TEXEL_431: [u8; 4] = [120, 80, 17, 240];
+const VOLUME_TEXEL_430: [u8; 4] = [120, 80, 6, 240];
 const VOLUME_LEVEL1_TEXEL_0: [u8; 4] = [93, 60, 4, 190];
 const VOLUME_NORMAL_000: [i8; 4] = [-38, 61, 103, 4];
-const CLOUD_FIXTURE_LEN: usize = 2168;
-const CLOUD_FIXTURE_CRC: u32 = 0xd6cf_df8b;
+const CLOUD_FIXTURE_LEN: usize = 2344;
+const CLOUD_FIXTURE_CRC: u32 = 0x6883_1791;
 const CLOUD_ATLAS0_TEXEL0: [u8; 4] = [1, 9, 17, 25];
 
 #[test]

@@ -8,7 +8,7 @@ use super::{
     bad, Atlas, AtlasRect, Billboard, CloudAsset, CloudError, CloudLevel, Mesh, MeshMaterial,
     MeshTexture, MeshVertex, NO_INDEX,
 };
-use crate::blocks::{bc7_len, decode_bc7, CloudBlocks};
+use crate::blocks::{decode_bc7, sparse_len, CloudBlocks};
 use crate::container::{encode, ChunkRef};
 use crate::{from_bytes, write_atomic, AssetKind, Container, ElemType};
 
@@ -197,15 +197,15 @@ impl CloudAsset {
 
     /// Whether `b` has the shape of this asset's textures (sizes only).
     fn check_blocks(&self, b: &CloudBlocks) -> Result<(), CloudError> {
-        let lv = |w: u32, h: u32, k: usize| {
+        let dims = |w: u32, h: u32, k: usize| {
             let s = |x: u32| x.checked_shr(k as u32).unwrap_or(0).max(1);
-            bc7_len(s(w), s(h), 1)
+            [s(w), s(h), 1]
         };
         let shape = |l: &[Vec<u8>], w, h, n: usize| {
             l.len() == n
                 && l.iter()
                     .enumerate()
-                    .all(|(k, x)| x.len() as u64 == lv(w, h, k))
+                    .all(|(k, x)| sparse_len(x, dims(w, h, k)).is_ok())
         };
         let atl_ok = b.atlases.len() == self.atlases.len()
             && b.atlases
@@ -229,7 +229,7 @@ impl CloudAsset {
             && b.textures
                 .iter()
                 .zip(&self.textures)
-                .all(|(l, t)| l.len() as u64 == lv(t.width, t.height, 0));
+                .all(|(l, t)| sparse_len(l, [t.width, t.height, 1]).is_ok());
         if atl_ok && nrm_ok && tex_ok {
             Ok(())
         } else {
@@ -389,10 +389,11 @@ impl CloudAsset {
                                 "atlas {i}: fewer {tag} chunks than its MIP count"
                             ));
                         };
-                        if b.len() as u64 != bc7_len(d(a[0]), d(a[1]), 1) {
-                            return bad(format!("atlas {i} {tag} level {k} is {} bytes", b.len()));
+                        let dims = [d(a[0]), d(a[1]), 1];
+                        if let Err(e) = sparse_len(&b, dims) {
+                            return bad(format!("atlas {i} {tag} level {k}: {e}"));
                         }
-                        raw.push(decode_bc7(&b, [d(a[0]), d(a[1]), 1]));
+                        raw.push(decode_bc7(&b, dims, 0));
                         lv.push(b);
                     }
                     out.push(lv);
@@ -474,10 +475,10 @@ impl CloudAsset {
                         t[0], t[1]
                     ));
                 }
-                if b.len() as u64 != bc7_len(t[0], t[1], 1) {
-                    return bad(format!("mesh texture {i}: MTB7 is {} bytes", b.len()));
+                if let Err(e) = sparse_len(&b, [t[0], t[1], 1]) {
+                    return bad(format!("mesh texture {i}: MTB7: {e}"));
                 }
-                mtex.push(decode_bc7(&b, [t[0], t[1], 1]));
+                mtex.push(decode_bc7(&b, [t[0], t[1], 1], 0));
                 cb.textures.push(b);
             }
         }
