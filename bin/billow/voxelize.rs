@@ -4,6 +4,7 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Instant;
 
+use billow::compress::{compress_volume, Compression};
 use billow::export::{check_slices, ktx2_bytes, slice_bytes, slice_file_name, SliceFormat};
 use billow::import::{import, ImportOptions};
 use billow::provenance::{source_info, tool_version, with_companions};
@@ -61,6 +62,10 @@ pub struct Args {
     /// for a tileable volume texture used by `billow shell`.
     #[arg(long)]
     bounds: Option<String>,
+    /// Texel storage: bc (BC7 blocks, one byte per texel, format 1.2) or none (raw RGBA8,
+    /// readable by format 1.0/1.1 readers). --ktx2 carries the same blocks.
+    #[arg(long, default_value = "bc")]
+    compress: String,
     /// Also write the volume as a KTX2 3D texture with its MIP chain (premultiplied, sRGB).
     #[arg(long, value_name = "FILE")]
     ktx2: Option<PathBuf>,
@@ -103,6 +108,7 @@ struct Seconds {
     mip: f64,
     combine: f64,
     quantize: f64,
+    compress: f64,
     write: f64,
     total: f64,
 }
@@ -116,6 +122,7 @@ struct Summary {
     combine: String,
     supersample: u32,
     normals: bool,
+    compress: String,
     triangles: usize,
     non_empty_voxels: u64,
     fragments: u64,
@@ -247,6 +254,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     }
     opts.align = args.align;
     opts.bake = parse_bake(&args.bake, args.ao_rays, args.ao_distance)?;
+    let compression: Compression = args.compress.parse().map_err(|e| usage("--compress", e))?;
     if let Some(b) = &args.bounds {
         opts.bounds = Some(parse_bounds(b)?);
     }
@@ -326,21 +334,28 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let stats = volume.stats;
     let (dims, mip_count) = (volume.dims(), volume.mip_count());
     let params = bake_params(&volume, &opts, &BTreeMap::new());
-    let asset = volume.into_asset(&tool_version(), Some(source), params);
+    let mut asset = volume.into_asset(&tool_version(), Some(source), params);
+    let compress_start = Instant::now();
+    let blocks = (compression == Compression::Bc).then(|| {
+        asset.header.params.insert("compress".into(), "bc7".into());
+        compress_volume(&mut asset)
+    });
+    let compress_s = compress_start.elapsed().as_secs_f64();
     let write_start = Instant::now();
     // All outputs go to temporary files first and are renamed into place together, -o last
     // (see staged.rs): a failure or a kill leaves the old outputs as they were.
     let mut stage = Staged::new(&args.output);
     // Streamed from the texel data (no file-sized copy in memory).
     let bytes = asset
-        .with_parts(|parts| {
+        .with_parts_with(blocks.as_ref(), |parts| {
             let len = parts.iter().map(|p| p.len() as u64).sum::<u64>();
             stage.stage_parts(&args.output, parts).map(|()| len)
         })
         .map_err(|e| CliError::new(Code::Internal, e))?
         .map_err(|e| out_err(&args.output, e))?;
     if let Some(path) = &args.ktx2 {
-        let ktx = ktx2_bytes(&asset, path).map_err(|e| CliError::new(Code::from(&e), e))?;
+        let ktx = ktx2_bytes(&asset, blocks.as_ref(), path)
+            .map_err(|e| CliError::new(Code::from(&e), e))?;
         stage.stage(path, &ktx).map_err(|e| out_err(path, e))?;
     }
     let mut written: Vec<PathBuf> = Vec::new();
@@ -374,6 +389,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         combine: opts.combine.to_string(),
         supersample: opts.supersample,
         normals: opts.normals,
+        compress: args.compress.clone(),
         triangles: stats.triangles,
         non_empty_voxels: stats.non_empty_voxels,
         fragments: stats.fragments,
@@ -386,6 +402,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             mip: stats.seconds.mip,
             combine: stats.seconds.combine,
             quantize: stats.seconds.quantize,
+            compress: compress_s,
             write: write_s,
             total: start.elapsed().as_secs_f64(),
         },
