@@ -18,11 +18,12 @@
 //! the opaque meshes and do not write it. The same pipeline with depth writes and an
 //! alpha test renders volumes into the shadow map ([`VolumePass::shadow_pipeline`]).
 
-use billow_format::{ColourSpace, VolumeAsset};
+use billow_format::{ColourSpace, VolumeAsset, VolumeBlocks};
 use bytemuck::{Pod, Zeroable};
 
 use crate::layout::{color_target, entry, sampler, shader, storage, texture, uniform, Pipeline};
 use crate::target::COLOR_FORMAT;
+use crate::texture_bc::upload_bc7;
 use crate::{Gpu, ViewError};
 
 /// Most textures bound at once (the shaders switch over this many slots at most).
@@ -142,6 +143,8 @@ pub struct GpuVolume {
     pub repeat: bool,
     pub texture: wgpu::Texture,
     pub view: wgpu::TextureView,
+    /// Uploaded as BC7 blocks (format 1.2, [`Gpu::block_upload`]) rather than RGBA8 texels.
+    pub blocks: bool,
 }
 
 /// Volume pipelines and layouts.
@@ -293,25 +296,68 @@ impl VolumePass {
     /// Uploads `asset`'s textures: the base texture first, then one per LOD band
     /// (SPEC §8.6), each with its MIP chain.
     pub fn upload(&self, gpu: &Gpu, asset: &VolumeAsset) -> Result<Vec<GpuVolume>, ViewError> {
+        self.upload_with(gpu, asset, None)
+    }
+
+    /// [`VolumePass::upload`] of a compressed asset: the base texture is uploaded as its BC7
+    /// `blocks` when the device allows it ([`Gpu::block_upload`]), else as the decoded
+    /// texels in `asset.levels` (what the reader decoded on load).
+    pub fn upload_with(
+        &self,
+        gpu: &Gpu,
+        asset: &VolumeAsset,
+        blocks: Option<&VolumeBlocks>,
+    ) -> Result<Vec<GpuVolume>, ViewError> {
         asset
             .validate()
             .map_err(|e| ViewError::InvalidAsset(e.to_string()))?;
         let rep = repeat_axes(asset);
         let repeat = rep[0] || rep[2];
         let cs = asset.header.colour_space;
-        let mut out = vec![upload_levels(
-            gpu,
-            asset.level_dims(0),
-            &asset.levels,
-            cs,
-            repeat,
-        )?];
+        let dims0 = asset.level_dims(0);
+        let direct = blocks
+            .filter(|b| b.colour.len() == asset.levels.len() && gpu.block_upload(dims0, true));
+        let mut out = vec![match direct {
+            Some(b) => {
+                check_3d(gpu, dims0, b.colour.len() as u32)?;
+                let texture = upload_bc7(
+                    gpu,
+                    "volume (BC7)",
+                    dims0,
+                    wgpu::TextureDimension::D3,
+                    &b.colour,
+                    cs == ColourSpace::SrgbPremultiplied,
+                );
+                let view = texture.create_view(&Default::default());
+                GpuVolume {
+                    dims0,
+                    levels: b.colour.len() as u32,
+                    repeat,
+                    texture,
+                    view,
+                    blocks: true,
+                }
+            }
+            None => upload_levels(gpu, dims0, &asset.levels, cs, repeat)?,
+        }];
         for b in &asset.bands {
             // Bands address their textures with clamp-to-edge (SPEC §8.6).
             out.push(upload_levels(gpu, b.dims, &b.levels, cs, false)?);
         }
         Ok(out)
     }
+}
+
+/// A `dims0` volume with `count` levels fits a 3D texture of the device.
+fn check_3d(gpu: &Gpu, dims0: [u32; 3], count: u32) -> Result<(), ViewError> {
+    let max3d = gpu.device.limits().max_texture_dimension_3d;
+    if dims0.iter().any(|&d| d > max3d) || count == 0 {
+        return Err(ViewError::InvalidAsset(format!(
+            "volume {}x{}x{} with {count} levels does not fit a 3D texture (max {max3d})",
+            dims0[0], dims0[1], dims0[2]
+        )));
+    }
+    Ok(())
 }
 
 /// One 3D texture with its MIP chain (`levels[l]` is `mip_dims(dims0, l)` texels).
@@ -323,13 +369,7 @@ fn upload_levels(
     repeat: bool,
 ) -> Result<GpuVolume, ViewError> {
     let count = levels.len() as u32;
-    let max3d = gpu.device.limits().max_texture_dimension_3d;
-    if dims0.iter().any(|&d| d > max3d) || count == 0 {
-        return Err(ViewError::InvalidAsset(format!(
-            "volume {}x{}x{} with {count} levels does not fit a 3D texture (max {max3d})",
-            dims0[0], dims0[1], dims0[2]
-        )));
-    }
+    check_3d(gpu, dims0, count)?;
     let format = match colour_space {
         ColourSpace::SrgbPremultiplied => wgpu::TextureFormat::Rgba8UnormSrgb,
         ColourSpace::LinearPremultiplied => wgpu::TextureFormat::Rgba8Unorm,
@@ -377,5 +417,6 @@ fn upload_levels(
         repeat,
         texture,
         view,
+        blocks: false,
     })
 }
