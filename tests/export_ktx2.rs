@@ -35,7 +35,7 @@ fn asset(dims: [u32; 3], mip_count: u32, cs: ColourSpace) -> VolumeAsset {
 }
 
 fn check(a: &VolumeAsset, path: &Path) {
-    write_ktx2(a, path).unwrap();
+    write_ktx2(a, None, path).unwrap();
     let bytes = std::fs::read(path).unwrap();
     // For checking with outside tools: BILLOW_KTX2_DUMP=DIR keeps a copy of each file.
     if let Some(dump) = std::env::var_os("BILLOW_KTX2_DUMP") {
@@ -43,7 +43,7 @@ fn check(a: &VolumeAsset, path: &Path) {
     }
     assert_eq!(
         bytes,
-        ktx2_bytes(a, path).unwrap(),
+        ktx2_bytes(a, None, path).unwrap(),
         "write_ktx2 writes ktx2_bytes"
     );
     let r = ktx2::Reader::new(&bytes[..]).expect("ktx2 crate parses the file");
@@ -191,7 +191,7 @@ fn invalid_asset_is_refused_naming_the_file() {
     let path = dir.path().join("bad.ktx2");
     let mut a = asset([4, 4, 4], 3, ColourSpace::SrgbPremultiplied);
     a.levels[1].pop();
-    let e = write_ktx2(&a, &path).unwrap_err();
+    let e = write_ktx2(&a, None, &path).unwrap_err();
     assert!(matches!(e, ExportError::InvalidAsset { .. }));
     assert!(e.to_string().contains("bad.ktx2"), "{e}");
     assert!(!path.exists());
@@ -201,7 +201,12 @@ fn invalid_asset_is_refused_naming_the_file() {
 fn unwritable_destination_names_the_file() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("missing-dir").join("x.ktx2");
-    let e = write_ktx2(&asset([2, 2, 2], 1, ColourSpace::SrgbPremultiplied), &path).unwrap_err();
+    let e = write_ktx2(
+        &asset([2, 2, 2], 1, ColourSpace::SrgbPremultiplied),
+        None,
+        &path,
+    )
+    .unwrap_err();
     assert!(e.to_string().contains("x.ktx2"), "{e}");
 }
 
@@ -224,7 +229,7 @@ fn khronos_ktx_validate_if_installed() {
         ("l.ktx2", ColourSpace::LinearPremultiplied),
     ] {
         let path = dir.path().join(name);
-        write_ktx2(&asset([8, 4, 6], 4, cs), &path).unwrap();
+        write_ktx2(&asset([8, 4, 6], 4, cs), None, &path).unwrap();
         let out = std::process::Command::new("ktx")
             .arg("validate")
             .arg(&path)
