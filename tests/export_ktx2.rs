@@ -243,3 +243,51 @@ fn khronos_ktx_validate_if_installed() {
         );
     }
 }
+
+/// A compressed volume's KTX2 (`voxelize --compress bc`, the default) carries its BC7
+/// blocks: `BC7_SRGB_BLOCK`/`BC7_UNORM_BLOCK`, a BC7 DFD, each level every block of each z
+/// slice (the omitted empty blocks as a block that decodes to zero).
+#[test]
+fn compressed_volumes_export_their_bc7_blocks() {
+    let dir = tempfile::tempdir().unwrap();
+    for (cs, vk, fmt) in [
+        (ColourSpace::SrgbPremultiplied, 146u32, ktx2::Format::BC7_SRGB_BLOCK),
+        (ColourSpace::LinearPremultiplied, 145, ktx2::Format::BC7_UNORM_BLOCK),
+    ] {
+        let mut a = asset([10, 6, 3], 4, cs);
+        // An empty corner: its block is omitted in the asset and a zero block in the KTX2.
+        for y in 0..4 {
+            for x in 0..4 {
+                let i = 4 * (x + 10 * y);
+                a.levels[0][i..i + 4].fill(0);
+            }
+        }
+        let blocks = billow::compress::compress_volume(&mut a);
+        let path = dir.path().join(format!("bc{vk}.ktx2"));
+        let bytes = ktx2_bytes(&a, Some(&blocks), &path).unwrap();
+        let r = ktx2::Reader::new(&bytes[..]).expect("ktx2 crate parses the file");
+        let h = r.header();
+        assert_eq!(h.format, Some(fmt));
+        assert_eq!(u32::from_le_bytes(bytes[12..16].try_into().unwrap()), vk);
+        assert_eq!([h.pixel_width, h.pixel_height, h.pixel_depth], [10, 6, 3]);
+        assert_eq!(h.level_count, 4);
+        assert_eq!(h.supercompression_scheme, None);
+        assert_eq!(r.is_alpha_premultiplied(), Some(true));
+        let dfd = r.basic_dfd().unwrap();
+        assert_eq!(dfd.color_model, Some(ktx2::ColorModel::BC7));
+        assert_eq!(dfd.texel_block_dimensions.map(|d| d.get()), [4, 4, 1, 1]);
+        for (i, l) in r.levels().enumerate() {
+            let d = mip_dims([10, 6, 3], i as u32);
+            let dense = billow_format::expand_blocks(&blocks.colour[i], d, billow_format::ZERO_BLOCK);
+            assert_eq!(l.data, &dense[..], "level {i}: the asset's blocks");
+            assert_eq!(l.data.len() as u64, billow_format::bc7_len(d[0], d[1], d[2]));
+            // And they decode to the asset's texels.
+            let packed = billow_format::pack_blocks(l.data, &vec![true; l.data.len() / 16]);
+            assert_eq!(billow_format::decode_bc7(&packed, d, 0), a.levels[i]);
+        }
+        assert_eq!(&bytes[..], &ktx2_bytes(&a, Some(&blocks), &path).unwrap()[..]);
+        // The first level-0 block (the empty corner) is the zero block.
+        let l0 = r.levels().next().unwrap();
+        assert_eq!(&l0.data[..16], &billow_format::ZERO_BLOCK);
+    }
+}
