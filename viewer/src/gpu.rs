@@ -91,8 +91,8 @@ impl Gpu {
         let f = self.device.features();
         f.contains(wgpu::Features::TEXTURE_COMPRESSION_BC)
             && (!d3 || f.contains(wgpu::Features::TEXTURE_COMPRESSION_BC_SLICED_3D))
-            && dims[0] % 4 == 0
-            && dims[1] % 4 == 0
+            && dims[0].is_multiple_of(4)
+            && dims[1].is_multiple_of(4)
     }
 
     /// "name (backend, device type)".
