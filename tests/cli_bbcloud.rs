@@ -160,10 +160,17 @@ fn json_summary_and_atlas_dump() {
                 flips += u64::from((p.0[3] >= 128) != (q[3] >= 128));
                 n += 1;
             }
-            assert!(diff as f64 / n as f64 <= 2.0, "mean |Δα| {}", diff as f64 / n as f64);
+            assert!(
+                diff as f64 / n as f64 <= 2.0,
+                "mean |Δα| {}",
+                diff as f64 / n as f64
+            );
             // (Measured: 8 of 1024 on the 32² cross atlas, 0.8 %; docs/accuracy.md has the
             // whole cloud's figures.)
-            assert!(flips as f64 / n as f64 <= 0.01, "{flips} of {n} alpha tests flip");
+            assert!(
+                flips as f64 / n as f64 <= 0.01,
+                "{flips} of {n} alpha tests flip"
+            );
         }
     }
     assert_eq!(files(d), ["atlases", "oak.billow", "oak.glb"]);

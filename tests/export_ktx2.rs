@@ -251,8 +251,16 @@ fn khronos_ktx_validate_if_installed() {
 fn compressed_volumes_export_their_bc7_blocks() {
     let dir = tempfile::tempdir().unwrap();
     for (cs, vk, fmt) in [
-        (ColourSpace::SrgbPremultiplied, 146u32, ktx2::Format::BC7_SRGB_BLOCK),
-        (ColourSpace::LinearPremultiplied, 145, ktx2::Format::BC7_UNORM_BLOCK),
+        (
+            ColourSpace::SrgbPremultiplied,
+            146u32,
+            ktx2::Format::BC7_SRGB_BLOCK,
+        ),
+        (
+            ColourSpace::LinearPremultiplied,
+            145,
+            ktx2::Format::BC7_UNORM_BLOCK,
+        ),
     ] {
         let mut a = asset([10, 6, 3], 4, cs);
         // An empty corner: its block is omitted in the asset and a zero block in the KTX2.
@@ -278,14 +286,21 @@ fn compressed_volumes_export_their_bc7_blocks() {
         assert_eq!(dfd.texel_block_dimensions.map(|d| d.get()), [4, 4, 1, 1]);
         for (i, l) in r.levels().enumerate() {
             let d = mip_dims([10, 6, 3], i as u32);
-            let dense = billow_format::expand_blocks(&blocks.colour[i], d, billow_format::ZERO_BLOCK);
+            let dense =
+                billow_format::expand_blocks(&blocks.colour[i], d, billow_format::ZERO_BLOCK);
             assert_eq!(l.data, &dense[..], "level {i}: the asset's blocks");
-            assert_eq!(l.data.len() as u64, billow_format::bc7_len(d[0], d[1], d[2]));
+            assert_eq!(
+                l.data.len() as u64,
+                billow_format::bc7_len(d[0], d[1], d[2])
+            );
             // And they decode to the asset's texels.
             let packed = billow_format::pack_blocks(l.data, &vec![true; l.data.len() / 16]);
             assert_eq!(billow_format::decode_bc7(&packed, d, 0), a.levels[i]);
         }
-        assert_eq!(&bytes[..], &ktx2_bytes(&a, Some(&blocks), &path).unwrap()[..]);
+        assert_eq!(
+            &bytes[..],
+            &ktx2_bytes(&a, Some(&blocks), &path).unwrap()[..]
+        );
         // The first level-0 block (the empty corner) is the zero block.
         let l0 = r.levels().next().unwrap();
         assert_eq!(&l0.data[..16], &billow_format::ZERO_BLOCK);
