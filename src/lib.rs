@@ -2,6 +2,7 @@
 pub mod bbcloud;
 pub mod bvh;
 pub mod camera;
+pub mod compress;
 pub mod emptyspace;
 pub mod eval;
 pub mod export;

@@ -151,11 +151,26 @@ fn json_summary_and_atlas_dump() {
             let img = image::open(&p).expect("PNG").into_rgba8();
             let at = &asset.atlases[(lv.first_atlas + k) as usize];
             assert_eq!(img.dimensions(), (at.width, at.height));
-            // Alpha is the asset's, byte for byte.
-            assert!(img
-                .pixels()
-                .zip(at.mips[0].chunks_exact(4))
-                .all(|(p, q)| p.0[3] == q[3]));
+            // Alpha is the asset's before BC7 compression (the PNGs are made from the
+            // uncompressed texels; the asset holds the blocks, SPEC §12): within the
+            // encoder's error, and the 0.5 alpha test agrees almost everywhere.
+            let (mut diff, mut flips, mut n) = (0u64, 0u64, 0u64);
+            for (p, q) in img.pixels().zip(at.mips[0].chunks_exact(4)) {
+                diff += u64::from(p.0[3].abs_diff(q[3]));
+                flips += u64::from((p.0[3] >= 128) != (q[3] >= 128));
+                n += 1;
+            }
+            assert!(
+                diff as f64 / n as f64 <= 2.0,
+                "mean |Δα| {}",
+                diff as f64 / n as f64
+            );
+            // (Measured: 8 of 1024 on the 32² cross atlas, 0.8 %; docs/accuracy.md has the
+            // whole cloud's figures.)
+            assert!(
+                flips as f64 / n as f64 <= 0.01,
+                "{flips} of {n} alpha tests flip"
+            );
         }
     }
     assert_eq!(files(d), ["atlases", "oak.billow", "oak.glb"]);

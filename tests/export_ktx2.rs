@@ -35,7 +35,7 @@ fn asset(dims: [u32; 3], mip_count: u32, cs: ColourSpace) -> VolumeAsset {
 }
 
 fn check(a: &VolumeAsset, path: &Path) {
-    write_ktx2(a, path).unwrap();
+    write_ktx2(a, None, path).unwrap();
     let bytes = std::fs::read(path).unwrap();
     // For checking with outside tools: BILLOW_KTX2_DUMP=DIR keeps a copy of each file.
     if let Some(dump) = std::env::var_os("BILLOW_KTX2_DUMP") {
@@ -43,7 +43,7 @@ fn check(a: &VolumeAsset, path: &Path) {
     }
     assert_eq!(
         bytes,
-        ktx2_bytes(a, path).unwrap(),
+        ktx2_bytes(a, None, path).unwrap(),
         "write_ktx2 writes ktx2_bytes"
     );
     let r = ktx2::Reader::new(&bytes[..]).expect("ktx2 crate parses the file");
@@ -191,7 +191,7 @@ fn invalid_asset_is_refused_naming_the_file() {
     let path = dir.path().join("bad.ktx2");
     let mut a = asset([4, 4, 4], 3, ColourSpace::SrgbPremultiplied);
     a.levels[1].pop();
-    let e = write_ktx2(&a, &path).unwrap_err();
+    let e = write_ktx2(&a, None, &path).unwrap_err();
     assert!(matches!(e, ExportError::InvalidAsset { .. }));
     assert!(e.to_string().contains("bad.ktx2"), "{e}");
     assert!(!path.exists());
@@ -201,7 +201,12 @@ fn invalid_asset_is_refused_naming_the_file() {
 fn unwritable_destination_names_the_file() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("missing-dir").join("x.ktx2");
-    let e = write_ktx2(&asset([2, 2, 2], 1, ColourSpace::SrgbPremultiplied), &path).unwrap_err();
+    let e = write_ktx2(
+        &asset([2, 2, 2], 1, ColourSpace::SrgbPremultiplied),
+        None,
+        &path,
+    )
+    .unwrap_err();
     assert!(e.to_string().contains("x.ktx2"), "{e}");
 }
 
@@ -224,7 +229,7 @@ fn khronos_ktx_validate_if_installed() {
         ("l.ktx2", ColourSpace::LinearPremultiplied),
     ] {
         let path = dir.path().join(name);
-        write_ktx2(&asset([8, 4, 6], 4, cs), &path).unwrap();
+        write_ktx2(&asset([8, 4, 6], 4, cs), None, &path).unwrap();
         let out = std::process::Command::new("ktx")
             .arg("validate")
             .arg(&path)
@@ -236,5 +241,68 @@ fn khronos_ktx_validate_if_installed() {
             String::from_utf8_lossy(&out.stdout),
             String::from_utf8_lossy(&out.stderr)
         );
+    }
+}
+
+/// A compressed volume's KTX2 (`voxelize --compress bc`) carries its BC7
+/// blocks: `BC7_SRGB_BLOCK`/`BC7_UNORM_BLOCK`, a BC7 DFD, each level every block of each z
+/// slice (the omitted empty blocks as a block that decodes to zero).
+#[test]
+fn compressed_volumes_export_their_bc7_blocks() {
+    let dir = tempfile::tempdir().unwrap();
+    for (cs, vk, fmt) in [
+        (
+            ColourSpace::SrgbPremultiplied,
+            146u32,
+            ktx2::Format::BC7_SRGB_BLOCK,
+        ),
+        (
+            ColourSpace::LinearPremultiplied,
+            145,
+            ktx2::Format::BC7_UNORM_BLOCK,
+        ),
+    ] {
+        let mut a = asset([10, 6, 3], 4, cs);
+        // An empty corner: its block is omitted in the asset and a zero block in the KTX2.
+        for y in 0..4 {
+            for x in 0..4 {
+                let i = 4 * (x + 10 * y);
+                a.levels[0][i..i + 4].fill(0);
+            }
+        }
+        let blocks = billow::compress::compress_volume(&mut a);
+        let path = dir.path().join(format!("bc{vk}.ktx2"));
+        let bytes = ktx2_bytes(&a, Some(&blocks), &path).unwrap();
+        let r = ktx2::Reader::new(&bytes[..]).expect("ktx2 crate parses the file");
+        let h = r.header();
+        assert_eq!(h.format, Some(fmt));
+        assert_eq!(u32::from_le_bytes(bytes[12..16].try_into().unwrap()), vk);
+        assert_eq!([h.pixel_width, h.pixel_height, h.pixel_depth], [10, 6, 3]);
+        assert_eq!(h.level_count, 4);
+        assert_eq!(h.supercompression_scheme, None);
+        assert_eq!(r.is_alpha_premultiplied(), Some(true));
+        let dfd = r.basic_dfd().unwrap();
+        assert_eq!(dfd.color_model, Some(ktx2::ColorModel::BC7));
+        assert_eq!(dfd.texel_block_dimensions.map(|d| d.get()), [4, 4, 1, 1]);
+        for (i, l) in r.levels().enumerate() {
+            let d = mip_dims([10, 6, 3], i as u32);
+            let dense =
+                billow_format::expand_blocks(&blocks.colour[i], d, billow_format::ZERO_BLOCK);
+            assert_eq!(l.data, &dense[..], "level {i}: the asset's blocks");
+            assert_eq!(
+                l.data.len() as u64,
+                billow_format::bc7_len(d[0], d[1], d[2])
+            );
+            // And they decode to the asset's texels.
+            let packed = billow_format::pack_blocks(l.data, &vec![true; l.data.len() / 16]);
+            assert_eq!(billow_format::decode_bc7(&packed, d, 0), a.levels[i]);
+        }
+        assert_eq!(
+            &bytes[..],
+            &ktx2_bytes(&a, Some(&blocks), &path).unwrap()[..]
+        );
+        // The first level-0 block (the empty corner) is the zero block.
+        let l0 = r.levels().next().unwrap();
+        assert_eq!(&l0.data[..16], &billow_format::ZERO_BLOCK);
     }
 }

@@ -62,8 +62,10 @@ fn read_rust(path: &Path) -> Value {
         "major": 1,
         "minor": minor,
         "kind": format!("{:?}", c.header.kind),
-        "chunks": tags,
+        "chunks": tags.clone(),
     });
+    // Block-compressed texel chunks (format 1.2, SPEC §12).
+    v["compressed"] = serde_json::json!(tags.iter().any(|t| t.ends_with("B7")));
     if let Some(vol) = &c.header.volume {
         v["dims"] = serde_json::json!(vol.dims);
         v["mip_levels"] = serde_json::json!(vol.mip_count);
@@ -101,8 +103,26 @@ fn independent_reader_agrees_with_the_rust_reader() {
             "--align",
             "8",
             "--normals",
+            "--compress",
+            "bc",
         ],
-        vec!["emptyspace", "vol.billow", "-o", "pruned.billow"],
+        // Raw texels (--compress none), and the volume emptyspace prunes: BC7's error
+        // leaves faint alpha in empty texels of non-empty blocks, which at 64³ keeps
+        // emptyspace (threshold 0) from pruning anything.
+        vec![
+            "voxelize",
+            oak,
+            "-o",
+            "raw.billow",
+            "--res",
+            "64",
+            "--align",
+            "8",
+            "--normals",
+            "--compress",
+            "none",
+        ],
+        vec!["emptyspace", "raw.billow", "-o", "pruned.billow"],
         vec![
             "shell",
             oak,
@@ -133,17 +153,26 @@ fn independent_reader_agrees_with_the_rust_reader() {
         .filter(|p| p.extension().is_some_and(|e| e == "billow"))
         .collect();
     paths.sort();
-    assert_eq!(paths.len(), 4, "{paths:?}");
-    paths.extend(["vol", "pruned", "cloud", "shell"].map(|n| d.join(format!("{n}.billow"))));
+    assert_eq!(paths.len(), 6, "{paths:?}");
+    let f = paths.len();
+    paths.extend(["vol", "pruned", "cloud", "shell", "raw"].map(|n| d.join(format!("{n}.billow"))));
     let (lines, code) = read_py(py, &paths);
     for (line, path) in lines.iter().zip(&paths) {
         assert_agree(line, path);
     }
     assert_eq!(code, 0);
-    // The baked assets exercise what the fixtures are too small to: normals, bands, ANRM.
-    assert_eq!(lines[4]["normals"], true, "{}", lines[4]);
-    assert!(lines[5]["bands"].as_u64().unwrap() >= 1, "{}", lines[5]);
-    assert_eq!(lines[6]["normal_maps"], true, "{}", lines[6]);
+    // The baked assets exercise what the fixtures are too small to: normals, bands, ANRM,
+    // block compression (`--compress bc`) and raw texels (--compress none, the volumes' default).
+    assert_eq!(lines[f]["normals"], true, "{}", lines[f]);
+    assert!(
+        lines[f + 1]["bands"].as_u64().unwrap() >= 1,
+        "{}",
+        lines[f + 1]
+    );
+    assert_eq!(lines[f + 2]["normal_maps"], true, "{}", lines[f + 2]);
+    for (i, compressed) in [(f, true), (f + 2, true), (f + 3, true), (f + 4, false)] {
+        assert_eq!(lines[i]["compressed"], compressed, "{}", lines[i]);
+    }
 }
 
 #[test]

@@ -8,6 +8,7 @@ use billow::bbcloud::{
     bake, estimate, straight, BbcloudOptions, BbcloudStats, Estimate, Shading, Stage, ViewDirs,
     ViewPreference, MAX_ATLAS_BYTES,
 };
+use billow::compress::{compress_cloud, Compression};
 use billow::export::gltf::cloud_glb_bytes_with;
 use billow::export::{GltfAlpha, GltfOptions};
 use billow::import::{import, ImportOptions};
@@ -96,6 +97,11 @@ pub struct Args {
     /// Alpha mode of the billboards in the .glb: mask (alpha test at 0.5) or blend.
     #[arg(long, value_enum, default_value_t = GltfAlphaArg::Mask)]
     gltf_alpha: GltfAlphaArg,
+    /// Texel storage: bc (BC7 blocks for the atlases, normal maps and mesh textures, format
+    /// 1.2) or none (raw RGBA8, readable by format 1.0/1.1 readers). --gltf and --atlas
+    /// stay PNG, made from the uncompressed texels.
+    #[arg(long, default_value = "bc")]
+    compress: String,
     /// Also dump every atlas (MIP level 0) as an 8-bit straight-alpha PNG into DIR
     /// (created if missing): lod{L}_atlas{I}.png.
     #[arg(long, value_name = "DIR")]
@@ -132,6 +138,8 @@ struct Summary<'a> {
     stats: &'a BbcloudStats,
     estimate: Estimate,
     seconds_import: f64,
+    compress: String,
+    seconds_compress: f64,
     seconds_write: f64,
     seconds_export: f64,
     gltf: Option<String>,
@@ -240,6 +248,7 @@ const SLOW_SECONDS: f64 = 60.0;
 
 pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let start = Instant::now();
+    let compression: Compression = args.compress.parse().map_err(|e| usage("--compress", e))?;
     let mut outputs = vec![("-o", args.output.as_path())];
     outputs.extend(args.gltf.as_deref().map(|g| ("--gltf", g)));
     outputs.extend(args.depfile.as_deref().map(|g| ("--depfile", g)));
@@ -369,7 +378,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             },
         );
     };
-    let (asset, stats) = bake(&scene, &opts, &tool_version(), Some(source), &report)
+    let (mut asset, stats) = bake(&scene, &opts, &tool_version(), Some(source), &report)
         .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;
     bar.finish();
 
@@ -408,9 +417,15 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     };
     let seconds_export = export_start.elapsed().as_secs_f64();
 
+    let compress_start = Instant::now();
+    let blocks = (compression == Compression::Bc).then(|| {
+        asset.header.params.insert("compress".into(), "bc7".into());
+        compress_cloud(&mut asset)
+    });
+    let seconds_compress = compress_start.elapsed().as_secs_f64();
     let write_start = Instant::now();
     let bytes = asset
-        .to_bytes()
+        .to_bytes_with(blocks.as_ref())
         .map_err(|e| CliError::new(Code::Internal, e))?;
     // Every file goes to a temporary name first; all are renamed into place only when all
     // are written, so a failure leaves no new file (and no new folder) behind.
@@ -462,6 +477,8 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         stats: &stats,
         estimate: cost,
         seconds_import,
+        compress: args.compress.clone(),
+        seconds_compress,
         seconds_write,
         seconds_export,
         gltf: args.gltf.as_ref().map(|p| p.display().to_string()),

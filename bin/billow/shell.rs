@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 
+use billow::compress::{compress_volume, Compression};
 use billow::import::{import, ImportOptions};
 use billow::shell::{shell, shell_asset, with_surface_normals};
 use billow_format::VolumeAsset;
@@ -10,7 +11,7 @@ use glam::Vec2;
 use serde::Serialize;
 
 use crate::depfile;
-use crate::exit::{CliError, Code};
+use crate::exit::{usage, CliError, Code};
 use crate::output::{print_json, refuse_clobbering, refuse_clobbering_read, warn};
 use crate::staged::{out_err, Staged};
 use crate::Ctx;
@@ -35,6 +36,10 @@ pub struct Args {
     /// with each prism; the tile's colour is then albedo.
     #[arg(long)]
     surface_normals: bool,
+    /// Texel storage: bc (BC7 blocks, format 1.2; a compressed volume's blocks are kept as
+    /// they are) or none (raw RGBA8, readable by format 1.0/1.1 readers).
+    #[arg(long, default_value = "bc")]
+    compress: String,
     /// Treat import warnings as errors.
     #[arg(long)]
     strict: bool,
@@ -58,6 +63,7 @@ struct Summary {
 }
 
 pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
+    let compression: Compression = args.compress.parse().map_err(|e| usage("--compress", e))?;
     let mut outputs = vec![("-o", args.output.as_path())];
     outputs.extend(args.depfile.as_deref().map(|d| ("--depfile", d)));
     refuse_clobbering(&[&args.surface, &args.volume], &outputs)?;
@@ -96,7 +102,8 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     for w in &surface.warnings {
         warn(ctx, &format!("{}: {}", args.surface.display(), w.message));
     }
-    let volume = VolumeAsset::read(&args.volume).map_err(|e| CliError::new(Code::from(&e), &e))?;
+    let (volume, volume_blocks) = VolumeAsset::read_with_blocks(&args.volume)
+        .map_err(|e| CliError::new(Code::from(&e), &e))?;
     let s = shell(&surface, args.height, Vec2::new(u, v))
         .map_err(|e| CliError::new(Code::from(&e), format!("{}: {e}", args.surface.display())))?;
     let (skipped, mirrored, folded) = (s.skipped, s.mirrored, s.folded);
@@ -116,8 +123,22 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     if args.surface_normals {
         with_surface_normals(&mut asset);
     }
+    // The shell's texture is the volume's: its blocks are reused, not encoded again.
+    let blocks = match compression {
+        Compression::None => {
+            asset.header.params.remove("compress");
+            None
+        }
+        Compression::Bc => {
+            asset.header.params.insert("compress".into(), "bc7".into());
+            Some(match volume_blocks.filter(|_| !args.surface_normals) {
+                Some(b) => b,
+                None => compress_volume(&mut asset),
+            })
+        }
+    };
     let bytes = asset
-        .to_bytes()
+        .to_bytes_with(blocks.as_ref())
         .map_err(|e| CliError::new(Code::Internal, e))?;
     let mut stage = Staged::new(&args.output);
     stage

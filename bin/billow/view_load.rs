@@ -113,16 +113,18 @@ pub fn load_content(scene: &SceneFile, read: &mut Vec<PathBuf>) -> Result<Conten
     };
     for v in &scene.volumes {
         read.push(v.asset.clone());
-        let asset = VolumeAsset::read(&v.asset).map_err(|e| CliError::new(Code::from(&e), e))?;
+        let (asset, blocks) = VolumeAsset::read_with_blocks(&v.asset)
+            .map_err(|e| CliError::new(Code::from(&e), e))?;
         c.volumes.push(VolumeContent {
             asset,
+            blocks: blocks.map(std::sync::Arc::new),
             instances: v.instances.iter().map(|t| t.matrix()).collect(),
             animation: v.animation,
         });
     }
     for d in &scene.clouds {
         read.push(d.asset.clone());
-        let asset = CloudAsset::read(&d.asset)
+        let (asset, blocks) = CloudAsset::read_with_blocks(&d.asset)
             .map_err(|e| CliError::new(Code::from(&e), format!("{}: {e}", d.asset.display())))?;
         let levels = asset.levels.len();
         if let Some(dist) = &d.lod_distances {
@@ -140,6 +142,7 @@ pub fn load_content(scene: &SceneFile, read: &mut Vec<PathBuf>) -> Result<Conten
         }
         c.clouds.push(CloudContent {
             asset,
+            blocks: blocks.map(std::sync::Arc::new),
             instances: d.instances.iter().map(|t| t.matrix()).collect(),
             lod_distances: d.lod_distances.clone(),
             transition: d.transition,

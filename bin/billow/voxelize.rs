@@ -4,6 +4,7 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Instant;
 
+use billow::compress::{compress_volume, Compression};
 use billow::export::{check_slices, ktx2_bytes, slice_bytes, slice_file_name, SliceFormat};
 use billow::import::{import, ImportOptions};
 use billow::provenance::{source_info, tool_version, with_companions};
@@ -65,6 +66,11 @@ pub struct Args {
     /// for a tileable volume texture used by `billow shell`.
     #[arg(long)]
     bounds: Option<String>,
+    /// Texel storage: none (raw RGBA8, readable by format 1.0/1.1 readers; the default
+    /// until `billow emptyspace` writes compressed bricks) or bc (BC7 blocks, one byte per
+    /// texel, format 1.2). --ktx2 carries the same blocks.
+    #[arg(long, default_value = "none")]
+    compress: String,
     /// Also write the volume as a KTX2 3D texture with its MIP chain (premultiplied, sRGB).
     #[arg(long, value_name = "FILE")]
     ktx2: Option<PathBuf>,
@@ -107,6 +113,7 @@ struct Seconds {
     mip: f64,
     combine: f64,
     quantize: f64,
+    compress: f64,
     write: f64,
     total: f64,
 }
@@ -130,6 +137,7 @@ struct Summary {
     normals: bool,
     /// `--normals auto`: the coherence the choice was made on (see docs/voxelize.md).
     normal_coherence: Option<f32>,
+    compress: String,
     triangles: usize,
     non_empty_voxels: u64,
     fragments: u64,
@@ -261,6 +269,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     }
     opts.align = args.align;
     opts.bake = parse_bake(&args.bake, args.ao_rays, args.ao_distance)?;
+    let compression: Compression = args.compress.parse().map_err(|e| usage("--compress", e))?;
     if let Some(b) = &args.bounds {
         opts.bounds = Some(parse_bounds(b)?);
     }
@@ -372,21 +381,28 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         extra.insert("normal_coherence".to_string(), format!("{k:.3}"));
     }
     let params = bake_params(&volume, &opts, &extra);
-    let asset = volume.into_asset(&tool_version(), Some(source), params);
+    let mut asset = volume.into_asset(&tool_version(), Some(source), params);
+    let compress_start = Instant::now();
+    let blocks = (compression == Compression::Bc).then(|| {
+        asset.header.params.insert("compress".into(), "bc7".into());
+        compress_volume(&mut asset)
+    });
+    let compress_s = compress_start.elapsed().as_secs_f64();
     let write_start = Instant::now();
     // All outputs go to temporary files first and are renamed into place together, -o last
     // (see staged.rs): a failure or a kill leaves the old outputs as they were.
     let mut stage = Staged::new(&args.output);
     // Streamed from the texel data (no file-sized copy in memory).
     let bytes = asset
-        .with_parts(|parts| {
+        .with_parts_with(blocks.as_ref(), |parts| {
             let len = parts.iter().map(|p| p.len() as u64).sum::<u64>();
             stage.stage_parts(&args.output, parts).map(|()| len)
         })
         .map_err(|e| CliError::new(Code::Internal, e))?
         .map_err(|e| out_err(&args.output, e))?;
     if let Some(path) = &args.ktx2 {
-        let ktx = ktx2_bytes(&asset, path).map_err(|e| CliError::new(Code::from(&e), e))?;
+        let ktx = ktx2_bytes(&asset, blocks.as_ref(), path)
+            .map_err(|e| CliError::new(Code::from(&e), e))?;
         stage.stage(path, &ktx).map_err(|e| out_err(path, e))?;
     }
     let mut written: Vec<PathBuf> = Vec::new();
@@ -421,6 +437,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         supersample: opts.supersample,
         normals: opts.normals,
         normal_coherence: coherence,
+        compress: args.compress.clone(),
         triangles: stats.triangles,
         non_empty_voxels: stats.non_empty_voxels,
         fragments: stats.fragments,
@@ -433,6 +450,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             mip: stats.seconds.mip,
             combine: stats.seconds.combine,
             quantize: stats.seconds.quantize,
+            compress: compress_s,
             write: write_s,
             total: start.elapsed().as_secs_f64(),
         },

@@ -265,8 +265,10 @@ fn check_chunks(header: &Header, chunks: &[ChunkRef<'_>]) -> Result<String, Form
 }
 
 /// Chunk tags introduced by each minor version after 1.0 (index 0: 1.1).
-const TAGS_SINCE_MINOR: [&[&[u8; 4]]; FORMAT_MINOR as usize] =
-    [&[b"ANRM", b"VBND", b"BLEV", b"BNRM", b"BCEL"]];
+const TAGS_SINCE_MINOR: [&[&[u8; 4]]; FORMAT_MINOR as usize] = [
+    &[b"ANRM", b"VBND", b"BLEV", b"BNRM", b"BCEL"],
+    &[b"VLB7", b"VNB7", b"ATB7", b"ANB7", b"MTB7"],
+];
 
 /// The lowest minor version that defines every chunk tag in `chunks` (SPEC §5): files that
 /// use nothing newer than 1.0 are written as 1.0, byte for byte as before.

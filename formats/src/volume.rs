@@ -11,6 +11,9 @@ use std::path::Path;
 
 use crate::bands::{band_table, prism_bytes, validate_bands, LodBand, RawBands};
 use crate::bands::{TAG_BCEL, TAG_BLEV, TAG_BNRM, TAG_VBND};
+use crate::blocks::{
+    check_block_levels, decode_levels, unorm_to_snorm_in_place, VolumeBlocks, TAG_VLB7, TAG_VNB7,
+};
 use crate::container::{encode_with_minor, with_parts_minor, write_with_minor, ChunkRef};
 use crate::{
     from_bytes, AssetKind, Chunk, Container, ElemType, FormatError, Header, NormalEncoding,
@@ -155,24 +158,42 @@ impl VolumeAsset {
         n
     }
 
-    fn with_chunks<R>(&self, f: impl FnOnce(&[ChunkRef<'_>]) -> R) -> Result<R, FormatError> {
+    fn with_chunks<R>(
+        &self,
+        blocks: Option<&VolumeBlocks>,
+        f: impl FnOnce(&[ChunkRef<'_>]) -> R,
+    ) -> Result<R, FormatError> {
         self.validate()?;
+        if let Some(b) = blocks {
+            self.check_blocks(b)?;
+        }
+        let (colour, colour_tag) = match blocks {
+            Some(b) => (&b.colour, TAG_VLB7),
+            None => (&self.levels, TAG_VLEV),
+        };
+        let (normals, normal_tag) = match blocks {
+            Some(b) => (&b.normals, TAG_VNB7),
+            None => (&self.normals, TAG_VNRM),
+        };
         let cells = prism_bytes(&self.cells);
         let table = band_table(&self.bands);
         let band_cells: Vec<Vec<u8>> = self.bands.iter().map(|b| prism_bytes(&b.cells)).collect();
-        let mut refs: Vec<ChunkRef<'_>> = self
-            .levels
+        let mut refs: Vec<ChunkRef<'_>> = colour
             .iter()
             .map(|l| ChunkRef {
-                tag: TAG_VLEV,
+                tag: colour_tag,
                 elem: ElemType::U8,
                 data: l,
             })
             .collect();
-        for n in self.normals.iter().flatten() {
+        for n in normals.iter().flatten() {
             refs.push(ChunkRef {
-                tag: TAG_VNRM,
-                elem: ElemType::I8,
+                tag: normal_tag,
+                elem: if blocks.is_some() {
+                    ElemType::U8
+                } else {
+                    ElemType::I8
+                },
                 data: n,
             });
         }
@@ -214,7 +235,7 @@ impl VolumeAsset {
 
     /// The container for this asset (validates first).
     pub fn to_container(&self) -> Result<Container, FormatError> {
-        self.with_chunks(|refs| Container {
+        self.with_chunks(None, |refs| Container {
             header: self.header.clone(),
             chunks: refs
                 .iter()
@@ -229,14 +250,50 @@ impl VolumeAsset {
 
     /// Encode to file bytes without copying the texel data into a [`Container`] first.
     pub fn to_bytes(&self) -> Result<Vec<u8>, FormatError> {
-        // Minor 1 only when the file uses LOD bands (SPEC §5).
-        let minor = if self.bands.is_empty() { 0 } else { 1 };
-        self.with_chunks(|refs| encode_with_minor(&self.header, refs, minor))?
+        self.to_bytes_with(None)
+    }
+
+    /// [`VolumeAsset::to_bytes`] storing the base texture as the BC7 `blocks` (format 1.2,
+    /// SPEC §12) instead of raw texels when given. `blocks` must decode to `levels` and
+    /// `normals` (what a reader gets back); only their sizes are checked here.
+    pub fn to_bytes_with(&self, blocks: Option<&VolumeBlocks>) -> Result<Vec<u8>, FormatError> {
+        // The minor follows from the chunk tags (SPEC §5: 1.1 for bands, 1.2 for blocks).
+        self.with_chunks(blocks, |refs| encode_with_minor(&self.header, refs, 0))?
+    }
+
+    /// Whether `blocks` has the shape of this asset's base texture (sizes only).
+    fn check_blocks(&self, b: &VolumeBlocks) -> Result<(), FormatError> {
+        let dims = self.level_dims(0);
+        if b.colour.len() != self.levels.len() {
+            return bad(format!(
+                "{} colour block levels for {} levels",
+                b.colour.len(),
+                self.levels.len()
+            ));
+        }
+        check_block_levels("VLB7", &b.colour, |i| mip_dims(dims, i))
+            .map_err(FormatError::Volume)?;
+        match (&b.normals, &self.normals) {
+            (Some(n), Some(l)) if n.len() == l.len() => {
+                check_block_levels("VNB7", n, |i| mip_dims(dims, i)).map_err(FormatError::Volume)
+            }
+            (None, None) => Ok(()),
+            _ => bad("normal blocks do not match the asset's normals".into()),
+        }
     }
 
     /// Decode and validate a volume asset from a container. Chunks with
     /// unknown tags are skipped.
     pub fn from_container(c: Container) -> Result<Self, FormatError> {
+        Ok(Self::from_container_with_blocks(c)?.0)
+    }
+
+    /// [`VolumeAsset::from_container`] that also returns the BC7 blocks of a compressed
+    /// base texture (format 1.2), `None` for raw texels. The asset's `levels` and
+    /// `normals` are the decoded blocks either way.
+    pub fn from_container_with_blocks(
+        c: Container,
+    ) -> Result<(Self, Option<VolumeBlocks>), FormatError> {
         let Container { header, chunks } = c;
         if header.kind != AssetKind::Volume {
             return bad(format!("asset kind is {:?}, not Volume", header.kind));
@@ -246,6 +303,7 @@ impl VolumeAsset {
         };
         validate_volume_header(&v)?;
         let (mut levels, mut normals, mut cells) = (Vec::new(), Vec::new(), None);
+        let (mut bc_colour, mut bc_normals) = (Vec::new(), Vec::new());
         let mut raw = RawBands::default();
         for (i, ch) in chunks.into_iter().enumerate() {
             let band_chunk = match &ch.tag {
@@ -273,6 +331,8 @@ impl VolumeAsset {
             let (want, list) = match &ch.tag {
                 b"VLEV" => (ElemType::U8, &mut levels),
                 b"VNRM" => (ElemType::I8, &mut normals),
+                b"VLB7" => (ElemType::U8, &mut bc_colour),
+                b"VNB7" => (ElemType::U8, &mut bc_normals),
                 b"CELL" => {
                     if ch.elem != ElemType::F32 {
                         return bad(format!(
@@ -310,6 +370,43 @@ impl VolumeAsset {
                 cells.len()
             ));
         }
+        let blocks = if bc_colour.is_empty() && bc_normals.is_empty() {
+            None
+        } else {
+            if !levels.is_empty() || !normals.is_empty() {
+                return bad(
+                    "both raw (VLEV/VNRM) and compressed (VLB7/VNB7) levels: a compressed volume stores all its levels as blocks"
+                        .into(),
+                );
+            }
+            let dims_of = |i| mip_dims(v.dims, i);
+            let count = |tag: &str, n: usize| {
+                if n as u64 == u64::from(v.mip_count) {
+                    Ok(())
+                } else {
+                    bad(format!("{n} {tag} levels but mip_count is {}", v.mip_count))
+                }
+            };
+            count("VLB7", bc_colour.len())?;
+            check_block_levels("VLB7", &bc_colour, dims_of).map_err(FormatError::Volume)?;
+            levels = decode_levels(&bc_colour, dims_of, 0);
+            let bc_normals = match v.normals {
+                None if bc_normals.is_empty() => None,
+                None => return bad("VNB7 chunks present but header.volume.normals is None".into()),
+                Some(_) => {
+                    count("VNB7", bc_normals.len())?;
+                    check_block_levels("VNB7", &bc_normals, dims_of)
+                        .map_err(FormatError::Volume)?;
+                    normals = decode_levels(&bc_normals, dims_of, 0x80);
+                    normals.iter_mut().for_each(|l| unorm_to_snorm_in_place(l));
+                    Some(bc_normals)
+                }
+            };
+            Some(VolumeBlocks {
+                colour: bc_colour,
+                normals: bc_normals,
+            })
+        };
         let normals = match (v.normals, normals.is_empty()) {
             (None, true) => None,
             (None, false) => {
@@ -329,12 +426,25 @@ impl VolumeAsset {
             bands,
         };
         asset.validate()?;
-        Ok(asset)
+        Ok((asset, blocks))
     }
 
     /// Decode and validate a volume asset from file bytes.
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, FormatError> {
         Self::from_container(from_bytes(bytes)?)
+    }
+
+    /// [`VolumeAsset::from_bytes`] that also returns the BC7 blocks of a compressed file.
+    pub fn from_bytes_with_blocks(
+        bytes: &[u8],
+    ) -> Result<(Self, Option<VolumeBlocks>), FormatError> {
+        Self::from_container_with_blocks(from_bytes(bytes)?)
+    }
+
+    /// [`VolumeAsset::read`] that also returns the BC7 blocks of a compressed file.
+    pub fn read_with_blocks(path: &Path) -> Result<(Self, Option<VolumeBlocks>), FormatError> {
+        let bytes = crate::container::read_regular(path)?;
+        Self::from_bytes_with_blocks(&bytes).map_err(|e| e.in_file(path))
     }
 
     /// Read a volume asset file. Errors carry the path.
@@ -347,16 +457,34 @@ impl VolumeAsset {
     /// the file), handed to `f`, the texel data borrowed where it is: for a writer that
     /// streams the file somewhere without assembling it in memory first.
     pub fn with_parts<R>(&self, f: impl FnOnce(&[&[u8]]) -> R) -> Result<R, FormatError> {
-        let minor = if self.bands.is_empty() { 0 } else { 1 };
-        self.with_chunks(|refs| with_parts_minor(&self.header, refs, minor, f))?
+        self.with_parts_with(None, f)
+    }
+
+    /// [`VolumeAsset::with_parts`] with the base texture as BC7 `blocks` when given (see
+    /// [`VolumeAsset::to_bytes_with`]).
+    pub fn with_parts_with<R>(
+        &self,
+        blocks: Option<&VolumeBlocks>,
+        f: impl FnOnce(&[&[u8]]) -> R,
+    ) -> Result<R, FormatError> {
+        self.with_chunks(blocks, |refs| with_parts_minor(&self.header, refs, 0, f))?
     }
 
     /// Encode and write atomically (see [`crate::write_atomic`]): the bytes of
     /// [`VolumeAsset::to_bytes`], written from the texel data where it is, without
     /// assembling the file in memory first.
     pub fn write(&self, path: &Path) -> Result<(), FormatError> {
-        let minor = if self.bands.is_empty() { 0 } else { 1 };
-        self.with_chunks(|refs| write_with_minor(path, &self.header, refs, minor))?
+        self.write_with(path, None)
+    }
+
+    /// [`VolumeAsset::write`] with the base texture as BC7 `blocks` when given (see
+    /// [`VolumeAsset::to_bytes_with`]).
+    pub fn write_with(
+        &self,
+        path: &Path,
+        blocks: Option<&VolumeBlocks>,
+    ) -> Result<(), FormatError> {
+        self.with_chunks(blocks, |refs| write_with_minor(path, &self.header, refs, 0))?
     }
 }
 

@@ -12,6 +12,15 @@
 //! | KVD | `KTXorientation` = `"ruo"`, `KTXwriter` = `"billow <version>"`, sorted by key, each entry padded to 4 bytes |
 //! | levels | level data, **smallest level first** (level `mip_count − 1` … level 0), each level's offset aligned to `lcm(4, texel size 4) = 4` (`mipPadding` zero bytes, never needed for RGBA8 but computed) |
 //!
+//! **Block-compressed** (the asset's `VolumeBlocks`, `billow voxelize --compress bc`, the
+//! default): `vkFormat` 146 `BC7_SRGB_BLOCK` or 145 `BC7_UNORM_BLOCK`, `typeSize` 1, the
+//! level data the asset's BC7 blocks, every block (the omitted empty ones as a block that
+//! decodes to zero, SPEC §12.1; each z slice's 4×4 blocks, rows of blocks
+//! top to bottom: KTX's order for a block-compressed 3D image), levels aligned to
+//! `lcm(16, 4) = 16`; the DFD's colour model is `KHR_DF_MODEL_BC7` with a 4×4×1×1 texel
+//! block of 16 bytes and one 128-bit sample (channel 0, lower 0, upper `0xFFFFFFFF`). No
+//! supercompression.
+//!
 //! The level bytes are the asset's bytes unchanged: texel `(x, y, z)` at `4·(x + w·(y + h·z))`,
 //! which is KTX's row-major, slice-by-slice image order.
 //!
@@ -31,7 +40,10 @@
 
 use std::path::Path;
 
-use billow_format::{mip_dims, write_atomic, ColourSpace, VolumeAsset};
+use billow_format::{
+    bc7_len, expand_blocks, mip_dims, write_atomic, ColourSpace, VolumeAsset, VolumeBlocks,
+    ZERO_BLOCK,
+};
 
 use super::{check_asset, ExportError};
 
@@ -43,6 +55,12 @@ pub const KTX2_IDENTIFIER: [u8; 12] = [
 pub const VK_FORMAT_R8G8B8A8_UNORM: u32 = 37;
 /// `VK_FORMAT_R8G8B8A8_SRGB`.
 pub const VK_FORMAT_R8G8B8A8_SRGB: u32 = 43;
+/// `VK_FORMAT_BC7_UNORM_BLOCK`.
+pub const VK_FORMAT_BC7_UNORM_BLOCK: u32 = 145;
+/// `VK_FORMAT_BC7_SRGB_BLOCK`.
+pub const VK_FORMAT_BC7_SRGB_BLOCK: u32 = 146;
+/// `KHR_DF_MODEL_BC7`.
+pub const KHR_DF_MODEL_BC7: u8 = 134;
 /// `KHR_DF_MODEL_RGBSDA`.
 pub const KHR_DF_MODEL_RGBSDA: u8 = 1;
 /// `KHR_DF_PRIMARIES_BT709`.
@@ -66,26 +84,45 @@ const SAMPLES: usize = 4;
 /// Basic descriptor block: 24 bytes of header + 16 per sample.
 const BASIC_BLOCK_BYTES: usize = 24 + 16 * SAMPLES;
 
-/// Writes `asset`'s colour levels as a KTX 2.0 3D texture at `path`, atomically.
+/// Writes `asset`'s colour levels as a KTX 2.0 3D texture at `path`, atomically: its BC7
+/// `blocks` when given (the asset's compressed colour levels), else the raw texels.
 /// Normals and cells are not part of the KTX file.
-pub fn write_ktx2(asset: &VolumeAsset, path: &Path) -> Result<(), ExportError> {
-    let bytes = ktx2_bytes(asset, path)?;
+pub fn write_ktx2(
+    asset: &VolumeAsset,
+    blocks: Option<&VolumeBlocks>,
+    path: &Path,
+) -> Result<(), ExportError> {
+    let bytes = ktx2_bytes(asset, blocks, path)?;
     write_atomic(path, &bytes).map_err(ExportError::Write)
 }
 
 /// The KTX 2.0 file [`write_ktx2`] writes, in memory. `path` only names the file in errors.
-pub fn ktx2_bytes(asset: &VolumeAsset, path: &Path) -> Result<Vec<u8>, ExportError> {
+pub fn ktx2_bytes(
+    asset: &VolumeAsset,
+    blocks: Option<&VolumeBlocks>,
+    path: &Path,
+) -> Result<Vec<u8>, ExportError> {
     let dims = check_asset(asset, path)?;
-    let levels = &asset.levels;
+    let bc = blocks.is_some();
+    // The dense blocks: a GPU texture has every block (omitted ones decode to zero).
+    let dense: Option<Vec<Vec<u8>>> = blocks.map(|b| {
+        b.colour
+            .iter()
+            .enumerate()
+            .map(|(i, p)| expand_blocks(p, mip_dims(dims, i as u32), ZERO_BLOCK))
+            .collect()
+    });
+    let levels = dense.as_ref().unwrap_or(&asset.levels);
     let level_count = levels.len();
     let srgb = asset.header.colour_space == ColourSpace::SrgbPremultiplied;
-    let vk_format = if srgb {
-        VK_FORMAT_R8G8B8A8_SRGB
-    } else {
-        VK_FORMAT_R8G8B8A8_UNORM
+    let vk_format = match (bc, srgb) {
+        (false, true) => VK_FORMAT_R8G8B8A8_SRGB,
+        (false, false) => VK_FORMAT_R8G8B8A8_UNORM,
+        (true, true) => VK_FORMAT_BC7_SRGB_BLOCK,
+        (true, false) => VK_FORMAT_BC7_UNORM_BLOCK,
     };
 
-    let dfd = basic_dfd(srgb);
+    let dfd = if bc { bc7_dfd(srgb) } else { basic_dfd(srgb) };
     let kvd = key_value_data(&[
         ("KTXorientation", ORIENTATION),
         ("KTXwriter", &writer_name()),
@@ -95,16 +132,26 @@ pub fn ktx2_bytes(asset: &VolumeAsset, path: &Path) -> Result<Vec<u8>, ExportErr
     let data_start = kvd_offset + kvd.len();
 
     // Level placement: smallest (last) level first, each aligned.
-    let align = lcm(TEXEL_BYTES, 4);
+    let align = lcm(if bc { 16 } else { TEXEL_BYTES }, 4);
     let mut placement = vec![(0usize, 0usize); level_count];
     let mut end = data_start;
     for i in (0..level_count).rev() {
         let offset = end.next_multiple_of(align);
         let d = mip_dims(dims, i as u32);
-        debug_assert_eq!(
-            levels[i].len(),
+        let want = if bc {
+            bc7_len(d[0], d[1], d[2]) as usize
+        } else {
             d.iter().map(|&v| v as usize).product::<usize>() * TEXEL_BYTES
-        );
+        };
+        if levels[i].len() != want {
+            return Err(ExportError::InvalidAsset {
+                path: path.to_path_buf(),
+                source: billow_format::FormatError::Volume(format!(
+                    "level {i} is {} bytes, expected {want}",
+                    levels[i].len()
+                )),
+            });
+        }
         placement[i] = (offset, levels[i].len());
         end = offset + levels[i].len();
     }
@@ -189,6 +236,37 @@ fn basic_dfd(srgb: bool) -> Vec<u8> {
         put_u32(&mut b, 255); // sampleUpper
     }
     debug_assert_eq!(b.len(), 4 + BASIC_BLOCK_BYTES);
+    b
+}
+
+/// `dfdTotalSize` followed by one Basic Data Format Descriptor block for BC7: colour model
+/// `KHR_DF_MODEL_BC7`, 4×4 texel blocks of 16 bytes, one 128-bit sample.
+fn bc7_dfd(srgb: bool) -> Vec<u8> {
+    let block = 24 + 16;
+    let mut b = Vec::with_capacity(4 + block);
+    put_u32(&mut b, (4 + block) as u32);
+    put_u32(&mut b, 0);
+    put_u32(&mut b, 2 | ((block as u32) << 16));
+    let transfer = if srgb {
+        KHR_DF_TRANSFER_SRGB
+    } else {
+        KHR_DF_TRANSFER_LINEAR
+    };
+    b.extend_from_slice(&[
+        KHR_DF_MODEL_BC7,
+        KHR_DF_PRIMARIES_BT709,
+        transfer,
+        KHR_DF_FLAG_ALPHA_PREMULTIPLIED,
+    ]);
+    b.extend_from_slice(&[3, 3, 0, 0]); // texel block 4×4×1×1, stored minus one
+    b.extend_from_slice(&[16, 0, 0, 0, 0, 0, 0, 0]); // bytesPlane0: 16 per block
+    b.extend_from_slice(&0u16.to_le_bytes()); // bitOffset
+    b.push(127); // bitLength minus one: 128 bits
+    b.push(0); // KHR_DF_CHANNEL_BC7_COLOR
+    b.extend_from_slice(&[0, 0, 0, 0]);
+    put_u32(&mut b, 0);
+    put_u32(&mut b, u32::MAX);
+    debug_assert_eq!(b.len(), 4 + block);
     b
 }
 

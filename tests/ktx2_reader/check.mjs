@@ -2,7 +2,9 @@
 // glTF-Transform) and checks what billow promises of its 3D-texture exports: one face, no
 // array layers, no supercompression, RGBA8 (sRGB or linear, matching the DFD's transfer
 // function), the premultiplied flag in the DFD, and a full MIP chain whose level sizes match
-// the halved dimensions. Used by `make check-ktx2`; exits 1 on a mismatch, 2 when it cannot run.
+// the halved dimensions; or the same as BC7 blocks (BC7_SRGB_BLOCK / BC7_UNORM_BLOCK, DFD colour
+// model BC7, each level 16 bytes per 4x4 block of each z slice: billow voxelize --compress bc,
+// the default). Used by `make check-ktx2`; exits 1 on a mismatch, 2 when it cannot run.
 // Usage: node check.mjs MODULE_DIR FILE...
 import fs from 'fs';
 import path from 'path';
@@ -17,6 +19,7 @@ try {
   process.exit(2);
 }
 const VK_R8G8B8A8_UNORM = 37, VK_R8G8B8A8_SRGB = 43;
+const VK_BC7_UNORM = 145, VK_BC7_SRGB = 146, KHR_DF_MODEL_BC7 = 134;
 let bad = 0;
 for (const f of files) {
   const problems = [];
@@ -31,7 +34,9 @@ for (const f of files) {
   const d = c.dataFormatDescriptor[0];
   const premul = (d.flags & ktx.KHR_DF_FLAG_ALPHA_PREMULTIPLIED) !== 0;
   const srgb = d.transferFunction === ktx.KHR_DF_TRANSFER_SRGB;
-  if (c.vkFormat !== (srgb ? VK_R8G8B8A8_SRGB : VK_R8G8B8A8_UNORM)) problems.push(`vkFormat ${c.vkFormat} does not match the DFD transfer ${d.transferFunction}`);
+  const bc7 = d.colorModel === KHR_DF_MODEL_BC7;
+  const want = bc7 ? (srgb ? VK_BC7_SRGB : VK_BC7_UNORM) : (srgb ? VK_R8G8B8A8_SRGB : VK_R8G8B8A8_UNORM);
+  if (c.vkFormat !== want) problems.push(`vkFormat ${c.vkFormat} does not match the DFD (model ${d.colorModel}, transfer ${d.transferFunction})`);
   if (!premul) problems.push('DFD lacks KHR_DF_FLAG_ALPHA_PREMULTIPLIED');
   if (c.faceCount !== 1 || c.layerCount !== 0) problems.push(`faces ${c.faceCount}, layers ${c.layerCount}`);
   if (c.supercompressionScheme !== 0) problems.push(`supercompression ${c.supercompressionScheme}`);
@@ -40,7 +45,8 @@ for (const f of files) {
   const full = 1 + Math.floor(Math.log2(Math.max(...dims)));
   if (c.levels.length !== full) problems.push(`${c.levels.length} levels, a full chain has ${full}`);
   c.levels.forEach((l, i) => {
-    const n = dims.map((x) => Math.max(1, x >> i)).reduce((a, b) => a * b, 1) * 4;
+    const [w, h, z] = dims.map((x) => Math.max(1, x >> i));
+    const n = bc7 ? Math.ceil(w / 4) * Math.ceil(h / 4) * z * 16 : w * h * z * 4;
     if (l.levelData.byteLength !== n) problems.push(`level ${i}: ${l.levelData.byteLength} bytes, expected ${n}`);
   });
   console.log(`${f}: ktx-parse: ${dims.join('x')}, ${c.levels.length} levels, vkFormat ${c.vkFormat}, ` +

@@ -432,30 +432,77 @@ def need_elem(ch, elem, what):
              % (what, ch["off"], ch["elem"], ELEM_TYPES[ch["elem"]][0], elem, ELEM_TYPES[elem][0]))
 
 
+def bc7_check(ch, w, h, d, what):
+    # SPEC 12.1: n = ceil(w/4) * ceil(h/4) * d blocks; a block mask of m bytes (one bit per
+    # block, LSB first, padded with zero bits to a multiple of 16 bytes), then 16 bytes per
+    # stored block.
+    n = ((w + 3) // 4) * ((h + 3) // 4) * d
+    m = -(-(-(-n // 8)) // 16) * 16
+    p = ch["payload"]
+    if len(p) < m:
+        fail("%s: length %d, shorter than its %d-byte block mask (%d blocks)" % (what, len(p), m, n))
+    mask = int.from_bytes(p[:m], "little")
+    if mask >> n:
+        fail("%s: block mask has bits set beyond its %d blocks" % (what, n))
+    s = bin(mask).count("1")
+    if len(p) != m + 16 * s:
+        fail("%s: length %d, expected %d (a %d-byte mask and %d stored blocks)" % (what, len(p), m + 16 * s, m, s))
+
+
+def raw_or_blocks(by_tag, raw, comp):
+    # SPEC 12.1: a compressed chunk replaces its raw chunk one for one; a file has one
+    # kind or the other for a given texture stream, never both.
+    r, c = by_tag.get(raw, []), by_tag.get(comp, [])
+    if r and c:
+        fail("both %s and %s chunks: a level is raw or compressed, not both"
+             % (tag_str(raw), tag_str(comp)))
+    return (c, True) if c else (r, False)
+
+
+def level_len_check(ch, w, h, d, compressed, what):
+    if compressed:
+        bc7_check(ch, w, h, d, what)
+        return
+    need = w * h * d * 4
+    if ch["len"] != need:
+        fail("%s: length %d, expected %d (%dx%dx%d texels x 4 bytes)" % (what, ch["len"], need, w, h, d))
+
+
 def decode_volume(header, by_tag, out):
     vol = header["volume"]
     dims, mc, has_n = vol["dims"], vol["mip_count"], vol["normals"]
-    vlev = by_tag.get(b"VLEV", [])
-    vnrm = by_tag.get(b"VNRM", [])
+    vlev, vbc = raw_or_blocks(by_tag, b"VLEV", b"VLB7")
+    vnrm, nbc = raw_or_blocks(by_tag, b"VNRM", b"VNB7")
+    if vnrm and has_n and vbc != nbc:
+        fail("Volume: colour and normals must both be raw or both compressed (SPEC 8.1)")
+    out["compressed"] = vbc
     cell = by_tag.get(b"CELL", [])
     vbnd = by_tag.get(b"VBND", [])
     blev = by_tag.get(b"BLEV", [])
     bnrm = by_tag.get(b"BNRM", [])
     bcel = by_tag.get(b"BCEL", [])
-    for tag, lst, elem in ((b"VLEV", vlev, E_U8), (b"VNRM", vnrm, E_I8), (b"CELL", cell, E_F32),
+    for tag, lst, elem in ((b"VLEV", vlev, E_U8), (b"VNRM", vnrm, E_U8 if nbc else E_I8),
+                           (b"CELL", cell, E_F32),
                            (b"VBND", vbnd, E_U32), (b"BLEV", blev, E_U8), (b"BNRM", bnrm, E_I8),
                            (b"BCEL", bcel, E_F32)):
         for ch in lst:
             need_elem(ch, elem, tag_str(tag))
+    ctag = "VLB7" if vbc else "VLEV"
+    ntag = "VNB7" if nbc else "VNRM"
     if len(vlev) != mc:
-        fail("Volume: %d VLEV chunks, header mip_count is %d" % (len(vlev), mc))
-    level_sizes = [volume_level_check(ch, dims, i, "VLEV") for i, ch in enumerate(vlev)]
+        fail("Volume: %d %s chunks, header mip_count is %d" % (len(vlev), ctag, mc))
+    level_sizes = []
+    for i, ch in enumerate(vlev):
+        w, h, d = mip_dims(dims, i)
+        level_len_check(ch, w, h, d, vbc, "%s level %d" % (ctag, i))
+        level_sizes.append([w, h, d])
     want_n = mc if has_n else 0
     if len(vnrm) != want_n:
-        fail("Volume: %d VNRM chunks, expected %d (%s)"
-             % (len(vnrm), want_n, "normals set" if has_n else "header has no normals"))
+        fail("Volume: %d %s chunks, expected %d (%s)"
+             % (len(vnrm), ntag, want_n, "normals set" if has_n else "header has no normals"))
     for i, ch in enumerate(vnrm):
-        volume_level_check(ch, dims, i, "VNRM")
+        w, h, d = mip_dims(dims, i)
+        level_len_check(ch, w, h, d, nbc, "%s level %d" % (ntag, i))
     if len(cell) != 1:
         fail("Volume: %d CELL chunks, expected exactly 1" % len(cell))
     cells = check_cells(cell[0], "CELL")
@@ -536,10 +583,13 @@ CLOUD_TABLE = [  # tag, elem, record bytes (None = per-chunk length rule), repea
     (b"ATLS", E_U32, 16, False),
     (b"ATEX", E_U8, None, True),
     (b"ANRM", E_U8, None, True),
+    (b"ATB7", E_U8, None, True),
+    (b"ANB7", E_U8, None, True),
     (b"MMAT", E_F32, 32, False),
     (b"MMAI", E_U32, 16, False),
     (b"MTXI", E_U32, 16, False),
     (b"MTEX", E_U8, None, True),
+    (b"MTB7", E_U8, None, True),
     (b"TVTX", E_F32, 32, False),
     (b"TIDX", E_U32, 16, False),
     (b"FVTX", E_F32, 44, False),
@@ -645,21 +695,28 @@ def decode_cloud(header, by_tag, out):
         if res:
             fail("ATLS atlas %d: reserved word must be 0" % a)
         atlases.append((w, h, m))
-    atex = by_tag.get(b"ATEX", [])
-    anrm = by_tag.get(b"ANRM", [])
+    atex, abc = raw_or_blocks(by_tag, b"ATEX", b"ATB7")
+    anrm, nbc = raw_or_blocks(by_tag, b"ANRM", b"ANB7")
+    mtex_c = by_tag.get(b"MTB7", [])
+    comp = abc or nbc or bool(mtex_c)
+    if comp and (by_tag.get(b"ATEX") or by_tag.get(b"ANRM") or by_tag.get(b"MTEX")):
+        fail("Cloud: both raw (ATEX/ANRM/MTEX) and compressed (ATB7/ANB7/MTB7) texture chunks")
+    out["compressed"] = comp
+    at, nt = ("ATB7", "ANB7") if comp else ("ATEX", "ANRM")
     expected = [(a, i, max(1, w >> i), max(1, h >> i)) for a, (w, h, m) in enumerate(atlases) for i in range(m)]
     if len(atex) != len(expected):
-        fail("Cloud: %d ATEX chunks, expected %d (sum of atlas mip_counts)" % (len(atex), len(expected)))
+        fail("Cloud: %d %s chunks, expected %d (sum of atlas mip_counts)" % (len(atex), at, len(expected)))
     for ch, (a, i, w, h) in zip(atex, expected):
-        if ch["len"] != w * h * 4:
-            fail("ATEX atlas %d level %d: length %d, expected %d (%dx%d x 4)" % (a, i, ch["len"], w * h * 4, w, h))
+        level_len_check(ch, w, h, 1, comp, "%s atlas %d level %d" % (at, a, i))
     if anrm:
         if len(anrm) != len(atex):
-            fail("Cloud: %d ANRM chunks, expected none or %d (one per ATEX)" % (len(anrm), len(atex)))
+            fail("Cloud: %d %s chunks, expected none or %d (one per %s)" % (len(anrm), nt, len(atex), at))
         for ch, ach, (a, i, w, h) in zip(anrm, atex, expected):
-            if ch["len"] != ach["len"]:
-                fail("ANRM atlas %d level %d: length %d differs from its ATEX length %d"
-                     % (a, i, ch["len"], ach["len"]))
+            if comp:
+                level_len_check(ch, w, h, 1, True, "%s atlas %d level %d" % (nt, a, i))
+            elif ch["len"] != ach["len"]:
+                fail("%s atlas %d level %d: length %d differs from its %s length %d"
+                     % (nt, a, i, ch["len"], at, ach["len"]))
 
     # 9.5 materials, textures, meshes
     nmat = len(one[b"MMAT"]) // 32
@@ -667,17 +724,17 @@ def decode_cloud(header, by_tag, out):
         fail("MMAI has %d records but MMAT has %d materials" % (len(one[b"MMAI"]) // 16, nmat))
     mtxi = le_u32s(one[b"MTXI"])
     ntex = len(mtxi) // 4
-    mtex = by_tag.get(b"MTEX", [])
+    mtex = mtex_c if comp else by_tag.get(b"MTEX", [])
+    mt = "MTB7" if comp else "MTEX"
     if len(mtex) != ntex:
-        fail("Cloud: %d MTEX chunks, MTXI has %d textures" % (len(mtex), ntex))
+        fail("Cloud: %d %s chunks, MTXI has %d textures" % (len(mtex), mt, ntex))
     for t in range(ntex):
         w, h, wu, wv = mtxi[4 * t:4 * t + 4]
         if not (1 <= w <= 16384 and 1 <= h <= 16384):
             fail("MTXI texture %d: size %dx%d, sides must be in 1..=16384" % (t, w, h))
         if wu > 2 or wv > 2:
             fail("MTXI texture %d: wrap codes (%d, %d) must be 0..=2" % (t, wu, wv))
-        if mtex[t]["len"] != w * h * 4:
-            fail("MTEX texture %d: length %d, expected %d (%dx%d x 4)" % (t, mtex[t]["len"], w * h * 4, w, h))
+        level_len_check(mtex[t], w, h, 1, comp, "%s texture %d" % (mt, t))
     k = first_nonfinite(one[b"MMAT"])
     if k >= 0:
         fail("MMAT material %d: float #%d is not finite" % (k // 8, k % 8))
@@ -746,7 +803,7 @@ def decode_cloud(header, by_tag, out):
 
 # ------------------------------------------------------------------ main
 
-VOLUME_TAGS = {b"VLEV", b"VNRM", b"CELL", b"VBND", b"BLEV", b"BNRM", b"BCEL"}
+VOLUME_TAGS = {b"VLEV", b"VNRM", b"CELL", b"VBND", b"BLEV", b"BNRM", b"BCEL", b"VLB7", b"VNB7"}
 
 
 def read_billow(data):

@@ -3,7 +3,7 @@
 //! needed), and [`Content::build`] uploads it into a [`Renderer`] that builds exactly
 //! those passes.
 
-use billow_format::{CloudAsset, VolumeAsset};
+use billow_format::{CloudAsset, CloudBlocks, VolumeAsset, VolumeBlocks};
 use glam::{Mat4, Vec3};
 
 use crate::animate::Sway;
@@ -16,6 +16,9 @@ use crate::{Gpu, Renderer, SliceParams, ViewError};
 #[derive(Clone, Debug)]
 pub struct CloudContent {
     pub asset: CloudAsset,
+    /// The BC7 blocks of a compressed asset (format 1.2), uploaded as they are where the
+    /// device allows it; `asset` holds their decoded texels either way.
+    pub blocks: Option<std::sync::Arc<CloudBlocks>>,
     pub instances: Vec<Mat4>,
     pub lod_distances: Option<Vec<f32>>,
     pub transition: f32,
@@ -68,6 +71,8 @@ pub fn pass_list(n: Needs) -> Vec<&'static str> {
 #[derive(Clone, Debug)]
 pub struct VolumeContent {
     pub asset: VolumeAsset,
+    /// The BC7 blocks of a compressed asset (format 1.2), as for [`CloudContent::blocks`].
+    pub blocks: Option<std::sync::Arc<VolumeBlocks>>,
     pub instances: Vec<Mat4>,
     pub animation: Option<Sway>,
 }
@@ -174,8 +179,9 @@ impl Content {
             r.add_mesh(m)?;
         }
         for c in &self.clouds {
-            r.add_cloud(
+            r.add_cloud_blocks(
                 &c.asset,
+                c.blocks.as_deref(),
                 c.instances.clone(),
                 c.lod_distances.clone(),
                 c.transition,
@@ -184,7 +190,12 @@ impl Content {
             r.set_cloud_dissolve(r.cloud_count() - 1, c.dissolve)?;
         }
         for v in &self.volumes {
-            r.add_animated_volume(&v.asset, v.instances.clone(), v.animation)?;
+            r.add_volume_blocks(
+                &v.asset,
+                v.blocks.as_deref(),
+                v.instances.clone(),
+                v.animation,
+            )?;
         }
         if !self.particles.is_empty() {
             r.set_particles(self.particles.clone(), self.particle_layer)?;

@@ -16,7 +16,18 @@ impl Gpu {
     /// (Vulkan, Metal, DX12) unless `WGPU_BACKEND` says otherwise — the GL fallback is not
     /// used by default (through llvmpipe it is ~100× slower than lavapipe and noisy); on
     /// Linux without a GPU, Mesa's lavapipe is the Vulkan adapter.
+    ///
+    /// Block-compressed textures (BC7, format 1.2) are uploaded as blocks when the adapter
+    /// has the BC features ([`Gpu::block_upload`]); `BILLOW_VIEW_BC=decode` leaves them off,
+    /// so every compressed texture is decoded on load instead.
     pub fn headless() -> Result<Gpu, ViewError> {
+        let decode = std::env::var("BILLOW_VIEW_BC").is_ok_and(|v| v == "decode");
+        Self::headless_with(!decode)
+    }
+
+    /// [`Gpu::headless`] with the BC features requested (`bc`, when the adapter has them)
+    /// or not (every compressed texture decoded on load).
+    pub fn headless_with(bc: bool) -> Result<Gpu, ViewError> {
         let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
         desc.backends = wgpu::Backends::PRIMARY;
         let instance = wgpu::Instance::new(desc.with_env());
@@ -25,13 +36,22 @@ impl Gpu {
             ..Default::default()
         }))
         .map_err(|e| ViewError::NoAdapter(e.to_string()))?;
-        Self::from_adapter(instance, adapter)
+        Self::from_adapter_with(instance, adapter, bc)
     }
 
-    /// A device on `adapter`.
+    /// A device on `adapter`, with the BC features when the adapter has them.
     pub fn from_adapter(
         instance: wgpu::Instance,
         adapter: wgpu::Adapter,
+    ) -> Result<Gpu, ViewError> {
+        Self::from_adapter_with(instance, adapter, true)
+    }
+
+    /// A device on `adapter`; `bc`: request the BC texture features the adapter has.
+    pub fn from_adapter_with(
+        instance: wgpu::Instance,
+        adapter: wgpu::Adapter,
+        bc: bool,
     ) -> Result<Gpu, ViewError> {
         let info = adapter.get_info();
         let limits = adapter.limits();
@@ -43,7 +63,13 @@ impl Gpu {
         }
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("billow-view"),
-            required_features: wgpu::Features::empty(),
+            required_features: if bc {
+                adapter.features()
+                    & (wgpu::Features::TEXTURE_COMPRESSION_BC
+                        | wgpu::Features::TEXTURE_COMPRESSION_BC_SLICED_3D)
+            } else {
+                wgpu::Features::empty()
+            },
             required_limits: limits,
             ..Default::default()
         }))
@@ -55,6 +81,18 @@ impl Gpu {
             queue,
             info,
         })
+    }
+
+    /// Whether a BC7 texture of `dims` (`d3`: a 3D texture) is uploaded as its blocks:
+    /// the device has `TEXTURE_COMPRESSION_BC` (and `TEXTURE_COMPRESSION_BC_SLICED_3D` for
+    /// 3D) and level 0's width and height are multiples of the 4×4 block. Otherwise the
+    /// viewer uploads the decoded texels.
+    pub fn block_upload(&self, dims: [u32; 3], d3: bool) -> bool {
+        let f = self.device.features();
+        f.contains(wgpu::Features::TEXTURE_COMPRESSION_BC)
+            && (!d3 || f.contains(wgpu::Features::TEXTURE_COMPRESSION_BC_SLICED_3D))
+            && dims[0].is_multiple_of(4)
+            && dims[1].is_multiple_of(4)
     }
 
     /// "name (backend, device type)".

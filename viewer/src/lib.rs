@@ -34,6 +34,7 @@ pub mod slab;
 pub mod slice_plan;
 pub mod target;
 pub mod texture;
+pub mod texture_bc;
 pub mod volume_pass;
 pub mod volume_plan;
 pub mod window;

@@ -128,6 +128,9 @@ pub struct Renderer {
     particle_layer: crate::particle_pass::ParticleLayerDesc,
     /// The particle layer's targets, for the last frame size (made on first use).
     layer_targets: std::cell::RefCell<Option<crate::particle_pass::LayerTargets>>,
+    /// Textures uploaded as BC7 blocks so far (volumes, atlases, normal maps); the others
+    /// of compressed assets were decoded on load ([`Gpu::block_upload`]).
+    pub block_textures: u32,
 }
 
 impl Renderer {
@@ -158,6 +161,7 @@ impl Renderer {
             particles: Vec::new(),
             particle_layer: Default::default(),
             layer_targets: std::cell::RefCell::new(None),
+            block_textures: 0,
         }
     }
 
@@ -237,6 +241,18 @@ impl Renderer {
         instances: Vec<Mat4>,
         animation: Option<crate::animate::Sway>,
     ) -> Result<(), ViewError> {
+        self.add_volume_blocks(asset, None, instances, animation)
+    }
+
+    /// [`Renderer::add_animated_volume`] of a compressed asset with its BC7 `blocks`
+    /// (format 1.2): uploaded as blocks where the device allows it, else decoded.
+    pub fn add_volume_blocks(
+        &mut self,
+        asset: &VolumeAsset,
+        blocks: Option<&billow_format::VolumeBlocks>,
+        instances: Vec<Mat4>,
+        animation: Option<crate::animate::Sway>,
+    ) -> Result<(), ViewError> {
         check_transforms(&instances)?;
         if let Some(a) = &animation {
             a.validate().map_err(ViewError::InvalidParam)?;
@@ -244,7 +260,8 @@ impl Renderer {
         let pass = self.volume_pass.get_or_insert_with(|| {
             VolumePass::new(&self.gpu, &self.receiver_layout, self.texture_batch)
         });
-        let textures = pass.upload(&self.gpu, asset)?;
+        let textures = pass.upload_with(&self.gpu, asset, blocks)?;
+        self.block_textures += textures.iter().filter(|t| t.blocks).count() as u32;
         let first_texture: usize = self.volumes.iter().map(|v| v.bands.len()).sum();
         let b = &asset.header.bounds;
         let bounds = (Vec3::from(b.min), Vec3::from(b.max));
@@ -306,11 +323,26 @@ impl Renderer {
         transition: f32,
         fov_y: f32,
     ) -> Result<(), ViewError> {
+        self.add_cloud_blocks(asset, None, instances, distances, transition, fov_y)
+    }
+
+    /// [`Renderer::add_cloud`] of a compressed asset with its BC7 `blocks` (format 1.2):
+    /// atlases and normal maps uploaded as blocks where the device allows it, else decoded.
+    pub fn add_cloud_blocks(
+        &mut self,
+        asset: &CloudAsset,
+        blocks: Option<&billow_format::CloudBlocks>,
+        instances: Vec<Mat4>,
+        distances: Option<Vec<f32>>,
+        transition: f32,
+        fov_y: f32,
+    ) -> Result<(), ViewError> {
         check_transforms(&instances)?;
         let pass = self
             .cloud_pass
             .get_or_insert_with(|| CloudPass::new(&self.gpu, &self.receiver_layout));
-        let gpu = pass.upload(&self.gpu, asset)?;
+        let gpu = pass.upload_with(&self.gpu, asset, blocks)?;
+        self.block_textures += gpu.block_textures;
         let levels = gpu.level_count();
         let distances = match distances {
             Some(d) => d,

@@ -27,12 +27,13 @@
 //! view space by the cell's normal matrix (src/eval/lighting.rs::volume_diffuse_factor,
 //! src/eval/slicer.rs::normal_matrix). Assets without normals keep their baked colour.
 
-use billow_format::{ColourSpace, VolumeAsset};
+use billow_format::{ColourSpace, VolumeAsset, VolumeBlocks};
 use bytemuck::{Pod, Zeroable};
 use glam::Mat3;
 
 use crate::layout::{color_target, entry, sampler, shader, storage, texture, uniform, Pipeline};
 use crate::target::COLOR_FORMAT;
+use crate::texture_bc::upload_bc7;
 use crate::{Gpu, ViewError};
 
 /// Most textures bound at once (the shaders switch over this many slots at most).
@@ -181,6 +182,8 @@ pub struct GpuVolume {
     pub view: wgpu::TextureView,
     /// The `(α·n̄, α)` normal texture (module docs), when the asset stores normals.
     pub normals: Option<(wgpu::Texture, wgpu::TextureView)>,
+    /// Uploaded as BC7 blocks (format 1.2, [`Gpu::block_upload`]) rather than RGBA8 texels.
+    pub blocks: bool,
 }
 
 /// Volume pipelines and layouts.
@@ -346,20 +349,58 @@ impl VolumePass {
     /// Uploads `asset`'s textures: the base texture first, then one per LOD band
     /// (SPEC §8.6), each with its MIP chain.
     pub fn upload(&self, gpu: &Gpu, asset: &VolumeAsset) -> Result<Vec<GpuVolume>, ViewError> {
+        self.upload_with(gpu, asset, None)
+    }
+
+    /// [`VolumePass::upload`] of a compressed asset: the base texture is uploaded as its BC7
+    /// `blocks` when the device allows it ([`Gpu::block_upload`]), else as the decoded
+    /// texels in `asset.levels` (what the reader decoded on load).
+    pub fn upload_with(
+        &self,
+        gpu: &Gpu,
+        asset: &VolumeAsset,
+        blocks: Option<&VolumeBlocks>,
+    ) -> Result<Vec<GpuVolume>, ViewError> {
         asset
             .validate()
             .map_err(|e| ViewError::InvalidAsset(e.to_string()))?;
         let rep = repeat_axes(asset);
         let repeat = rep[0] || rep[2];
         let cs = asset.header.colour_space;
-        let mut out = vec![upload_levels(
-            gpu,
-            asset.level_dims(0),
-            &asset.levels,
-            asset.normals.as_deref(),
-            cs,
-            repeat,
-        )?];
+        let dims0 = asset.level_dims(0);
+        let direct = blocks
+            .filter(|b| b.colour.len() == asset.levels.len() && gpu.block_upload(dims0, true));
+        let mut out = vec![match direct {
+            Some(b) => {
+                check_3d(gpu, dims0, b.colour.len() as u32)?;
+                let texture = upload_bc7(
+                    gpu,
+                    "volume (BC7)",
+                    dims0,
+                    wgpu::TextureDimension::D3,
+                    &b.colour,
+                    cs == ColourSpace::SrgbPremultiplied,
+                );
+                let view = texture.create_view(&Default::default());
+                GpuVolume {
+                    dims0,
+                    levels: b.colour.len() as u32,
+                    repeat,
+                    texture,
+                    view,
+                    normals: normal_texture(gpu, dims0, &asset.levels, asset.normals.as_deref()),
+                    blocks: true,
+                }
+            }
+            None => upload_levels(
+                gpu,
+                dims0,
+                &asset.levels,
+                asset.normals.as_deref(),
+                cs,
+                repeat,
+            )?,
+        }];
         for b in &asset.bands {
             // Bands address their textures with clamp-to-edge (SPEC §8.6).
             out.push(upload_levels(
@@ -375,6 +416,18 @@ impl VolumePass {
     }
 }
 
+/// A `dims0` volume with `count` levels fits a 3D texture of the device.
+fn check_3d(gpu: &Gpu, dims0: [u32; 3], count: u32) -> Result<(), ViewError> {
+    let max3d = gpu.device.limits().max_texture_dimension_3d;
+    if dims0.iter().any(|&d| d > max3d) || count == 0 {
+        return Err(ViewError::InvalidAsset(format!(
+            "volume {}x{}x{} with {count} levels does not fit a 3D texture (max {max3d})",
+            dims0[0], dims0[1], dims0[2]
+        )));
+    }
+    Ok(())
+}
+
 /// One 3D texture with its MIP chain (`levels[l]` is `mip_dims(dims0, l)` texels).
 fn upload_levels(
     gpu: &Gpu,
@@ -385,20 +438,33 @@ fn upload_levels(
     repeat: bool,
 ) -> Result<GpuVolume, ViewError> {
     let count = levels.len() as u32;
-    let max3d = gpu.device.limits().max_texture_dimension_3d;
-    if dims0.iter().any(|&d| d > max3d) || count == 0 {
-        return Err(ViewError::InvalidAsset(format!(
-            "volume {}x{}x{} with {count} levels does not fit a 3D texture (max {max3d})",
-            dims0[0], dims0[1], dims0[2]
-        )));
-    }
+    check_3d(gpu, dims0, count)?;
     let format = match colour_space {
         ColourSpace::SrgbPremultiplied => wgpu::TextureFormat::Rgba8UnormSrgb,
         ColourSpace::LinearPremultiplied => wgpu::TextureFormat::Rgba8Unorm,
     };
     let (texture, view) = texture_3d(gpu, "volume", dims0, format, levels.iter().map(|b| &b[..]));
-    // (α·n̄, α) per texel, f16: the colour alpha weights the stored snorm8 normal.
-    let normals = normals.map(|nl| {
+    let normals = normal_texture(gpu, dims0, levels, normals);
+    Ok(GpuVolume {
+        dims0,
+        levels: count,
+        repeat,
+        texture,
+        view,
+        normals,
+        blocks: false,
+    })
+}
+
+/// The `(α·n̄, α)` normal texture of a volume that stores normals (module docs), f16: the
+/// colour alpha weights the stored snorm8 normal.
+fn normal_texture(
+    gpu: &Gpu,
+    dims0: [u32; 3],
+    levels: &[Vec<u8>],
+    normals: Option<&[Vec<u8>]>,
+) -> Option<(wgpu::Texture, wgpu::TextureView)> {
+    normals.map(|nl| {
         let texels: Vec<Vec<u8>> = nl
             .iter()
             .zip(levels)
@@ -421,16 +487,9 @@ fn upload_levels(
             wgpu::TextureFormat::Rgba16Float,
             texels.iter().map(|b| &b[..]),
         )
-    });
-    Ok(GpuVolume {
-        dims0,
-        levels: count,
-        repeat,
-        texture,
-        view,
-        normals,
     })
 }
+
 
 /// A 3D texture of `format` with one MIP level per item of `levels` (tightly packed).
 fn texture_3d<'a>(

@@ -8,6 +8,7 @@ use super::{
     bad, Atlas, AtlasRect, Billboard, CloudAsset, CloudError, CloudLevel, Mesh, MeshMaterial,
     MeshTexture, MeshVertex, NO_INDEX,
 };
+use crate::blocks::{decode_bc7, sparse_len, CloudBlocks};
 use crate::container::{encode, ChunkRef};
 use crate::{from_bytes, write_atomic, AssetKind, Container, ElemType};
 
@@ -55,7 +56,12 @@ const LAYOUT: [(&[u8; 4], ElemType, usize); 13] = [
 
 impl CloudAsset {
     /// Every chunk in writing order; the large texel payloads are borrowed, not copied.
-    fn payloads(&self) -> Vec<([u8; 4], ElemType, Cow<'_, [u8]>)> {
+    /// With `blocks`, the atlas levels, normal maps and mesh textures are their BC7 blocks
+    /// (`ATB7`, `ANB7`, `MTB7`, format 1.2) instead of raw texels.
+    fn payloads<'a>(
+        &'a self,
+        blocks: Option<&'a CloudBlocks>,
+    ) -> Vec<([u8; 4], ElemType, Cow<'a, [u8]>)> {
         let mut c: Vec<([u8; 4], ElemType, Cow<'_, [u8]>)> = Vec::new();
         let mut push = |tag: &[u8; 4], elem, data| c.push((*tag, elem, data));
         let (mut lv, mut lf) = (Vec::new(), Vec::new());
@@ -99,11 +105,23 @@ impl CloudAsset {
             put_u32(&mut al, &[a.width, a.height, a.mips.len() as u32, 0]);
         }
         push(b"ATLS", ElemType::U32, Cow::Owned(al));
-        for m in self.atlases.iter().flat_map(|a| &a.mips) {
-            push(b"ATEX", ElemType::U8, Cow::Borrowed(m));
-        }
-        for m in self.atlases.iter().flat_map(|a| a.normals.iter().flatten()) {
-            push(b"ANRM", ElemType::U8, Cow::Borrowed(m));
+        match blocks {
+            None => {
+                for m in self.atlases.iter().flat_map(|a| &a.mips) {
+                    push(b"ATEX", ElemType::U8, Cow::Borrowed(m));
+                }
+                for m in self.atlases.iter().flat_map(|a| a.normals.iter().flatten()) {
+                    push(b"ANRM", ElemType::U8, Cow::Borrowed(m));
+                }
+            }
+            Some(b) => {
+                for m in b.atlases.iter().flatten() {
+                    push(b"ATB7", ElemType::U8, Cow::Borrowed(m));
+                }
+                for m in b.atlas_normals.iter().flatten().flatten() {
+                    push(b"ANB7", ElemType::U8, Cow::Borrowed(m));
+                }
+            }
         }
         let (mut mf, mut mi) = (Vec::new(), Vec::new());
         for m in &self.materials {
@@ -119,8 +137,17 @@ impl CloudAsset {
             put_u32(&mut ti, &[t.width, t.height, t.wrap[0], t.wrap[1]]);
         }
         push(b"MTXI", ElemType::U32, Cow::Owned(ti));
-        for t in &self.textures {
-            push(b"MTEX", ElemType::U8, Cow::Borrowed(&t.texels));
+        match blocks {
+            None => {
+                for t in &self.textures {
+                    push(b"MTEX", ElemType::U8, Cow::Borrowed(&t.texels));
+                }
+            }
+            Some(b) => {
+                for t in &b.textures {
+                    push(b"MTB7", ElemType::U8, Cow::Borrowed(t));
+                }
+            }
         }
         for (m, vt, it) in [
             (&self.trunk, b"TVTX", b"TIDX"),
@@ -151,7 +178,7 @@ impl CloudAsset {
     /// The container for this asset (validates first).
     pub fn to_container(&self) -> Result<Container, CloudError> {
         self.validate()?;
-        let chunks = self.payloads().into_iter();
+        let chunks = self.payloads(None).into_iter();
         let chunks = chunks.map(|(tag, elem, data)| crate::Chunk {
             tag,
             elem,
@@ -165,8 +192,60 @@ impl CloudAsset {
 
     /// Encode to file bytes (validates first). Deterministic.
     pub fn to_bytes(&self) -> Result<Vec<u8>, CloudError> {
+        self.to_bytes_with(None)
+    }
+
+    /// Whether `b` has the shape of this asset's textures (sizes only).
+    fn check_blocks(&self, b: &CloudBlocks) -> Result<(), CloudError> {
+        let dims = |w: u32, h: u32, k: usize| {
+            let s = |x: u32| x.checked_shr(k as u32).unwrap_or(0).max(1);
+            [s(w), s(h), 1]
+        };
+        let shape = |l: &[Vec<u8>], w, h, n: usize| {
+            l.len() == n
+                && l.iter()
+                    .enumerate()
+                    .all(|(k, x)| sparse_len(x, dims(w, h, k)).is_ok())
+        };
+        let atl_ok = b.atlases.len() == self.atlases.len()
+            && b.atlases
+                .iter()
+                .zip(&self.atlases)
+                .all(|(l, a)| shape(l, a.width, a.height, a.mips.len()));
+        let nrm_ok = match (
+            &b.atlas_normals,
+            self.atlases.first().and_then(|a| a.normals.as_ref()),
+        ) {
+            (None, None) => true,
+            (Some(n), Some(_)) => {
+                n.len() == self.atlases.len()
+                    && n.iter()
+                        .zip(&self.atlases)
+                        .all(|(l, a)| shape(l, a.width, a.height, a.mips.len()))
+            }
+            _ => false,
+        };
+        let tex_ok = b.textures.len() == self.textures.len()
+            && b.textures
+                .iter()
+                .zip(&self.textures)
+                .all(|(l, t)| sparse_len(l, [t.width, t.height, 1]).is_ok());
+        if atl_ok && nrm_ok && tex_ok {
+            Ok(())
+        } else {
+            bad("the BC7 blocks do not match the asset's atlases and textures")
+        }
+    }
+
+    /// [`CloudAsset::to_bytes`] storing every atlas level, normal map and mesh texture as
+    /// the BC7 `blocks` (format 1.2, SPEC §12) when given. The blocks must decode to the
+    /// asset's texels (what a reader gets back); only their sizes are checked here.
+    pub fn to_bytes_with(&self, blocks: Option<&CloudBlocks>) -> Result<Vec<u8>, CloudError> {
         self.validate()?;
-        let p = self.payloads();
+        if let Some(b) = blocks {
+            self.check_blocks(b)?;
+        }
+        let p = self.payloads(blocks);
         let refs: Vec<ChunkRef<'_>> = p
             .iter()
             .map(|(tag, elem, data)| ChunkRef {
@@ -180,15 +259,30 @@ impl CloudAsset {
 
     /// Decode and validate from a container; unknown chunk tags are skipped.
     pub fn from_container(c: Container) -> Result<Self, CloudError> {
+        Ok(Self::from_container_with_blocks(c)?.0)
+    }
+
+    /// [`CloudAsset::from_container`] that also returns the BC7 blocks of a compressed
+    /// file (format 1.2); the asset's texels are the decoded blocks either way.
+    pub fn from_container_with_blocks(
+        c: Container,
+    ) -> Result<(Self, Option<CloudBlocks>), CloudError> {
         let Container { header, chunks } = c;
         if header.kind != AssetKind::Cloud {
             return bad(format!("asset kind is {:?}, not Cloud", header.kind));
         }
         let mut single: [Option<Vec<u8>>; 12] = Default::default();
         let (mut atex, mut mtex, mut anrm) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut atb7, mut mtb7, mut anb7) = (Vec::new(), Vec::new(), Vec::new());
         for ch in chunks {
             let Some(k) = LAYOUT.iter().position(|(t, _, _)| **t == ch.tag) else {
-                for (tag, list) in [(b"MTEX", &mut mtex), (b"ANRM", &mut anrm)] {
+                for (tag, list) in [
+                    (b"MTEX", &mut mtex),
+                    (b"ANRM", &mut anrm),
+                    (b"ATB7", &mut atb7),
+                    (b"MTB7", &mut mtb7),
+                    (b"ANB7", &mut anb7),
+                ] {
                     if &ch.tag == tag {
                         if ch.elem != ElemType::U8 {
                             return bad(format!(
@@ -224,6 +318,12 @@ impl CloudAsset {
             if single[k].replace(ch.data).is_some() {
                 return bad(format!("more than one {tag} chunk"));
             }
+        }
+        let compressed = !(atb7.is_empty() && mtb7.is_empty() && anb7.is_empty());
+        if compressed && !(atex.is_empty() && mtex.is_empty() && anrm.is_empty()) {
+            return bad(
+                "both raw (ATEX/ANRM/MTEX) and compressed (ATB7/ANB7/MTB7) textures: a compressed cloud stores all its textures as blocks",
+            );
         }
         let mut take = |k: usize| {
             single[k].take().ok_or_else(|| {
@@ -268,6 +368,48 @@ impl CloudAsset {
                 elements: i[3],
             });
         let al = u32s(&take(4)?);
+        let mut cblocks = compressed.then(CloudBlocks::default);
+        if let Some(cb) = cblocks.as_mut() {
+            // Decode the blocks into the raw chunks' texels (sizes checked first).
+            let decode_chain = |chunks: Vec<Vec<u8>>,
+                                tag: &str,
+                                out: &mut Vec<Vec<Vec<u8>>>|
+             -> Result<Vec<Vec<u8>>, CloudError> {
+                let mut it = chunks.into_iter();
+                let mut raw = Vec::new();
+                for (i, a) in al.chunks_exact(4).enumerate() {
+                    if a[2] == 0 || a[2] > 32 || a[0] == 0 || a[1] == 0 {
+                        return bad(format!("atlas {i}: size or MIP count out of range"));
+                    }
+                    let mut lv = Vec::new();
+                    for k in 0..a[2] {
+                        let d = |x: u32| x.checked_shr(k).unwrap_or(0).max(1);
+                        let Some(b) = it.next() else {
+                            return bad(format!(
+                                "atlas {i}: fewer {tag} chunks than its MIP count"
+                            ));
+                        };
+                        let dims = [d(a[0]), d(a[1]), 1];
+                        if let Err(e) = sparse_len(&b, dims) {
+                            return bad(format!("atlas {i} {tag} level {k}: {e}"));
+                        }
+                        raw.push(decode_bc7(&b, dims, 0));
+                        lv.push(b);
+                    }
+                    out.push(lv);
+                }
+                if it.next().is_some() {
+                    return bad(format!("more {tag} chunks than the atlases' MIP counts"));
+                }
+                Ok(raw)
+            };
+            atex = decode_chain(atb7, "ATB7", &mut cb.atlases)?;
+            if !anb7.is_empty() {
+                let mut n = Vec::new();
+                anrm = decode_chain(anb7, "ANB7", &mut n)?;
+                cb.atlas_normals = Some(n);
+            }
+        }
         if !anrm.is_empty() && anrm.len() != atex.len() {
             return bad(format!(
                 "{} ANRM chunks for {} ATEX chunks (must be none or one each)",
@@ -314,6 +456,32 @@ impl CloudAsset {
                 double_sided: i[2] != 0,
             });
         let ti = u32s(&take(7)?);
+        if let Some(cb) = cblocks.as_mut() {
+            if ti.len() / 4 != mtb7.len() {
+                return bad(format!(
+                    "MTXI lists {} textures but there are {} MTB7 chunks",
+                    ti.len() / 4,
+                    mtb7.len()
+                ));
+            }
+            for (i, (t, b)) in ti.chunks_exact(4).zip(mtb7).enumerate() {
+                if t[0] == 0
+                    || t[1] == 0
+                    || t[0] > super::MAX_TEXTURE_SIDE
+                    || t[1] > super::MAX_TEXTURE_SIDE
+                {
+                    return bad(format!(
+                        "mesh texture {i}: size {}x{} out of range",
+                        t[0], t[1]
+                    ));
+                }
+                if let Err(e) = sparse_len(&b, [t[0], t[1], 1]) {
+                    return bad(format!("mesh texture {i}: MTB7: {e}"));
+                }
+                mtex.push(decode_bc7(&b, [t[0], t[1], 1], 0));
+                cb.textures.push(b);
+            }
+        }
         if ti.len() / 4 != mtex.len() {
             return bad(format!(
                 "MTXI lists {} textures but there are {} MTEX chunks",
@@ -340,12 +508,26 @@ impl CloudAsset {
             foliage,
         };
         asset.validate()?;
-        Ok(asset)
+        Ok((asset, cblocks))
     }
 
     /// Decode and validate from file bytes.
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, CloudError> {
         Self::from_container(from_bytes(bytes)?)
+    }
+
+    /// [`CloudAsset::from_bytes`] that also returns the BC7 blocks of a compressed file.
+    pub fn from_bytes_with_blocks(bytes: &[u8]) -> Result<(Self, Option<CloudBlocks>), CloudError> {
+        Self::from_container_with_blocks(from_bytes(bytes)?)
+    }
+
+    /// [`CloudAsset::read`] that also returns the BC7 blocks of a compressed file.
+    pub fn read_with_blocks(path: &Path) -> Result<(Self, Option<CloudBlocks>), CloudError> {
+        let bytes = crate::container::read_regular(path)?;
+        Self::from_bytes_with_blocks(&bytes).map_err(|e| match e {
+            CloudError::Format(f) => CloudError::Format(f.in_file(path)),
+            CloudError::Invalid(m) => CloudError::Invalid(format!("{}: {m}", path.display())),
+        })
     }
 
     /// Read a cloud asset file.
@@ -360,6 +542,11 @@ impl CloudAsset {
     /// Encode and write atomically (see [`write_atomic`]).
     pub fn write(&self, path: &Path) -> Result<(), CloudError> {
         Ok(write_atomic(path, &self.to_bytes()?)?)
+    }
+
+    /// [`CloudAsset::write`] with the textures as BC7 `blocks` when given.
+    pub fn write_with(&self, path: &Path, blocks: Option<&CloudBlocks>) -> Result<(), CloudError> {
+        Ok(write_atomic(path, &self.to_bytes_with(blocks)?)?)
     }
 }
 

@@ -3,12 +3,13 @@
 //! billboard quads by (level, atlas)) and one index buffer (the quads of each (level,
 //! atlas) group in a fixed order), and the kept (trunk) mesh handed to the mesh pass.
 
-use billow_format::{CloudAsset, NO_INDEX};
+use billow_format::{CloudAsset, CloudBlocks, NO_INDEX};
 use glam::Vec3;
 
 use super::{CloudPass, CloudVertex, DrawUniform, BILLBOARD_CUTOFF};
 use crate::mesh_pass::{MeshData, MeshMaterial, MeshVertex};
 use crate::texture::{upload_rgba8_mips, write_level, TextureData};
+use crate::texture_bc::upload_bc7;
 use crate::{Gpu, ViewError};
 
 /// A foliage-mesh material's vertex range.
@@ -42,6 +43,8 @@ pub struct GpuCloud {
     pub radius: f32,
     /// The kept mesh, for the mesh pass (object space).
     pub trunk: MeshData,
+    /// Atlases and normal maps uploaded as BC7 blocks (format 1.2, [`Gpu::block_upload`]).
+    pub block_textures: u32,
 }
 
 impl GpuCloud {
@@ -190,13 +193,43 @@ impl CloudPass {
     /// by (level, atlas), the foliage mesh grouped by material; the trunk is returned as
     /// [`GpuCloud::trunk`]. Nothing of it changes afterwards.
     pub fn upload(&self, gpu: &Gpu, asset: &CloudAsset) -> Result<GpuCloud, ViewError> {
+        self.upload_with(gpu, asset, None)
+    }
+
+    /// [`CloudPass::upload`] of a compressed asset: atlases and normal maps are uploaded as
+    /// their BC7 `blocks` where the device allows it ([`Gpu::block_upload`]; the blocks
+    /// are drawn as the baker stored them, its MIP alpha already keeps the alpha-tested
+    /// coverage), else as the decoded texels in `asset` (what the reader decoded on load).
+    /// Mesh textures are always uploaded decoded: the viewer builds their MIP chains.
+    pub fn upload_with(
+        &self,
+        gpu: &Gpu,
+        asset: &CloudAsset,
+        blocks: Option<&CloudBlocks>,
+    ) -> Result<GpuCloud, ViewError> {
         asset
             .validate()
             .map_err(|e| ViewError::InvalidAsset(e.to_string()))?;
+        let blocks = blocks.filter(|b| b.atlases.len() == asset.atlases.len());
+        let mut block_textures = 0u32;
         let atlas_views: Vec<wgpu::TextureView> = asset
             .atlases
             .iter()
-            .map(|a| {
+            .enumerate()
+            .map(|(i, a)| {
+                if let Some(b) = blocks.filter(|_| gpu.block_upload([a.width, a.height, 1], false))
+                {
+                    block_textures += 1;
+                    return upload_bc7(
+                        gpu,
+                        "cloud atlas (BC7)",
+                        [a.width, a.height, 1],
+                        wgpu::TextureDimension::D2,
+                        &b.atlases[i],
+                        true,
+                    )
+                    .create_view(&Default::default());
+                }
                 let mut mips = a.mips[1..].to_vec();
                 let target = coverage(&a.mips[0], BILLBOARD_CUTOFF, 1.0);
                 for m in &mut mips {
@@ -218,13 +251,30 @@ impl CloudPass {
         let has_normals =
             !asset.atlases.is_empty() && asset.atlases.iter().all(|a| a.normals.is_some());
         let runtime_lit = unlit && has_normals;
+        let normal_blocks = blocks.and_then(|b| b.atlas_normals.as_ref());
         let normal_views: Vec<Option<wgpu::TextureView>> = asset
             .atlases
             .iter()
-            .map(|a| match (&a.normals, runtime_lit) {
-                (Some(n), true) => {
-                    Some(linear_texture(gpu, a.width, a.height, n).create_view(&Default::default()))
-                }
+            .enumerate()
+            .map(|(i, a)| match (&a.normals, runtime_lit) {
+                (Some(n), true) => Some(
+                    match normal_blocks.filter(|_| gpu.block_upload([a.width, a.height, 1], false))
+                    {
+                        Some(nb) => {
+                            block_textures += 1;
+                            upload_bc7(
+                                gpu,
+                                "cloud normal map (BC7)",
+                                [a.width, a.height, 1],
+                                wgpu::TextureDimension::D2,
+                                &nb[i],
+                                false,
+                            )
+                        }
+                        None => linear_texture(gpu, a.width, a.height, n),
+                    }
+                    .create_view(&Default::default()),
+                ),
                 _ => None,
             })
             .collect();
@@ -397,6 +447,7 @@ impl CloudPass {
             centre: 0.5 * (lo + hi),
             radius: 0.5 * (hi - lo).length(),
             trunk: trunk_mesh(asset),
+            block_textures,
         })
     }
 }
