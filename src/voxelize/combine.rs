@@ -31,8 +31,9 @@ use std::sync::Arc;
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
+use super::bricks::{local, voxels_of, BrickAccum, Bricked, B3};
 use super::expr::{Expr, ExprError};
-use super::mip::{Grid3, Texel};
+use super::mip::{Disjoint, Grid3, Texel};
 use super::quantize::encode_normal;
 use super::slices::DirSlices;
 use super::toksvig::average_normal;
@@ -183,25 +184,23 @@ impl FromStr for CombineFn {
     }
 }
 
-/// Voxels per chunk of an accumulator level (the unit of parallel work and of skipping
-/// empty space).
+/// Voxels per chunk of parallel work in [`combine_level`].
 const CH: usize = 4096;
 
-/// Streaming accumulator of a preset: one f32 buffer per MIP level, folded one direction at
-/// a time in direction order. Only non-empty voxels are folded (a chunk of voxels nothing
-/// was folded into is never read again, and its memory is never touched).
+/// Streaming accumulator of a preset: one brick-sparse f32 buffer per MIP level, folded one
+/// direction at a time in direction order. Only the bricks some direction holds are
+/// allocated, and only non-empty voxels are folded.
 pub(crate) struct Accum {
     preset: Preset,
     /// Per level, `width` floats per voxel: 4 (`mean`, `max`: Σ or max rgba) or 5
     /// (`opaque`: Σ rgba, max a; `min`: min rgba, directions that saw the voxel).
-    levels: Vec<Vec<f32>>,
-    /// Per level, per chunk of [`CH`] voxels: whether anything was folded into it.
-    touched: Vec<Vec<bool>>,
+    levels: Vec<BrickAccum<f32>>,
     width: usize,
 }
 
 impl Accum {
-    pub fn new(preset: Preset, level_sizes: &[usize]) -> Self {
+    /// Accumulators for levels of these sizes (nothing is allocated until folded).
+    pub fn new(preset: Preset, level_dims: &[[usize; 3]]) -> Self {
         let width = if matches!(preset, Preset::Opaque | Preset::Min) {
             5
         } else {
@@ -209,10 +208,9 @@ impl Accum {
         };
         Accum {
             preset,
-            levels: level_sizes.iter().map(|&n| vec![0.0; n * width]).collect(),
-            touched: level_sizes
+            levels: level_dims
                 .iter()
-                .map(|&n| vec![false; n.div_ceil(CH)])
+                .map(|&d| BrickAccum::new(d, width))
                 .collect(),
             width,
         }
@@ -241,41 +239,40 @@ impl Accum {
     }
 
     /// Folds one direction's volume of MIP level `level`.
-    pub fn fold<T: Texel>(&mut self, level: usize, grid: &Grid3<T>) {
+    pub fn fold<T: Texel>(&mut self, level: usize, grid: &Bricked<T>) {
         let (w, preset) = (self.width, self.preset);
-        self.levels[level]
-            .par_chunks_mut(CH * w)
-            .zip(grid.data.par_chunks(CH))
-            .zip(self.touched[level].par_iter_mut())
-            .for_each(|((acc, src), touched)| {
-                for (a, v) in acc.chunks_exact_mut(w).zip(src) {
-                    let v = v.load();
-                    // Empty voxels change nothing (for `min`, they are counted as missing).
-                    if v == [0.0; 4] {
-                        continue;
-                    }
-                    *touched = true;
-                    Self::fold_one(preset, a, v);
+        let acc = &mut self.levels[level];
+        acc.reserve(&grid.layout);
+        acc.for_each_brick(&grid.layout, |acc, i| {
+            for (a, v) in acc
+                .chunks_exact_mut(w)
+                .zip(&grid.data[i * B3..(i + 1) * B3])
+            {
+                let v = v.load();
+                // Empty voxels change nothing (for `min`, they are counted as missing).
+                if v == [0.0; 4] {
+                    continue;
                 }
-            });
+                Self::fold_one(preset, a, v);
+            }
+        });
     }
 
-    /// The combined, clamped level, encoded RGBA8 (see [`super::quantize`]); frees the
-    /// level's buffer.
+    /// The combined, clamped level, encoded RGBA8 (see [`super::quantize`]), dense; frees
+    /// the level's buffer.
     pub fn finish_level(&mut self, level: usize) -> Vec<u8> {
         let (w, preset) = (self.width, self.preset);
-        let acc = std::mem::take(&mut self.levels[level]);
-        let touched = std::mem::take(&mut self.touched[level]);
-        let mut out = vec![0u8; acc.len() / w * 4];
+        let acc = std::mem::replace(&mut self.levels[level], BrickAccum::new([0; 3], w));
+        let dims = acc.dims;
+        let mut out = vec![0u8; dims.iter().product::<usize>() * 4];
         let enc = super::quantize::Encoder::get();
-        out.par_chunks_mut(4 * CH)
-            .zip(acc.par_chunks(w * CH))
-            .zip(touched.par_iter())
-            .for_each(|((o, a), touched)| {
-                if !touched {
-                    return;
-                }
-                for (o, a) in o.chunks_exact_mut(4).zip(a.chunks_exact(w)) {
+        let dst = Disjoint::new(&mut out);
+        acc.data
+            .par_chunks(B3 * w)
+            .zip(&acc.bricks)
+            .for_each(|(brick, &b)| {
+                for p in voxels_of(acc.coords(b as usize), dims) {
+                    let a = &brick[local(p) * w..local(p) * w + w];
                     if a[..4] == [0.0; 4] {
                         continue;
                     }
@@ -286,7 +283,10 @@ impl Accum {
                         Preset::Min => Vec4::from_slice(a),
                         Preset::Opaque => opaque_colour(Vec3::from_slice(a), a[3], a[4]),
                     };
-                    o.copy_from_slice(&enc.rgba8(clamp_premultiplied(v)));
+                    let i = p[0] + dims[0] * (p[1] + dims[1] * p[2]);
+                    // SAFETY: every voxel lies in one brick, and each brick is one task.
+                    unsafe { dst.slice_mut(4 * i, 4) }
+                        .copy_from_slice(&enc.rgba8(clamp_premultiplied(v)));
                 }
             });
         out

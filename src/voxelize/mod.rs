@@ -34,6 +34,7 @@
 
 mod ao;
 pub mod asset;
+pub(crate) mod bricks;
 pub mod cells;
 pub mod combine;
 pub mod dense;
@@ -245,13 +246,6 @@ pub enum VoxelizeError {
         needed_gib: f64,
         limit_gib: f64,
     },
-}
-
-/// Voxel counts of every level.
-fn level_sizes(grid: &GridSpec, mip_count: u32) -> Vec<usize> {
-    (0..mip_count)
-        .map(|l| grid.level_dims(l).iter().map(|&d| d as usize).product())
-        .collect()
 }
 
 /// Estimated peak memory of [`voxelize`] for a grid (see the module docs), in bytes, in the
@@ -491,8 +485,9 @@ fn ao_baker<'a>(
 enum Level<'a, T> {
     /// Level 0, sparse.
     Zero(&'a slices::DirSlices),
-    /// A coarser level: colour and weighted normals.
-    Dense(Grid3<T>, Option<Grid3<[f16; 4]>>),
+    /// A coarser level: colour and weighted normals, brick-sparse (the normals on the
+    /// colour's bricks).
+    Dense(bricks::Bricked<T>, Option<bricks::Bricked<[f16; 4]>>),
 }
 
 /// Builds the pyramid of one direction from its sparse level 0: level 1 is filtered
@@ -518,10 +513,10 @@ fn pyramid<T: Texel>(
             return;
         }
         let t = Instant::now();
+        let next = mip::downsample_bricks(&rgba, &rgba, dir, None);
         let next_n = nrm
             .as_ref()
-            .map(|n| toksvig::downsample_normals(n, &rgba, dir));
-        let next = mip::downsample(&rgba, dir);
+            .map(|n| toksvig::downsample_normals(n, &rgba, dir, &next.layout));
         *mip_secs += t.elapsed().as_secs_f64();
         sink(level, Level::Dense(rgba, nrm));
         rgba = next;
@@ -539,13 +534,15 @@ pub fn voxelize(
     let t_all = Instant::now();
     let (grid, mips) = check(scene, opts)?;
     let shader = shade::Shader::new(scene);
-    let sizes = level_sizes(&grid, mips);
+    let dims: Vec<[usize; 3]> = (0..mips)
+        .map(|l| grid.level_dims(l).map(|d| d as usize))
+        .collect();
     let mut times = StageTimes::default();
     let mut fragments = 0u64;
     // With a preset, level 0's normals are combined with its colour (see below).
     let mut nacc = match opts.combine {
         CombineFn::Preset(_) => None,
-        _ => opts.normals.then(|| toksvig::NormalAccum::new(&sizes)),
+        _ => opts.normals.then(|| toksvig::NormalAccum::new(&dims, true)),
     };
     let t = Instant::now();
     let mut baker = ao_baker(scene, &shader, &grid, opts);
@@ -597,10 +594,10 @@ pub fn voxelize(
         CombineFn::Preset(p) => {
             // Level 0 is combined at the end from the six sparse stacks, plane by plane;
             // the coarser levels are folded as each direction's pyramid is built.
-            let mut coarse = sizes.clone();
-            coarse[0] = 0;
-            let mut acc = combine::Accum::new(*p, &coarse);
-            nacc = opts.normals.then(|| toksvig::NormalAccum::new(&coarse));
+            let mut acc = combine::Accum::new(*p, &dims);
+            nacc = opts
+                .normals
+                .then(|| toksvig::NormalAccum::new(&dims, false));
             let mut zero = Vec::with_capacity(6);
             for &pass in &passes {
                 let stacks = raster(&mut bufs, ctx, pass, &mut times, baker.as_mut(), progress);
@@ -656,7 +653,7 @@ pub fn voxelize(
                             if let (Some(na), Some(n)) = (nacc.as_mut(), n.as_ref()) {
                                 na.fold(level, n, &c);
                             }
-                            levels.push(Some(c));
+                            levels.push(Some(c.to_dense()));
                         }
                     });
                     pyrs.push(levels);
