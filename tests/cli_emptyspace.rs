@@ -186,7 +186,11 @@ fn default_voxelize_output_of_the_oak_is_pruned() {
         &[("RAYON_NUM_THREADS", "2")],
     );
     assert_eq!(r.code, Some(0), "{}", r.stderr);
-    let r = emptyspace(dir.path(), &["oak.billow", "-o", "pruned.billow", "--json"], "2");
+    let r = emptyspace(
+        dir.path(),
+        &["oak.billow", "-o", "pruned.billow", "--json"],
+        "2",
+    );
     assert_eq!(r.code, Some(0), "{}", r.stderr);
     assert!(!r.stderr.contains("warning"), "{}", r.stderr);
     let v: serde_json::Value = serde_json::from_str(&r.stdout).unwrap();
@@ -205,7 +209,12 @@ fn default_voxelize_output_of_the_oak_is_pruned() {
     let out = VolumeAsset::read(&dir.path().join("pruned.billow")).unwrap();
     assert!(!out.bands.is_empty());
     for b in v["bands"].as_array().unwrap() {
-        let dims: Vec<u64> = b["dims"].as_array().unwrap().iter().map(|x| x.as_u64().unwrap()).collect();
+        let dims: Vec<u64> = b["dims"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_u64().unwrap())
+            .collect();
         if b["whole"] == false {
             assert!(dims[0] % 4 == 0 && dims[1] % 4 == 0, "band {b}");
         }

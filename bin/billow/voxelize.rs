@@ -248,7 +248,9 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         args.margin,
     )?;
     opts.mip_levels = args.mips;
-    let align = args.align.unwrap_or_else(|| default_align(&opts.resolution, &args.bounds));
+    let align = args
+        .align
+        .unwrap_or_else(|| default_align(&opts.resolution, &args.bounds));
     if !(1..=billow::voxelize::MAX_AXIS).contains(&align) {
         return Err(bad(
             "--align",
