@@ -143,6 +143,19 @@ impl<T: Texel> Bricked<T> {
     }
 }
 
+/// Calls `f` with every voxel of brick `bc` inside a grid of `dims`, x fastest.
+#[inline]
+pub fn for_each_voxel(bc: [usize; 3], dims: [usize; 3], mut f: impl FnMut([usize; 3])) {
+    let hi = [0, 1, 2].map(|a| ((bc[a] + 1) * B).min(dims[a]));
+    for z in bc[2] * B..hi[2] {
+        for y in bc[1] * B..hi[1] {
+            for x in bc[0] * B..hi[0] {
+                f([x, y, z]);
+            }
+        }
+    }
+}
+
 /// The voxels of brick `bc` inside a grid of `dims`, x fastest.
 pub fn voxels_of(bc: [usize; 3], dims: [usize; 3]) -> impl Iterator<Item = [usize; 3]> {
     let lo = bc.map(|c| c * B);
@@ -266,10 +279,10 @@ mod tests {
             assert_eq!(cb.to_dense(), c);
             for dir in Dir::ALL {
                 let dense = downsample(&c, dir);
-                let sparse = downsample_bricks(&cb, &cb, dir, None);
+                let sparse = downsample_bricks::<_, [f32; 4]>(&cb, None, dir, None);
                 assert_eq!(sparse.to_dense(), dense, "{dims:?} {dir:?}");
                 let dense_n = downsample_with(&n, &c, dir);
-                let sparse_n = downsample_bricks(&nb, &cb, dir, Some(&sparse.layout));
+                let sparse_n = downsample_bricks(&nb, Some(&cb), dir, Some(&sparse.layout));
                 assert_eq!(sparse_n.to_dense(), dense_n, "normals {dims:?} {dir:?}");
             }
         }
@@ -280,7 +293,7 @@ mod tests {
         let g = Grid3::<[f32; 4]>::new([40, 24, 16]);
         let b = Bricked::from_dense(&g);
         assert!(b.data.is_empty());
-        let d = downsample_bricks(&b, &b, Dir::PosX, None);
+        let d = downsample_bricks::<_, [f32; 4]>(&b, None, Dir::PosX, None);
         assert!(d.data.is_empty() && d.layout.bricks.is_empty());
         assert_eq!(d.to_dense(), downsample(&g, Dir::PosX));
     }
@@ -295,7 +308,7 @@ mod tests {
         let b = Bricked::from_dense(&g);
         assert_eq!(b.layout.bricks.len(), 1);
         for dir in Dir::ALL {
-            let d = downsample_bricks(&b, &b, dir, None);
+            let d = downsample_bricks::<_, [f32; 4]>(&b, None, dir, None);
             assert_eq!(d.layout.bricks.len(), 1, "{dir:?}");
             assert_eq!(d.to_dense(), downsample(&g, dir));
         }

@@ -31,7 +31,7 @@ use std::sync::Arc;
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
-use super::bricks::{local, voxels_of, BrickAccum, Bricked, B3};
+use super::bricks::{for_each_voxel, local, BrickAccum, Bricked, B3};
 use super::expr::{Expr, ExprError};
 use super::mip::{Disjoint, Grid3, Texel};
 use super::quantize::encode_normal;
@@ -271,15 +271,15 @@ impl Accum {
             .par_chunks(B3 * w)
             .zip(&acc.bricks)
             .for_each(|(brick, &b)| {
-                for p in voxels_of(acc.coords(b as usize), dims) {
+                for_each_voxel(acc.coords(b as usize), dims, |p| {
                     let a = &brick[local(p) * w..local(p) * w + w];
                     if a[..4] == [0.0; 4] {
-                        continue;
+                        return;
                     }
                     let v = match preset {
                         Preset::Mean => Vec4::from_slice(a) / 6.0,
                         Preset::Max => Vec4::from_slice(a),
-                        Preset::Min if a[4] < 6.0 => continue,
+                        Preset::Min if a[4] < 6.0 => return,
                         Preset::Min => Vec4::from_slice(a),
                         Preset::Opaque => opaque_colour(Vec3::from_slice(a), a[3], a[4]),
                     };
@@ -287,7 +287,7 @@ impl Accum {
                     // SAFETY: every voxel lies in one brick, and each brick is one task.
                     unsafe { dst.slice_mut(4 * i, 4) }
                         .copy_from_slice(&enc.rgba8(clamp_premultiplied(v)));
-                }
+                });
             });
         out
     }
@@ -330,11 +330,12 @@ fn prefetch<T>(x: &T) {
 /// directions are folded into a small plane-sized accumulator (in direction order, as
 /// [`Accum`] does) and encoded RGBA8 at once, so level 0 never has a full-size
 /// accumulator. With `normals`, also the plane's Toksvig normals (`Σ Nw / Σ α`, snorm8).
+/// Also returns the number of voxels whose alpha byte is not 0.
 pub(crate) fn combine_level0(
     preset: Preset,
     dirs: &[DirSlices],
     normals: bool,
-) -> (Vec<u8>, Option<Vec<u8>>) {
+) -> (Vec<u8>, Option<Vec<u8>>, u64) {
     let dims = dirs[0].dims;
     let plane = dims[0] * dims[1];
     let w = if matches!(preset, Preset::Opaque | Preset::Min) {
@@ -388,8 +389,10 @@ pub(crate) fn combine_level0(
             Vec::new(),
         )
     };
+    let non_empty = std::sync::atomic::AtomicU64::new(0);
     let work = |(acc, nacc, list): &mut Bufs, z: usize, o: &mut [u8], mut on: Option<&mut [u8]>| {
         list.clear();
+        let mut count = 0u64;
         for (s, table) in dirs.iter().zip(&by_plane) {
             let nrm = s.nrm.as_deref();
             let mut fold = |i: usize, k: usize| {
@@ -439,7 +442,9 @@ pub(crate) fn combine_level0(
                     Preset::Min => Vec4::from_slice(a),
                     Preset::Opaque => opaque_colour(Vec3::from_slice(a), a[3], a[4]),
                 };
-                o[4 * i..4 * i + 4].copy_from_slice(&enc.rgba8(clamp_premultiplied(v)));
+                let px = enc.rgba8(clamp_premultiplied(v));
+                count += u64::from(px[3] != 0);
+                o[4 * i..4 * i + 4].copy_from_slice(&px);
             }
             a.fill(0.0);
             if let Some(on) = on.as_deref_mut() {
@@ -452,6 +457,7 @@ pub(crate) fn combine_level0(
                 on[4 * i..4 * i + 4].copy_from_slice(&encode_normal(n));
             }
         }
+        non_empty.fetch_add(count, std::sync::atomic::Ordering::Relaxed);
     };
     match out_n.as_mut() {
         Some(on) => out
@@ -464,5 +470,5 @@ pub(crate) fn combine_level0(
             .enumerate()
             .for_each_init(init, |b, (z, o)| work(b, z, o, None)),
     }
-    (out, out_n)
+    (out, out_n, non_empty.into_inner())
 }

@@ -27,7 +27,7 @@ use glam::Vec4;
 use half::f16;
 use rayon::prelude::*;
 
-use super::bricks::{local, voxels_of, Bricked, Layout, B, B3, EMPTY};
+use super::bricks::{local, Bricked, Layout, B, B3, EMPTY};
 use super::slices::DirSlices;
 use super::Dir;
 
@@ -288,7 +288,16 @@ pub(crate) fn downsample_sparse<T: Texel>(
             || vec![false; nbricks],
             |mut f, cj| {
                 let (row, _) = s.row(cj);
+                // Parents of one child are consecutive, so a child's parent bricks are a run
+                // (first, last); neighbours in a column with the same run mark the same bricks.
+                let run = |l: &[usize]| (l[0], l[l.len() - 1]);
+                let mut last = (usize::MAX, (0, 0));
                 for v in row {
+                    let key = (v.u as usize, run(&bs[v.s as usize]));
+                    if key == last {
+                        continue;
+                    }
+                    last = key;
                     for &jb in &bj[cj] {
                         for &ub in &bu[v.u as usize] {
                             for &sb in &bs[v.s as usize] {
@@ -430,14 +439,15 @@ pub(crate) fn downsample_sparse<T: Texel>(
     (out, out_n)
 }
 
-/// One MIP step of a brick-sparse direction volume: the same filter, in the same order,
-/// as [`downsample_with`] on the dense grid (so the same values), computed only for the
+/// One MIP step of a brick-sparse direction volume (occluded by `alpha_src`'s alpha, or by
+/// its own with `None`): the same filter, in the same order, as [`downsample_with`] on the
+/// dense grid (so the same values), computed only for the
 /// parent bricks whose footprint meets an allocated child brick of `src`; or, when given,
 /// exactly the bricks of `layout` (the colour's layout for the normals, a superset of
 /// theirs: a normal is non-zero only where the colour is).
 pub(crate) fn downsample_bricks<T: Texel, A: Texel>(
     src: &Bricked<T>,
-    alpha_src: &Bricked<A>,
+    alpha_src: Option<&Bricked<A>>,
     view: Dir,
     layout: Option<&Layout>,
 ) -> Bricked<T> {
@@ -488,6 +498,39 @@ pub(crate) fn downsample_bricks<T: Texel, A: Texel>(
             &made
         }
     };
+    // One parent: the children composited along the view axis front to back, averaged
+    // across (the arithmetic and order of `downsample_with`). `sv`/`sa`: the gathered
+    // footprint from `lo`, with strides `st`; `sa` empty: the alpha is the value's own.
+    let parent = |p: [usize; 3], sv: &[T], sa: &[A], lo: [usize; 3], st: [usize; 3]| -> T {
+        let mut acc = [0.0f64; 4];
+        let tu = &axis_taps[across[0]][p[across[0]]];
+        let tv = &axis_taps[across[1]][p[across[1]]];
+        let tw = &axis_taps[a][p[a]];
+        for &(cu, wu) in tu {
+            let ou = (cu - lo[across[0]]) * st[across[0]];
+            for &(cv, wv) in tv {
+                let ov = (cv - lo[across[1]]) * st[across[1]];
+                // Composite the column of children along the view axis, front first.
+                let mut col = [0.0f64; 4];
+                let mut transmit = 1.0f64;
+                for &(cw, f) in tw {
+                    let i = ou + ov + (cw - lo[a]) * st[a];
+                    let v = sv[i].load();
+                    let alpha = if sa.is_empty() { v[3] } else { sa[i].load()[3] } as f64;
+                    let s = partial_scale(alpha, f as f64);
+                    for k in 0..4 {
+                        col[k] += transmit * s * v[k] as f64;
+                    }
+                    transmit *= 1.0 - s * alpha;
+                }
+                let w = wu as f64 * wv as f64;
+                for k in 0..4 {
+                    acc[k] += w * col[k];
+                }
+            }
+        }
+        T::store(acc.map(|v| (v * norm) as f32))
+    };
     let mut out = Bricked::<T>::zeroed(layout.clone());
     out.data
         .par_chunks_mut(B3)
@@ -500,8 +543,11 @@ pub(crate) fn downsample_bricks<T: Texel, A: Texel>(
                 let lo = r.map(|r| r.0);
                 let ext = r.map(|r| r.1 - r.0);
                 gather(src, lo, ext, sv);
-                gather(alpha_src, lo, ext, sa);
-                let strides = [1, ext[0], ext[0] * ext[1]];
+                match alpha_src {
+                    Some(g) => gather(g, lo, ext, sa),
+                    None => sa.clear(),
+                }
+                let st = [1, ext[0], ext[0] * ext[1]];
                 // Rows along x of the footprint that hold anything: as in the dense step,
                 // parents whose child rows are all empty stay zero.
                 rows.clear();
@@ -509,48 +555,22 @@ pub(crate) fn downsample_bricks<T: Texel, A: Texel>(
                     sv.chunks_exact(ext[0])
                         .map(|row| row.iter().any(|v| v.load() != [0.0; 4])),
                 );
-                let mut skip = (usize::MAX, usize::MAX, false);
-                for p in voxels_of(bc, nd) {
-                    if (p[1], p[2]) != (skip.0, skip.1) {
-                        let ty = &axis_taps[1][p[1]];
-                        let tz = &axis_taps[2][p[2]];
+                let hi = [0, 1, 2].map(|ax| ((bc[ax] + 1) * B).min(nd[ax]));
+                for z in bc[2] * B..hi[2] {
+                    for y in bc[1] * B..hi[1] {
+                        let (ty, tz) = (&axis_taps[1][y], &axis_taps[2][z]);
                         let any = ty.iter().any(|&(cy, _)| {
                             tz.iter()
                                 .any(|&(cz, _)| rows[(cy - lo[1]) + ext[1] * (cz - lo[2])])
                         });
-                        skip = (p[1], p[2], !any);
-                    }
-                    if skip.2 {
-                        continue;
-                    }
-                    let mut acc = [0.0f64; 4];
-                    let tu = &axis_taps[across[0]][p[across[0]]];
-                    let tv = &axis_taps[across[1]][p[across[1]]];
-                    let tw = &axis_taps[a][p[a]];
-                    for &(cu, wu) in tu {
-                        let ou = (cu - lo[across[0]]) * strides[across[0]];
-                        for &(cv, wv) in tv {
-                            let ov = (cv - lo[across[1]]) * strides[across[1]];
-                            // Composite the column of children along the view axis, front first.
-                            let mut col = [0.0f64; 4];
-                            let mut transmit = 1.0f64;
-                            for &(cw, f) in tw {
-                                let i = ou + ov + (cw - lo[a]) * strides[a];
-                                let v = sv[i].load();
-                                let alpha = sa[i].load()[3] as f64;
-                                let s = partial_scale(alpha, f as f64);
-                                for k in 0..4 {
-                                    col[k] += transmit * s * v[k] as f64;
-                                }
-                                transmit *= 1.0 - s * alpha;
-                            }
-                            let w = wu as f64 * wv as f64;
-                            for k in 0..4 {
-                                acc[k] += w * col[k];
-                            }
+                        if !any {
+                            continue;
+                        }
+                        for x in bc[0] * B..hi[0] {
+                            let p = [x, y, z];
+                            brick[local(p)] = parent(p, sv, sa, lo, st);
                         }
                     }
-                    brick[local(p)] = T::store(acc.map(|v| (v * norm) as f32));
                 }
             },
         );

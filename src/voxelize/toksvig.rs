@@ -23,7 +23,7 @@ use glam::Vec3;
 use half::f16;
 use rayon::prelude::*;
 
-use super::bricks::{local, voxels_of, BrickAccum, Bricked, Layout, B3};
+use super::bricks::{for_each_voxel, local, BrickAccum, Bricked, Layout, B3};
 use super::mip::{downsample_bricks, Disjoint, Texel};
 use super::slices::DirSlices;
 use super::Dir;
@@ -38,7 +38,7 @@ pub(crate) fn downsample_normals<T: Texel>(
     view: Dir,
     colour_next: &Layout,
 ) -> Bricked<[f16; 4]> {
-    downsample_bricks(nrm, rgba, view, Some(colour_next))
+    downsample_bricks(nrm, Some(rgba), view, Some(colour_next))
 }
 
 /// Toksvig's average normal `Σ Nw / Σ α` (length ≤ 1; zero when `Σ α` is 0).
@@ -174,11 +174,11 @@ impl NormalAccum {
             .par_chunks(B3)
             .zip(&acc.bricks)
             .for_each(|(brick, &b)| {
-                for p in voxels_of(acc.coords(b as usize), dims) {
+                for_each_voxel(acc.coords(b as usize), dims, |p| {
                     let i = p[0] + dims[0] * (p[1] + dims[1] * p[2]);
                     // SAFETY: every voxel lies in one brick, and each brick is one task.
                     unsafe { dst.slice_mut(4 * i, 4) }.copy_from_slice(&encode(&brick[local(p)]));
-                }
+                });
             });
         out
     }
@@ -213,7 +213,7 @@ mod tests {
     fn parent_normal(left: Vec3, right: Vec3, view: Dir) -> (Vec3, f32) {
         let (nrm, rgba) = siblings(left, right);
         let (nrm, rgba) = (Bricked::from_dense(&nrm), Bricked::from_dense(&rgba));
-        let c1 = downsample_bricks(&rgba, &rgba, view, None);
+        let c1 = downsample_bricks::<_, [f32; 4]>(&rgba, None, view, None);
         let n1 = downsample_normals(&nrm, &rgba, view, &c1.layout);
         assert_eq!(n1.dims(), [1, 1, 1]);
         let n = n1.get([0, 0, 0]);
@@ -265,7 +265,7 @@ mod tests {
             Bricked::from_dense(&neg),
             Bricked::from_dense(&rgba),
         );
-        let c1 = downsample_bricks(&rgba, &rgba, Dir::PosZ, None);
+        let c1 = downsample_bricks::<_, [f32; 4]>(&rgba, None, Dir::PosZ, None);
         let mut acc = NormalAccum::new(&[[2, 2, 2], [1, 1, 1]], false);
         acc.fold(
             1,
