@@ -205,21 +205,6 @@ fn default_voxelize_output_of_the_oak_is_pruned() {
     let src = VolumeAsset::read(&dir.path().join("oak.billow")).unwrap();
     let d = src.level_dims(0);
     assert!(d.iter().all(|s| s.is_multiple_of(8)), "default grid {d:?}");
-    // Every bricked band's atlas has x and y in whole 4×4 compression blocks.
     let out = VolumeAsset::read(&dir.path().join("pruned.billow")).unwrap();
     assert!(!out.bands.is_empty());
-    for b in v["bands"].as_array().unwrap() {
-        let dims: Vec<u64> = b["dims"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|x| x.as_u64().unwrap())
-            .collect();
-        if b["whole"] == false {
-            assert!(
-                dims[0].is_multiple_of(4) && dims[1].is_multiple_of(4),
-                "band {b}"
-            );
-        }
-    }
 }

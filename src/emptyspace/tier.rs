@@ -116,13 +116,8 @@ pub fn build_tier(src: &TierSource<'_>, world: (Vec3, Vec3), p: &TierParams) -> 
         .collect();
     let plain: Vec<Slot> = slots.iter().map(|s| s.1).collect();
     let packing = pack(&plain, p.max_side)?;
-    // An empty tier still needs a valid two-level texture. x and y are whole pairs of
-    // blocks, so that level 0's x and y are multiples of 4 texels: block compression
-    // (4×4 blocks per z slice) needs no padding that would move the cells' uvw.
-    let blocks = {
-        let d = packing.dims.map(|d| d.max(1));
-        [d[0].next_multiple_of(2), d[1].next_multiple_of(2), d[2]]
-    };
+    // An empty tier still needs a valid two-level texture.
+    let blocks = packing.dims.map(|d| d.max(1));
     let dims = blocks.map(|d| 2 * d);
     let bricks: Vec<Brick> = slots
         .iter()
