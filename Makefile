@@ -185,19 +185,26 @@ bench-particles: build
 	python3 benches/particle_layer_bench.py --billow $(BILLOW) --scene fixtures/scenes/explosion.ron \
 		--pictures docs/gallery
 
-## Benchmark: `billow voxelize` vs. the raster floor on the 200k-triangle tree, side by side,
-## medians of BENCH_RUNS runs at each of BENCH_RES; writes docs/benchmarks.md. Needs python3 and cc.
-BENCH_SRC  ?= ../shared/bench
+## Benchmark: `billow voxelize` vs. the raster floor (benches/raster_floor.c) and OpenVDB's
+## `vdb_tool -mesh2ls` (when installed: Debian's libopenvdb-tools) on the project's own
+## 200k-triangle tree (examples/bench_tree.rs), side by side, medians of BENCH_RUNS runs at each
+## of BENCH_RES, instruction counts (valgrind callgrind, when installed) at BENCH_COUNT_RES;
+## BENCH_BEFORE=path/to/an/older/billow adds its rows. Writes docs/benchmarks.md. Needs python3 and cc.
 BENCH_DIR  ?= $(OUT)/bench
 BENCH_RES  ?= 128 256 512
 BENCH_RUNS ?= 5
+BENCH_COUNT_RES ?= 128
+BENCH_BEFORE ?=
+VDB_TOOL   ?= $(shell command -v vdb_tool)
 bench: build
 	@mkdir -p $(BENCH_DIR)
-	python3 $(BENCH_SRC)/gen_tree.py $(BENCH_DIR)/tree
-	cc -O3 -march=native -o $(BENCH_DIR)/raster_floor $(BENCH_SRC)/raster_floor.c
+	$(CARGO) run --release --locked --example bench_tree -- $(BENCH_DIR)/tree.obj
+	cc -O3 -march=native -o $(BENCH_DIR)/raster_floor benches/raster_floor.c
 	python3 benches/voxelize_bench.py --billow $(BILLOW) --floor $(BENCH_DIR)/raster_floor \
 		--mesh $(BENCH_DIR)/tree.obj --res "$(BENCH_RES)" --runs $(BENCH_RUNS) \
-		--foliage $(SAMPLE) --notes benches/voxelize_bench_notes.md --out docs/benchmarks.md
+		--callgrind-res "$(BENCH_COUNT_RES)" $(if $(VDB_TOOL),--vdb-tool $(VDB_TOOL)) \
+		$(if $(BENCH_BEFORE),--before $(BENCH_BEFORE)) \
+		--notes benches/voxelize_bench_notes.md --out docs/benchmarks.md
 
 ## Benchmark: `billow bbcloud` on the oak (N = 500, ε = 0.04, defaults and a few options),
 ## medians of BBCLOUD_RUNS runs: wall and CPU time, billboards and atlas fill per LOD, stage

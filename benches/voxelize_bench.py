@@ -1,182 +1,221 @@
 #!/usr/bin/env python3
-"""`billow voxelize` against the six-direction raster floor, side by side (see `make bench`).
+"""`billow voxelize` against its peers, side by side (see `make bench`, docs/benchmarks.md).
 
-For every resolution, runs `raster_floor MESH R` and `billow voxelize MESH --res R --json`
-alternately (so both see the same machine load), RUNS times each, and writes the medians
-(whole-process wall seconds, billow's per-stage seconds and peak memory) to a Markdown file.
-Only the Python standard library is used.
+For every resolution R, runs alternately (so all see the same machine load), RUNS times each:
+- the raster floor (`benches/raster_floor.c`: occupancy only, one sample per voxel column,
+  nearest texel, one thread) on MESH at R;
+- OpenVDB's `vdb_tool -read MESH -mesh2ls dim=R` when `--vdb-tool` is given (a narrow-band
+  signed distance field: no colour, no coverage, no MIPs);
+- `billow voxelize MESH --res R --json` with default options and with `--supersample 1`;
+- the same two with `--before BIN` (an older billow), when given: the "before" rows.
+It writes the medians of whole-process wall time, CPU time, peak RSS (`wait4`, the figure
+`/usr/bin/time -v` prints as "Maximum resident set size") and billow's per-stage seconds,
+and, with `--callgrind-res`, the instructions of one run of each program counted by
+`valgrind --tool=callgrind` (one thread: `RAYON_NUM_THREADS=1`), which do not depend on the
+machine's load. Only the Python standard library is used.
 """
 
 import argparse
 import json
 import os
 import platform
+import re
+import shutil
 import statistics
 import subprocess
 import sys
 import time
 
 
-def run_rusage(cmd):
-    """Like `run`, with the child's own peak RSS from wait4."""
+def run_measured(cmd):
     t0 = time.perf_counter()
     p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     out = p.stdout.read()
     err = p.stderr.read()
     _, status, ru = os.wait4(p.pid, 0)
     wall = time.perf_counter() - t0
-    p.returncode = os.waitstatus_to_exitcode(status)
-    if p.returncode != 0:
-        sys.exit(f"{' '.join(cmd)} failed ({p.returncode}):\n{err.decode(errors='replace')}")
+    code = os.waitstatus_to_exitcode(status)
+    if code != 0:
+        sys.exit(f"{' '.join(cmd)} failed ({code}):\n{err.decode(errors='replace')}")
     return wall, ru.ru_maxrss * 1024, ru.ru_utime + ru.ru_stime, out.decode()
+
+
+def instructions(cmd):
+    """Instructions of one run under callgrind (one thread)."""
+    env = dict(os.environ, RAYON_NUM_THREADS="1")
+    p = subprocess.run(["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null", *cmd],
+                       env=env, capture_output=True, text=True)
+    if p.returncode != 0:
+        sys.exit(f"callgrind {' '.join(cmd)} failed:\n{p.stderr[-2000:]}")
+    m = re.findall(r"Collected : (\d+)", p.stderr)
+    return int(m[-1]) if m else None
 
 
 def med(xs):
     return statistics.median(xs) if xs else float("nan")
 
 
+STAGES = ["import", "rasterize", "bake", "mip", "combine", "quantize", "write", "total"]
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--billow", required=True)
+    ap.add_argument("--before", default=None, help="an older billow binary, measured in the same runs")
+    ap.add_argument("--before-label", default="before")
     ap.add_argument("--floor", required=True, help="the compiled raster_floor")
+    ap.add_argument("--vdb-tool", default=None, help="OpenVDB's vdb_tool (optional)")
     ap.add_argument("--mesh", required=True)
     ap.add_argument("--res", default="128 256 512")
     ap.add_argument("--runs", type=int, default=3)
-    ap.add_argument("--extra", default="", help="extra billow arguments (e.g. '--supersample 1')")
+    ap.add_argument("--callgrind-res", default="128", help="resolutions counted with callgrind ('' for none)")
     ap.add_argument("--work", default=None, help="folder for the temporary assets (default: next to the mesh)")
     ap.add_argument("--out", required=True, help="Markdown file to write")
     ap.add_argument("--command", default="make bench", help="the command that regenerates the file")
     ap.add_argument("--notes", default=None, help="Markdown appended after the tables")
-    ap.add_argument("--sweep-res", type=int, default=256,
-                    help="resolution of the supersampling sweep (0: no sweep)")
-    ap.add_argument("--sweep", default="1 2 3 4",
-                    help="supersampling factors of the sweep (what the coverage samples cost)")
-    ap.add_argument("--foliage", default=None,
-                    help="a foliage glTF with an OBJ copy beside it (same name, .obj): one more row "
-                         "at the sweep resolution, billow on the glTF, the floor on the OBJ")
     a = ap.parse_args()
     work = a.work or os.path.dirname(os.path.abspath(a.mesh))
     asset = os.path.join(work, "bench_tmp.billow")
-    extra = a.extra.split()
-    stages = ["import", "rasterize", "bake", "mip", "combine", "quantize", "write", "total"]
+    vdb_out = os.path.join(work, "bench_tmp.vdb")
     load_before = os.getloadavg()
-    def measure(r, more, mesh=None, floor_mesh=None):
-        """Medians of RUNS alternating floor / billow runs at resolution `r`."""
-        mesh, floor_mesh = mesh or a.mesh, floor_mesh or mesh or a.mesh
-        floor_s, floor_cpu, floor_rss, b_s, b_cpu, b_rss, b_peak, b_stage = [], [], [], [], [], [], [], {}
-        info = None
-        for i in range(a.runs):
-            w, rss, cpu, _ = run_rusage([a.floor, floor_mesh, str(r)])
-            floor_s.append(w), floor_cpu.append(cpu), floor_rss.append(rss)
-            cmd = [a.billow, "voxelize", mesh, "-o", asset, "--res", str(r), "--json", *extra, *more]
-            w, rss, cpu, out = run_rusage(cmd)
-            j = json.loads(out)
-            info = j
-            b_s.append(w), b_cpu.append(cpu), b_rss.append(rss)
-            if j.get("peak_memory_bytes") is not None:
-                b_peak.append(j["peak_memory_bytes"])
-            for k in stages:
-                if k in j["seconds"]:
-                    b_stage.setdefault(k, []).append(j["seconds"][k])
-            os.remove(asset)
-            print(f"res {r} {' '.join(more)} run {i + 1}/{a.runs}: floor {floor_s[-1]:.2f} s, "
-                  f"billow {b_s[-1]:.2f} s (load {os.getloadavg()[0]:.2f})", file=sys.stderr)
-        return info, dict(res=r, dims=info["dims"], floor=med(floor_s), floor_cpu=med(floor_cpu),
-                          floor_rss=med(floor_rss), billow=med(b_s), billow_cpu=med(b_cpu),
-                          billow_rss=max(b_rss), peak=max(b_peak) if b_peak else None,
-                          stages={k: med(v) for k, v in b_stage.items()},
-                          fragments=info["fragments"], voxels=info["non_empty_voxels"],
-                          supersample=info["supersample"], triangles=info["triangles"])
+    bins = [("after", a.billow)] + ([("before", a.before)] if a.before else [])
+    configs = [(b, k) for b, _ in bins for k in ("default", "k1")]
+    path = dict(bins)
+
+    def billow_cmd(which, k, r):
+        more = ["--supersample", "1"] if k == "k1" else []
+        return [path[which], "voxelize", a.mesh, "-o", asset, "--res", str(r), "--json", *more]
 
     rows = []
     for r in [int(x) for x in a.res.split()]:
-        info, row = measure(r, [])
+        m = {"floor": [], "vdb": []}
+        for c in configs:
+            m[c] = []
+        info = {}
+        for i in range(a.runs):
+            w, rss, cpu, _ = run_measured([a.floor, a.mesh, str(r)])
+            m["floor"].append((w, rss, cpu, None))
+            if a.vdb_tool:
+                w, rss, cpu, _ = run_measured([a.vdb_tool, "-read", a.mesh, "-mesh2ls", f"dim={r}",
+                                               "-write", vdb_out])
+                m["vdb"].append((w, rss, cpu, None))
+                os.remove(vdb_out)
+            for c in configs:
+                w, rss, cpu, out = run_measured(billow_cmd(*c, r))
+                j = json.loads(out)
+                info[c] = j
+                m[c].append((w, rss, cpu, j))
+                os.remove(asset)
+            print(f"res {r} run {i + 1}/{a.runs}: " + ", ".join(
+                f"{k if isinstance(k, str) else '/'.join(k)} {v[-1][0]:.2f} s" for k, v in m.items() if v)
+                  + f" (load {os.getloadavg()[0]:.2f})", file=sys.stderr)
+        row = {"res": r, "dims": info[("after", "default")]["dims"], "info": info}
+        for k, v in m.items():
+            if not v:
+                continue
+            row[k] = {
+                "wall": med([x[0] for x in v]),
+                "rss": max(x[1] for x in v),
+                "cpu": med([x[2] for x in v]),
+                # the per-run ratio against the floor of the same round
+                "ratio": med([x[0] / f[0] for x, f in zip(v, m["floor"])]),
+                "ratio_vdb": med([x[0] / f[0] for x, f in zip(v, m["vdb"])]) if m["vdb"] else None,
+                "stages": {s: med([x[3]["seconds"][s] for x in v]) for s in STAGES} if v[0][3] else None,
+                "peak": max((x[3].get("peak_memory_bytes") or 0) for x in v) if v[0][3] else None,
+            }
         rows.append(row)
-    sweep = [measure(a.sweep_res, ["--supersample", k])[1] for k in a.sweep.split()] if a.sweep_res else []
-    foliage = None
-    if a.foliage:
-        # raster_floor reads `f a/b c/d e/f` faces only: a copy of the OBJ without the
-        # normal indices (same vertices, texture coordinates and triangles).
-        src = os.path.splitext(a.foliage)[0] + ".obj"
-        floor_obj = os.path.join(work, "bench_foliage_v_vt.obj")
-        with open(src) as f, open(floor_obj, "w") as o:
-            for line in f:
-                if line.startswith("f "):
-                    line = "f " + " ".join("/".join(v.split("/")[:2]) for v in line.split()[1:]) + "\n"
-                o.write(line)
-        foliage = measure(a.sweep_res or 256, [], a.foliage, floor_obj)[1]
-        os.remove(floor_obj)
+
+    counts = []
+    for r in [int(x) for x in a.callgrind_res.split()] if shutil.which("valgrind") else []:
+        c = {"res": r, "floor": instructions([a.floor, a.mesh, str(r)])}
+        for cfg in configs:
+            c[cfg] = instructions(billow_cmd(*cfg, r))
+            os.remove(asset)
+        counts.append(c)
+        print(f"callgrind {r}: {c}", file=sys.stderr)
     load_after = os.getloadavg()
 
-    gib = lambda b: f"{b / 2**30:.2f} GiB" if b is not None else "—"
-
-    def against_floor(x):
-        """The cells `floor s | billow s | ratio | rasterize s | fragments | voxels |`."""
-        return (f"{x['floor']:.2f} | {x['billow']:.2f} | **{x['billow'] / x['floor']:.1f}×** "
-                f"| {x['stages'].get('rasterize', float('nan')):.2f} | {x['fragments']:,} | {x['voxels']:,} |")
+    gib = lambda b: f"{b / 2**30:.2f} GiB" if b else "—"
+    label = {"after": "billow", "before": f"billow {a.before_label}"}
+    k_name = {"default": "default (4×4)", "k1": "`--supersample 1`"}
+    res_hdr = " | ".join(f"{x['res']}³" for x in rows)
     lines = [
-        "# Benchmarks: `billow voxelize` vs. the raster floor",
+        "# Benchmarks: `billow voxelize` vs. the raster floor and OpenVDB",
         "",
-        f"Regenerate with `{a.command}` (writes this file). Input: the 200,000-triangle synthetic tree",
-        "from `../shared/bench/gen_tree.py`; `raster_floor` is `../shared/bench/raster_floor.c`",
-        "built with `cc -O3 -march=native` (one core, one sample per voxel column, nearest texel,",
-        "no compositing/MIP/combine/write). `billow voxelize MESH -o OUT --res R --json"
-        + (f" {a.extra}" if a.extra else "") + "` (release build,",
-        f"defaults otherwise: supersample {info['supersample']}, combine `{info['combine']}`, full MIP chain).",
-        "Both programs run alternately, "
-        f"{a.runs} times each per resolution; the table shows **medians** of whole-process wall time.",
+        f"Regenerate with `{a.command}` (writes this file from the project alone). Input: the",
+        "200,000-triangle textured tree that `cargo run --release --example bench_tree` writes",
+        "(`billow::procgen::bench_tree`: an 81,920-triangle icosphere with a bark texture and 59,040",
+        "leaf quads, one opaque single-sided material with a 512² atlas, an indexed OBJ).",
         "",
+        "- **The floor** is `benches/raster_floor.c` built with `cc -O3 -march=native`: one thread,",
+        "  occupancy only — six orthographic views, one sample per voxel column (the pixel centre),",
+        "  barycentrics, depth → slice, nearest texel of an opaque test texture, store — with no",
+        "  coverage samples, compositing, MIP, combine or output file. No six-direction voxelizer",
+        "  can beat it by much; billow is judged by its ratio to it, measured in the same run.",
+        "- **OpenVDB** is Debian's `vdb_tool -read MESH.obj -mesh2ls dim=R -write OUT.vdb`",
+        "  (libopenvdb-tools): it computes a **narrow-band signed distance field**, not coloured",
+        "  coverage — no texture, no alpha, no MIPs — with all cores (TBB). It is the tool a VFX",
+        "  user reaches for to turn a mesh into a sparse volume.",
+        "- **billow** is `billow voxelize MESH -o OUT --res R --json` (release build), with default",
+        "  options (4×4 coverage samples per voxel column, combine `opaque`, full MIP chain) and",
+        "  with `--supersample 1` (one sample per column, what the floor does)"
+        + (f"; *{a.before_label}* is an older binary measured in the same alternating runs." if a.before else "."),
+        f"- Every program runs alternately, {a.runs} times per resolution; tables show **medians**",
+        "  of whole-process wall time, and the ratios are medians of the per-round ratios.",
         f"- Machine: {platform.machine()}, {os.cpu_count()} logical CPUs, {platform.system()} {platform.release()};"
-        f" measured {time.strftime('%Y-%m-%d %H:%M %Z')}.",
-        f"- Load average (1/5/15 min) before: {load_before[0]:.2f}/{load_before[1]:.2f}/{load_before[2]:.2f},"
-        f" after: {load_after[0]:.2f}/{load_after[1]:.2f}/{load_after[2]:.2f}"
-        " (the machine is shared: other jobs compete for the cores, so absolute times are noisy;"
-        " the ratio is the figure to compare).",
+        f" measured {time.strftime('%Y-%m-%d %H:%M %Z')}. Load average (1/5/15 min) before:"
+        f" {load_before[0]:.2f}/{load_before[1]:.2f}/{load_before[2]:.2f}, after:"
+        f" {load_after[0]:.2f}/{load_after[1]:.2f}/{load_after[2]:.2f}.",
+        "  **The machine is shared and noisy**: other jobs compete for the cores, so absolute",
+        "  times move by tens of percent between runs. Compare the side-by-side ratios and the",
+        "  instruction counts (below), which do not depend on the load.",
         "",
-        "| res | dims | raster_floor s | billow s | ratio (target ≤ 2) | billow CPU s | floor CPU s "
-        "| billow peak memory | floor peak RSS |",
-        "|---|---|---|---|---|---|---|---|---|",
+        f"| billow ÷ peer (wall, medians) | {res_hdr} |",
+        "|---|" + "---|" * len(rows),
     ]
+    for b, _ in bins:
+        for k, target in (("default", "≤ 3×"), ("k1", "≤ 2×")):
+            cells = " | ".join(f"**{x[(b, k)]['ratio']:.1f}×**" for x in rows)
+            lines.append(f"| {label[b]}, {k_name[k]} ÷ raster floor (target {target}) | {cells} |")
+        if a.vdb_tool:
+            cells = " | ".join(f"**{x[(b, 'default')]['ratio_vdb']:.2f}×**" for x in rows)
+            lines.append(f"| {label[b]}, default ÷ OpenVDB `-mesh2ls` (target ≤ 0.4×) | {cells} |")
+    lines += ["", "Whole-process wall seconds (medians) and peak memory (the largest peak RSS of the runs):", "",
+              "| res | dims | floor s | " + ("OpenVDB s | " if a.vdb_tool else "")
+              + " | ".join(f"{label[b]} {k} s" for b, k in configs)
+              + " | floor RSS | " + ("OpenVDB RSS | " if a.vdb_tool else "")
+              + " | ".join(f"{label[b]} {k} RSS" for b, k in configs) + " |",
+              "|---|---|---|" + ("---|" if a.vdb_tool else "") + "---|" * len(configs)
+              + "---|" + ("---|" if a.vdb_tool else "") + "---|" * len(configs)]
     for x in rows:
         d = "×".join(str(v) for v in x["dims"])
-        lines.append(f"| {x['res']} | {d} | {x['floor']:.2f} | {x['billow']:.2f} | **{x['billow'] / x['floor']:.1f}×** "
-                     f"| {x['billow_cpu']:.2f} | {x['floor_cpu']:.2f} | {gib(x['peak'] or x['billow_rss'])} "
-                     f"| {gib(x['floor_rss'])} |")
-    lines += ["", "Per-stage seconds of `billow voxelize` (medians, from `--json`; `total` is the",
-              "process's own measure, without process start and exit):", "",
-              "| res | " + " | ".join(k for k in stages if k in rows[0]["stages"]) + " | fragments | non-empty voxels |",
-              "|---|" + "---|" * (len([k for k in stages if k in rows[0]["stages"]]) + 2)]
-    for x in rows:
-        lines.append(f"| {x['res']} | " + " | ".join(f"{x['stages'][k]:.2f}" for k in stages if k in x["stages"])
-                     + f" | {x['fragments']:,} | {x['voxels']:,} |")
+        lines.append(f"| {x['res']} | {d} | {x['floor']['wall']:.2f} | "
+                     + (f"{x['vdb']['wall']:.2f} | " if a.vdb_tool else "")
+                     + " | ".join(f"{x[c]['wall']:.2f}" for c in configs)
+                     + f" | {gib(x['floor']['rss'])} | " + (f"{gib(x['vdb']['rss'])} | " if a.vdb_tool else "")
+                     + " | ".join(gib(x[c]['rss']) for c in configs) + " |")
+    for b, _ in bins:
+        lines += ["", f"Per-stage seconds of {label[b]} (default options; medians of `--json`; `total` is the",
+                  "process's own measure, without process start and exit; peak RSS as above):", "",
+                  "| res | " + " | ".join(STAGES) + " | peak RSS | fragments | non-empty voxels |",
+                  "|---|" + "---|" * (len(STAGES) + 3)]
+        for x in rows:
+            s = x[(b, "default")]
+            j = x["info"][(b, "default")]
+            lines.append(f"| {x['res']} | " + " | ".join(f"{s['stages'][k]:.2f}" for k in STAGES)
+                         + f" | {gib(s['rss'])} | {j['fragments']:,} | {j['non_empty_voxels']:,} |")
+    if counts:
+        lines += ["", "Instructions of one whole run (`valgrind --tool=callgrind`, one thread; load-independent):", "",
+                  "| res | floor | " + " | ".join(f"{label[b]} {k}" for b, k in configs) + " | "
+                  + " | ".join(f"{label[b]} {k} ÷ floor" for b, k in configs) + " |",
+                  "|---|---|" + "---|" * (2 * len(configs))]
+        for c in counts:
+            lines.append(f"| {c['res']} | {c['floor'] / 1e9:.2f} G | "
+                         + " | ".join(f"{c[cfg] / 1e9:.2f} G" for cfg in configs) + " | "
+                         + " | ".join(f"**{c[cfg] / c['floor']:.1f}×**" for cfg in configs) + " |")
+        lines += ["", "Instructions are not time: billow runs on every core and the floor on one, and "
+                  "memory stalls cost time, not instructions; they show how much work each does."]
     lines.append("")
-    if sweep:
-        lines += [f"What the coverage samples cost at {a.sweep_res}³ (`--supersample K`: K×K samples per",
-                  "voxel column, the default 4; same alternating runs; what they buy in accuracy is the",
-                  "supersampling sweep of [accuracy.md](accuracy.md)):", "",
-                  "| K | raster_floor s | billow s | ratio | rasterize s | fragments | non-empty voxels |",
-                  "|---|---|---|---|---|---|---|"]
-        for x in sweep:
-            lines.append(f"| {x['supersample']} | {against_floor(x)}")
-        lines.append("")
-    # The budget: what the target leaves once everything but rasterizing is paid for.
-    for x in rows:
-        if x["res"] == (a.sweep_res or 256):
-            rest = sum(v for k, v in x["stages"].items() if k not in ("rasterize", "total"))
-            budget = 2 * x["floor"]
-            lines += [f"**The budget at {x['res']}³:** the target allows {budget:.2f} s (2 × the floor). "
-                      f"billow's stages other than rasterizing (import, bake, MIP, combine, quantize, write) take "
-                      f"{rest:.2f} s, {100 * rest / budget:.0f} % of that budget, before a single fragment is made; "
-                      f"rasterizing takes {x['stages'].get('rasterize', float('nan')):.2f} s.", ""]
-    if foliage:
-        x = foliage
-        d = "×".join(str(v) for v in x["dims"])
-        lines += [f"Foliage, the main use case: `{a.foliage}` ({x['triangles']:,} triangles) at the "
-                  "sweep resolution; billow reads the glTF, the floor the OBJ copy of the same mesh (with its "
-                  "own opaque test texture, so its alpha test never discards):", "",
-                  "| mesh | dims | raster_floor s | billow s | ratio | rasterize s | fragments | non-empty voxels |",
-                  "|---|---|---|---|---|---|---|---|",
-                  f"| {os.path.splitext(os.path.basename(a.foliage))[0]} | {d} | {against_floor(x)}", ""]
     if a.notes:
         with open(a.notes) as f:
             lines.append(f.read().rstrip())

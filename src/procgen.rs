@@ -10,6 +10,9 @@
 //! - [`leafy_tree`]: a broadleaf tree — an opaque trunk and branches, and alpha-masked
 //!   leaf cards with a generated leaf texture (MASK 0.5) in a crown — the second foliage
 //!   mesh of the billboard-cloud tests beside the bundled oak.
+//! - [`bench_tree`]: the 200,000-triangle textured "tree" of the voxelize benchmark
+//!   (`make bench`, docs/benchmarks.md): an icosphere canopy core and leaf quads, one
+//!   opaque single-sided material with a 512² bark/leaf atlas, written as an indexed OBJ.
 //!
 //! Everything is deterministic for a given seed (see [`crate::rng`]).
 
@@ -452,7 +455,10 @@ pub fn write_obj(scene: &Scene, obj_path: &Path) -> std::io::Result<()> {
                 image::ExtendedColorType::Rgba8,
             )
             .map_err(std::io::Error::other)?;
-            writeln!(mtl, "map_Kd {0}\nmap_d {0}", t.name)?;
+            writeln!(mtl, "map_Kd {}", t.name)?;
+            if m.alpha_mode != AlphaMode::Opaque {
+                writeln!(mtl, "map_d {}", t.name)?;
+            }
         }
         writeln!(mtl)?;
     }
@@ -481,6 +487,218 @@ pub fn write_obj(scene: &Scene, obj_path: &Path) -> std::io::Result<()> {
     }
     std::fs::write(&mtl_path, mtl)?;
     std::fs::write(obj_path, obj)
+}
+
+/// An indexed, textured triangle mesh as the benchmark writes it (see [`bench_tree`]).
+pub struct IndexedMesh {
+    pub positions: Vec<Vec3>,
+    /// OBJ texture coordinates (v up).
+    pub uvs: Vec<Vec2>,
+    /// Per triangle, indices into `positions` and `uvs` alike.
+    pub faces: Vec<[u32; 3]>,
+    pub texture: Texture,
+}
+
+/// The voxelize benchmark's tree (after `gen_tree.py` of earlier rounds, same construction
+/// and counts, this crate's generator): exactly 200,000 triangles — an icosphere of
+/// 81,920 (subdivided 6 times, radius 0.3 around (0, 0, 0.6), bark in the left half of a
+/// 512 × 512 atlas) and 59,040 leaf quads of side 0.012–0.03 scattered in a shell up to
+/// 0.52 around it, randomly oriented, textured with the atlas's right half (a leaf shape;
+/// the material is opaque, so the quads are whole). Deterministic for a seed.
+pub fn bench_tree(seed: u64) -> IndexedMesh {
+    let mut rng = Pcg32::seeded(seed, 23);
+    const W: u32 = 512;
+    let mut texels = Vec::with_capacity((W * W) as usize);
+    for y in 0..W {
+        for x in 0..W {
+            let (xf, yf) = (x as f32, y as f32);
+            texels.push(if x < W / 2 {
+                let s = 0.5 + 0.5 * (xf * 0.35 + 3.0 * (yf * 0.05).sin()).sin();
+                [
+                    (90.0 + 60.0 * s) as u8,
+                    (55.0 + 35.0 * s) as u8,
+                    (25.0 + 15.0 * s) as u8,
+                    255,
+                ]
+            } else {
+                let u = (xf - W as f32 * 0.75) / (W as f32 * 0.25);
+                let v = (yf - W as f32 * 0.5) / (W as f32 * 0.5);
+                let inside = u * u + v * v * 0.6 < 0.9;
+                let g0 = 0.5 + 0.5 * (yf * 0.2).sin();
+                let rgb = if u.abs() < 0.03 {
+                    [150, 200, 90]
+                } else {
+                    [(40.0 + 40.0 * g0) as u8, (120.0 + 80.0 * g0) as u8, 30]
+                };
+                [rgb[0], rgb[1], rgb[2], if inside { 255 } else { 0 }]
+            });
+        }
+    }
+    let texture = Texture {
+        name: "tree.png".into(),
+        width: W,
+        height: W,
+        texels,
+        wrap_u: Wrap::Repeat,
+        wrap_v: Wrap::Repeat,
+    };
+    // Icosphere.
+    let t = (1.0 + 5f32.sqrt()) / 2.0;
+    let mut verts: Vec<Vec3> = [
+        (-1.0, t, 0.0),
+        (1.0, t, 0.0),
+        (-1.0, -t, 0.0),
+        (1.0, -t, 0.0),
+        (0.0, -1.0, t),
+        (0.0, 1.0, t),
+        (0.0, -1.0, -t),
+        (0.0, 1.0, -t),
+        (t, 0.0, -1.0),
+        (t, 0.0, 1.0),
+        (-t, 0.0, -1.0),
+        (-t, 0.0, 1.0),
+    ]
+    .iter()
+    .map(|&(x, y, z)| Vec3::new(x, y, z).normalize())
+    .collect();
+    let mut faces: Vec<[u32; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..6 {
+        let mut cache = std::collections::HashMap::new();
+        let mut mid = |a: u32, b: u32, verts: &mut Vec<Vec3>| -> u32 {
+            *cache.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                verts.push(((verts[a as usize] + verts[b as usize]) / 2.0).normalize());
+                verts.len() as u32 - 1
+            })
+        };
+        let mut next = Vec::with_capacity(faces.len() * 4);
+        for &[a, b, c] in &faces {
+            let (ab, bc, ca) = (
+                mid(a, b, &mut verts),
+                mid(b, c, &mut verts),
+                mid(c, a, &mut verts),
+            );
+            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+        }
+        faces = next;
+    }
+    let (centre, r) = (Vec3::new(0.0, 0.0, 0.6), 0.30f32);
+    let mut positions = Vec::new();
+    let mut uvs = Vec::new();
+    for v in &verts {
+        positions.push(centre + r * *v);
+        let u = 0.5 + v.y.atan2(v.x) / TAU;
+        let w = 0.5 + v.z.clamp(-1.0, 1.0).asin() / std::f32::consts::PI;
+        uvs.push(Vec2::new(u * 0.5, w));
+    }
+    // Leaves.
+    for _ in 0..59_040 {
+        let (p, d) = loop {
+            let p = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0;
+            let d = p.length();
+            if 0.2 < d && d <= 1.0 {
+                break (p, d);
+            }
+        };
+        let c = centre + (r + 0.22 * d) * p / d;
+        let n = loop {
+            let n = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0;
+            if n.length_squared() > 1e-4 && n.length_squared() <= 1.0 {
+                break n.normalize();
+            }
+        };
+        let a = if n.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
+        let t1 = n.cross(a).normalize();
+        let t2 = n.cross(t1);
+        let s = rng.range_f32(0.012, 0.03);
+        let base = positions.len() as u32;
+        for (su, sv, uu, vv) in [
+            (-0.5, -1.0, 0.5, 0.0),
+            (0.5, -1.0, 1.0, 0.0),
+            (0.5, 1.0, 1.0, 1.0),
+            (-0.5, 1.0, 0.5, 1.0),
+        ] {
+            positions.push(c + s * (su * t1 + sv * t2));
+            uvs.push(Vec2::new(uu, vv));
+        }
+        faces.push([base, base + 1, base + 2]);
+        faces.push([base, base + 2, base + 3]);
+    }
+    IndexedMesh {
+        positions,
+        uvs,
+        faces,
+        texture,
+    }
+}
+
+impl IndexedMesh {
+    /// Writes `obj_path` (v, vt, `f a/a b/b c/c`), its `.mtl` (one opaque material,
+    /// `map_Kd`) and the texture as a PNG beside it.
+    pub fn write_obj(&self, obj_path: &Path) -> std::io::Result<()> {
+        let dir = obj_path.parent().unwrap_or(Path::new("."));
+        let t = &self.texture;
+        let bytes: Vec<u8> = t.texels.iter().flatten().copied().collect();
+        image::save_buffer(
+            dir.join(&t.name),
+            &bytes,
+            t.width,
+            t.height,
+            image::ExtendedColorType::Rgba8,
+        )
+        .map_err(std::io::Error::other)?;
+        let mtl_path = obj_path.with_extension("mtl");
+        let mtl_name = mtl_path
+            .file_name()
+            .and_then(|s| s.to_str())
+            .unwrap_or("out.mtl");
+        std::fs::write(
+            &mtl_path,
+            format!(
+                "newmtl tree\nKa 1 1 1\nKd 1 1 1\nKs 0 0 0\nd 1\nillum 1\nmap_Kd {}\n",
+                t.name
+            ),
+        )?;
+        let mut obj = Vec::with_capacity(64 * self.positions.len());
+        writeln!(
+            obj,
+            "# billow::procgen::bench_tree: {} vertices, {} triangles\nmtllib {mtl_name}",
+            self.positions.len(),
+            self.faces.len()
+        )?;
+        for p in &self.positions {
+            writeln!(obj, "v {:.6} {:.6} {:.6}", p.x, p.y, p.z)?;
+        }
+        for uv in &self.uvs {
+            writeln!(obj, "vt {:.6} {:.6}", uv.x, uv.y)?;
+        }
+        writeln!(obj, "usemtl tree")?;
+        for f in &self.faces {
+            let [a, b, c] = f.map(|i| i + 1);
+            writeln!(obj, "f {a}/{a} {b}/{b} {c}/{c}")?;
+        }
+        std::fs::write(obj_path, obj)
+    }
 }
 
 #[cfg(test)]
@@ -513,6 +731,18 @@ mod tests {
                 assert_eq!(v.uv, Vec2::new(v.position.x, 1.0 - v.position.y));
             }
         }
+    }
+
+    #[test]
+    fn bench_tree_has_exactly_200k_triangles() {
+        let t = bench_tree(1);
+        assert_eq!(t.faces.len(), 200_000);
+        assert_eq!(t.positions.len(), t.uvs.len());
+        assert!(t
+            .faces
+            .iter()
+            .flatten()
+            .all(|&i| (i as usize) < t.positions.len()));
     }
 
     #[test]

@@ -171,3 +171,40 @@ fn odd_sides_are_kept_whole_with_a_warning_naming_the_fix() {
     assert_eq!(out.levels, a.levels);
     assert!(out.bands.is_empty());
 }
+
+/// Issue 23 item 5: `billow emptyspace` prunes what a default `billow voxelize` writes (the
+/// default `--align` makes the oak's sides even), with no warning, losing nothing.
+#[test]
+fn default_voxelize_output_of_the_oak_is_pruned() {
+    let dir = tempfile::tempdir().unwrap();
+    let oak = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/oak/eztree_oak_medium.gltf");
+    let r = run_with(
+        &["voxelize", oak.to_str().unwrap(), "-o", "oak.billow", "-q"],
+        dir.path(),
+        Duration::from_secs(300),
+        8 << 20,
+        &[("RAYON_NUM_THREADS", "2")],
+    );
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let r = emptyspace(
+        dir.path(),
+        &["oak.billow", "-o", "pruned.billow", "--json"],
+        "2",
+    );
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    assert!(!r.stderr.contains("warning"), "{}", r.stderr);
+    let v: serde_json::Value = serde_json::from_str(&r.stdout).unwrap();
+    assert_eq!(v["kept_whole"], false, "{v}");
+    let saving = v["saving"].as_f64().unwrap();
+    assert!(saving > 0.25, "texel saving {saving}");
+    let (before, after) = (
+        v["file_bytes_before"].as_u64().unwrap(),
+        v["file_bytes_after"].as_u64().unwrap(),
+    );
+    assert!(after < before * 3 / 4, "file {before} -> {after} bytes");
+    let src = VolumeAsset::read(&dir.path().join("oak.billow")).unwrap();
+    let d = src.level_dims(0);
+    assert!(d.iter().all(|s| s.is_multiple_of(8)), "default grid {d:?}");
+    let out = VolumeAsset::read(&dir.path().join("pruned.billow")).unwrap();
+    assert!(!out.bands.is_empty());
+}

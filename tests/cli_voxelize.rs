@@ -296,6 +296,28 @@ fn align_rounds_the_grid_up_and_bad_alignments_are_refused() {
         .map(|d| d.as_u64().unwrap())
         .collect();
     assert_eq!(dims, [40, 40, 40], "33x40x34 rounded up to multiples of 8");
+    // Without --align: `--res N` aligns to the largest of 8, 4, 2, 1 dividing N (so
+    // `billow emptyspace` can prune it and the longest axis stays N); an exact size stays.
+    for (res, want) in [
+        ("40", [40, 40, 40]),
+        ("36", [32, 36, 32]),
+        ("33", [28, 33, 28]),
+        ("33x40x34", [33, 40, 34]),
+    ] {
+        let r = run(
+            &["voxelize", &oak(), "-o", "d.billow", "--res", res, "--json"],
+            dir.path(),
+        );
+        assert_eq!(r.code, Some(0), "{}", r.stderr);
+        let v: serde_json::Value = serde_json::from_str(&r.stdout).unwrap();
+        let dims: Vec<u64> = v["dims"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|d| d.as_u64().unwrap())
+            .collect();
+        assert_eq!(dims, want, "--res {res}");
+    }
     for bad in ["0", "4096"] {
         let r = run(
             &["voxelize", &oak(), "-o", "b.billow", "--align", bad],

@@ -59,9 +59,11 @@ pub struct Args {
     margin: f32,
     /// Round every side of the grid up to a multiple of N voxels, 1–2048 (the box grows evenly with
     /// empty voxels). `billow emptyspace` needs even sides, and sides that are multiples of
-    /// 2^k to prune MIP levels 1..k as well; 8 is a good choice.
-    #[arg(long, default_value_t = 1)]
-    align: u32,
+    /// 2^k to prune MIP levels 1..k as well. Default: with `--res N` and no `--bounds`, the
+    /// largest of 8, 4, 2, 1 that divides N (so the longest axis stays N: 8 for 128, 256, 512);
+    /// with `--res XxYxZ` or `--bounds`, 1 (the grid is exactly as asked).
+    #[arg(long)]
+    align: Option<u32>,
     /// Bake exactly this box, `minx,miny,minz,maxx,maxy,maxz` (no margin), e.g. `0,0,0,1,1,1`
     /// for a tileable volume texture used by `billow shell`.
     #[arg(long)]
@@ -183,6 +185,17 @@ pub fn options(
     })
 }
 
+/// `--align` when not given: with `--res N` (and no `--bounds`) the largest of 8, 4, 2, 1 that
+/// divides `N`, so that `billow emptyspace` can prune the output (it needs even sides; 8
+/// lets it brick MIP levels 0–2, and keeps levels 0 and 1 in whole 4×4 blocks for block
+/// compression) while the longest axis stays `N`; 1 for an exact `XxYxZ` or `--bounds`.
+fn default_align(res: &Resolution, bounds: &Option<String>) -> u32 {
+    match res {
+        Resolution::Longest(n) if bounds.is_none() => 1 << n.trailing_zeros().min(3),
+        _ => 1,
+    }
+}
+
 /// `minx,miny,minz,maxx,maxy,maxz` → a box with min < max on every axis.
 fn parse_bounds(s: &str) -> Result<Aabb, CliError> {
     let v: Vec<f32> = s
@@ -257,17 +270,19 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         args.margin,
     )?;
     opts.mip_levels = args.mips;
-    if !(1..=billow::voxelize::MAX_AXIS).contains(&args.align) {
+    let align = args
+        .align
+        .unwrap_or_else(|| default_align(&opts.resolution, &args.bounds));
+    if !(1..=billow::voxelize::MAX_AXIS).contains(&align) {
         return Err(bad(
             "--align",
             format!(
-                "must be between 1 and {} voxels, got {}",
+                "must be between 1 and {} voxels, got {align}",
                 billow::voxelize::MAX_AXIS,
-                args.align
             ),
         ));
     }
-    opts.align = args.align;
+    opts.align = align;
     opts.bake = parse_bake(&args.bake, args.ao_rays, args.ao_distance)?;
     let compression: Compression = args.compress.parse().map_err(|e| usage("--compress", e))?;
     if let Some(b) = &args.bounds {

@@ -31,8 +31,9 @@ use std::sync::Arc;
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
+use super::bricks::{for_each_voxel, local, BrickAccum, Bricked, B3};
 use super::expr::{Expr, ExprError};
-use super::mip::{Grid3, Texel};
+use super::mip::{Disjoint, Grid3, Texel};
 use super::quantize::encode_normal;
 use super::slices::DirSlices;
 use super::toksvig::average_normal;
@@ -183,25 +184,23 @@ impl FromStr for CombineFn {
     }
 }
 
-/// Voxels per chunk of an accumulator level (the unit of parallel work and of skipping
-/// empty space).
+/// Voxels per chunk of parallel work in [`combine_level`].
 const CH: usize = 4096;
 
-/// Streaming accumulator of a preset: one f32 buffer per MIP level, folded one direction at
-/// a time in direction order. Only non-empty voxels are folded (a chunk of voxels nothing
-/// was folded into is never read again, and its memory is never touched).
+/// Streaming accumulator of a preset: one brick-sparse f32 buffer per MIP level, folded one
+/// direction at a time in direction order. Only the bricks some direction holds are
+/// allocated, and only non-empty voxels are folded.
 pub(crate) struct Accum {
     preset: Preset,
     /// Per level, `width` floats per voxel: 4 (`mean`, `max`: Σ or max rgba) or 5
     /// (`opaque`: Σ rgba, max a; `min`: min rgba, directions that saw the voxel).
-    levels: Vec<Vec<f32>>,
-    /// Per level, per chunk of [`CH`] voxels: whether anything was folded into it.
-    touched: Vec<Vec<bool>>,
+    levels: Vec<BrickAccum<f32>>,
     width: usize,
 }
 
 impl Accum {
-    pub fn new(preset: Preset, level_sizes: &[usize]) -> Self {
+    /// Accumulators for levels of these sizes (nothing is allocated until folded).
+    pub fn new(preset: Preset, level_dims: &[[usize; 3]]) -> Self {
         let width = if matches!(preset, Preset::Opaque | Preset::Min) {
             5
         } else {
@@ -209,10 +208,9 @@ impl Accum {
         };
         Accum {
             preset,
-            levels: level_sizes.iter().map(|&n| vec![0.0; n * width]).collect(),
-            touched: level_sizes
+            levels: level_dims
                 .iter()
-                .map(|&n| vec![false; n.div_ceil(CH)])
+                .map(|&d| BrickAccum::new(d, width))
                 .collect(),
             width,
         }
@@ -241,53 +239,55 @@ impl Accum {
     }
 
     /// Folds one direction's volume of MIP level `level`.
-    pub fn fold<T: Texel>(&mut self, level: usize, grid: &Grid3<T>) {
+    pub fn fold<T: Texel>(&mut self, level: usize, grid: &Bricked<T>) {
         let (w, preset) = (self.width, self.preset);
-        self.levels[level]
-            .par_chunks_mut(CH * w)
-            .zip(grid.data.par_chunks(CH))
-            .zip(self.touched[level].par_iter_mut())
-            .for_each(|((acc, src), touched)| {
-                for (a, v) in acc.chunks_exact_mut(w).zip(src) {
-                    let v = v.load();
-                    // Empty voxels change nothing (for `min`, they are counted as missing).
-                    if v == [0.0; 4] {
-                        continue;
-                    }
-                    *touched = true;
-                    Self::fold_one(preset, a, v);
+        let acc = &mut self.levels[level];
+        acc.reserve(&grid.layout);
+        acc.for_each_brick(&grid.layout, |acc, i| {
+            for (a, v) in acc
+                .chunks_exact_mut(w)
+                .zip(&grid.data[i * B3..(i + 1) * B3])
+            {
+                let v = v.load();
+                // Empty voxels change nothing (for `min`, they are counted as missing).
+                if v == [0.0; 4] {
+                    continue;
                 }
-            });
+                Self::fold_one(preset, a, v);
+            }
+        });
     }
 
-    /// The combined, clamped level, encoded RGBA8 (see [`super::quantize`]); frees the
-    /// level's buffer.
+    /// The combined, clamped level, encoded RGBA8 (see [`super::quantize`]), dense; frees
+    /// the level's buffer.
     pub fn finish_level(&mut self, level: usize) -> Vec<u8> {
         let (w, preset) = (self.width, self.preset);
-        let acc = std::mem::take(&mut self.levels[level]);
-        let touched = std::mem::take(&mut self.touched[level]);
-        let mut out = vec![0u8; acc.len() / w * 4];
+        let acc = std::mem::replace(&mut self.levels[level], BrickAccum::new([0; 3], w));
+        let dims = acc.dims;
+        let mut out = vec![0u8; dims.iter().product::<usize>() * 4];
         let enc = super::quantize::Encoder::get();
-        out.par_chunks_mut(4 * CH)
-            .zip(acc.par_chunks(w * CH))
-            .zip(touched.par_iter())
-            .for_each(|((o, a), touched)| {
-                if !touched {
-                    return;
-                }
-                for (o, a) in o.chunks_exact_mut(4).zip(a.chunks_exact(w)) {
+        let dst = Disjoint::new(&mut out);
+        acc.data
+            .par_chunks(B3 * w)
+            .zip(&acc.bricks)
+            .for_each(|(brick, &b)| {
+                for_each_voxel(acc.coords(b as usize), dims, |p| {
+                    let a = &brick[local(p) * w..local(p) * w + w];
                     if a[..4] == [0.0; 4] {
-                        continue;
+                        return;
                     }
                     let v = match preset {
                         Preset::Mean => Vec4::from_slice(a) / 6.0,
                         Preset::Max => Vec4::from_slice(a),
-                        Preset::Min if a[4] < 6.0 => continue,
+                        Preset::Min if a[4] < 6.0 => return,
                         Preset::Min => Vec4::from_slice(a),
                         Preset::Opaque => opaque_colour(Vec3::from_slice(a), a[3], a[4]),
                     };
-                    o.copy_from_slice(&enc.rgba8(clamp_premultiplied(v)));
-                }
+                    let i = p[0] + dims[0] * (p[1] + dims[1] * p[2]);
+                    // SAFETY: every voxel lies in one brick, and each brick is one task.
+                    unsafe { dst.slice_mut(4 * i, 4) }
+                        .copy_from_slice(&enc.rgba8(clamp_premultiplied(v)));
+                });
             });
         out
     }
@@ -330,11 +330,12 @@ fn prefetch<T>(x: &T) {
 /// directions are folded into a small plane-sized accumulator (in direction order, as
 /// [`Accum`] does) and encoded RGBA8 at once, so level 0 never has a full-size
 /// accumulator. With `normals`, also the plane's Toksvig normals (`Σ Nw / Σ α`, snorm8).
+/// Also returns the number of voxels whose alpha byte is not 0.
 pub(crate) fn combine_level0(
     preset: Preset,
     dirs: &[DirSlices],
     normals: bool,
-) -> (Vec<u8>, Option<Vec<u8>>) {
+) -> (Vec<u8>, Option<Vec<u8>>, u64) {
     let dims = dirs[0].dims;
     let plane = dims[0] * dims[1];
     let w = if matches!(preset, Preset::Opaque | Preset::Min) {
@@ -388,8 +389,10 @@ pub(crate) fn combine_level0(
             Vec::new(),
         )
     };
+    let non_empty = std::sync::atomic::AtomicU64::new(0);
     let work = |(acc, nacc, list): &mut Bufs, z: usize, o: &mut [u8], mut on: Option<&mut [u8]>| {
         list.clear();
+        let mut count = 0u64;
         for (s, table) in dirs.iter().zip(&by_plane) {
             let nrm = s.nrm.as_deref();
             let mut fold = |i: usize, k: usize| {
@@ -439,7 +442,9 @@ pub(crate) fn combine_level0(
                     Preset::Min => Vec4::from_slice(a),
                     Preset::Opaque => opaque_colour(Vec3::from_slice(a), a[3], a[4]),
                 };
-                o[4 * i..4 * i + 4].copy_from_slice(&enc.rgba8(clamp_premultiplied(v)));
+                let px = enc.rgba8(clamp_premultiplied(v));
+                count += u64::from(px[3] != 0);
+                o[4 * i..4 * i + 4].copy_from_slice(&px);
             }
             a.fill(0.0);
             if let Some(on) = on.as_deref_mut() {
@@ -452,6 +457,7 @@ pub(crate) fn combine_level0(
                 on[4 * i..4 * i + 4].copy_from_slice(&encode_normal(n));
             }
         }
+        non_empty.fetch_add(count, std::sync::atomic::Ordering::Relaxed);
     };
     match out_n.as_mut() {
         Some(on) => out
@@ -464,5 +470,5 @@ pub(crate) fn combine_level0(
             .enumerate()
             .for_each_init(init, |b, (z, o)| work(b, z, o, None)),
     }
-    (out, out_n)
+    (out, out_n, non_empty.into_inner())
 }

@@ -27,6 +27,7 @@ use glam::Vec4;
 use half::f16;
 use rayon::prelude::*;
 
+use super::bricks::{local, Bricked, Layout, B, B3, EMPTY};
 use super::slices::DirSlices;
 use super::Dir;
 
@@ -248,7 +249,9 @@ fn inverse_taps(t: &Taps, d: usize) -> Vec<Vec<(usize, f32)>> {
 /// [`downsample_with`]: composite the children along the view axis front to back, average
 /// across), colour and — when present — weighted normals (occluded by the colour's
 /// alpha). Only the non-empty level-0 voxels are read; the level-0 grid is never dense.
-pub(crate) fn downsample_sparse<T: Texel>(s: &DirSlices) -> (Grid3<T>, Option<Grid3<[f16; 4]>>) {
+pub(crate) fn downsample_sparse<T: Texel>(
+    s: &DirSlices,
+) -> (Bricked<T>, Option<Bricked<[f16; 4]>>) {
     let dims = s.dims;
     let view = s.dir;
     let (a, [ua, va]) = (view.axis(), view.image_axes());
@@ -260,8 +263,66 @@ pub(crate) fn downsample_sparse<T: Texel>(s: &DirSlices) -> (Grid3<T>, Option<Gr
     let norm = (1.0 / (ratio(ua) * ratio(va))) as f32;
     let (wu, ws) = (nd[ua], nd[a]);
     let normals = s.nrm.as_ref();
-    let mut out = Grid3::<T>::new(nd);
-    let mut out_n = normals.map(|_| Grid3::<[f16; 4]>::new(nd));
+    // The parent bricks some non-empty child reaches (colour and normals alike: a child
+    // with a normal has a non-zero colour); only they are allocated.
+    // Per child coordinate, the bricks of its parents.
+    let bricks_of = |inv: &[Vec<(usize, f32)>]| -> Vec<Vec<usize>> {
+        inv.iter()
+            .map(|l| {
+                let mut b: Vec<usize> = l.iter().map(|&(p, _)| p / B).collect();
+                b.dedup();
+                b
+            })
+            .collect()
+    };
+    let (bj, bu, bs) = (
+        bricks_of(&inverse_taps(&tj, dims[va])),
+        bricks_of(&inv_u),
+        bricks_of(&inv_s),
+    );
+    let nb = nd.map(|d| d.div_ceil(B));
+    let nbricks: usize = nb.iter().product();
+    let occupied = (0..dims[va])
+        .into_par_iter()
+        .fold(
+            || vec![false; nbricks],
+            |mut f, cj| {
+                let (row, _) = s.row(cj);
+                // Parents of one child are consecutive, so a child's parent bricks are a run
+                // (first, last); neighbours in a column with the same run mark the same bricks.
+                let run = |l: &[usize]| (l[0], l[l.len() - 1]);
+                let mut last = (usize::MAX, (0, 0));
+                for v in row {
+                    let key = (v.u as usize, run(&bs[v.s as usize]));
+                    if key == last {
+                        continue;
+                    }
+                    last = key;
+                    for &jb in &bj[cj] {
+                        for &ub in &bu[v.u as usize] {
+                            for &sb in &bs[v.s as usize] {
+                                let mut bc = [0usize; 3];
+                                bc[a] = sb;
+                                bc[ua] = ub;
+                                bc[va] = jb;
+                                f[bc[0] + nb[0] * (bc[1] + nb[1] * bc[2])] = true;
+                            }
+                        }
+                    }
+                }
+                f
+            },
+        )
+        .reduce(
+            || vec![false; nbricks],
+            |mut x, y| {
+                x.iter_mut().zip(y).for_each(|(x, y)| *x |= y);
+                x
+            },
+        );
+    let layout = Layout::from_flags(nd, &occupied);
+    let mut out = Bricked::<T>::zeroed(layout.clone());
+    let mut out_n = normals.map(|_| Bricked::<[f16; 4]>::zeroed(layout.clone()));
     let (out_w, out_nw) = (
         Disjoint::new(&mut out.data),
         out_n.as_mut().map(|g| Disjoint::new(&mut g.data)),
@@ -364,7 +425,9 @@ pub(crate) fn downsample_sparse<T: Texel>(s: &DirSlices) -> (Grid3<T>, Option<Gr
                 p[a] = sp;
                 p[ua] = up;
                 p[va] = jp;
-                let i = p[0] + nd[0] * (p[1] + nd[1] * p[2]);
+                let i = layout
+                    .offset(p)
+                    .expect("a reached parent's brick is allocated");
                 // SAFETY: parent row `jp` writes only the voxels with `p[va] == jp`.
                 unsafe { out_w.write(i, T::store(v.map(|x| x * norm))) };
                 if let (Some(g), Some(n)) = (&out_nw, n) {
@@ -374,6 +437,176 @@ pub(crate) fn downsample_sparse<T: Texel>(s: &DirSlices) -> (Grid3<T>, Option<Gr
         }
     });
     (out, out_n)
+}
+
+/// One MIP step of a brick-sparse direction volume (occluded by `alpha_src`'s alpha, or by
+/// its own with `None`): the same filter, in the same order, as [`downsample_with`] on the
+/// dense grid (so the same values), computed only for the
+/// parent bricks whose footprint meets an allocated child brick of `src`; or, when given,
+/// exactly the bricks of `layout` (the colour's layout for the normals, a superset of
+/// theirs: a normal is non-zero only where the colour is).
+pub(crate) fn downsample_bricks<T: Texel, A: Texel>(
+    src: &Bricked<T>,
+    alpha_src: Option<&Bricked<A>>,
+    view: Dir,
+    layout: Option<&Layout>,
+) -> Bricked<T> {
+    let dims = src.dims();
+    let nd = dims.map(|d| (d >> 1).max(1));
+    let a = view.axis();
+    let axis_taps: [Taps; 3] = std::array::from_fn(|ax| {
+        let mut t = taps(dims[ax]);
+        if ax == a && view.positive() {
+            // Front to back: the camera on the + side sees high indices first.
+            t.iter_mut().for_each(|l| l.reverse());
+        }
+        t
+    });
+    let ratio = |ax: usize| dims[ax] as f64 / nd[ax] as f64;
+    let across: Vec<usize> = (0..3).filter(|&x| x != a).collect();
+    let norm = 1.0 / (ratio(across[0]) * ratio(across[1]));
+    // The children of parent brick `bo` along `ax`: [lo, hi).
+    let span = |ax: usize, bo: usize| -> (usize, usize) {
+        let (p0, p1) = (bo * B, ((bo + 1) * B).min(nd[ax]) - 1);
+        let c = |p: usize| {
+            let l = &axis_taps[ax][p];
+            let (x, y) = (l[0].0, l[l.len() - 1].0);
+            (x.min(y), x.max(y))
+        };
+        (c(p0).0, c(p1).1 + 1)
+    };
+    let sl = &src.layout;
+    let made;
+    let layout = match layout {
+        Some(l) => l,
+        None => {
+            let nb = nd.map(|d| d.div_ceil(B));
+            let flags: Vec<bool> = (0..nb.iter().product::<usize>())
+                .into_par_iter()
+                .map(|b| {
+                    let bc = [b % nb[0], (b / nb[0]) % nb[1], b / (nb[0] * nb[1])];
+                    let r = [0, 1, 2].map(|ax| span(ax, bc[ax]));
+                    (r[2].0 / B..=(r[2].1 - 1) / B).any(|z| {
+                        (r[1].0 / B..=(r[1].1 - 1) / B).any(|y| {
+                            (r[0].0 / B..=(r[0].1 - 1) / B)
+                                .any(|x| sl.slot[sl.brick_of([x, y, z])] != EMPTY)
+                        })
+                    })
+                })
+                .collect();
+            made = Layout::from_flags(nd, &flags);
+            &made
+        }
+    };
+    // One parent: the children composited along the view axis front to back, averaged
+    // across (the arithmetic and order of `downsample_with`). `sv`/`sa`: the gathered
+    // footprint from `lo`, with strides `st`; `sa` empty: the alpha is the value's own.
+    let parent = |p: [usize; 3], sv: &[T], sa: &[A], lo: [usize; 3], st: [usize; 3]| -> T {
+        let mut acc = [0.0f64; 4];
+        let tu = &axis_taps[across[0]][p[across[0]]];
+        let tv = &axis_taps[across[1]][p[across[1]]];
+        let tw = &axis_taps[a][p[a]];
+        for &(cu, wu) in tu {
+            let ou = (cu - lo[across[0]]) * st[across[0]];
+            for &(cv, wv) in tv {
+                let ov = (cv - lo[across[1]]) * st[across[1]];
+                // Composite the column of children along the view axis, front first.
+                let mut col = [0.0f64; 4];
+                let mut transmit = 1.0f64;
+                for &(cw, f) in tw {
+                    let i = ou + ov + (cw - lo[a]) * st[a];
+                    let v = sv[i].load();
+                    let alpha = if sa.is_empty() { v[3] } else { sa[i].load()[3] } as f64;
+                    let s = partial_scale(alpha, f as f64);
+                    for k in 0..4 {
+                        col[k] += transmit * s * v[k] as f64;
+                    }
+                    transmit *= 1.0 - s * alpha;
+                }
+                let w = wu as f64 * wv as f64;
+                for k in 0..4 {
+                    acc[k] += w * col[k];
+                }
+            }
+        }
+        T::store(acc.map(|v| (v * norm) as f32))
+    };
+    let mut out = Bricked::<T>::zeroed(layout.clone());
+    out.data
+        .par_chunks_mut(B3)
+        .zip(&layout.bricks)
+        .for_each_init(
+            || (Vec::<T>::new(), Vec::<A>::new(), Vec::<bool>::new()),
+            |(sv, sa, rows), (brick, &b)| {
+                let bc = layout.coords(b as usize);
+                let r = [0, 1, 2].map(|ax| span(ax, bc[ax]));
+                let lo = r.map(|r| r.0);
+                let ext = r.map(|r| r.1 - r.0);
+                gather(src, lo, ext, sv);
+                match alpha_src {
+                    Some(g) => gather(g, lo, ext, sa),
+                    None => sa.clear(),
+                }
+                let st = [1, ext[0], ext[0] * ext[1]];
+                // Rows along x of the footprint that hold anything: as in the dense step,
+                // parents whose child rows are all empty stay zero.
+                rows.clear();
+                rows.extend(
+                    sv.chunks_exact(ext[0])
+                        .map(|row| row.iter().any(|v| v.load() != [0.0; 4])),
+                );
+                let hi = [0, 1, 2].map(|ax| ((bc[ax] + 1) * B).min(nd[ax]));
+                for z in bc[2] * B..hi[2] {
+                    for y in bc[1] * B..hi[1] {
+                        let (ty, tz) = (&axis_taps[1][y], &axis_taps[2][z]);
+                        let any = ty.iter().any(|&(cy, _)| {
+                            tz.iter()
+                                .any(|&(cz, _)| rows[(cy - lo[1]) + ext[1] * (cz - lo[2])])
+                        });
+                        if !any {
+                            continue;
+                        }
+                        for x in bc[0] * B..hi[0] {
+                            let p = [x, y, z];
+                            brick[local(p)] = parent(p, sv, sa, lo, st);
+                        }
+                    }
+                }
+            },
+        );
+    out
+}
+
+/// The voxels `[lo, lo + ext)` of `g` into `out` (x fastest; zeros where no brick is).
+fn gather<T: Texel>(g: &Bricked<T>, lo: [usize; 3], ext: [usize; 3], out: &mut Vec<T>) {
+    out.clear();
+    out.resize(ext.iter().product(), T::default());
+    let l = &g.layout;
+    let hi = [0, 1, 2].map(|ax| lo[ax] + ext[ax]);
+    for bz in lo[2] / B..=(hi[2] - 1) / B {
+        for by in lo[1] / B..=(hi[1] - 1) / B {
+            for bx in lo[0] / B..=(hi[0] - 1) / B {
+                let s = l.slot[l.brick_of([bx, by, bz])];
+                if s == EMPTY {
+                    continue;
+                }
+                let brick = &g.data[s as usize * B3..(s as usize + 1) * B3];
+                let z0 = lo[2].max(bz * B);
+                let z1 = hi[2].min(bz * B + B);
+                let y0 = lo[1].max(by * B);
+                let y1 = hi[1].min(by * B + B);
+                let x0 = lo[0].max(bx * B);
+                let x1 = hi[0].min(bx * B + B);
+                for z in z0..z1 {
+                    for y in y0..y1 {
+                        let from = local([x0, y, z]);
+                        let to = (x0 - lo[0]) + ext[0] * ((y - lo[1]) + ext[1] * (z - lo[2]));
+                        out[to..to + (x1 - x0)].copy_from_slice(&brick[from..from + (x1 - x0)]);
+                    }
+                }
+            }
+        }
+    }
 }
 
 /// A slice that parallel tasks write at indices no two tasks share.
@@ -400,5 +633,14 @@ impl<T> Disjoint<T> {
     pub(crate) unsafe fn write(&self, i: usize, v: T) {
         assert!(i < self.len);
         unsafe { self.ptr.add(i).write(v) };
+    }
+    /// # Safety
+    /// No other task may write or read `[start, start + len)` at the same time, and the
+    /// slice given to [`Disjoint::new`] must outlive the returned one.
+    #[inline]
+    #[allow(clippy::mut_from_ref)]
+    pub(crate) unsafe fn slice_mut(&self, start: usize, len: usize) -> &mut [T] {
+        assert!(start + len <= self.len);
+        unsafe { std::slice::from_raw_parts_mut(self.ptr.add(start), len) }
     }
 }

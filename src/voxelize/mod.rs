@@ -8,7 +8,8 @@
 //!    are double-sided, the two directions of an axis are rasterized in one pass (each
 //!    triangle covered and shaded once for both, [`slices::passes`]; same result);
 //! 2. [`mip`]: build that direction's MIP pyramid (composite along the view axis, average
-//!    across), level 1 straight from the sparse level 0;
+//!    across), level 1 straight from the sparse level 0; every level above 0 is
+//!    brick-sparse ([`bricks`]: 8³ bricks, only those near non-empty voxels allocated);
 //! 3. [`combine`]: fold every coarser level into the combined volume as it is built
 //!    (streamed for the presets; expressions and custom functions keep the six pyramids in
 //!    f16 and combine at the end); with a preset, level 0 is combined at the end from the
@@ -21,9 +22,9 @@
 //!
 //! Memory (level 0 has `N` voxels, `S ≤ N` of them non-empty from one direction; a full
 //! pyramid is at most `8/7 N`): the six sparse level-0 stacks (20 bytes per non-empty voxel,
-//! 32 with normals), one direction's f32 levels 1 and 2 while its pyramid is built, the
-//! streamed accumulators of the levels above 0 (16 or 20 bytes per voxel, plus 8 for
-//! normals), and the RGBA8 (+ snorm8) output. No level-0 grid is ever dense with a preset.
+//! 32 with normals), one direction's brick-sparse f32 levels 1 and 2 while its pyramid is
+//! built, the streamed brick-sparse accumulators of the levels above 0 (16 or 20 bytes per
+//! voxel of an allocated brick, plus 8 for normals), and the RGBA8 (+ snorm8) output. No level-0 grid is ever dense with a preset.
 //! Expressions and custom functions keep six f16 pyramids (48 bytes per voxel of every
 //! level): 7.5 GiB at 512³, 9.3 GiB with normals (over an 8 GiB budget: use a preset for
 //! normals at 512³, or raise the limit).
@@ -34,6 +35,7 @@
 
 mod ao;
 pub mod asset;
+pub(crate) mod bricks;
 pub mod cells;
 pub mod combine;
 pub mod dense;
@@ -245,13 +247,6 @@ pub enum VoxelizeError {
         needed_gib: f64,
         limit_gib: f64,
     },
-}
-
-/// Voxel counts of every level.
-fn level_sizes(grid: &GridSpec, mip_count: u32) -> Vec<usize> {
-    (0..mip_count)
-        .map(|l| grid.level_dims(l).iter().map(|&d| d as usize).product())
-        .collect()
 }
 
 /// Estimated peak memory of [`voxelize`] for a grid (see the module docs), in bytes, in the
@@ -491,8 +486,9 @@ fn ao_baker<'a>(
 enum Level<'a, T> {
     /// Level 0, sparse.
     Zero(&'a slices::DirSlices),
-    /// A coarser level: colour and weighted normals.
-    Dense(Grid3<T>, Option<Grid3<[f16; 4]>>),
+    /// A coarser level: colour and weighted normals, brick-sparse (the normals on the
+    /// colour's bricks).
+    Dense(bricks::Bricked<T>, Option<bricks::Bricked<[f16; 4]>>),
 }
 
 /// Builds the pyramid of one direction from its sparse level 0: level 1 is filtered
@@ -518,10 +514,10 @@ fn pyramid<T: Texel>(
             return;
         }
         let t = Instant::now();
+        let next = mip::downsample_bricks::<T, T>(&rgba, None, dir, None);
         let next_n = nrm
             .as_ref()
-            .map(|n| toksvig::downsample_normals(n, &rgba, dir));
-        let next = mip::downsample(&rgba, dir);
+            .map(|n| toksvig::downsample_normals(n, &rgba, dir, &next.layout));
         *mip_secs += t.elapsed().as_secs_f64();
         sink(level, Level::Dense(rgba, nrm));
         rgba = next;
@@ -539,13 +535,17 @@ pub fn voxelize(
     let t_all = Instant::now();
     let (grid, mips) = check(scene, opts)?;
     let shader = shade::Shader::new(scene);
-    let sizes = level_sizes(&grid, mips);
+    let dims: Vec<[usize; 3]> = (0..mips)
+        .map(|l| grid.level_dims(l).map(|d| d as usize))
+        .collect();
     let mut times = StageTimes::default();
     let mut fragments = 0u64;
+    // Level-0 voxels with a non-zero alpha byte, when the level-0 combine counted them.
+    let mut non_empty = None;
     // With a preset, level 0's normals are combined with its colour (see below).
     let mut nacc = match opts.combine {
         CombineFn::Preset(_) => None,
-        _ => opts.normals.then(|| toksvig::NormalAccum::new(&sizes)),
+        _ => opts.normals.then(|| toksvig::NormalAccum::new(&dims, true)),
     };
     let t = Instant::now();
     let mut baker = ao_baker(scene, &shader, &grid, opts);
@@ -597,10 +597,10 @@ pub fn voxelize(
         CombineFn::Preset(p) => {
             // Level 0 is combined at the end from the six sparse stacks, plane by plane;
             // the coarser levels are folded as each direction's pyramid is built.
-            let mut coarse = sizes.clone();
-            coarse[0] = 0;
-            let mut acc = combine::Accum::new(*p, &coarse);
-            nacc = opts.normals.then(|| toksvig::NormalAccum::new(&coarse));
+            let mut acc = combine::Accum::new(*p, &dims);
+            nacc = opts
+                .normals
+                .then(|| toksvig::NormalAccum::new(&dims, false));
             let mut zero = Vec::with_capacity(6);
             for &pass in &passes {
                 let stacks = raster(&mut bufs, ctx, pass, &mut times, baker.as_mut(), progress);
@@ -625,7 +625,8 @@ pub fn voxelize(
             }
             drop(std::mem::take(&mut bufs)); // before the level-0 combine's peak
             let t = Instant::now();
-            let (level0, normals0) = combine::combine_level0(*p, &zero, opts.normals);
+            let (level0, normals0, count) = combine::combine_level0(*p, &zero, opts.normals);
+            non_empty = Some(count);
             drop(zero);
             progress(Stage::Combine, 1.0);
             let mut out = vec![level0];
@@ -656,7 +657,7 @@ pub fn voxelize(
                             if let (Some(na), Some(n)) = (nacc.as_mut(), n.as_ref()) {
                                 na.fold(level, n, &c);
                             }
-                            levels.push(Some(c));
+                            levels.push(Some(c.to_dense()));
                         }
                     });
                     pyrs.push(levels);
@@ -683,7 +684,8 @@ pub fn voxelize(
     };
     let t = Instant::now();
     let normals = nacc.map(|mut na| (0..mips as usize).map(|l| na.finish_level(l)).collect());
-    let non_empty_voxels = levels[0].chunks_exact(4).filter(|p| p[3] != 0).count() as u64;
+    let non_empty_voxels =
+        non_empty.unwrap_or_else(|| levels[0].chunks_exact(4).filter(|p| p[3] != 0).count() as u64);
     times.quantize += t.elapsed().as_secs_f64();
     progress(Stage::Quantize, 1.0);
     times.total = t_all.elapsed().as_secs_f64();

@@ -23,18 +23,22 @@ use glam::Vec3;
 use half::f16;
 use rayon::prelude::*;
 
-use super::mip::{downsample_with, Grid3, Texel};
+use super::bricks::{for_each_voxel, local, BrickAccum, Bricked, Layout, B3};
+use super::mip::{downsample_bricks, Disjoint, Texel};
 use super::slices::DirSlices;
 use super::Dir;
 
 /// One MIP step of a direction's weighted normals `nrm`, occluded by the colour volume `rgba`
 /// of the same level (same footprints and compositing as the colour, see [`super::mip`]).
+/// `colour_next` is the colour's next level: the normals get its bricks (a superset of
+/// theirs, since a normal is non-zero only where the colour is).
 pub(crate) fn downsample_normals<T: Texel>(
-    nrm: &Grid3<[f16; 4]>,
-    rgba: &Grid3<T>,
+    nrm: &Bricked<[f16; 4]>,
+    rgba: &Bricked<T>,
     view: Dir,
-) -> Grid3<[f16; 4]> {
-    downsample_with(nrm, rgba, view)
+    colour_next: &Layout,
+) -> Bricked<[f16; 4]> {
+    downsample_bricks(nrm, Some(rgba), view, Some(colour_next))
 }
 
 /// Toksvig's average normal `Σ Nw / Σ α` (length ≤ 1; zero when `Σ α` is 0).
@@ -101,53 +105,64 @@ pub fn normal_coherence(rgba: &[u8], normals: &[u8]) -> Option<f32> {
     (den > 0.0).then(|| (num / den) as f32)
 }
 
-/// Running sums `(Σ Nw, Σ α)` of one MIP level over the six directions.
+/// Running sums `(Σ Nw, Σ α)` of one MIP level over the six directions: brick-sparse
+/// above level 0; level 0 is dense only when folded from the sparse stacks
+/// ([`NormalAccum::fold_sparse`], expressions and custom functions).
 pub(crate) struct NormalAccum {
-    pub levels: Vec<Vec<[f16; 4]>>,
+    dense0: Vec<[f16; 4]>,
+    dims0: [usize; 3],
+    levels: Vec<BrickAccum<[f16; 4]>>,
     /// Level 0 already encoded elsewhere ([`super::combine::combine_level0`]).
     level0: Option<Vec<u8>>,
 }
 
 impl NormalAccum {
-    pub fn new(level_sizes: &[usize]) -> Self {
+    /// Accumulators for levels of these sizes; `dense0`: level 0 is folded with
+    /// [`NormalAccum::fold_sparse`] (else it comes encoded, [`NormalAccum::set_level0`]).
+    pub fn new(level_dims: &[[usize; 3]], dense0: bool) -> Self {
+        let n0 = if dense0 {
+            level_dims[0].iter().product()
+        } else {
+            0
+        };
         NormalAccum {
-            levels: level_sizes
-                .iter()
-                .map(|&n| vec![[f16::ZERO; 4]; n])
-                .collect(),
+            dense0: vec![[f16::ZERO; 4]; n0],
+            dims0: level_dims[0],
+            levels: level_dims.iter().map(|&d| BrickAccum::new(d, 1)).collect(),
             level0: None,
         }
     }
 
-    /// Hands over level 0's encoded normals (then [`NormalAccum::finish_level`]`(0)`
-    /// returns them).
+    /// Level 0, already encoded (from the level-0 combine).
     pub fn set_level0(&mut self, encoded: Vec<u8>) {
         self.level0 = Some(encoded);
     }
 
-    /// Adds one direction's level.
-    pub fn fold<T: Texel>(&mut self, level: usize, nrm: &Grid3<[f16; 4]>, rgba: &Grid3<T>) {
-        self.levels[level]
-            .par_chunks_mut(4096)
-            .zip(nrm.data.par_chunks(4096).zip(rgba.data.par_chunks(4096)))
-            .for_each(|(acc, (n, c))| {
-                for ((a, n), c) in acc.iter_mut().zip(n).zip(c) {
-                    let (n, c) = (n.load(), c.load());
-                    if c[3] == 0.0 && n == [0.0; 4] {
-                        continue;
-                    }
-                    let s = a.load();
-                    *a = <[f16; 4]>::store([s[0] + n[0], s[1] + n[1], s[2] + n[2], s[3] + c[3]]);
+    /// Folds one direction's weighted normals of `level` (occluding colour `rgba`, whose
+    /// bricks the normals share).
+    pub fn fold<T: Texel>(&mut self, level: usize, nrm: &Bricked<[f16; 4]>, rgba: &Bricked<T>) {
+        debug_assert_eq!(nrm.layout.bricks, rgba.layout.bricks);
+        let acc = &mut self.levels[level];
+        acc.reserve(&rgba.layout);
+        acc.for_each_brick(&rgba.layout, |acc, i| {
+            let r = i * B3..(i + 1) * B3;
+            for ((a, n), c) in acc.iter_mut().zip(&nrm.data[r.clone()]).zip(&rgba.data[r]) {
+                let (n, c) = (n.load(), c.load());
+                if c[3] == 0.0 && n == [0.0; 4] {
+                    continue;
                 }
-            });
+                let s = a.load();
+                *a = <[f16; 4]>::store([s[0] + n[0], s[1] + n[1], s[2] + n[2], s[3] + c[3]]);
+            }
+        });
     }
 
-    /// Adds one direction's sparse level 0 (its weighted normals and colour alpha).
+    /// Folds one direction's sparse level 0 into the dense level 0.
     pub fn fold_sparse(&mut self, s: &DirSlices) {
         let Some(nrm) = s.nrm.as_ref() else {
             return;
         };
-        let acc = &mut self.levels[0];
+        let acc = &mut self.dense0;
         for j in 0..s.row_count() {
             let (row, first) = s.row(j);
             for (k, v) in row.iter().enumerate() {
@@ -160,23 +175,41 @@ impl NormalAccum {
         }
     }
 
-    /// Encoded snorm8 normals of one level (see [`super::quantize::encode_normal`]).
+    /// Encoded snorm8 normals of one level (see [`super::quantize::encode_normal`]), dense.
     pub fn finish_level(&mut self, level: usize) -> Vec<u8> {
+        let encode = |a: &[f16; 4]| {
+            let s = a.load();
+            super::quantize::encode_normal(average_normal(Vec3::new(s[0], s[1], s[2]), s[3]))
+        };
         if level == 0 {
             if let Some(done) = self.level0.take() {
                 return done;
             }
+            let acc = std::mem::take(&mut self.dense0);
+            let mut out = vec![0u8; self.dims0.iter().product::<usize>() * 4];
+            out.par_chunks_mut(4 * 4096)
+                .zip(acc.par_chunks(4096))
+                .for_each(|(o, a)| {
+                    for (o, a) in o.chunks_exact_mut(4).zip(a) {
+                        o.copy_from_slice(&encode(a));
+                    }
+                });
+            return out;
         }
-        let acc = std::mem::take(&mut self.levels[level]);
-        let mut out = vec![0u8; acc.len() * 4];
-        out.par_chunks_mut(4 * 4096)
-            .zip(acc.par_chunks(4096))
-            .for_each(|(o, a)| {
-                for (o, a) in o.chunks_exact_mut(4).zip(a) {
-                    let s = a.load();
-                    let n = average_normal(Vec3::new(s[0], s[1], s[2]), s[3]);
-                    o.copy_from_slice(&super::quantize::encode_normal(n));
-                }
+        let acc = std::mem::replace(&mut self.levels[level], BrickAccum::new([0; 3], 1));
+        let dims = acc.dims;
+        // Voxels nothing was folded into encode as 0 (a zero normal).
+        let mut out = vec![0u8; dims.iter().product::<usize>() * 4];
+        let dst = Disjoint::new(&mut out);
+        acc.data
+            .par_chunks(B3)
+            .zip(&acc.bricks)
+            .for_each(|(brick, &b)| {
+                for_each_voxel(acc.coords(b as usize), dims, |p| {
+                    let i = p[0] + dims[0] * (p[1] + dims[1] * p[2]);
+                    // SAFETY: every voxel lies in one brick, and each brick is one task.
+                    unsafe { dst.slice_mut(4 * i, 4) }.copy_from_slice(&encode(&brick[local(p)]));
+                });
             });
         out
     }
@@ -187,6 +220,7 @@ mod tests {
     //! Toksvig filtering through the real MIP path ([`downsample_normals`], the
     //! level-by-level step of every direction's pyramid, then [`NormalAccum`]).
 
+    use super::super::mip::Grid3;
     use super::*;
 
     /// A 2×2×2 direction volume, opaque, whose weighted normals are `left` in the x = 0
@@ -209,9 +243,10 @@ mod tests {
 
     fn parent_normal(left: Vec3, right: Vec3, view: Dir) -> (Vec3, f32) {
         let (nrm, rgba) = siblings(left, right);
-        let n1 = downsample_normals(&nrm, &rgba, view);
-        let c1 = super::super::mip::downsample(&rgba, view);
-        assert_eq!(n1.dims, [1, 1, 1]);
+        let (nrm, rgba) = (Bricked::from_dense(&nrm), Bricked::from_dense(&rgba));
+        let c1 = downsample_bricks::<_, [f32; 4]>(&rgba, None, view, None);
+        let n1 = downsample_normals(&nrm, &rgba, view, &c1.layout);
+        assert_eq!(n1.dims(), [1, 1, 1]);
         let n = n1.get([0, 0, 0]);
         let a = c1.get([0, 0, 0])[3];
         (average_normal(Vec3::new(n[0], n[1], n[2]), a), a)
@@ -256,10 +291,23 @@ mod tests {
         // double-sided leaf): the combined level is a zero normal, encoded as zeros.
         let (pos, rgba) = siblings(Vec3::X, Vec3::X);
         let (neg, _) = siblings(-Vec3::X, -Vec3::X);
-        let c1 = super::super::mip::downsample(&rgba, Dir::PosZ);
-        let mut acc = NormalAccum::new(&[8, 1]);
-        acc.fold(1, &downsample_normals(&pos, &rgba, Dir::PosZ), &c1);
-        acc.fold(1, &downsample_normals(&neg, &rgba, Dir::NegZ), &c1);
+        let (pos, neg, rgba) = (
+            Bricked::from_dense(&pos),
+            Bricked::from_dense(&neg),
+            Bricked::from_dense(&rgba),
+        );
+        let c1 = downsample_bricks::<_, [f32; 4]>(&rgba, None, Dir::PosZ, None);
+        let mut acc = NormalAccum::new(&[[2, 2, 2], [1, 1, 1]], false);
+        acc.fold(
+            1,
+            &downsample_normals(&pos, &rgba, Dir::PosZ, &c1.layout),
+            &c1,
+        );
+        acc.fold(
+            1,
+            &downsample_normals(&neg, &rgba, Dir::NegZ, &c1.layout),
+            &c1,
+        );
         assert_eq!(acc.finish_level(1), vec![0, 0, 0, 0]);
     }
 }
