@@ -98,7 +98,7 @@ impl LinePass {
             bytemuck::cast_slice(&flat),
             wgpu::BufferUsages::VERTEX,
         );
-        let bind = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let bind = gpu.bind_group(&wgpu::BindGroupDescriptor {
             label: Some("lines"),
             layout: &self.layout,
             entries: &[wgpu::BindGroupEntry {

@@ -281,7 +281,7 @@ impl MeshPass {
             bytemuck::bytes_of(frame),
             wgpu::BufferUsages::UNIFORM,
         );
-        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        gpu.bind_group(&wgpu::BindGroupDescriptor {
             label: Some("mesh frame"),
             layout: &self.frame_layout,
             entries: &[wgpu::BindGroupEntry {

@@ -498,7 +498,7 @@ impl ParticlePass {
                 resource: wgpu::BindingResource::Sampler(&self.smp_clamp),
             },
         ];
-        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        gpu.bind_group(&wgpu::BindGroupDescriptor {
             label: Some("particles"),
             layout: &self.layout,
             entries: &entries,
@@ -533,7 +533,7 @@ impl ParticlePass {
             binding: 4,
             resource: wgpu::BindingResource::Sampler(&self.smp_clamp),
         });
-        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        gpu.bind_group(&wgpu::BindGroupDescriptor {
             label: Some("composite"),
             layout: &self.comp_layout,
             entries: &entries,

@@ -294,7 +294,7 @@ pub fn plan(
     let sb = storage(gpu, "slices", &gpu_slices);
     let lb = storage(gpu, "cell lists", &list);
     let vb = storage(gpu, "volume params", &vparams);
-    let frame_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+    let frame_bind = gpu.bind_group(&wgpu::BindGroupDescriptor {
         label: Some("volume frame"),
         layout: &pass.frame_layout,
         entries: &[
