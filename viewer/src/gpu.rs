@@ -154,11 +154,59 @@ impl Gpu {
         })
     }
 
+    /// Blocks until submission `index` has finished.
+    pub fn wait_for(&self, index: wgpu::SubmissionIndex) -> Result<(), ViewError> {
+        self.device
+            .poll(wgpu::PollType::Wait {
+                submission_index: Some(index),
+                timeout: None,
+            })
+            .map(|_| ())
+            .map_err(|e| ViewError::Gpu(e.to_string()))
+    }
+
     /// Blocks until the queue is idle.
     pub fn wait(&self) -> Result<(), ViewError> {
         self.device
             .poll(wgpu::PollType::wait_indefinitely())
             .map(|_| ())
             .map_err(|e| ViewError::Gpu(e.to_string()))
+    }
+}
+
+/// A buffer kept from frame to frame and written with `queue.write_buffer`; made again,
+/// bigger (a power of two of bytes, at least 256), only when the data outgrows it.
+pub struct GrowBuffer {
+    pub buffer: wgpu::Buffer,
+    capacity: u64,
+    label: &'static str,
+    usage: wgpu::BufferUsages,
+}
+
+impl GrowBuffer {
+    /// An empty buffer of 256 bytes for `usage` (`COPY_DST` is added).
+    pub fn new(gpu: &Gpu, label: &'static str, usage: wgpu::BufferUsages) -> GrowBuffer {
+        let usage = usage | wgpu::BufferUsages::COPY_DST;
+        GrowBuffer {
+            buffer: gpu.empty_buffer(label, 256, usage),
+            capacity: 256,
+            label,
+            usage,
+        }
+    }
+
+    /// Writes `bytes` at the start (a multiple of 4 bytes long); returns whether the
+    /// buffer was made again (bind groups holding the old one must be remade).
+    pub fn write(&mut self, gpu: &Gpu, bytes: &[u8]) -> bool {
+        let n = bytes.len() as u64;
+        let grown = n > self.capacity;
+        if grown {
+            self.capacity = n.next_power_of_two().max(256);
+            self.buffer = gpu.empty_buffer(self.label, self.capacity, self.usage);
+        }
+        if n > 0 {
+            gpu.queue.write_buffer(&self.buffer, 0, bytes);
+        }
+        grown
     }
 }

@@ -19,7 +19,7 @@ use crate::shadow::{self, ShadowMap, SHADOW_MAP_SIZE};
 use crate::target::{RgbaImage, Target};
 use crate::volume_pass::{GpuVolume, VolumePass};
 
-use crate::volume_plan::{self, VolumePlan};
+use crate::volume_plan::{self, PlanBuffers, VolumePlan};
 use crate::{Gpu, SliceParams, ViewCamera, ViewError};
 
 /// Vertices per cell × slice instance: a fan of 3 triangles covers the ≤ 5-gon.
@@ -118,6 +118,16 @@ pub struct Renderer {
     particle_layer: crate::particle_pass::ParticleLayerDesc,
     /// The particle layer's targets, for the last frame size (made on first use).
     layer_targets: std::cell::RefCell<Option<crate::particle_pass::LayerTargets>>,
+    /// The volume plans' buffers, kept from frame to frame: the camera's, the light's
+    /// (made on first use).
+    plan_buffers: [std::cell::RefCell<Option<PlanBuffers>>; 2],
+}
+
+/// Which view a volume plan is for (its [`PlanBuffers`]).
+#[derive(Clone, Copy)]
+enum PlanView {
+    Camera = 0,
+    Light = 1,
 }
 
 impl Renderer {
@@ -147,6 +157,7 @@ impl Renderer {
             particles: Vec::new(),
             particle_layer: Default::default(),
             layer_targets: std::cell::RefCell::new(None),
+            plan_buffers: Default::default(),
         }
     }
 
@@ -185,6 +196,12 @@ impl Renderer {
 
     pub fn shadows(&self) -> bool {
         self.shadow_map.is_some()
+    }
+
+    /// Whether frames change with [`Renderer::time`] (particles, animated volume cells):
+    /// a window showing nothing else redraws only on input.
+    pub fn animated(&self) -> bool {
+        self.particle_pass.is_some() || self.volumes.iter().any(|v| v.animation.is_some())
     }
 
     /// World-space end points of every cell edge of every volume instance.
@@ -498,6 +515,7 @@ impl Renderer {
 
         // 2–4. Meshes, clouds, volumes.
         let plan = self.plan(
+            PlanView::Camera,
             camera,
             self.params,
             world_to_shadow.map(|w| (w.2, w.1)),
@@ -525,7 +543,7 @@ impl Renderer {
         let mesh_bind = self
             .mesh_pass
             .as_ref()
-            .map(|p| p.frame_bind_group_from(&self.gpu, &mesh_frame));
+            .map(|p| p.frame_bind_group(&self.gpu, View::Camera, &mesh_frame));
         let cloud_bind = self.cloud_pass.as_ref().map(|p| {
             stats.cloud_bytes_uploaded += std::mem::size_of::<MeshFrame>();
             p.frame_bind_group(&self.gpu, View::Camera, &mesh_frame)
@@ -564,7 +582,7 @@ impl Renderer {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            if let (Some(pass), Some(bind)) = (&self.mesh_pass, &mesh_bind) {
+            if let (Some(pass), Some(bind)) = (&self.mesh_pass, mesh_bind) {
                 for m in &self.meshes {
                     stats.mesh_triangles += m.triangles as usize;
                     stats.draw_calls += pass.draw(&mut rp, bind, receiver, m, false);
@@ -615,7 +633,13 @@ impl Renderer {
     ) -> Result<(), ViewError> {
         let mut params = self.params;
         params.spacing = params.spacing.scaled(shadow::SHADOW_SPACING_BIAS);
-        let plan = self.plan(light, params, None, Some(shadow::SHADOW_ALPHA_CUTOFF))?;
+        let plan = self.plan(
+            PlanView::Light,
+            light,
+            params,
+            None,
+            Some(shadow::SHADOW_ALPHA_CUTOFF),
+        )?;
         stats.shadow_slices = plan.as_ref().map_or(0, |p| p.slice_count());
         let frame = MeshFrame {
             view_proj: (light.projection() * light.view).to_cols_array_2d(),
@@ -633,9 +657,9 @@ impl Renderer {
             multiview_mask: None,
         });
         if let Some(pass) = &self.mesh_pass {
-            let bind = pass.frame_bind_group_from(&self.gpu, &frame);
+            let bind = pass.frame_bind_group(&self.gpu, View::Light, &frame);
             for m in &self.meshes {
-                pass.draw(&mut rp, &bind, none, m, true);
+                pass.draw(&mut rp, bind, none, m, true);
             }
         }
         if let (Some(pass), Some(cf)) = (&self.cloud_pass, clouds) {
@@ -649,9 +673,11 @@ impl Renderer {
         Ok(())
     }
 
-    /// The volume plan for `camera` (cells in camera space, slices, slabs, draws).
+    /// The volume plan for `camera` (cells in camera space, slices, slabs, draws),
+    /// written into `view`'s buffers.
     fn plan(
         &self,
+        view: PlanView,
         camera: &ViewCamera,
         params: SliceParams,
         shadow: Option<(Mat4, f32)>,
@@ -661,9 +687,12 @@ impl Renderer {
             return Ok(None);
         };
         let receive = shadow.map(|(m, bias)| (m, bias, self.ambient));
+        let mut bufs = self.plan_buffers[view as usize].borrow_mut();
+        let bufs = bufs.get_or_insert_with(|| PlanBuffers::new(&self.gpu));
         volume_plan::plan(
             &self.gpu,
             pass,
+            bufs,
             &self.volumes,
             camera,
             params,
