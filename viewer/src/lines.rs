@@ -5,9 +5,9 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
+use crate::gpu::GrowBuffer;
 use crate::layout::{color_target, frame_layout, shader, Pipeline};
 use crate::target::COLOR_FORMAT;
-use crate::gpu::GrowBuffer;
 use crate::Gpu;
 
 /// Vertex index pairs of a prism's edges (0,1,2 bottom, 3,4,5 top).

@@ -271,7 +271,8 @@ impl Resolve {
                 let scale = if out_size.0 >= 1400 { 2 } else { 1 };
                 // Wrapped to the frame's width (the text image is (cols × 8 + 4) × scale).
                 let cols = (out_size.0 / scale).saturating_sub(4) / 8;
-                let (w, h) = self.text_texture(gpu, &mut cache.text, &wrap(t, cols as usize), scale);
+                let (w, h) =
+                    self.text_texture(gpu, &mut cache.text, &wrap(t, cols as usize), scale);
                 let (ow, oh) = (out_size.0.max(1) as f32, out_size.1.max(1) as f32);
                 let rect = [
                     -1.0,

@@ -18,6 +18,7 @@ use std::cell::RefCell;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
+use crate::gpu::GrowBuffer;
 use crate::layout::{
     color_target, depth_texture, entry, sampler, shader, storage, texture, uniform, Pipeline,
 };
@@ -25,7 +26,6 @@ use crate::particle_layer::Bakes;
 pub use crate::particle_layer::{LayerResolution, MotionBlur, ParticleLayerDesc, ParticleNeeds};
 use crate::particles::{particles_at, BillboardMode, ParticleKind, ParticleSystemDesc};
 use crate::target::COLOR_FORMAT;
-use crate::gpu::GrowBuffer;
 use crate::texture::desc_2d;
 use crate::{Gpu, ViewCamera};
 

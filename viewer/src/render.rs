@@ -1,6 +1,7 @@
 //! The frame. Passes, each built only when the content needs it:
-//! 1. `shadow` — the light's depth map (meshes, clouds, volumes cast), only with
-//!    shadows on and something to cast ([`crate::shadow`]);
+//! 1. `shadow` — the light's depth map in cascades fitted to the view, one submission
+//!    per cascade (meshes, clouds, volumes cast), only with shadows on and something to
+//!    cast ([`crate::shadow`]);
 //! 2. `mesh` — opaque meshes (and kept cloud trunks, the ground), depth write;
 //! 3. `cloud` — billboard clouds: foliage meshes and billboards alpha-tested, depth
 //!    write, one instanced draw per (cloud, level, atlas) ([`crate::cloud_pass`]);
@@ -400,8 +401,9 @@ impl Renderer {
         })
     }
 
-    /// Bounding sphere of all content (world space), for the shadow camera.
-    fn content_sphere(&self) -> (Vec3, f32) {
+    /// Bounds of all content (world space, min and max), for the shadow camera; a unit
+    /// box around the origin when there is none.
+    pub fn content_bounds(&self) -> (Vec3, Vec3) {
         let mut lo = Vec3::splat(f32::INFINITY);
         let mut hi = Vec3::splat(f32::NEG_INFINITY);
         for v in &self.volumes {
@@ -428,9 +430,9 @@ impl Renderer {
             hi = hi.max(m.bounds.1);
         }
         if !(lo.x <= hi.x) {
-            return (Vec3::ZERO, 1.0);
+            return (Vec3::splat(-1.0), Vec3::ONE);
         }
-        (0.5 * (lo + hi), 0.5 * (hi - lo).length())
+        (lo, hi)
     }
 
     /// Per cloud instance (cloud-major): level and morph factor for `camera`.
@@ -497,10 +499,18 @@ impl Renderer {
         // 1. Shadow map.
         let shadow = match &self.shadow_map {
             Some(map) if self.has_casters() => {
-                let (centre, radius) = self.content_sphere();
-                let light = shadow::light_camera(self.light_dir, centre, radius, map.size);
-                self.shadow_pass(&mut enc, map, &light, cloud_frame.as_ref(), &mut stats)?;
-                Some((map, light))
+                let cs = shadow::cascades(self.light_dir, camera, self.content_bounds(), map.size);
+                self.gpu
+                    .queue
+                    .write_buffer(&map.cascades, 0, bytemuck::bytes_of(&cs.uniform));
+                // One submission per cascade: the light's uniforms and volume plan are
+                // written again for each (writes land before the next submission).
+                for (k, light) in cs.cameras.iter().enumerate() {
+                    let mut senc = device.create_command_encoder(&Default::default());
+                    self.shadow_pass(&mut senc, map, k, light, cloud_frame.as_ref(), &mut stats)?;
+                    self.gpu.queue.submit([senc.finish()]);
+                }
+                Some((map, cs.base))
             }
             _ => None,
         };
@@ -621,12 +631,14 @@ impl Renderer {
         Ok(stats)
     }
 
-    /// The light's depth map: meshes, clouds (at the levels the viewer shows), volumes
-    /// sliced from the light with [`shadow::SHADOW_SPACING_BIAS`]× the spacing.
+    /// Cascade `k` of the light's depth atlas (its tile; cascade 0 clears the atlas):
+    /// meshes, clouds (at the levels the viewer shows), volumes sliced from the light with
+    /// [`shadow::SHADOW_SPACING_BIAS`]× the spacing.
     fn shadow_pass(
         &self,
         enc: &mut wgpu::CommandEncoder,
         map: &ShadowMap,
+        k: usize,
         light: &ViewCamera,
         clouds: Option<&CloudFrame<'_>>,
         stats: &mut FrameStats,
@@ -640,7 +652,7 @@ impl Renderer {
             None,
             Some(shadow::SHADOW_ALPHA_CUTOFF),
         )?;
-        stats.shadow_slices = plan.as_ref().map_or(0, |p| p.slice_count());
+        stats.shadow_slices += plan.as_ref().map_or(0, |p| p.slice_count());
         let frame = MeshFrame {
             view_proj: (light.projection() * light.view).to_cols_array_2d(),
             world_to_shadow: Mat4::IDENTITY.to_cols_array_2d(),
@@ -648,14 +660,24 @@ impl Renderer {
             flags: [0.0; 4],
         };
         let none = &self.no_shadow.bind_group;
+        let mut depth = depth_attachment(&map.view);
+        if k > 0 {
+            depth.depth_ops = Some(wgpu::Operations {
+                load: wgpu::LoadOp::Load,
+                store: wgpu::StoreOp::Store,
+            });
+        }
         let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("shadow"),
             color_attachments: &[],
-            depth_stencil_attachment: Some(depth_attachment(&map.view)),
+            depth_stencil_attachment: Some(depth),
             timestamp_writes: None,
             occlusion_query_set: None,
             multiview_mask: None,
         });
+        let (x, y, side) = shadow::tile_rect(k, map.size);
+        rp.set_viewport(x as f32, y as f32, side as f32, side as f32, 0.0, 1.0);
+        rp.set_scissor_rect(x, y, side, side);
         if let Some(pass) = &self.mesh_pass {
             let bind = pass.frame_bind_group(&self.gpu, View::Light, &frame);
             for m in &self.meshes {

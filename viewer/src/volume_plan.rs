@@ -12,11 +12,11 @@
 
 use glam::{Mat4, Vec3};
 
+use crate::gpu::GrowBuffer;
 use crate::render::{FrameStats, VolumeEntry, VERTICES_PER_INSTANCE};
 use crate::slab::partition;
 use crate::slice_plan::{slice_depths, voxel_size};
 use crate::volume_pass::{FrameUniform, GpuCell, GpuDraw, GpuSlice, GpuVolumeParams, VolumePass};
-use crate::gpu::GrowBuffer;
 use crate::{Gpu, SliceParams, ViewCamera, ViewError};
 
 /// One planned draw: its batch, the dynamic offset of its [`GpuDraw`], its instances.
@@ -209,6 +209,13 @@ pub fn plan(
     shadow_cutoff: Option<f32>,
     time: f32,
 ) -> Result<Option<VolumePlan>, ViewError> {
+    // A shadow map's (orthographic) cascade draws only the cells across its window: the
+    // cascades of a view share the casters, each sees a part of them. The camera's plan
+    // keeps every cell (its slices follow the cells' depth range).
+    let window = match (shadow_cutoff, camera.ortho_half_height) {
+        (Some(_), Some(hh)) => Some((hh * camera.aspect(), hh)),
+        _ => None,
+    };
     let mut cells: Vec<GpuCell> = Vec::new();
     let mut ranges: Vec<(f32, f32)> = Vec::new();
     let mut vparams: Vec<GpuVolumeParams> = Vec::new();
@@ -268,6 +275,9 @@ pub fn plan(
                 });
                 for c in w {
                     let pos = c.pos.map(|p| camera.to_view(Vec3::from(p)).to_array());
+                    if outside_window(&pos, window) {
+                        continue;
+                    }
                     let (mut a, mut z) = (f32::INFINITY, f32::NEG_INFINITY);
                     for p in &pos {
                         a = a.min(-p[2]);
@@ -397,6 +407,18 @@ pub fn plan(
         v0,
         spacing,
     }))
+}
+
+/// Whether the cell with view-space corners `pos` lies wholly to one side of the
+/// orthographic window `(half width, half height)` (never, without a window).
+fn outside_window(pos: &[[f32; 3]; 6], window: Option<(f32, f32)>) -> bool {
+    let Some((hw, hh)) = window else {
+        return false;
+    };
+    pos.iter().all(|p| p[0] < -hw)
+        || pos.iter().all(|p| p[0] > hw)
+        || pos.iter().all(|p| p[1] < -hh)
+        || pos.iter().all(|p| p[1] > hh)
 }
 
 /// A banded asset draws each slice with one band (SPEC §8.6): clip each cell's depth

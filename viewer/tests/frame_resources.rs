@@ -129,7 +129,10 @@ fn frames_make_no_gpu_resources_after_the_first() {
     let target = Target::new(&r.gpu, w, h);
     for cam in &cams {
         let s = r.render(&target, cam).expect("render");
-        assert!(s.slices > 0 && s.shadow_slices > 0 && s.particles > 0, "{s:?}");
+        assert!(
+            s.slices > 0 && s.shadow_slices > 0 && s.particles > 0,
+            "{s:?}"
+        );
     }
     r.gpu.wait().expect("wait");
     let warm = made(&r);
