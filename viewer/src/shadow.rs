@@ -21,6 +21,9 @@
 //! (meshes, clouds, volume slices) look the map up with 3×3 PCF
 //! (`shaders/shadow_lookup.wgsl`) and scale the light by `ambient + (1 − ambient)·vis`.
 
+// NaN-safe range checks (`!(a <= b)` is true for NaN) are meant.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
@@ -268,7 +271,7 @@ pub fn fit_light_camera(
         lo = lo.min(q);
         hi = hi.max(q);
     }
-    if !(lo.x <= hi.x && lo.y <= hi.y) || !lo.is_finite() || !hi.is_finite() {
+    if !(lo.x <= hi.x && lo.y <= hi.y && lo.is_finite() && hi.is_finite()) {
         return None;
     }
     let size = size.max(2);
