@@ -1,4 +1,12 @@
 //! The wgpu instance, adapter, device and queue.
+//!
+//! The viewer makes its buffers, bind groups and textures through [`Gpu::buffer`],
+//! [`Gpu::empty_buffer`], [`Gpu::bind_group`] and [`Gpu::texture`], which count what they
+//! make ([`Gpu::resources_created`]): a frame that makes none shows as a count that stops
+//! growing (`viewer/tests/frame_resources.rs`). The cloud pass keeps its own count
+//! ([`crate::Renderer::cloud_resources_created`]).
+
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::ViewError;
 
@@ -9,6 +17,8 @@ pub struct Gpu {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
     pub info: wgpu::AdapterInfo,
+    /// Buffers, bind groups and textures made through this wrapper so far.
+    created: AtomicU64,
 }
 
 impl Gpu {
@@ -80,6 +90,7 @@ impl Gpu {
             device,
             queue,
             info,
+            created: AtomicU64::new(0),
         })
     }
 
@@ -103,9 +114,44 @@ impl Gpu {
         )
     }
 
+    /// Buffers, bind groups and textures made through [`Gpu::buffer`],
+    /// [`Gpu::empty_buffer`], [`Gpu::bind_group`], [`Gpu::texture`] (and the helpers built
+    /// on them) since the device was made.
+    pub fn resources_created(&self) -> u64 {
+        self.created.load(Ordering::Relaxed)
+    }
+
+    fn count(&self) {
+        self.created.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// An uninitialised buffer of `size` bytes (at least 4) for `usage`.
+    pub fn empty_buffer(&self, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
+        self.count();
+        self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: size.max(4).next_multiple_of(4),
+            usage,
+            mapped_at_creation: false,
+        })
+    }
+
+    /// A bind group (counted).
+    pub fn bind_group(&self, desc: &wgpu::BindGroupDescriptor<'_>) -> wgpu::BindGroup {
+        self.count();
+        self.device.create_bind_group(desc)
+    }
+
+    /// A texture (counted).
+    pub fn texture(&self, desc: &wgpu::TextureDescriptor<'_>) -> wgpu::Texture {
+        self.count();
+        self.device.create_texture(desc)
+    }
+
     /// A buffer holding `contents`, for `usage`.
     pub fn buffer(&self, label: &str, contents: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
         use wgpu::util::DeviceExt;
+        self.count();
         self.device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
@@ -126,7 +172,7 @@ impl Gpu {
         sampler: &wgpu::Sampler,
     ) -> wgpu::BindGroup {
         let buf = self.buffer(label, uniform, wgpu::BufferUsages::UNIFORM);
-        self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        self.bind_group(&wgpu::BindGroupDescriptor {
             label: Some(label),
             layout,
             entries: &[
@@ -146,11 +192,59 @@ impl Gpu {
         })
     }
 
+    /// Blocks until submission `index` has finished.
+    pub fn wait_for(&self, index: wgpu::SubmissionIndex) -> Result<(), ViewError> {
+        self.device
+            .poll(wgpu::PollType::Wait {
+                submission_index: Some(index),
+                timeout: None,
+            })
+            .map(|_| ())
+            .map_err(|e| ViewError::Gpu(e.to_string()))
+    }
+
     /// Blocks until the queue is idle.
     pub fn wait(&self) -> Result<(), ViewError> {
         self.device
             .poll(wgpu::PollType::wait_indefinitely())
             .map(|_| ())
             .map_err(|e| ViewError::Gpu(e.to_string()))
+    }
+}
+
+/// A buffer kept from frame to frame and written with `queue.write_buffer`; made again,
+/// bigger (a power of two of bytes, at least 256), only when the data outgrows it.
+pub struct GrowBuffer {
+    pub buffer: wgpu::Buffer,
+    capacity: u64,
+    label: &'static str,
+    usage: wgpu::BufferUsages,
+}
+
+impl GrowBuffer {
+    /// An empty buffer of 256 bytes for `usage` (`COPY_DST` is added).
+    pub fn new(gpu: &Gpu, label: &'static str, usage: wgpu::BufferUsages) -> GrowBuffer {
+        let usage = usage | wgpu::BufferUsages::COPY_DST;
+        GrowBuffer {
+            buffer: gpu.empty_buffer(label, 256, usage),
+            capacity: 256,
+            label,
+            usage,
+        }
+    }
+
+    /// Writes `bytes` at the start (a multiple of 4 bytes long); returns whether the
+    /// buffer was made again (bind groups holding the old one must be remade).
+    pub fn write(&mut self, gpu: &Gpu, bytes: &[u8]) -> bool {
+        let n = bytes.len() as u64;
+        let grown = n > self.capacity;
+        if grown {
+            self.capacity = n.next_power_of_two().max(256);
+            self.buffer = gpu.empty_buffer(self.label, self.capacity, self.usage);
+        }
+        if n > 0 {
+            gpu.queue.write_buffer(&self.buffer, 0, bytes);
+        }
+        grown
     }
 }

@@ -5,6 +5,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
+use crate::gpu::GrowBuffer;
 use crate::layout::{color_target, frame_layout, shader, Pipeline};
 use crate::target::COLOR_FORMAT;
 use crate::Gpu;
@@ -29,9 +30,13 @@ struct LineFrame {
     color: [f32; 4],
 }
 
+/// The wireframe pipeline, its frame uniform and bind group (made once) and its vertex
+/// buffer (kept, grown when the edges outgrow it).
 pub struct LinePass {
     pipeline: wgpu::RenderPipeline,
-    layout: wgpu::BindGroupLayout,
+    frame: wgpu::Buffer,
+    bind: wgpu::BindGroup,
+    vertices: std::cell::RefCell<GrowBuffer>,
 }
 
 impl LinePass {
@@ -68,7 +73,26 @@ impl LinePass {
             ..Pipeline::new("cell wireframe", &pl, &module)
         }
         .build(device);
-        LinePass { pipeline, layout }
+        let frame = gpu.empty_buffer(
+            "lines frame",
+            std::mem::size_of::<LineFrame>() as u64,
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        );
+        let bind = gpu.bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("lines"),
+            layout: &layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: frame.as_entire_binding(),
+            }],
+        });
+        let vertices = GrowBuffer::new(gpu, "lines", wgpu::BufferUsages::VERTEX);
+        LinePass {
+            pipeline,
+            frame,
+            bind,
+            vertices: std::cell::RefCell::new(vertices),
+        }
     }
 
     /// Records `points` (pairs, world space) as lines of `color` seen by `view_proj`.
@@ -87,28 +111,14 @@ impl LinePass {
             view_proj: view_proj.to_cols_array_2d(),
             color,
         };
-        let ub = gpu.buffer(
-            "lines frame",
-            bytemuck::bytes_of(&frame),
-            wgpu::BufferUsages::UNIFORM,
-        );
+        gpu.queue
+            .write_buffer(&self.frame, 0, bytemuck::bytes_of(&frame));
         let flat: Vec<[f32; 3]> = points.iter().map(|p| p.to_array()).collect();
-        let vb = gpu.buffer(
-            "lines",
-            bytemuck::cast_slice(&flat),
-            wgpu::BufferUsages::VERTEX,
-        );
-        let bind = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("lines"),
-            layout: &self.layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: ub.as_entire_binding(),
-            }],
-        });
+        let mut vb = self.vertices.borrow_mut();
+        vb.write(gpu, bytemuck::cast_slice(&flat));
         rp.set_pipeline(&self.pipeline);
-        rp.set_bind_group(0, &bind, &[]);
-        rp.set_vertex_buffer(0, vb.slice(..));
+        rp.set_bind_group(0, &self.bind, &[]);
+        rp.set_vertex_buffer(0, vb.buffer.slice(..));
         rp.draw(0..(points.len() as u32 / 2) * 2, 0..1);
         1
     }

@@ -10,6 +10,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
+use crate::cloud_pass::View;
 use crate::layout::{color_target, frame_layout, material_layout, shader, Pipeline};
 use crate::target::COLOR_FORMAT;
 use crate::texture::{repeat_sampler, upload_rgba8_mips, TextureData};
@@ -103,7 +104,9 @@ struct MaterialUniform {
 pub struct MeshPass {
     pipeline: wgpu::RenderPipeline,
     shadow_pipeline: wgpu::RenderPipeline,
-    frame_layout: wgpu::BindGroupLayout,
+    /// Frame uniforms and their bind groups, made once: the camera's, the light's (both
+    /// are written before the submission that reads them, so each has its own).
+    frames: [(wgpu::Buffer, wgpu::BindGroup); 2],
     material_layout: wgpu::BindGroupLayout,
     sampler: wgpu::Sampler,
     white: wgpu::TextureView,
@@ -158,10 +161,26 @@ impl MeshPass {
         let sampler = repeat_sampler(device, "mesh texture");
         let white =
             upload_rgba8_mips(gpu, &TextureData::white(), "white").create_view(&Default::default());
+        let frames = [View::Camera, View::Light].map(|_| {
+            let buf = gpu.empty_buffer(
+                "mesh frame",
+                std::mem::size_of::<MeshFrame>() as u64,
+                wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            );
+            let bind = gpu.bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("mesh frame"),
+                layout: &frame_layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: buf.as_entire_binding(),
+                }],
+            });
+            (buf, bind)
+        });
         MeshPass {
             pipeline,
             shadow_pipeline,
-            frame_layout,
+            frames,
             material_layout,
             sampler,
             white,
@@ -274,21 +293,12 @@ impl MeshPass {
         )
     }
 
-    /// The frame bind group of `frame` (the camera's, or the light's for the shadow map).
-    pub fn frame_bind_group_from(&self, gpu: &Gpu, frame: &MeshFrame) -> wgpu::BindGroup {
-        let buf = gpu.buffer(
-            "mesh frame",
-            bytemuck::bytes_of(frame),
-            wgpu::BufferUsages::UNIFORM,
-        );
-        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("mesh frame"),
-            layout: &self.frame_layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: buf.as_entire_binding(),
-            }],
-        })
+    /// Writes `frame` into `view`'s uniform (the camera's, or the light's for the shadow
+    /// map) and returns its bind group (both made once, with the pass).
+    pub fn frame_bind_group(&self, gpu: &Gpu, view: View, frame: &MeshFrame) -> &wgpu::BindGroup {
+        let (buf, bind) = &self.frames[view as usize];
+        gpu.queue.write_buffer(buf, 0, bytemuck::bytes_of(frame));
+        bind
     }
 
     /// Draws `mesh` (colour pass, or the depth-only shadow pass); returns the draw calls.

@@ -1,7 +1,8 @@
 //! The resolve pass and the on-screen stats line, shared by the window (and usable
 //! off-screen): the Rgba16Float frame (premultiplied linear) is composited over a
 //! background colour and written to an 8-bit target; a line of text (an 8×8 bitmap
-//! font, `font8x8`) is blended on top.
+//! font, `font8x8`) is blended on top. The uniforms and bind groups are kept from frame
+//! to frame; the text is rasterised again only when it changes.
 
 use font8x8::UnicodeFonts;
 
@@ -74,12 +75,33 @@ pub fn wrap(text: &str, cols: usize) -> String {
     out.join("\n")
 }
 
-/// The resolve + overlay pipelines for one output format.
+/// The resolve + overlay pipelines for one output format, and what they draw with,
+/// kept from frame to frame.
 pub struct Resolve {
     pipeline: wgpu::RenderPipeline,
     overlay: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
     sampler: wgpu::Sampler,
+    /// The two uniforms (the frame's, the text's), made once.
+    uniforms: [wgpu::Buffer; 2],
+    cache: std::cell::RefCell<Cache>,
+}
+
+/// The frame's bind group (for the frame view it was made with) and the stats texture:
+/// re-rasterised only when the text or its scale changes, written into the same
+/// texture while its size stays, made again otherwise.
+#[derive(Default)]
+struct Cache {
+    frame: Option<(wgpu::TextureView, wgpu::BindGroup)>,
+    text: Option<TextTexture>,
+}
+
+struct TextTexture {
+    text: String,
+    scale: u32,
+    size: (u32, u32),
+    texture: wgpu::Texture,
+    bind: wgpu::BindGroup,
 }
 
 #[repr(C)]
@@ -136,22 +158,84 @@ impl Resolve {
             label: Some("resolve"),
             ..Default::default()
         });
+        let uniforms = ["resolve", "stats line"].map(|label| {
+            gpu.empty_buffer(
+                label,
+                std::mem::size_of::<ResolveUniform>() as u64,
+                wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            )
+        });
         Resolve {
             pipeline,
             overlay,
             layout,
             sampler,
+            uniforms,
+            cache: Default::default(),
         }
     }
 
-    fn bind(&self, gpu: &Gpu, u: &ResolveUniform, view: &wgpu::TextureView) -> wgpu::BindGroup {
-        gpu.uniform_texture_bind_group(
-            "resolve",
-            &self.layout,
-            bytemuck::bytes_of(u),
-            view,
-            &self.sampler,
-        )
+    /// The bind group of uniform `i` and `view`.
+    fn bind(&self, gpu: &Gpu, i: usize, view: &wgpu::TextureView) -> wgpu::BindGroup {
+        gpu.bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("resolve"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: self.uniforms[i].as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::Sampler(&self.sampler),
+                },
+            ],
+        })
+    }
+
+    /// The stats texture showing `text` at `scale` (straight alpha, sRGB, one level):
+    /// kept when the text is the same, rewritten when only the text changed, made again
+    /// when its size changed. Returns its size.
+    fn text_texture(
+        &self,
+        gpu: &Gpu,
+        cache: &mut Option<TextTexture>,
+        text: &str,
+        scale: u32,
+    ) -> (u32, u32) {
+        if let Some(t) = cache {
+            if t.text == text && t.scale == scale {
+                return t.size;
+            }
+        }
+        let (w, h, texels) = text_image(text, scale);
+        let same_size = cache.as_ref().is_some_and(|t| t.size == (w, h));
+        if !same_size {
+            let texture = gpu.texture(&crate::texture::desc_2d(
+                "stats line",
+                w,
+                h,
+                wgpu::TextureFormat::Rgba8UnormSrgb,
+                wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            ));
+            let bind = self.bind(gpu, 1, &texture.create_view(&Default::default()));
+            *cache = Some(TextTexture {
+                text: String::new(),
+                scale,
+                size: (w, h),
+                texture,
+                bind,
+            });
+        }
+        let t = cache.as_mut().expect("made above");
+        crate::texture::write_level(gpu, &t.texture, 0, &texels, (w, h));
+        t.text = text.to_string();
+        t.scale = scale;
+        (w, h)
     }
 
     /// Composites `frame` over `background` into `out` (`srgb_out`: the output format
@@ -174,30 +258,37 @@ impl Resolve {
             flags,
             rect: [-1.0, -1.0, 1.0, 1.0],
         };
-        let main = self.bind(gpu, &u, frame);
-        let overlay = text.map(|t| {
-            let scale = if out_size.0 >= 1400 { 2 } else { 1 };
-            // Wrapped to the frame's width (the text image is (cols × 8 + 4) × scale).
-            let cols = (out_size.0 / scale).saturating_sub(4) / 8;
-            let (w, h, texels) = text_image(&wrap(t, cols as usize), scale);
-            let tex = crate::texture::upload_rgba8_mips(
-                gpu,
-                &crate::texture::TextureData::straight(w, h, texels),
-                "stats line",
-            );
-            let view = tex.create_view(&wgpu::TextureViewDescriptor {
-                mip_level_count: Some(1),
-                ..Default::default()
-            });
-            let (ow, oh) = (out_size.0.max(1) as f32, out_size.1.max(1) as f32);
-            let rect = [
-                -1.0,
-                1.0 - 2.0 * h as f32 / oh,
-                -1.0 + 2.0 * w as f32 / ow,
-                1.0,
-            ];
-            self.bind(gpu, &ResolveUniform { rect, ..u }, &view)
-        });
+        let mut cache = self.cache.borrow_mut();
+        let cache = &mut *cache;
+        gpu.queue
+            .write_buffer(&self.uniforms[0], 0, bytemuck::bytes_of(&u));
+        if cache.frame.as_ref().is_none_or(|(v, _)| v != frame) {
+            cache.frame = Some((frame.clone(), self.bind(gpu, 0, frame)));
+        }
+        let main = &cache.frame.as_ref().expect("made above").1;
+        let overlay = match text {
+            Some(t) => {
+                let scale = if out_size.0 >= 1400 { 2 } else { 1 };
+                // Wrapped to the frame's width (the text image is (cols × 8 + 4) × scale).
+                let cols = (out_size.0 / scale).saturating_sub(4) / 8;
+                let (w, h) =
+                    self.text_texture(gpu, &mut cache.text, &wrap(t, cols as usize), scale);
+                let (ow, oh) = (out_size.0.max(1) as f32, out_size.1.max(1) as f32);
+                let rect = [
+                    -1.0,
+                    1.0 - 2.0 * h as f32 / oh,
+                    -1.0 + 2.0 * w as f32 / ow,
+                    1.0,
+                ];
+                gpu.queue.write_buffer(
+                    &self.uniforms[1],
+                    0,
+                    bytemuck::bytes_of(&ResolveUniform { rect, ..u }),
+                );
+                cache.text.as_ref().map(|t| &t.bind)
+            }
+            None => None,
+        };
         let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("resolve"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -215,9 +306,9 @@ impl Resolve {
             multiview_mask: None,
         });
         rp.set_pipeline(&self.pipeline);
-        rp.set_bind_group(0, &main, &[]);
+        rp.set_bind_group(0, main, &[]);
         rp.draw(0..3, 0..1);
-        if let Some(o) = &overlay {
+        if let Some(o) = overlay {
             rp.set_pipeline(&self.overlay);
             rp.set_bind_group(0, o, &[]);
             rp.draw(0..6, 0..1);

@@ -13,9 +13,12 @@
 //! behind a semi-transparent volume is not dimmed by it. Opaque meshes and clouds do hide
 //! particles: the particle shader clips each ray at the scene depth.
 
+use std::cell::RefCell;
+
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
+use crate::gpu::GrowBuffer;
 use crate::layout::{
     color_target, depth_texture, entry, sampler, shader, storage, texture, uniform, Pipeline,
 };
@@ -60,6 +63,19 @@ pub struct LayerTargets {
     pub layer: wgpu::TextureView,
     sub: Option<wgpu::TextureView>,
     shimmer: Option<wgpu::TextureView>,
+    /// The composite's bind group (scene, layer, shimmer) and, with motion blur, the
+    /// accumulation's (the time sample): made with the targets.
+    composite_bind: wgpu::BindGroup,
+    accumulate_bind: Option<wgpu::BindGroup>,
+}
+
+/// The buffers of one particle draw (one per shutter sample), kept from frame to frame:
+/// the frame uniform, the particles (grown when they outgrow it) and their bind group,
+/// made again when the particle buffer grows or the depth target changes.
+struct ParticleSlot {
+    frame: wgpu::Buffer,
+    particles: GrowBuffer,
+    bind: Option<(wgpu::TextureView, wgpu::BindGroup)>,
 }
 
 pub struct ParticlePass {
@@ -76,6 +92,7 @@ pub struct ParticlePass {
     dummy: wgpu::TextureView,
     smp_repeat: wgpu::Sampler,
     smp_clamp: wgpu::Sampler,
+    slots: RefCell<Vec<ParticleSlot>>,
 }
 
 impl ParticlePass {
@@ -225,6 +242,7 @@ impl ParticlePass {
             dummy,
             smp_repeat: sampler(wgpu::AddressMode::Repeat),
             smp_clamp: sampler(wgpu::AddressMode::ClampToEdge),
+            slots: RefCell::new(Vec::new()),
         }
     }
 
@@ -234,23 +252,47 @@ impl ParticlePass {
         let make = |w, h, format, label| {
             let usage =
                 wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
-            gpu.device
-                .create_texture(&desc_2d(label, w, h, format, usage))
+            gpu.texture(&desc_2d(label, w, h, format, usage))
                 .create_view(&Default::default())
         };
+        let scene = make(w, h, COLOR_FORMAT, "scene (opaque + volumes)");
+        let layer = make(lw, lh, COLOR_FORMAT, "particle layer");
+        let sub = self
+            .needs
+            .motion_blur
+            .then(|| make(lw, lh, COLOR_FORMAT, "particle time sample"));
+        let shimmer = self
+            .needs
+            .shimmer
+            .then(|| make(lw, lh, wgpu::TextureFormat::Rg16Float, "shimmer offsets"));
+        // Add a time sample into the layer with weight 1/N (the blend constant).
+        let accumulate_bind = sub
+            .as_ref()
+            .map(|s| self.comp_bind(gpu, &Comp { flags: [0.0; 4] }, s, s, &self.dummy));
+        let u = Comp {
+            flags: [
+                f32::from(u8::from(shimmer.is_some())),
+                1.0 / lw as f32,
+                1.0 / lh as f32,
+                0.0,
+            ],
+        };
+        let composite_bind = self.comp_bind(
+            gpu,
+            &u,
+            &scene,
+            &layer,
+            shimmer.as_ref().unwrap_or(&self.dummy),
+        );
         LayerTargets {
             size: (w, h),
             layer_size: (lw, lh),
-            scene: make(w, h, COLOR_FORMAT, "scene (opaque + volumes)"),
-            layer: make(lw, lh, COLOR_FORMAT, "particle layer"),
-            sub: self
-                .needs
-                .motion_blur
-                .then(|| make(lw, lh, COLOR_FORMAT, "particle time sample")),
-            shimmer: self
-                .needs
-                .shimmer
-                .then(|| make(lw, lh, wgpu::TextureFormat::Rg16Float, "shimmer offsets")),
+            scene,
+            layer,
+            sub,
+            shimmer,
+            composite_bind,
+            accumulate_bind,
         }
     }
 
@@ -347,6 +389,7 @@ impl ParticlePass {
             }
             let bind = self.bind(
                 gpu,
+                k,
                 &PFrame {
                     clip: [frame.clip[0], frame.clip[1], tk, frame.clip[3]],
                     ..frame
@@ -362,8 +405,10 @@ impl ParticlePass {
             draws += self.pass(enc, &self.draw, &bind, parts.len(), into);
             if times.len() > 1 {
                 // Add this sample into the layer with weight 1/N.
-                let u = Comp { flags: [0.0; 4] };
-                let cb = self.comp_bind(gpu, &u, into, into, &self.dummy);
+                let cb = targets
+                    .accumulate_bind
+                    .as_ref()
+                    .expect("motion blur bind group");
                 let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                     label: Some("motion blur"),
                     color_attachments: &[Some(attachment(&targets.layer, k == 0))],
@@ -380,7 +425,7 @@ impl ParticlePass {
                     b: w,
                     a: w,
                 });
-                rp.set_bind_group(0, &cb, &[]);
+                rp.set_bind_group(0, cb, &[]);
                 rp.draw(0..3, 0..1);
                 draws += 1;
             }
@@ -390,21 +435,6 @@ impl ParticlePass {
                 }
             }
         }
-        let u = Comp {
-            flags: [
-                f32::from(u8::from(targets.shimmer.is_some())),
-                1.0 / lw as f32,
-                1.0 / lh as f32,
-                0.0,
-            ],
-        };
-        let cb = self.comp_bind(
-            gpu,
-            &u,
-            &targets.scene,
-            &targets.layer,
-            targets.shimmer.as_ref().unwrap_or(&self.dummy),
-        );
         let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("composite"),
             color_attachments: &[Some(attachment(out, true))],
@@ -414,7 +444,7 @@ impl ParticlePass {
             multiview_mask: None,
         });
         rp.set_pipeline(&self.composite);
-        rp.set_bind_group(0, &cb, &[]);
+        rp.set_bind_group(0, &targets.composite_bind, &[]);
         rp.draw(0..3, 0..1);
         (drawn_now, draws + 1)
     }
@@ -445,33 +475,47 @@ impl ParticlePass {
         1
     }
 
+    /// Writes draw `k`'s frame uniform and particles into its slot (made on first use)
+    /// and returns its bind group.
     fn bind(
         &self,
         gpu: &Gpu,
+        k: usize,
         frame: &PFrame,
         parts: &[GpuParticle],
         depth: &wgpu::TextureView,
     ) -> wgpu::BindGroup {
-        let fb = gpu.buffer(
-            "particle frame",
-            bytemuck::bytes_of(frame),
-            wgpu::BufferUsages::UNIFORM,
-        );
+        let mut slots = self.slots.borrow_mut();
+        while slots.len() <= k {
+            slots.push(ParticleSlot {
+                frame: gpu.empty_buffer(
+                    "particle frame",
+                    std::mem::size_of::<PFrame>() as u64,
+                    wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                ),
+                particles: GrowBuffer::new(gpu, "particles", wgpu::BufferUsages::STORAGE),
+                bind: None,
+            });
+        }
+        let slot = &mut slots[k];
+        gpu.queue
+            .write_buffer(&slot.frame, 0, bytemuck::bytes_of(frame));
         let one = [GpuParticle::default()];
         let data: &[GpuParticle] = if parts.is_empty() { &one } else { parts };
-        let pb = gpu.buffer(
-            "particles",
-            bytemuck::cast_slice(data),
-            wgpu::BufferUsages::STORAGE,
-        );
+        let grown = slot.particles.write(gpu, bytemuck::cast_slice(data));
+        if let Some((view, bind)) = &slot.bind {
+            if !grown && view == depth {
+                return bind.clone();
+            }
+        }
         let entries = [
             wgpu::BindGroupEntry {
                 binding: 0,
-                resource: fb.as_entire_binding(),
+                resource: slot.frame.as_entire_binding(),
             },
             wgpu::BindGroupEntry {
                 binding: 1,
-                resource: pb.as_entire_binding(),
+                resource: slot.particles.buffer.as_entire_binding(),
             },
             wgpu::BindGroupEntry {
                 binding: 2,
@@ -498,11 +542,13 @@ impl ParticlePass {
                 resource: wgpu::BindingResource::Sampler(&self.smp_clamp),
             },
         ];
-        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let bind = gpu.bind_group(&wgpu::BindGroupDescriptor {
             label: Some("particles"),
             layout: &self.layout,
             entries: &entries,
-        })
+        });
+        slot.bind = Some((depth.clone(), bind.clone()));
+        bind
     }
 
     fn comp_bind(
@@ -533,7 +579,7 @@ impl ParticlePass {
             binding: 4,
             resource: wgpu::BindingResource::Sampler(&self.smp_clamp),
         });
-        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        gpu.bind_group(&wgpu::BindGroupDescriptor {
             label: Some("composite"),
             layout: &self.comp_layout,
             entries: &entries,

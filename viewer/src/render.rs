@@ -1,6 +1,7 @@
 //! The frame. Passes, each built only when the content needs it:
-//! 1. `shadow` — the light's depth map (meshes, clouds, volumes cast), only with
-//!    shadows on and something to cast ([`crate::shadow`]);
+//! 1. `shadow` — the light's depth map in cascades fitted to the view, one submission
+//!    per cascade (meshes, clouds, volumes cast), only with shadows on and something to
+//!    cast ([`crate::shadow`]);
 //! 2. `mesh` — opaque meshes (and kept cloud trunks, the ground), depth write;
 //! 3. `cloud` — billboard clouds: foliage meshes and billboards alpha-tested, depth
 //!    write, one instanced draw per (cloud, level, atlas) ([`crate::cloud_pass`]);
@@ -21,7 +22,7 @@ use crate::shadow::{self, ShadowMap, SHADOW_MAP_SIZE};
 use crate::target::{RgbaImage, Target};
 use crate::volume_pass::{GpuVolume, VolumePass};
 
-use crate::volume_plan::{self, VolumePlan};
+use crate::volume_plan::{self, PlanBuffers, VolumePlan};
 use crate::{Gpu, SliceParams, ViewCamera, ViewError};
 
 /// Vertices per cell × slice instance: a fan of 3 triangles covers the ≤ 5-gon.
@@ -131,6 +132,16 @@ pub struct Renderer {
     /// Textures uploaded as BC7 blocks so far (volumes, atlases, normal maps); the others
     /// of compressed assets were decoded on load ([`Gpu::block_upload`]).
     pub block_textures: u32,
+    /// The volume plans' buffers, kept from frame to frame: the camera's, the light's
+    /// (made on first use).
+    plan_buffers: [std::cell::RefCell<Option<PlanBuffers>>; 2],
+}
+
+/// Which view a volume plan is for (its [`PlanBuffers`]).
+#[derive(Clone, Copy)]
+enum PlanView {
+    Camera = 0,
+    Light = 1,
 }
 
 impl Renderer {
@@ -162,6 +173,7 @@ impl Renderer {
             particle_layer: Default::default(),
             layer_targets: std::cell::RefCell::new(None),
             block_textures: 0,
+            plan_buffers: Default::default(),
         }
     }
 
@@ -200,6 +212,12 @@ impl Renderer {
 
     pub fn shadows(&self) -> bool {
         self.shadow_map.is_some()
+    }
+
+    /// Whether frames change with [`Renderer::time`] (particles, animated volume cells):
+    /// a window showing nothing else redraws only on input.
+    pub fn animated(&self) -> bool {
+        self.particle_pass.is_some() || self.volumes.iter().any(|v| v.animation.is_some())
     }
 
     /// World-space end points of every cell edge of every volume instance.
@@ -450,8 +468,9 @@ impl Renderer {
         })
     }
 
-    /// Bounding sphere of all content (world space), for the shadow camera.
-    fn content_sphere(&self) -> (Vec3, f32) {
+    /// Bounds of all content (world space, min and max), for the shadow camera; a unit
+    /// box around the origin when there is none.
+    pub fn content_bounds(&self) -> (Vec3, Vec3) {
         let mut lo = Vec3::splat(f32::INFINITY);
         let mut hi = Vec3::splat(f32::NEG_INFINITY);
         for v in &self.volumes {
@@ -478,9 +497,9 @@ impl Renderer {
             hi = hi.max(m.bounds.1);
         }
         if !(lo.x <= hi.x) {
-            return (Vec3::ZERO, 1.0);
+            return (Vec3::splat(-1.0), Vec3::ONE);
         }
-        (0.5 * (lo + hi), 0.5 * (hi - lo).length())
+        (lo, hi)
     }
 
     /// Per cloud instance (cloud-major): what it shows for `camera`.
@@ -551,10 +570,18 @@ impl Renderer {
         // 1. Shadow map.
         let shadow = match &self.shadow_map {
             Some(map) if self.has_casters() => {
-                let (centre, radius) = self.content_sphere();
-                let light = shadow::light_camera(self.light_dir, centre, radius, map.size);
-                self.shadow_pass(&mut enc, map, &light, cloud_frame.as_ref(), &mut stats)?;
-                Some((map, light))
+                let cs = shadow::cascades(self.light_dir, camera, self.content_bounds(), map.size);
+                self.gpu
+                    .queue
+                    .write_buffer(&map.cascades, 0, bytemuck::bytes_of(&cs.uniform));
+                // One submission per cascade: the light's uniforms and volume plan are
+                // written again for each (writes land before the next submission).
+                for (k, light) in cs.cameras.iter().enumerate() {
+                    let mut senc = device.create_command_encoder(&Default::default());
+                    self.shadow_pass(&mut senc, map, k, light, cloud_frame.as_ref(), &mut stats)?;
+                    self.gpu.queue.submit([senc.finish()]);
+                }
+                Some((map, cs.base))
             }
             _ => None,
         };
@@ -569,6 +596,7 @@ impl Renderer {
 
         // 2–4. Meshes, clouds, volumes.
         let plan = self.plan(
+            PlanView::Camera,
             camera,
             self.params,
             world_to_shadow.map(|w| (w.2, w.1)),
@@ -596,7 +624,7 @@ impl Renderer {
         let mesh_bind = self
             .mesh_pass
             .as_ref()
-            .map(|p| p.frame_bind_group_from(&self.gpu, &mesh_frame));
+            .map(|p| p.frame_bind_group(&self.gpu, View::Camera, &mesh_frame));
         let cloud_bind = self.cloud_pass.as_ref().map(|p| {
             stats.cloud_bytes_uploaded += std::mem::size_of::<MeshFrame>();
             p.frame_bind_group(&self.gpu, View::Camera, &mesh_frame)
@@ -635,7 +663,7 @@ impl Renderer {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            if let (Some(pass), Some(bind)) = (&self.mesh_pass, &mesh_bind) {
+            if let (Some(pass), Some(bind)) = (&self.mesh_pass, mesh_bind) {
                 for m in &self.meshes {
                     stats.mesh_triangles += m.triangles as usize;
                     stats.draw_calls += pass.draw(&mut rp, bind, receiver, m, false);
@@ -674,20 +702,28 @@ impl Renderer {
         Ok(stats)
     }
 
-    /// The light's depth map: meshes, clouds (at the levels the viewer shows), volumes
-    /// sliced from the light with [`shadow::SHADOW_SPACING_BIAS`]× the spacing.
+    /// Cascade `k` of the light's depth atlas (its tile; cascade 0 clears the atlas):
+    /// meshes, clouds (at the levels the viewer shows), volumes sliced from the light with
+    /// [`shadow::SHADOW_SPACING_BIAS`]× the spacing.
     fn shadow_pass(
         &self,
         enc: &mut wgpu::CommandEncoder,
         map: &ShadowMap,
+        k: usize,
         light: &ViewCamera,
         clouds: Option<&CloudFrame<'_>>,
         stats: &mut FrameStats,
     ) -> Result<(), ViewError> {
         let mut params = self.params;
         params.spacing = params.spacing.scaled(shadow::SHADOW_SPACING_BIAS);
-        let plan = self.plan(light, params, None, Some(shadow::SHADOW_ALPHA_CUTOFF))?;
-        stats.shadow_slices = plan.as_ref().map_or(0, |p| p.slice_count());
+        let plan = self.plan(
+            PlanView::Light,
+            light,
+            params,
+            None,
+            Some(shadow::SHADOW_ALPHA_CUTOFF),
+        )?;
+        stats.shadow_slices += plan.as_ref().map_or(0, |p| p.slice_count());
         let frame = MeshFrame {
             view_proj: (light.projection() * light.view).to_cols_array_2d(),
             world_to_shadow: Mat4::IDENTITY.to_cols_array_2d(),
@@ -695,18 +731,28 @@ impl Renderer {
             flags: [0.0; 4],
         };
         let none = &self.no_shadow.bind_group;
+        let mut depth = depth_attachment(&map.view);
+        if k > 0 {
+            depth.depth_ops = Some(wgpu::Operations {
+                load: wgpu::LoadOp::Load,
+                store: wgpu::StoreOp::Store,
+            });
+        }
         let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("shadow"),
             color_attachments: &[],
-            depth_stencil_attachment: Some(depth_attachment(&map.view)),
+            depth_stencil_attachment: Some(depth),
             timestamp_writes: None,
             occlusion_query_set: None,
             multiview_mask: None,
         });
+        let (x, y, side) = shadow::tile_rect(k, map.size);
+        rp.set_viewport(x as f32, y as f32, side as f32, side as f32, 0.0, 1.0);
+        rp.set_scissor_rect(x, y, side, side);
         if let Some(pass) = &self.mesh_pass {
-            let bind = pass.frame_bind_group_from(&self.gpu, &frame);
+            let bind = pass.frame_bind_group(&self.gpu, View::Light, &frame);
             for m in &self.meshes {
-                pass.draw(&mut rp, &bind, none, m, true);
+                pass.draw(&mut rp, bind, none, m, true);
             }
         }
         if let (Some(pass), Some(cf)) = (&self.cloud_pass, clouds) {
@@ -720,9 +766,11 @@ impl Renderer {
         Ok(())
     }
 
-    /// The volume plan for `camera` (cells in camera space, slices, slabs, draws).
+    /// The volume plan for `camera` (cells in camera space, slices, slabs, draws),
+    /// written into `view`'s buffers.
     fn plan(
         &self,
+        view: PlanView,
         camera: &ViewCamera,
         params: SliceParams,
         shadow: Option<(Mat4, f32)>,
@@ -731,9 +779,12 @@ impl Renderer {
         let Some(pass) = &self.volume_pass else {
             return Ok(None);
         };
+        let mut bufs = self.plan_buffers[view as usize].borrow_mut();
+        let bufs = bufs.get_or_insert_with(|| PlanBuffers::new(&self.gpu));
         volume_plan::plan(
             &self.gpu,
             pass,
+            bufs,
             &self.volumes,
             camera,
             params,

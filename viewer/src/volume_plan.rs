@@ -1,6 +1,7 @@
 //! A frame's volume work, planned on the CPU: every cell of every instance in camera
 //! space, the slices ([`crate::slice_plan`], back to front), the slabs
-//! ([`crate::slab`]) and the draws, uploaded as the volume pass's buffers.
+//! ([`crate::slab`]) and the draws, written into the volume pass's buffers
+//! ([`PlanBuffers`], kept from frame to frame).
 //!
 //! Draws: a slab whose cells all use textures of one batch is **one draw** (its slices ×
 //! its cells). A slab that mixes batches (more textures than
@@ -11,6 +12,7 @@
 
 use glam::{Mat3, Mat4, Vec3};
 
+use crate::gpu::GrowBuffer;
 use crate::render::{FrameStats, VolumeEntry, VERTICES_PER_INSTANCE};
 use crate::slab::partition;
 use crate::slice_plan::{slice_depths, voxel_size};
@@ -97,17 +99,106 @@ pub fn batch_bind_groups(
         .collect()
 }
 
-fn storage<T: bytemuck::Pod + Default>(gpu: &Gpu, label: &str, data: &[T]) -> wgpu::Buffer {
-    let one = [T::default()];
-    let contents: &[T] = if data.is_empty() { &one } else { data };
-    gpu.buffer(
-        label,
-        bytemuck::cast_slice(contents),
-        wgpu::BufferUsages::STORAGE,
-    )
+/// The bytes of `data`, or of one default element when it is empty (a storage binding
+/// is never empty).
+fn nonempty<T: bytemuck::Pod + Default>(data: &[T]) -> Vec<u8> {
+    if data.is_empty() {
+        bytemuck::bytes_of(&T::default()).to_vec()
+    } else {
+        bytemuck::cast_slice(data).to_vec()
+    }
 }
 
-/// Plans the volumes for `camera` at time `time` (animated cells). `light`: the world
+/// The buffers of one view's volume plan, kept from frame to frame: the frame uniform,
+/// the draws (dynamic-offset uniform) and the cells, slices, cell lists and volume
+/// params (storage), each grown only when a frame needs more, and their bind group,
+/// made again only when one of them grows. The camera's plan and the light's have one
+/// each: both are written before the submission that reads them.
+pub struct PlanBuffers {
+    frame: wgpu::Buffer,
+    draws: GrowBuffer,
+    storage: [GrowBuffer; 4],
+    bind: Option<wgpu::BindGroup>,
+}
+
+impl PlanBuffers {
+    pub fn new(gpu: &Gpu) -> PlanBuffers {
+        let st = wgpu::BufferUsages::STORAGE;
+        PlanBuffers {
+            frame: gpu.empty_buffer(
+                "volume frame",
+                std::mem::size_of::<FrameUniform>() as u64,
+                wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            ),
+            draws: GrowBuffer::new(gpu, "volume draws", wgpu::BufferUsages::UNIFORM),
+            storage: [
+                GrowBuffer::new(gpu, "cells", st),
+                GrowBuffer::new(gpu, "slices", st),
+                GrowBuffer::new(gpu, "cell lists", st),
+                GrowBuffer::new(gpu, "volume params", st),
+            ],
+            bind: None,
+        }
+    }
+
+    /// Writes a frame's data (`storage`: cells, slices, cell lists, volume params) and
+    /// returns the bind group that reads it.
+    fn write(
+        &mut self,
+        gpu: &Gpu,
+        pass: &VolumePass,
+        frame: &FrameUniform,
+        draws: &[GpuDraw],
+        storage: [Vec<u8>; 4],
+    ) -> wgpu::BindGroup {
+        gpu.queue
+            .write_buffer(&self.frame, 0, bytemuck::bytes_of(frame));
+        let mut grown = self.draws.write(gpu, bytemuck::cast_slice(draws));
+        for (b, data) in self.storage.iter_mut().zip(&storage) {
+            grown |= b.write(gpu, data);
+        }
+        if grown || self.bind.is_none() {
+            let [cb, sb, lb, vb] = self.storage.each_ref().map(|b| &b.buffer);
+            self.bind = Some(gpu.bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("volume frame"),
+                layout: &pass.frame_layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: self.frame.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: cb.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: sb.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 3,
+                        resource: lb.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 4,
+                        resource: vb.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 5,
+                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                            buffer: &self.draws.buffer,
+                            offset: 0,
+                            size: wgpu::BufferSize::new(16),
+                        }),
+                    },
+                ],
+            }));
+        }
+        self.bind.clone().expect("made above")
+    }
+}
+
+/// Plans the volumes for `camera` at time `time` (animated cells), written into `bufs`. `light`: the world
 /// direction towards the light and the ambient fraction, which shade the volumes that
 /// store normals; `receive`: (camera view → shadow clip, depth bias) when the slices
 /// receive shadows; `shadow_cutoff`: the alpha cut-off when this plan renders into the
@@ -116,6 +207,7 @@ fn storage<T: bytemuck::Pod + Default>(gpu: &Gpu, label: &str, data: &[T]) -> wg
 pub fn plan(
     gpu: &Gpu,
     pass: &VolumePass,
+    bufs: &mut PlanBuffers,
     volumes: &[VolumeEntry],
     camera: &ViewCamera,
     params: SliceParams,
@@ -124,6 +216,13 @@ pub fn plan(
     shadow_cutoff: Option<f32>,
     time: f32,
 ) -> Result<Option<VolumePlan>, ViewError> {
+    // A shadow map's (orthographic) cascade draws only the cells across its window: the
+    // cascades of a view share the casters, each sees a part of them. The camera's plan
+    // keeps every cell (its slices follow the cells' depth range).
+    let window = match (shadow_cutoff, camera.ortho_half_height) {
+        (Some(_), Some(hh)) => Some((hh * camera.aspect(), hh)),
+        _ => None,
+    };
     let mut cells: Vec<GpuCell> = Vec::new();
     let mut ranges: Vec<(f32, f32)> = Vec::new();
     let mut vparams: Vec<GpuVolumeParams> = Vec::new();
@@ -187,6 +286,9 @@ pub fn plan(
                 });
                 for c in w {
                     let pos = c.pos.map(|p| camera.to_view(Vec3::from(p)).to_array());
+                    if outside_window(&pos, window) {
+                        continue;
+                    }
                     let (mut a, mut z) = (f32::INFINITY, f32::NEG_INFINITY);
                     for p in &pos {
                         a = a.min(-p[2]);
@@ -301,56 +403,19 @@ pub fn plan(
             zd: [-depth, d, 0.0, 0.0],
         })
         .collect();
-    let device = &gpu.device;
-    let fb = gpu.buffer(
-        "volume frame",
-        bytemuck::bytes_of(&frame),
-        wgpu::BufferUsages::UNIFORM,
-    );
     draw_data.resize(draw_data.len().max(1), GpuDraw::default());
-    let db = gpu.buffer(
-        "volume draws",
-        bytemuck::cast_slice(&draw_data),
-        wgpu::BufferUsages::UNIFORM,
-    );
-    let cb = storage(gpu, "cells", &cells);
-    let sb = storage(gpu, "slices", &gpu_slices);
-    let lb = storage(gpu, "cell lists", &list);
-    let vb = storage(gpu, "volume params", &vparams);
-    let frame_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("volume frame"),
-        layout: &pass.frame_layout,
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: fb.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: cb.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 2,
-                resource: sb.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 3,
-                resource: lb.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 4,
-                resource: vb.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 5,
-                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                    buffer: &db,
-                    offset: 0,
-                    size: wgpu::BufferSize::new(16),
-                }),
-            },
+    let frame_bind = bufs.write(
+        gpu,
+        pass,
+        &frame,
+        &draw_data,
+        [
+            nonempty(&cells),
+            nonempty(&gpu_slices),
+            nonempty(&list),
+            nonempty(&vparams),
         ],
-    });
+    );
     let spacing = slices.iter().fold((f32::INFINITY, 0.0f32), |(lo, hi), s| {
         (lo.min(s.1), hi.max(s.1))
     });
@@ -365,6 +430,18 @@ pub fn plan(
         v0,
         spacing,
     }))
+}
+
+/// Whether the cell with view-space corners `pos` lies wholly to one side of the
+/// orthographic window `(half width, half height)` (never, without a window).
+fn outside_window(pos: &[[f32; 3]; 6], window: Option<(f32, f32)>) -> bool {
+    let Some((hw, hh)) = window else {
+        return false;
+    };
+    pos.iter().all(|p| p[0] < -hw)
+        || pos.iter().all(|p| p[0] > hw)
+        || pos.iter().all(|p| p[1] < -hh)
+        || pos.iter().all(|p| p[1] > hh)
 }
 
 /// A banded asset draws each slice with one band (SPEC §8.6): clip each cell's depth

@@ -6,6 +6,14 @@
 //! `W` cell wireframe, `S` shadows, `R` reset the camera, `Esc`/`Q` quit.
 //! The stats line: frame time, slices, slabs (empty ones skipped), cells, cell × slice
 //! instances, draws, the LOD (and morph factor) of each cloud instance, and the switches.
+//!
+//! Frames: the CPU builds frame N + 1 while the GPU draws frame N (after submitting a
+//! frame the loop waits only for the one before it, so at most two are in flight), and
+//! the window sleeps when nothing moves: a frame is drawn on input (orbit, keys,
+//! resize) and continuously only while the scene animates (particles, swaying cells) or
+//! a frame count was asked for. The frame time shown is the mean interval between
+//! frames over the last half second (and the CPU's share of it), so the stats texture
+//! changes at most twice a second.
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -13,7 +21,7 @@ use std::time::Instant;
 use glam::Vec3;
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
-use winit::event_loop::{ActiveEventLoop, EventLoop};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::{Key, ModifiersState, NamedKey};
 use winit::window::{Window, WindowId};
 
@@ -147,8 +155,54 @@ struct App {
     modifiers: ModifiersState,
     frames: u64,
     start: Instant,
-    last_ms: f64,
     last_stats: FrameStats,
+    /// The last frame's submission: waited for after the next one is submitted.
+    in_flight: Option<wgpu::SubmissionIndex>,
+    timing: FrameTiming,
+    /// The window title last set (set again only when it changes).
+    title: String,
+}
+
+/// Frame times averaged over about half a second: the interval between frames (what the
+/// user sees) and the CPU time of a frame (render, encode, submit).
+#[derive(Default)]
+struct FrameTiming {
+    last_frame: Option<Instant>,
+    window_start: Option<Instant>,
+    frames: u32,
+    interval_s: f64,
+    cpu_s: f64,
+    /// Shown: (frame ms, CPU ms).
+    shown: (f64, f64),
+}
+
+impl FrameTiming {
+    /// Records a frame that began at `start` and spent `cpu` seconds on the CPU.
+    fn record(&mut self, start: Instant, cpu: f64) {
+        if let Some(prev) = self.last_frame {
+            self.interval_s += (start - prev).as_secs_f64();
+            self.cpu_s += cpu;
+            self.frames += 1;
+        }
+        self.last_frame = Some(start);
+        let w = *self.window_start.get_or_insert(start);
+        if self.frames > 0 && (start - w).as_secs_f64() >= 0.5 {
+            let n = f64::from(self.frames);
+            self.shown = (1e3 * self.interval_s / n, 1e3 * self.cpu_s / n);
+            *self = FrameTiming {
+                last_frame: self.last_frame,
+                window_start: Some(start),
+                shown: self.shown,
+                ..Default::default()
+            };
+        }
+    }
+
+    /// After a pause (no frame while idle) the next interval is not a frame time.
+    fn idle(&mut self) {
+        self.last_frame = None;
+        self.window_start = None;
+    }
 }
 
 impl App {
@@ -205,6 +259,7 @@ impl App {
     }
 
     fn redraw(&mut self) -> Result<(), ViewError> {
+        let continuous = self.continuous();
         let Some(st) = &mut self.state else {
             return Ok(());
         };
@@ -230,7 +285,12 @@ impl App {
             .gpu
             .device
             .create_command_encoder(&Default::default());
-        let line = stats_line(self.last_ms, &stats, &st.renderer);
+        let line = stats_line(self.timing.shown.0, &stats, &st.renderer);
+        let line = line.replacen(
+            " ms ",
+            &format!(" ms (CPU {:.1})  ", self.timing.shown.1),
+            1,
+        );
         st.resolve.draw(
             &st.renderer.gpu,
             &mut enc,
@@ -241,19 +301,34 @@ impl App {
             self.opts.background,
             Some(&line),
         );
-        st.renderer.gpu.queue.submit([enc.finish()]);
+        let submitted = st.renderer.gpu.queue.submit([enc.finish()]);
         st.window.pre_present_notify();
         st.renderer.gpu.queue.present(frame);
-        st.renderer.gpu.wait()?;
-        self.last_ms = t.elapsed().as_secs_f64() * 1e3;
-        st.window.set_title(&format!(
-            "{} — {}",
-            self.opts.title,
-            line.replace('\n', "  ")
-        ));
+        let cpu = t.elapsed().as_secs_f64();
+        // Overlap: wait only for the previous frame, not for this one.
+        if let Some(prev) = self.in_flight.replace(submitted) {
+            st.renderer.gpu.wait_for(prev)?;
+        }
+        self.timing.record(t, cpu);
+        if !continuous {
+            self.timing.idle();
+        }
+        let title = format!("{} — {}", self.opts.title, line.replace('\n', "  "));
+        if title != self.title {
+            st.window.set_title(&title);
+            self.title = title;
+        }
         self.last_stats = stats;
         self.frames += 1;
         Ok(())
+    }
+
+    /// Whether frames follow one another without input: the scene animates, or a frame
+    /// count was asked for (smoke tests).
+    fn continuous(&self) -> bool {
+        let animated = self.opts.animate.is_some()
+            && self.state.as_ref().is_some_and(|s| s.renderer.animated());
+        animated || self.opts.max_frames.is_some()
     }
 
     fn key(&mut self, el: &ActiveEventLoop, key: &Key) {
@@ -365,8 +440,8 @@ impl ApplicationHandler for App {
                 }
                 if self.opts.max_frames.is_some_and(|n| self.frames >= n) {
                     el.exit();
-                } else if let Some(st) = &self.state {
-                    // Continuous redraw: frame times on screen, animations play.
+                } else if let (true, Some(st)) = (self.continuous(), &self.state) {
+                    // Animations play; a still scene waits for input.
                     st.window.request_redraw();
                 }
             }
@@ -396,9 +471,12 @@ pub fn run(content: Content, opts: WindowOptions) -> Result<FrameStats, ViewErro
         modifiers: ModifiersState::empty(),
         frames: 0,
         start: Instant::now(),
-        last_ms: 0.0,
         last_stats: FrameStats::default(),
+        in_flight: None,
+        timing: FrameTiming::default(),
+        title: String::new(),
     };
+    el.set_control_flow(ControlFlow::Wait);
     el.run_app(&mut app)
         .map_err(|e| ViewError::Gpu(format!("event loop: {e}")))?;
     match app.error {
