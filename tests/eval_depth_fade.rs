@@ -1,7 +1,7 @@
 //! Volumes meeting opaque surfaces (issue 22, "terraces"): the wall-through-oak scene
 //! (`fixtures/scenes/oak_wall.ron`: the bundled oak, an 80 × 80 wall in the plane x = 0)
 //! rendered by the CPU slicer over the wall at the default spacing, against the same
-//! slicer at a quarter of the spacing (uniform `v₀/4`, MIP level 0 like the default
+//! slicer at an eighth of the spacing (uniform `v₀/8`, MIP level 0 like the default
 //! here: the converged reference), at 32³ (`fixtures/scenes/oak32.billow`, 128² pixels)
 //! and 128³ (voxelized here from `fixtures/oak`, `--combine opaque` as the fixture,
 //! 256² pixels, so that a pixel is no larger than a voxel in both).
@@ -10,7 +10,8 @@
 //! whole or not at all there (a hard depth test) is off by up to one slice's opacity in
 //! bands, the terraces; fading each slice over its slab (`render_decoded_over`) leaves
 //! only the sampling error the rest of the image has. Tolerance: RMSE over the cut ≤
-//! [`CUT_RMSE`] (hard cut: ~0.06 at 32³, see docs/eval.md "Depth fade").
+//! [`CUT_RMSE`] (a hard depth test measures 0.0144 at 32³ and 0.0094 at 128³, see
+//! docs/eval.md "Depth fade").
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -25,7 +26,7 @@ use billow::voxelize::{voxelize, CombineFn, Preset, Resolution, VoxelizeOptions}
 use billow_format::VolumeAsset;
 use glam::{Vec3, Vec4};
 
-const CUT_RMSE: f64 = 0.02;
+const CUT_RMSE: f64 = 0.008;
 const WALL: [f32; 4] = [0.5, 0.45, 0.4, 1.0];
 
 fn repo() -> PathBuf {
@@ -114,7 +115,7 @@ fn check(res: u32) {
     let got = render(&SlicerParams::default());
     let v0 = got.stats.voxel_size;
     let fine = render(&SlicerParams {
-        spacing: Spacing::Uniform { spacing: v0 / 4.0 },
+        spacing: Spacing::Uniform { spacing: v0 / 8.0 },
         ..Default::default()
     });
     assert!(
@@ -124,15 +125,18 @@ fn check(res: u32) {
     );
     let (rmse, n) = cut_rmse(&got.image, &fine.image, &backdrop);
     println!(
-        "oak {res}³: {} slices vs {} (v₀ = {v0}), cut RMSE vs v₀/4 {rmse:.4} over {n} pixels",
+        "oak {res}³: {} slices vs {} (v₀ = {v0}), cut RMSE vs v₀/8 {rmse:.4} over {n} pixels",
         got.stats.slices, fine.stats.slices
     );
-    assert!(n > 500, "the wall must cut a visible part of the oak ({n} pixels)");
+    assert!(
+        n > 500,
+        "the wall must cut a visible part of the oak ({n} pixels)"
+    );
     if !(rmse <= CUT_RMSE) {
         let p = std::env::temp_dir().join(format!("eval_depth_fade_{res}.diff.png"));
         write_comparison_png(&fine.image, &got.image, 4.0, &p).expect("diff image");
         panic!(
-            "oak {res}³ over the wall: RMSE over the cut {rmse:.4} (tol {CUT_RMSE}); diff (v₀/4 | default | heatmap × 4): {}",
+            "oak {res}³ over the wall: RMSE over the cut {rmse:.4} (tol {CUT_RMSE}); diff (v₀/8 | default | heatmap × 4): {}",
             p.display()
         );
     }

@@ -93,7 +93,13 @@ fn plane_asset(chain: Chain) -> VolumeAsset {
         })
         .collect();
     VolumeAsset {
-        header: Header::volume("thin layer", ColourSpace::SrgbPremultiplied, dims, mips, false),
+        header: Header::volume(
+            "thin layer",
+            ColourSpace::SrgbPremultiplied,
+            dims,
+            mips,
+            false,
+        ),
         levels,
         normals: None,
         bands: Vec::new(),
@@ -170,9 +176,8 @@ fn one_voxel_opaque_plane_is_covered_at_30_45_60_degrees() {
             );
             assert!(rows >= 12, "the layer must cover rows ({rows})");
             if !(area >= AREA_TOL && row >= ROW_TOL) {
-                let p = std::env::temp_dir().join(format!(
-                    "eval_thin_layer_{distance}_{elevation}.png"
-                ));
+                let p = std::env::temp_dir()
+                    .join(format!("eval_thin_layer_{distance}_{elevation}.png"));
                 img.write_png(&p).expect("png");
                 failures.push(format!(
                     "distance {distance}, {elevation}°: area {area:.4} (≥ {AREA_TOL}), worst row {row:.4} (≥ {ROW_TOL}); image {}",
@@ -193,7 +198,12 @@ fn thin_layer_measurements() {
     let opaque = plane_asset(Chain::Opaque);
     let mean = plane_asset(Chain::Mean);
     let cases: Vec<(&str, &VolumeAsset, SlicerParams, f32)> = vec![
-        ("adaptive ×1 (default), near", &opaque, SlicerParams::default(), NEAR),
+        (
+            "adaptive ×1 (default), near",
+            &opaque,
+            SlicerParams::default(),
+            NEAR,
+        ),
         (
             "adaptive ×½, near",
             &opaque,
@@ -249,8 +259,18 @@ fn thin_layer_measurements() {
             },
             FAR,
         ),
-        ("mean-combine MIPs, near", &mean, SlicerParams::default(), NEAR),
-        ("mean-combine MIPs, far", &mean, SlicerParams::default(), FAR),
+        (
+            "mean-combine MIPs, near",
+            &mean,
+            SlicerParams::default(),
+            NEAR,
+        ),
+        (
+            "mean-combine MIPs, far",
+            &mean,
+            SlicerParams::default(),
+            FAR,
+        ),
     ];
     println!("| case | 30° area / worst row | 45° | 60° |\n|---|---|---|---|");
     for (name, asset, params, distance) in cases {

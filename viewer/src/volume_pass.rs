@@ -51,7 +51,9 @@ pub fn shader_source(n: usize) -> String {
     let mut switch = String::new();
     for i in 0..n {
         bindings += &format!("@group(1) @binding({i}) var vol_tex{i}: texture_3d<f32>;\n");
-        switch += &format!("        case {i}u: {{ return sample_extinction(vol_tex{i}, rep, uvw, lod); }}\n");
+        switch += &format!(
+            "        case {i}u: {{ return sample_extinction(vol_tex{i}, rep, uvw, lod); }}\n"
+        );
     }
     let sampler = format!(
         "{bindings}@group(1) @binding({n}) var smp_clamp: sampler;\n\

@@ -53,7 +53,13 @@ fn plane_asset() -> VolumeAsset {
         })
         .collect();
     VolumeAsset {
-        header: Header::volume("thin layer", ColourSpace::SrgbPremultiplied, dims, mips, false),
+        header: Header::volume(
+            "thin layer",
+            ColourSpace::SrgbPremultiplied,
+            dims,
+            mips,
+            false,
+        ),
         levels,
         normals: None,
         bands: Vec::new(),
