@@ -12,6 +12,9 @@
 //! Wrapping happens per texel index, so a bilinear footprint straddling the tile edge
 //! blends the last and the first texel, as a GPU does.
 
+// `!(a < b)` comparisons are deliberate: they also catch NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use billow_format::{ColourSpace, VolumeAsset};
 use glam::{Vec3, Vec4};
 

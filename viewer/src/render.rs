@@ -576,7 +576,7 @@ impl Renderer {
                 stats.draw_calls += pass.draw(&mut rp, bind, receiver, cf, false);
             }
         }
-        {
+        if plan.is_some() || self.lines.is_some() {
             // The slices read the opaque depth (they fade at it), so it is attached
             // read-only from here on.
             let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
