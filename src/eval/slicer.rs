@@ -22,8 +22,18 @@
 //!   polygon is scan-converted at pixel centres with half-open spans (`x_l ≤ x < x_r`,
 //!   rows `y_min ≤ y < y_max`), computed from canonically ordered edge end points, so
 //!   pixels on an edge shared by two cells are drawn exactly once.
-//! - Texels are decoded to linear premultiplied before filtering ([`DecodedVolume`]);
-//!   the result is composited with "over" into premultiplied linear RGBA f32.
+//! - Texels are decoded to linear premultiplied ([`DecodedVolume`]) and filtered in
+//!   **extinction space** ([`DecodedVolume::sample_opacity`]): each texel becomes
+//!   `(σ·c, σ)` with `σ = −ln(1 − α)` (capped at `ln 510`), those are interpolated, and
+//!   the sample is `α = 1 − e^(−σ)`. Interpolating α itself would give a one-voxel
+//!   opaque layer a finite optical depth (2 voxels' worth of σ = 1) and let rays between
+//!   texel centres through it: the see-through stripes of thin layers (docs/eval.md,
+//!   "Thin layers"). The result is composited with "over" into premultiplied linear
+//!   RGBA f32.
+//! - Over an opaque layer ([`render_decoded_over`], the viewer's mesh depth): each slice
+//!   stands for the slab `depth ± d/2` and is faded by the part of it in front of the
+//!   surface ([`depth_fade`], the ratio becomes `fade · d/d₀`), as spherical billboards
+//!   clip a particle's path at the scene depth; a hard depth test leaves terraces.
 //! - Rows are processed in parallel; every pixel sees the same sequence of fragments,
 //!   so the result is deterministic.
 //! - **LOD bands** (formats/SPEC.md §8.6, pruned volumes): `v₀` is the smallest
@@ -195,6 +205,9 @@ struct ScreenPoly {
     gy: Vec3,
     lod: f32,
     ratio: f32,
+    /// The slice's view distance and spacing (the slab `depth ± d/2` it stands for).
+    depth: f32,
+    spacing: f32,
     /// Index of the band (0 = the base texture) whose texture this polygon samples.
     band: usize,
     /// Normal frame → view space of the polygon's cell ([`normal_matrix`]), when it is
@@ -256,6 +269,46 @@ pub fn render_volume(
     render_decoded(&vol, dims, &asset.cells, camera, params)
 }
 
+/// An opaque layer under the volume (the CPU counterpart of the viewer's mesh pass):
+/// per pixel (row 0 at the top) its view distance along the view axis (`∞` where there
+/// is none) and its premultiplied linear colour.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OpaqueBackdrop {
+    pub depth: Vec<f32>,
+    pub colour: ImageF32,
+}
+
+/// [`render_decoded`] composited over an opaque layer. Each slice stands for the slab
+/// `depth ± d/2`; where the opaque surface at depth `Z` cuts that slab, the slice's
+/// opacity is corrected for the part in front of it only, `f = clamp((Z − (depth −
+/// d/2))/d, 0, 1)` times the spacing (ratio `f·d/d₀`), as spherical billboards clip a
+/// particle's path at the scene depth. A hard depth test instead (the slice drawn whole
+/// or not at all) leaves a terrace per slice where the surface cuts the volume.
+pub fn render_decoded_over(
+    vol: &DecodedVolume,
+    dims0: [u32; 3],
+    cells: &[Prism],
+    camera: &Camera,
+    params: &SlicerParams,
+    backdrop: &OpaqueBackdrop,
+) -> Result<SliceRender, EvalError> {
+    let n = camera.width as usize * camera.height as usize;
+    if backdrop.depth.len() != n
+        || backdrop.colour.width != camera.width
+        || backdrop.colour.height != camera.height
+    {
+        return Err(EvalError::InvalidParam(format!(
+            "opaque backdrop of {}x{} ({} depths) for a {}x{} camera",
+            backdrop.colour.width,
+            backdrop.colour.height,
+            backdrop.depth.len(),
+            camera.width,
+            camera.height
+        )));
+    }
+    render_sliced(vol, dims0, cells, camera, params, None, Some(backdrop))
+}
+
 /// Renders already-decoded levels (reuse across views) with the given cells.
 pub fn render_decoded(
     vol: &DecodedVolume,
@@ -279,6 +332,18 @@ pub fn render_decoded_in_depth_range(
     params: &SlicerParams,
     depth_range: Option<(f32, f32)>,
 ) -> Result<SliceRender, EvalError> {
+    render_sliced(vol, dims0, cells, camera, params, depth_range, None)
+}
+
+fn render_sliced(
+    vol: &DecodedVolume,
+    dims0: [u32; 3],
+    cells: &[Prism],
+    camera: &Camera,
+    params: &SlicerParams,
+    depth_range: Option<(f32, f32)>,
+    backdrop: Option<&OpaqueBackdrop>,
+) -> Result<SliceRender, EvalError> {
     let start = Instant::now();
     validate_camera(camera)?;
     match params.spacing {
@@ -294,7 +359,10 @@ pub fn render_decoded_in_depth_range(
         }
         _ => {}
     }
-    let mut image = ImageF32::new(camera.width, camera.height);
+    let mut image = match backdrop {
+        Some(b) => b.colour.clone(),
+        None => ImageF32::new(camera.width, camera.height),
+    };
     let mut stats = SliceStats::default();
     if vol.level_count() == 0 {
         return Err(EvalError::InvalidAsset("no MIP levels".into()));
@@ -380,7 +448,10 @@ pub fn render_decoded_in_depth_range(
             .data
             .par_chunks_mut(w)
             .enumerate()
-            .map(|(y, row)| raster_row(row, y, polys, &vols, params.mip_filter, light_view))
+            .map(|(y, row)| {
+                let depth = backdrop.map(|b| &b.depth[y * w..(y + 1) * w]);
+                raster_row(row, y, polys, &vols, params.mip_filter, light_view, depth)
+            })
             .sum();
         polys.clear();
         frags
@@ -408,6 +479,8 @@ pub fn render_decoded_in_depth_range(
             if let Some(mut sp) = sp {
                 sp.band = band;
                 sp.nmat = nmats[band].as_ref().map(|m| m[ci]);
+                sp.depth = depth;
+                sp.spacing = d;
                 polys.push(sp);
                 stats.polygons += 1;
             }
@@ -470,6 +543,8 @@ fn to_screen(
         gy,
         lod,
         ratio,
+        depth: 0.0,
+        spacing: 0.0,
         band: 0,
         nmat: None,
     })
@@ -483,7 +558,21 @@ fn cross2(a: [f32; 2], b: [f32; 2]) -> f32 {
     a[0] * b[1] - a[1] * b[0]
 }
 
+/// The part of a slice's slab `depth ± d/2` in front of an opaque surface at view
+/// distance `z`: `clamp((z − (depth − d/2))/d, 0, 1)` (1 without a surface).
+#[inline]
+pub fn depth_fade(z: f32, depth: f32, d: f32) -> f32 {
+    if !(z < f32::INFINITY) {
+        return 1.0;
+    }
+    if !(d > 0.0) {
+        return if depth < z { 1.0 } else { 0.0 };
+    }
+    ((z - (depth - 0.5 * d)) / d).clamp(0.0, 1.0)
+}
+
 /// Composites every polygon covering row `y` into `row`, in order; returns fragments.
+/// `depth`: the row of an opaque layer's view distances (slices fade at it).
 fn raster_row(
     row: &mut [Vec4],
     y: usize,
@@ -491,6 +580,7 @@ fn raster_row(
     vols: &[&DecodedVolume],
     filter: MipFilter,
     light: Option<(Vec3, f32)>,
+    depth: Option<&[f32]>,
 ) -> u64 {
     let yc = y as f32 + 0.5;
     let w = row.len() as i64;
@@ -524,8 +614,12 @@ fn raster_row(
         for x in x0..x1 {
             let xc = x as f32 + 0.5;
             let uvw = p.base + p.gx * (xc - p.origin[0]) + p.gy * dy;
-            let s = vols[p.band].sample(p.lod, uvw, filter);
-            let mut s = correct_premultiplied(s, p.ratio);
+            let fade = depth.map_or(1.0, |z| depth_fade(z[x as usize], p.depth, p.spacing));
+            if !(fade > 0.0) {
+                continue;
+            }
+            let s = vols[p.band].sample_opacity(p.lod, uvw, filter);
+            let mut s = correct_premultiplied(s, p.ratio * fade);
             if let (Some(m), Some((l, ambient))) = (p.nmat, light) {
                 let n = vols[p.band]
                     .sample_normal(p.lod, uvw, filter)

@@ -20,6 +20,9 @@
 //! normal, unlike filtering `n̄` itself. The viewer uploads the same `(α·n̄, α)` texels
 //! (`Rgba16Float`, viewer/src/volume_pass.rs).
 
+// `!(a < b)` comparisons are deliberate: they also catch NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use billow_format::{ColourSpace, VolumeAsset};
 use glam::{Vec3, Vec4};
 
@@ -169,23 +172,9 @@ impl DecodedVolume {
     fn trilinear(&self, levels: &[Level], level: usize, uvw: Vec3) -> Vec4 {
         let l = &levels[level.min(levels.len() - 1)];
         let [w, h, d] = l.dims.map(|v| v as i64);
-        let f = |u: f32, n: i64, repeat: bool| {
-            let u = if u.is_finite() { u } else { 0.0 };
-            // Repeat: only the fractional part matters (keeps the index small for any u).
-            let u = if repeat { u - u.floor() } else { u };
-            let x = u * n as f32 - 0.5;
-            let x0 = x.floor();
-            let t = x - x0;
-            let (i0, i1) = if repeat {
-                ((x0 as i64).rem_euclid(n), (x0 as i64 + 1).rem_euclid(n))
-            } else {
-                ((x0 as i64).clamp(0, n - 1), (x0 as i64 + 1).clamp(0, n - 1))
-            };
-            (i0 as usize, i1 as usize, t)
-        };
-        let (x0, x1, tx) = f(uvw.x, w, self.repeat[0]);
-        let (y0, y1, ty) = f(uvw.y, h, self.repeat[1]);
-        let (z0, z1, tz) = f(uvw.z, d, self.repeat[2]);
+        let (x0, x1, tx) = texel_pair(uvw.x, w, self.repeat[0]);
+        let (y0, y1, ty) = texel_pair(uvw.y, h, self.repeat[1]);
+        let (z0, z1, tz) = texel_pair(uvw.z, d, self.repeat[2]);
         let (w, h) = (w as usize, h as usize);
         let at = |x: usize, y: usize, z: usize| l.texels[x + w * (y + h * z)];
         let lerp = |a: Vec4, b: Vec4, t: f32| a + (b - a) * t;
@@ -194,6 +183,52 @@ impl DecodedVolume {
         let c01 = lerp(at(x0, y0, z1), at(x1, y0, z1), tx);
         let c11 = lerp(at(x0, y1, z1), at(x1, y1, z1), tx);
         lerp(lerp(c00, c10, ty), lerp(c01, c11, ty), tz)
+    }
+
+    /// Trilinear sample of level `level` (clamped to the last level) at `uvw`, filtered
+    /// in **extinction space** (see [`to_extinction`]): the result is `(σ·c, σ)`, the
+    /// weighted sum of the eight texels' extinction-weighted straight colours.
+    pub fn sample_level_extinction(&self, level: usize, uvw: Vec3) -> Vec4 {
+        let l = &self.levels[level.min(self.levels.len() - 1)];
+        let [w, h, d] = l.dims.map(|v| v as i64);
+        let (x0, x1, tx) = texel_pair(uvw.x, w, self.repeat[0]);
+        let (y0, y1, ty) = texel_pair(uvw.y, h, self.repeat[1]);
+        let (z0, z1, tz) = texel_pair(uvw.z, d, self.repeat[2]);
+        let (w, h) = (w as usize, h as usize);
+        let at = |x: usize, y: usize, z: usize| to_extinction(l.texels[x + w * (y + h * z)]);
+        let lerp = |a: Vec4, b: Vec4, t: f32| a + (b - a) * t;
+        let c00 = lerp(at(x0, y0, z0), at(x1, y0, z0), tx);
+        let c10 = lerp(at(x0, y1, z0), at(x1, y1, z0), tx);
+        let c01 = lerp(at(x0, y0, z1), at(x1, y0, z1), tx);
+        let c11 = lerp(at(x0, y1, z1), at(x1, y1, z1), tx);
+        lerp(lerp(c00, c10, ty), lerp(c01, c11, ty), tz)
+    }
+
+    /// The sample the slicer composites: like [`DecodedVolume::sample`] but filtered in
+    /// extinction space (trilinear within a level and linear between levels on
+    /// [`to_extinction`] values), returned as premultiplied RGBA ([`from_extinction`]).
+    pub fn sample_opacity(&self, lod: f32, uvw: Vec3, filter: MipFilter) -> Vec4 {
+        let max = (self.levels.len() - 1) as f32;
+        let lod = if lod.is_finite() {
+            lod.clamp(0.0, max)
+        } else {
+            0.0
+        };
+        let e = match filter {
+            MipFilter::Nearest => self.sample_level_extinction(lod.round() as usize, uvw),
+            MipFilter::Linear => {
+                let l0 = lod.floor();
+                let t = lod - l0;
+                let a = self.sample_level_extinction(l0 as usize, uvw);
+                if t <= 0.0 {
+                    a
+                } else {
+                    let b = self.sample_level_extinction(l0 as usize + 1, uvw);
+                    a + (b - a) * t
+                }
+            }
+        };
+        from_extinction(e)
     }
 
     /// Sample at fractional level `lod` (clamped to the stored levels).
@@ -259,6 +294,61 @@ pub fn normal_from_weighted(s: Vec4) -> Vec3 {
     } else {
         n
     }
+}
+
+/// Texel indices and weight of a linear filter along one axis of `n` texels (texel
+/// centres at `(i + ½)/n`); repeat wraps per index, clamp-to-edge clamps.
+fn texel_pair(u: f32, n: i64, repeat: bool) -> (usize, usize, f32) {
+    let u = if u.is_finite() { u } else { 0.0 };
+    let u = if repeat { u - u.floor() } else { u };
+    let x = u * n as f32 - 0.5;
+    let x0 = x.floor();
+    let t = x - x0;
+    let (i0, i1) = if repeat {
+        ((x0 as i64).rem_euclid(n), (x0 as i64 + 1).rem_euclid(n))
+    } else {
+        ((x0 as i64).clamp(0, n - 1), (x0 as i64 + 1).clamp(0, n - 1))
+    };
+    (i0 as usize, i1 as usize, t)
+}
+
+/// The largest optical depth a texel holds: `ln 510`, the optical depth of
+/// `α = 1 − 1/510` (half an 8-bit step below 1). An opaque texel (α = 1, infinite
+/// optical depth) is given this one, so that filtering stays finite.
+pub const MAX_OPTICAL_DEPTH: f32 = 6.234_411;
+
+/// A premultiplied texel in extinction space: `(σ·c, σ)` with `σ = −ln(1 − α)` the
+/// texel's optical depth over one voxel (capped at [`MAX_OPTICAL_DEPTH`]) and `c = rgb/α`
+/// its straight colour. Filtering these linearly interpolates the *optical depth* (what
+/// the opacity correction `α' = 1 − (1 − α)^(d/d₀)` assumes α encodes), so a ray through
+/// a one-voxel opaque layer stays opaque between texel centres; filtering α linearly
+/// would give that layer an optical depth of only 2 (86 % opacity head-on) — the
+/// see-through stripes of thin layers (docs/eval.md, "Thin layers").
+#[inline]
+pub fn to_extinction(c: Vec4) -> Vec4 {
+    let a = c.w.min(1.0);
+    if !(a > 0.0) {
+        return Vec4::ZERO;
+    }
+    let s = (-(-a).ln_1p()).min(MAX_OPTICAL_DEPTH);
+    (c.truncate() * (s / a)).extend(s)
+}
+
+/// Back from [`to_extinction`] space to premultiplied RGBA: `α = 1 − e^(−σ)`, colour
+/// `(σ·c)/σ · α`. `σ` within 1e-4 of [`MAX_OPTICAL_DEPTH`] (every texel under the
+/// filter opaque) gives α = 1 exactly.
+#[inline]
+pub fn from_extinction(e: Vec4) -> Vec4 {
+    let s = e.w;
+    if !(s > 0.0) {
+        return Vec4::ZERO;
+    }
+    let a = if s >= MAX_OPTICAL_DEPTH - 1e-4 {
+        1.0
+    } else {
+        -(-s).exp_m1()
+    };
+    (e.truncate() * (a / s)).extend(a)
 }
 
 #[cfg(test)]

@@ -5,8 +5,9 @@
 //! 2. `mesh` — opaque meshes (and kept cloud trunks, the ground), depth write;
 //! 3. `cloud` — billboard clouds: foliage meshes and billboards alpha-tested, depth
 //!    write, one instanced draw per (cloud, level, atlas) ([`crate::cloud_pass`]);
-//! 4. `volume` — volumetric-billboard slices, back to front, depth test only, blended
-//!    into Rgba16Float ([`crate::volume_pass`], [`crate::volume_plan`]);
+//! 4. `volume` — volumetric-billboard slices, back to front, blended into Rgba16Float,
+//!    each faded where the opaque depth (read-only from here) cuts its slab
+//!    ([`crate::volume_pass`], [`crate::volume_plan`]);
 //! 5. `resolve` — the read-back (headless) or the blit to the window.
 
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -673,7 +674,35 @@ impl Renderer {
             {
                 stats.draw_calls += pass.draw(&mut rp, bind, receiver, cf, false);
             }
+        }
+        if plan.is_some() || self.lines.is_some() {
+            // The slices read the opaque depth (they fade at it), so it is attached
+            // read-only from here on.
+            let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("frame volumes"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: scene_view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &target.depth_view,
+                    depth_ops: None,
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
             if let (Some(pass), Some(plan)) = (&self.volume_pass, &plan) {
+                let depth = target
+                    .scene_depth
+                    .get_or_init(|| pass.depth_bind_group(&self.gpu, &target.depth_view));
+                rp.set_bind_group(3, depth, &[]);
                 stats.draw_calls += plan.draw(&mut rp, &pass.pipeline, &self.batches, receiver);
             }
             if let Some(lines) = &self.lines {

@@ -20,6 +20,9 @@ pub struct Target {
     pub color: wgpu::Texture,
     pub color_view: wgpu::TextureView,
     pub depth_view: wgpu::TextureView,
+    /// The volume pass's bind group of `depth_view` (made on first use, kept with the
+    /// target so a frame allocates none).
+    pub scene_depth: std::cell::OnceCell<wgpu::BindGroup>,
 }
 
 impl Target {
@@ -35,7 +38,8 @@ impl Target {
                 | wgpu::TextureUsages::TEXTURE_BINDING,
             "colour",
         );
-        // Sampled by the particle pass (spherical billboards clip against it).
+        // Sampled by the particle pass (spherical billboards clip against it) and the
+        // volume pass (slices fade at it).
         let depth = make(
             DEPTH_FORMAT,
             wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
@@ -46,6 +50,7 @@ impl Target {
             height,
             color_view: color.create_view(&Default::default()),
             depth_view: depth.create_view(&Default::default()),
+            scene_depth: std::cell::OnceCell::new(),
             color,
         }
     }

@@ -14,8 +14,11 @@
 //! back to front and, within a slice, cells by ascending ID. The vertex shader
 //! intersects its prism with its slice plane in WGSL (`prism_plane.wgsl`, a port of the
 //! Rust reference) with a budget of 9 vertices (a fan of 3 triangles covers the ≤ 5-gon).
-//! Blending is premultiplied "over" into Rgba16Float; slices test against the depth of
-//! the opaque meshes and do not write it. The same pipeline with depth writes and an
+//! Blending is premultiplied "over" into Rgba16Float. Slices do not write depth; they
+//! read the opaque meshes' depth (group 3, bound read-only) and fade where a surface cuts
+//! the slab they stand for (`depth ± d/2`), as spherical billboards clip a particle's
+//! path at the scene depth; a hard depth test would end every slice on a line and leave
+//! terraces where volumes meet opaque surfaces. The same pipeline with depth writes and an
 //! alpha test renders volumes into the shadow map ([`VolumePass::shadow_pipeline`]).
 //!
 //! **Runtime shading** (VB §3.2 "Reflectance"): an asset that stores normals (SPEC §8.4)
@@ -31,7 +34,9 @@ use billow_format::{ColourSpace, VolumeAsset, VolumeBlocks};
 use bytemuck::{Pod, Zeroable};
 use glam::Mat3;
 
-use crate::layout::{color_target, entry, sampler, shader, storage, texture, uniform, Pipeline};
+use crate::layout::{
+    color_target, depth_texture, entry, sampler, shader, storage, texture, uniform, Pipeline,
+};
 use crate::target::COLOR_FORMAT;
 use crate::texture_bc::upload_bc7;
 use crate::{Gpu, ViewError};
@@ -47,7 +52,11 @@ pub fn batch_size(gpu: &Gpu) -> usize {
 }
 
 /// The WGSL of the volume pass for `n` texture slots (prism/plane intersection +
-/// slicing shaders + the texture-slot switch).
+/// slicing shaders + the texture-slot switch). `sample_volume` filters in extinction
+/// space (`volume.wgsl`, `sample_extinction`: eight texel loads per level, as
+/// `billow::eval::volume_sampler::DecodedVolume::sample_opacity`), not with the
+/// hardware's trilinear filter on alpha, which would leave thin opaque layers
+/// see-through.
 pub fn shader_source(n: usize) -> String {
     let mut bindings = String::new();
     let mut switch = String::new();
@@ -57,8 +66,7 @@ pub fn shader_source(n: usize) -> String {
         bindings += &format!("@group(1) @binding({i}) var vol_tex{i}: texture_3d<f32>;\n");
         bindings += &format!("@group(1) @binding({j}) var vol_nrm{i}: texture_3d<f32>;\n");
         switch += &format!(
-            "        case {i}u: {{ if rep {{ return textureSampleLevel(vol_tex{i}, smp_repeat, uvw, lod); }} \
-             return textureSampleLevel(vol_tex{i}, smp_clamp, uvw, lod); }}\n"
+            "        case {i}u: {{ return sample_extinction(vol_tex{i}, rep, uvw, lod); }}\n"
         );
         nswitch += &format!(
             "        case {i}u: {{ if rep {{ return textureSampleLevel(vol_nrm{i}, smp_repeat, uvw, lod); }} \
@@ -198,6 +206,8 @@ pub struct VolumePass {
     pub dummy: wgpu::TextureView,
     /// Texture slots per batch.
     pub batch: usize,
+    /// Group 3 of [`VolumePass::pipeline`]: the opaque scene's depth the slices fade at.
+    pub depth_layout: wgpu::BindGroupLayout,
 }
 
 /// The addressing of `asset` (SPEC §8.5): repeat in x and z for shells (header param
@@ -238,8 +248,22 @@ impl VolumePass {
             label: Some("volume textures"),
             entries: &batch_entries,
         });
+        let depth_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("volume scene depth"),
+            entries: &[entry(0, fs, depth_texture())],
+        });
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("volume"),
+            bind_group_layouts: &[
+                Some(&frame_layout),
+                Some(&batch_layout),
+                Some(shadow_layout),
+                Some(&depth_layout),
+            ],
+            immediate_size: 0,
+        });
+        let shadow_pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("volume shadow"),
             bind_group_layouts: &[
                 Some(&frame_layout),
                 Some(&batch_layout),
@@ -247,25 +271,26 @@ impl VolumePass {
             ],
             immediate_size: 0,
         });
-        let make = |label, fs, target, depth_write| {
-            Pipeline {
-                fs,
-                depth: Some((depth_write, wgpu::CompareFunction::Less)),
-                target,
-                ..Pipeline::new(label, &layout, &module)
-            }
-            .build(device)
-        };
-        let pipeline = make(
-            "volume slices",
-            "fs_main",
-            color_target(
+        // The slices fade at the opaque depth themselves (`depth_fade` in volume.wgsl),
+        // so the colour pipeline does not depth-test: a slice just behind a surface still
+        // adds the part of its slab in front of it.
+        let pipeline = Pipeline {
+            fs: "fs_main",
+            depth: Some((false, wgpu::CompareFunction::Always)),
+            target: color_target(
                 COLOR_FORMAT,
                 Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
             ),
-            false,
-        );
-        let shadow_pipeline = make("volume shadow slices", "fs_shadow", None, true);
+            ..Pipeline::new("volume slices", &layout, &module)
+        }
+        .build(device);
+        let shadow_pipeline = Pipeline {
+            fs: "fs_shadow",
+            depth: Some((true, wgpu::CompareFunction::Less)),
+            target: None,
+            ..Pipeline::new("volume shadow slices", &shadow_pl, &module)
+        }
+        .build(device);
         let mode = |r: bool| {
             if r {
                 wgpu::AddressMode::Repeat
@@ -309,7 +334,21 @@ impl VolumePass {
             samplers: [sampler(false), sampler(true)],
             dummy,
             batch,
+            depth_layout,
         }
+    }
+
+    /// Group 3 of [`VolumePass::pipeline`] for the depth buffer `depth` (bound read-only
+    /// while the slices are drawn).
+    pub fn depth_bind_group(&self, gpu: &Gpu, depth: &wgpu::TextureView) -> wgpu::BindGroup {
+        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("volume scene depth"),
+            layout: &self.depth_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::TextureView(depth),
+            }],
+        })
     }
 
     /// The bind group of a batch: `views[i]` (colour, normals) in slot `i`, the dummy in

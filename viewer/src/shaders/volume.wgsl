@@ -2,9 +2,10 @@
 // of a draw, a fixed budget of 9 vertices (a fan of 3 triangles covers the ≤ 5-gon);
 // the vertex shader intersects its cell with its slice plane (prism_plane.wgsl,
 // prepended, with shadow_lookup.wgsl and the texture-slot switch `sample_volume`).
-// Opacity correction and MIP choice as src/eval/slicer.rs. Volumes with normals are
-// shaded at runtime (VB §3.2): albedo × (ambient + (1 − ambient) · shadow · max(n̄·L, 0))
-// with n̄ the Toksvig normal (src/eval/lighting.rs::volume_diffuse_factor).
+// Opacity correction, MIP choice, extinction-space filtering and the depth fade as
+// src/eval/slicer.rs and src/eval/volume_sampler.rs. Volumes with normals are shaded at
+// runtime (VB §3.2): albedo × (ambient + (1 − ambient) · shadow · max(n̄·L, 0)) with n̄ the
+// Toksvig normal (src/eval/lighting.rs::volume_diffuse_factor).
 
 struct Frame {
     proj: mat4x4<f32>,
@@ -41,12 +42,14 @@ struct Draw {
 @group(0) @binding(3) var<storage, read> list: array<u32>;
 @group(0) @binding(4) var<storage, read> volumes: array<VolumeParams>;
 @group(0) @binding(5) var<uniform> draw: Draw;
+// The opaque meshes' depth (read-only attachment); only fs_main reads it.
+@group(3) @binding(0) var scene_depth: texture_depth_2d;
 
 struct VOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) uvw: vec3<f32>,
-    // x: lod, y: opacity-correction ratio d / d0
-    @location(1) @interpolate(flat) lod_ratio: vec2<f32>,
+    // x: lod, y: opacity-correction ratio d / d0, z: the slice's view distance, w: d
+    @location(1) @interpolate(flat) lod_ratio: vec4<f32>,
     // x: texture slot, y: flags (1 = repeat addressing, 2 = shaded from normals)
     @location(2) @interpolate(flat) slot: vec2<u32>,
     @location(3) shadow_clip: vec4<f32>,
@@ -75,7 +78,7 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
         // Unused vertex of the budget: a degenerate triangle outside the clip volume.
         out.clip = vec4<f32>(2.0, 2.0, 2.0, 1.0);
         out.uvw = vec3<f32>(0.0);
-        out.lod_ratio = vec2<f32>(0.0);
+        out.lod_ratio = vec4<f32>(0.0);
         out.slot = vec2<u32>(0u);
         out.shadow_clip = vec4<f32>(0.0, 0.0, 0.0, 1.0);
         out.n0 = vec3<f32>(0.0);
@@ -93,7 +96,7 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
     let v0 = vol.x;
     let lod = clamp(log2(d / v0), 0.0, vol.y);
     let d0 = params.q.x * exp2(lambda);
-    out.lod_ratio = vec2<f32>(lod, d / d0);
+    out.lod_ratio = vec4<f32>(lod, d / d0, -slice.zd.x, d);
     out.slot = vec2<u32>(u32(vol.z), u32(vol.w));
     // The normal matrix rows (volume_pass.rs, GpuCell::with_normal_matrix).
     out.n0 = vec3<f32>(c.uvw[0].w, c.uvw[1].w, c.uvw[2].w);
@@ -144,9 +147,125 @@ fn correct_premultiplied(c: vec4<f32>, ratio: f32) -> vec4<f32> {
     return vec4<f32>(c.rgb * scale, a2);
 }
 
-fn sample_corrected(in: VOut) -> vec4<f32> {
-    let s = sample_volume(in.slot.x, (in.slot.y & 1u) != 0u, in.uvw, in.lod_ratio.x);
-    return correct_premultiplied(s, in.lod_ratio.y);
+// Extinction-space filtering (src/eval/volume_sampler.rs): a texel becomes (σ·c, σ),
+// σ = −ln(1 − α) capped at ln 510, c its straight colour; these are filtered
+// trilinearly (eight loads per level, the CPU's texel addressing) and linearly between
+// levels, and turned back into premultiplied RGBA. Filtering α instead gives a
+// one-voxel opaque layer an optical depth of only 2: thin layers turn see-through.
+const MAX_OPTICAL_DEPTH: f32 = 6.234411;
+
+fn to_extinction(c: vec4<f32>) -> vec4<f32> {
+    let a = min(c.a, 1.0);
+    if !(a > 0.0) {
+        return vec4<f32>(0.0);
+    }
+    var s = MAX_OPTICAL_DEPTH;
+    if a < 1.0 {
+        s = min(-log1p_(-a), MAX_OPTICAL_DEPTH);
+    }
+    return vec4<f32>(c.rgb * (s / a), s);
+}
+
+fn from_extinction(e: vec4<f32>) -> vec4<f32> {
+    let s = e.a;
+    if !(s > 0.0) {
+        return vec4<f32>(0.0);
+    }
+    var a = 1.0;
+    if s < MAX_OPTICAL_DEPTH - 1e-4 {
+        a = -expm1_(-s);
+    }
+    return vec4<f32>(e.rgb * (a / s), a);
+}
+
+struct TexelPair {
+    i0: i32,
+    i1: i32,
+    t: f32,
+}
+
+// Texels and weight of a linear filter along an axis of n texels (centres at (i + ½)/n);
+// repeat wraps each index, clamp-to-edge clamps.
+fn texel_pair(u_in: f32, n: i32, rep: bool) -> TexelPair {
+    var u = u_in;
+    if rep {
+        u = u - floor(u);
+    }
+    let x = u * f32(n) - 0.5;
+    let x0 = floor(x);
+    var p: TexelPair;
+    p.t = x - x0;
+    let i = i32(x0);
+    if rep {
+        p.i0 = ((i % n) + n) % n;
+        p.i1 = (((i + 1) % n) + n) % n;
+    } else {
+        p.i0 = clamp(i, 0, n - 1);
+        p.i1 = clamp(i + 1, 0, n - 1);
+    }
+    return p;
+}
+
+fn extinction_level(t: texture_3d<f32>, rep: bool, uvw: vec3<f32>, level: i32) -> vec4<f32> {
+    let n = vec3<i32>(textureDimensions(t, level));
+    let px = texel_pair(uvw.x, n.x, rep);
+    let py = texel_pair(uvw.y, n.y, false);
+    let pz = texel_pair(uvw.z, n.z, rep);
+    let e000 = to_extinction(textureLoad(t, vec3<i32>(px.i0, py.i0, pz.i0), level));
+    let e100 = to_extinction(textureLoad(t, vec3<i32>(px.i1, py.i0, pz.i0), level));
+    let e010 = to_extinction(textureLoad(t, vec3<i32>(px.i0, py.i1, pz.i0), level));
+    let e110 = to_extinction(textureLoad(t, vec3<i32>(px.i1, py.i1, pz.i0), level));
+    let e001 = to_extinction(textureLoad(t, vec3<i32>(px.i0, py.i0, pz.i1), level));
+    let e101 = to_extinction(textureLoad(t, vec3<i32>(px.i1, py.i0, pz.i1), level));
+    let e011 = to_extinction(textureLoad(t, vec3<i32>(px.i0, py.i1, pz.i1), level));
+    let e111 = to_extinction(textureLoad(t, vec3<i32>(px.i1, py.i1, pz.i1), level));
+    let c00 = e000 + (e100 - e000) * px.t;
+    let c10 = e010 + (e110 - e010) * px.t;
+    let c01 = e001 + (e101 - e001) * px.t;
+    let c11 = e011 + (e111 - e011) * px.t;
+    let c0 = c00 + (c10 - c00) * py.t;
+    let c1 = c01 + (c11 - c01) * py.t;
+    return c0 + (c1 - c0) * pz.t;
+}
+
+// Extinction-space sample at fractional level lod (already clamped to the texture's).
+fn sample_extinction(t: texture_3d<f32>, rep: bool, uvw: vec3<f32>, lod: f32) -> vec4<f32> {
+    let l0 = floor(lod);
+    let f = lod - l0;
+    let a = extinction_level(t, rep, uvw, i32(l0));
+    if f <= 0.0 {
+        return a;
+    }
+    let b = extinction_level(t, rep, uvw, i32(l0) + 1);
+    return a + (b - a) * f;
+}
+
+fn sample_corrected(in: VOut, ratio: f32) -> vec4<f32> {
+    let e = sample_volume(in.slot.x, (in.slot.y & 1u) != 0u, in.uvw, in.lod_ratio.x);
+    return correct_premultiplied(from_extinction(e), ratio);
+}
+
+// View distance of the opaque surface under the fragment (3e38: none), inverting the
+// camera's projection (perspective or orthographic) at the stored depth.
+fn scene_distance(frag: vec2<f32>) -> f32 {
+    let z = textureLoad(scene_depth, vec2<i32>(frag), 0);
+    if z >= 1.0 {
+        return 3.0e38;
+    }
+    let p = frame.proj;
+    return (p[3][2] - z * p[3][3]) / (p[2][2] - z * p[2][3]);
+}
+
+// The part of the slice's slab depth ± d/2 in front of the surface at distance z
+// (src/eval/slicer.rs depth_fade).
+fn depth_fade(z: f32, depth: f32, d: f32) -> f32 {
+    if z >= 3.0e38 {
+        return 1.0;
+    }
+    if !(d > 0.0) {
+        return select(0.0, 1.0, depth < z);
+    }
+    return clamp((z - (depth - 0.5 * d)) / d, 0.0, 1.0);
 }
 
 // The Toksvig normal at the fragment in view space: the filtered (α·n̄, α) over α (the
@@ -172,7 +291,11 @@ fn toksvig_normal(in: VOut) -> vec3<f32> {
 
 @fragment
 fn fs_main(in: VOut) -> @location(0) vec4<f32> {
-    var c = sample_corrected(in);
+    let fade = depth_fade(scene_distance(in.clip.xy), in.lod_ratio.z, in.lod_ratio.w);
+    if !(fade > 0.0) {
+        discard;
+    }
+    var c = sample_corrected(in, in.lod_ratio.y * fade);
     var vis = 1.0;
     if frame.flags.x > 0.5 {
         vis = shadow_visibility(in.shadow_clip, frame.flags.z);
@@ -193,7 +316,7 @@ fn fs_main(in: VOut) -> @location(0) vec4<f32> {
 // spacing) occludes where its opacity reaches the cut-off.
 @fragment
 fn fs_shadow(in: VOut) {
-    if sample_corrected(in).a < frame.flags.y {
+    if sample_corrected(in, in.lod_ratio.y).a < frame.flags.y {
         discard;
     }
 }
