@@ -483,6 +483,8 @@ fn ao_baker<'a>(
 }
 
 /// One level of a direction's pyramid, as [`pyramid`] hands it on.
+// One value per MIP step, moved not copied: its size does not matter.
+#[allow(clippy::large_enum_variant)]
 enum Level<'a, T> {
     /// Level 0, sparse.
     Zero(&'a slices::DirSlices),

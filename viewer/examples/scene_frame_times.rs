@@ -49,18 +49,23 @@ fn content(scene: &SceneFile) -> Content {
         ..Default::default()
     };
     for v in &scene.volumes {
+        let (asset, blocks) = VolumeAsset::read_with_blocks(&v.asset).expect("volume asset");
         c.volumes.push(VolumeContent {
-            asset: VolumeAsset::read(&v.asset).expect("volume asset"),
+            asset,
             instances: v.instances.iter().map(|t| t.matrix()).collect(),
             animation: v.animation,
+            blocks: blocks.map(std::sync::Arc::new),
         });
     }
     for d in &scene.clouds {
+        let (asset, blocks) = CloudAsset::read_with_blocks(&d.asset).expect("cloud asset");
         c.clouds.push(CloudContent {
-            asset: CloudAsset::read(&d.asset).expect("cloud asset"),
+            asset,
             instances: d.instances.iter().map(|t| t.matrix()).collect(),
             lod_distances: d.lod_distances.clone(),
             transition: d.transition,
+            dissolve: d.dissolve,
+            blocks: blocks.map(std::sync::Arc::new),
         });
     }
     for m in &scene.meshes {

@@ -529,7 +529,6 @@ fn normal_texture(
     })
 }
 
-
 /// A 3D texture of `format` with one MIP level per item of `levels` (tightly packed).
 fn texture_3d<'a>(
     gpu: &Gpu,

@@ -104,7 +104,7 @@ fn a_cloud_mid_transition_morphs_instead_of_popping() {
         let (img, stats) = r.render_image(&cam).expect("render");
         (img, stats.cloud_lods[0])
     };
-    let mut dissolving = |r: &mut Renderer, z: f32| {
+    let dissolving = |r: &mut Renderer, z: f32| {
         r.lod_distance_override = Some(z);
         let (img, stats) = r.render_image(&cam).expect("render");
         (img, stats.cloud_dissolves[0], stats.cloud_quads)
