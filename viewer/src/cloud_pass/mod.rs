@@ -131,19 +131,19 @@ fn morph_toward(z: f32, end: f32, w: f32) -> f32 {
 /// `transition` the morph fraction, `dissolve` the dissolve half-width in octaves.
 pub fn choose_lod(z: f32, distances: &[f32], transition: f32, dissolve: f32) -> LodChoice {
     let w = transition.clamp(0.0, 1.0);
-    let h: Vec<f32> = (0..distances.len())
-        .map(|i| half_band(distances, i, dissolve))
-        .collect();
+    // No allocation: this runs per instance per frame.
+    let h = |i: usize| half_band(distances, i, dissolve);
     // Where each level's morph ends: where the dissolve into its parent begins.
-    let end = |i: usize| distances[i] * (-h[i]).exp2();
+    let end = |i: usize| distances[i] * (-h(i)).exp2();
     for (i, &d) in distances.iter().enumerate() {
-        if h[i] > 0.0 && d > 0.0 && z > 0.0 {
+        let hi = h(i);
+        if hi > 0.0 && d > 0.0 && z > 0.0 {
             let u = (z / d).log2();
-            if u > -h[i] && u < h[i] {
+            if u > -hi && u < hi {
                 return LodChoice {
                     level: i,
                     morph: morph_toward(z, end(i), w),
-                    dissolve: ((u + h[i]) / (2.0 * h[i])).clamp(0.0, 1.0),
+                    dissolve: ((u + hi) / (2.0 * hi)).clamp(0.0, 1.0),
                     next_morph: if i + 1 < distances.len() {
                         morph_toward(z, end(i + 1), w)
                     } else {
