@@ -10,6 +10,7 @@
 //! - [`prism_plane`]: the prism/plane intersection (VB paper Appendix A);
 //! - [`ray_triangle`]: the watertight ray/triangle test;
 //! - [`cells`]: a box as the two prism cells of a volumetric billboard;
+//! - [`shading`]: the two Lambert lighting models (leaf cards/meshes, volume voxels);
 //! - [`Aabb`]: the axis-aligned box the camera frames.
 //!
 //! **This is not a second contract between baker and viewer.** The asset contract stays
@@ -21,7 +22,7 @@
 //! The library keeps its old paths as re-exports (`billow::camera`,
 //! `billow::eval::prism_plane`, `billow::eval::ray_triangle`, `billow::eval::compositing`,
 //! `billow::scene::Aabb`, `billow::voxelize::box_prisms`, the slicer's `Spacing` and
-//! `voxel_size`), so code written against them compiles unchanged.
+//! `voxel_size`, `billow::eval::lighting::diffuse_factor`), so code written against them compiles unchanged.
 
 pub mod aabb;
 pub mod camera;
@@ -29,6 +30,7 @@ pub mod cells;
 pub mod compositing;
 pub mod prism_plane;
 pub mod ray_triangle;
+pub mod shading;
 pub mod slicing;
 
 pub use aabb::Aabb;
