@@ -161,3 +161,32 @@ pub fn shade_normal(nmat: Mat3, n: Vec3) -> Vec3 {
         Vec3::ZERO
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Uniform spacing: `z₀ = z_min + d/2`, then steps of `d`, front to back, below
+    /// `z_max`; the limit is an error naming more than it.
+    #[test]
+    fn uniform_slices_start_half_a_step_in_and_stop_at_the_limit() {
+        let s = Spacing::Uniform { spacing: 0.5 };
+        let d = slice_depths(|_| 1.0, s, 0.1, 1.0, 3.0, 100).unwrap();
+        assert_eq!(d, vec![(1.25, 0.5), (1.75, 0.5), (2.25, 0.5), (2.75, 0.5)]);
+        let e = slice_depths(|_| 1.0, s, 0.1, 1.0, 3.0, 3).unwrap_err();
+        assert_eq!(e.limit, 3);
+        assert!(e.needed > 3);
+    }
+
+    /// Adaptive spacing follows the pixel footprint, never finer than `v₀`, times `bias`.
+    #[test]
+    fn adaptive_spacing_is_bias_times_max_of_pixel_and_voxel() {
+        let s = Spacing::Adaptive { bias: 2.0 };
+        let d = slice_depths(|z| 0.01 * z, s, 0.05, 1.0, 20.0, 10_000).unwrap();
+        for &(z, dz) in &d {
+            assert_eq!(dz, 2.0 * (0.01 * z).max(0.05), "{z}");
+        }
+        assert!(d.windows(2).all(|w| w[1].0 == w[0].0 + w[0].1));
+        assert_eq!(s.scaled(0.5), Spacing::Adaptive { bias: 1.0 });
+    }
+}

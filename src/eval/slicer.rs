@@ -142,30 +142,6 @@ struct Part<'a> {
     first_level: u32,
 }
 
-/// Slice depths and spacings, front to back ([`billow_core::slicing::slice_depths`] at
-/// this camera's pixel size).
-fn slice_depths(
-    camera: &Camera,
-    spacing: Spacing,
-    v0: f32,
-    z_min: f32,
-    z_max: f32,
-    limit: usize,
-) -> Result<Vec<(f32, f32)>, EvalError> {
-    billow_core::slicing::slice_depths(
-        |z| camera.pixel_size_at(z),
-        spacing,
-        v0,
-        z_min,
-        z_max,
-        limit,
-    )
-    .map_err(|e| EvalError::TooManySlices {
-        needed: e.needed,
-        limit: e.limit,
-    })
-}
-
 /// Renders a volume asset from `camera`.
 pub fn render_volume(
     asset: &VolumeAsset,
@@ -340,7 +316,14 @@ fn render_sliced(
         stats.seconds = start.elapsed().as_secs_f64();
         return Ok(SliceRender { image, stats });
     }
-    let mut slices = slice_depths(camera, params.spacing, v0, z_min, z_max, params.max_slices)?;
+    let mut slices = billow_core::slicing::slice_depths(
+        |z| camera.pixel_size_at(z),
+        params.spacing,
+        v0,
+        z_min,
+        z_max,
+        params.max_slices,
+    )?;
     slices.reverse(); // back to front
     stats.slices = slices.len();
     stats.min_spacing = slices.iter().map(|s| s.1).fold(f32::INFINITY, f32::min);

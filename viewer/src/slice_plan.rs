@@ -12,9 +12,9 @@
 
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-pub use billow_core::slicing::{voxel_size, Spacing};
+pub use billow_core::slicing::{slice_depths, voxel_size, Spacing};
 
-use crate::{ViewCamera, ViewError};
+use crate::ViewError;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SliceParams {
@@ -51,28 +51,4 @@ impl SliceParams {
             _ => Ok(()),
         }
     }
-}
-
-/// Slice depths and spacings `(depth, d)`, **front to back**, over `[z_min, z_max]`:
-/// [`billow_core::slicing::slice_depths`] at this camera's pixel size.
-pub fn slice_depths(
-    camera: &ViewCamera,
-    spacing: Spacing,
-    v0: f32,
-    z_min: f32,
-    z_max: f32,
-    limit: usize,
-) -> Result<Vec<(f32, f32)>, ViewError> {
-    billow_core::slicing::slice_depths(
-        |z| camera.pixel_size_at(z),
-        spacing,
-        v0,
-        z_min,
-        z_max,
-        limit,
-    )
-    .map_err(|e| ViewError::TooManySlices {
-        needed: e.needed,
-        limit: e.limit,
-    })
 }

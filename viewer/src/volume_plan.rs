@@ -322,7 +322,14 @@ pub fn plan(
     if !(z_lo < z_hi) {
         return Ok(None);
     }
-    let mut slices = slice_depths(camera, params.spacing, v0, z_lo, z_hi, params.max_slices)?;
+    let mut slices = slice_depths(
+        |z| camera.pixel_size_at(z),
+        params.spacing,
+        v0,
+        z_lo,
+        z_hi,
+        params.max_slices,
+    )?;
     slices.reverse(); // back to front
     if slices.is_empty() {
         return Ok(None);
