@@ -13,6 +13,7 @@ pub mod procgen;
 pub mod provenance;
 pub mod rng;
 pub mod scene;
+pub(crate) mod shade;
 pub mod shell;
 pub mod texture;
 pub mod voxelize;

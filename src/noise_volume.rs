@@ -34,7 +34,8 @@ use rayon::prelude::*;
 use crate::rng::Pcg32;
 use crate::voxelize::dense::pyramid_from_dense;
 use crate::voxelize::mip::Grid3;
-use crate::voxelize::{box_prisms, CombineFn, Preset};
+use crate::voxelize::{CombineFn, Preset};
+use billow_core::cells::box_prisms;
 
 /// Seeded 3D gradient noise in about `[-1, 1]`.
 pub struct Perlin {

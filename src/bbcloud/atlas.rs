@@ -434,43 +434,9 @@ pub fn downsample(img: &Image) -> Image {
     }
 }
 
-/// Linear → sRGB byte thresholds: byte b is the count of thresholds ≤ value, i.e.
-/// `round(255 · oetf(c))`, computed exactly and without `powf` per texel.
-fn srgb_thresholds() -> &'static [f32; 255] {
-    static T: std::sync::OnceLock<[f32; 255]> = std::sync::OnceLock::new();
-    T.get_or_init(|| {
-        std::array::from_fn(|b| {
-            let c = (b as f64 + 0.5) / 255.0;
-            (if c <= 0.04045 {
-                c / 12.92
-            } else {
-                ((c + 0.055) / 1.055).powf(2.4)
-            }) as f32
-        })
-    })
-}
-
-/// For bucket k of [0, 1] in steps of 1/4096: how many thresholds are ≤ k/4096.
-fn srgb_buckets() -> &'static [u8; 4097] {
-    static B: std::sync::OnceLock<[u8; 4097]> = std::sync::OnceLock::new();
-    B.get_or_init(|| {
-        let t = srgb_thresholds();
-        std::array::from_fn(|k| t.partition_point(|&x| x <= k as f32 / 4096.0) as u8)
-    })
-}
-
-/// `round(255 · oetf(c))` for c in [0, 1] (NaN: 0): the number of thresholds ≤ c, found
-/// from the bucket of c (which starts at or below c, so it never overcounts) and at most a
-/// few steps up (thresholds are at least 1/3300 apart, buckets 1/4096 wide).
-#[inline]
-pub fn encode_srgb(c: f32) -> u8 {
-    let t = srgb_thresholds();
-    let mut b = srgb_buckets()[((c * 4095.0) as usize).min(4096)] as usize;
-    while b < 255 && t[b] <= c {
-        b += 1;
-    }
-    b as u8
-}
+/// Linear → sRGB byte: moved to [`crate::texture::encode_srgb`] (the exporter uses it
+/// too), re-exported here.
+pub use crate::texture::encode_srgb;
 
 /// Encode premultiplied linear RGBA to `SrgbPremultiplied` bytes.
 pub fn encode_srgb_premultiplied(img: &Image) -> Vec<u8> {
@@ -531,31 +497,4 @@ pub fn encode_normals(img: &Image) -> Vec<u8> {
 /// The MIP chain of a normal atlas: box-filtered premultiplied normals, encoded.
 pub fn normal_chain(atlas: Image, levels: u32) -> Vec<Vec<u8>> {
     chain(atlas, levels, encode_normals)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn bucketed_srgb_encoding_is_the_threshold_count() {
-        let t = srgb_thresholds();
-        let exact = |c: f32| t.partition_point(|&x| x <= c) as u8;
-        let mut c = 0.0f32;
-        while c <= 1.0 {
-            assert_eq!(encode_srgb(c), exact(c), "{c}");
-            c = if c < 1e-3 { c + 1e-7 } else { c + 3e-6 };
-        }
-        for &x in t.iter() {
-            for v in [
-                x,
-                f32::from_bits(x.to_bits() - 1),
-                f32::from_bits(x.to_bits() + 1),
-            ] {
-                assert_eq!(encode_srgb(v), exact(v), "{v}");
-            }
-        }
-        assert_eq!(encode_srgb(1.0), 255);
-        assert_eq!(encode_srgb(f32::NAN), 0);
-    }
 }

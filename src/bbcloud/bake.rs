@@ -8,7 +8,7 @@
 //! (no blending of several layers), OPAQUE with alpha 1. Every triangle is treated as
 //! double-sided for visibility (leaf cards are); lighting is the viewer's mesh-pass model,
 //! `albedo · (ambient + (1 − ambient) · |N·L|)` with the interpolated shading normal
-//! ([`crate::eval::lighting::diffuse_factor`]), so a leaf seen from either side is lit alike
+//! ([`billow_core::shading::diffuse_factor`]), so a leaf seen from either side is lit alike
 //! and a billboard looks like the mesh it replaces under the same light.
 //! A texel's colour is the mean of its samples' premultiplied colours, its alpha their mean
 //! coverage. Work is done in bands of rows so memory stays small for large billboards.
@@ -25,8 +25,8 @@ use glam::{Vec2, Vec3, Vec4};
 
 use super::rect::PlaneRect;
 use super::sampler::Decoded;
-use crate::eval::lighting::diffuse_factor;
 use crate::scene::{AlphaMode, Scene};
+use billow_core::shading::diffuse_factor;
 
 /// Lighting of the bake. `light: None` bakes unlit albedo.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -6,7 +6,7 @@
 use billow_format::{full_mip_count, mip_dims, ColourSpace, Header, NormalEncoding, VolumeAsset};
 use glam::Vec3;
 
-use crate::voxelize::box_prisms;
+use billow_core::cells::box_prisms;
 
 /// Level `pd` from level `cd` by the rule in the module docs; `signed`: bytes are i8.
 fn box_filter(prev: &[u8], cd: [u32; 3], pd: [u32; 3], signed: bool) -> Vec<u8> {

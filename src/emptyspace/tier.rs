@@ -15,7 +15,7 @@ use super::bricks::{fill_level, Brick};
 use super::kdtree::{subdivide, BlockBox, KdParams, TierGrid};
 use super::occupancy::{needed_blocks, DataGrid, TierSource};
 use super::pack::{pack, Slot};
-use crate::voxelize::box_prisms;
+use billow_core::cells::box_prisms;
 
 /// Parameters of one tier (the kd-tree's, in this tier's texels).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -28,3 +28,12 @@ pub enum EvalError {
     #[error("too many slices: {needed} exceed the limit {limit}; raise the spacing or the limit")]
     TooManySlices { needed: usize, limit: usize },
 }
+
+impl From<billow_core::slicing::TooManySlices> for EvalError {
+    fn from(e: billow_core::slicing::TooManySlices) -> Self {
+        EvalError::TooManySlices {
+            needed: e.needed,
+            limit: e.limit,
+        }
+    }
+}

@@ -34,7 +34,7 @@ use super::{EvalError, ImageF32};
 use crate::bvh::scene_bvh;
 use crate::camera::Camera;
 use crate::scene::{AlphaMode, Scene};
-use crate::voxelize::shade::{validate_scene, Shader};
+use crate::shade::{validate_scene, Shader};
 
 /// Pixel sampling pattern.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

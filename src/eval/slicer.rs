@@ -63,14 +63,10 @@ use super::volume_sampler::{DecodedVolume, MipFilter};
 use super::{EvalError, ImageF32};
 use crate::camera::{to_view, Camera};
 
-/// Slice spacing mode.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Spacing {
-    /// The paper's adaptive spacing scaled by `bias` (1 = paper; > 1 fewer slices).
-    Adaptive { bias: f32 },
-    /// Constant world-space spacing.
-    Uniform { spacing: f32 },
-}
+/// Slice spacing mode, [`voxel_size`], the per-cell [`normal_matrix`] and
+/// [`shade_normal`]: the shared slice planning of the rendering core
+/// ([`billow_core::slicing`], which the viewer uses too), re-exported here.
+pub use billow_core::slicing::{normal_matrix, shade_normal, voxel_size, Spacing};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SlicerParams {
@@ -115,83 +111,6 @@ pub struct SliceRender {
     pub stats: SliceStats,
 }
 
-/// World size of a level-0 voxel: per cell, the affine map uvw → world (from vertices
-/// 0, 1, 2, 3) scaled by the level-0 dims, `cbrt(|det J| / (w·h·d))` (the geometric
-/// mean of the three voxel edge lengths); the minimum over the cells (the finest).
-/// `None` when no cell has a non-degenerate uvw mapping.
-pub fn voxel_size(cells: &[Prism], dims: [u32; 3]) -> Option<f32> {
-    let n = f64::from(dims[0]) * f64::from(dims[1]) * f64::from(dims[2]);
-    let mut best: Option<f32> = None;
-    for c in cells {
-        let p = |i: usize| Vec3::from(c.pos[i]) - Vec3::from(c.pos[0]);
-        let t = |i: usize| Vec3::from(c.uvw[i]) - Vec3::from(c.uvw[0]);
-        let pm = Mat3::from_cols(p(1), p(2), p(3));
-        let tm = Mat3::from_cols(t(1), t(2), t(3));
-        let dt = f64::from(tm.determinant());
-        if dt.abs() < 1e-12 {
-            continue;
-        }
-        let v = (f64::from(pm.determinant()) / dt).abs() / n;
-        let s = v.cbrt() as f32;
-        if s > 0.0 && s.is_finite() {
-            best = Some(best.map_or(s, |b| b.min(s)));
-        }
-    }
-    best
-}
-
-/// The matrix taking a volume's stored normals to view space, for one cell (`view_cell`:
-/// its vertices in view space, `uvw` its texture coordinates), shared with the viewer
-/// (`viewer/src/volume_plan.rs`):
-///
-/// - a box asset's normals are in its object space, which the cells' positions are given
-///   in: the normal matrix of `object_to_view` (the inverse transpose of its linear part;
-///   a rotation for the CPU slicer's camera, where objects are not transformed);
-/// - a shell's (`shell`: repeat addressing) are in the tile's space, which uvw addresses
-///   (a tile baked on the unit box, as `billow shell` expects): the inverse transpose of
-///   the cell's uvw → view Jacobian (from vertices 0, 1, 2, 3), so the fur of a torus
-///   turns with its surface.
-///
-/// Only the direction of the result matters ([`shade_normal`] keeps the Toksvig length).
-/// A degenerate map gives the zero matrix (unlit: the ambient term).
-pub fn normal_matrix(
-    object_to_view: Mat3,
-    shell: bool,
-    view_cell: &[[f32; 3]; 6],
-    uvw: &[[f32; 3]; 6],
-) -> Mat3 {
-    let m = if shell {
-        let p = |i: usize| Vec3::from(view_cell[i]) - Vec3::from(view_cell[0]);
-        let t = |i: usize| Vec3::from(uvw[i]) - Vec3::from(uvw[0]);
-        let pm = Mat3::from_cols(p(1), p(2), p(3));
-        let tm = Mat3::from_cols(t(1), t(2), t(3));
-        if tm.determinant().abs() < 1e-20 {
-            return Mat3::ZERO;
-        }
-        pm * tm.inverse()
-    } else {
-        object_to_view
-    };
-    let det = m.determinant();
-    if !(det.abs() > 1e-30 && det.is_finite()) {
-        return Mat3::ZERO;
-    }
-    m.inverse().transpose()
-}
-
-/// A stored-frame Toksvig normal `n` (`|n| ≤ 1`) in view space: the direction of
-/// `nmat · n` with the length of `n` (the roughness stays the stored one).
-#[inline]
-pub fn shade_normal(nmat: Mat3, n: Vec3) -> Vec3 {
-    let v = nmat * n;
-    let l = v.length();
-    if l > 0.0 && l.is_finite() {
-        v * (n.length() / l)
-    } else {
-        Vec3::ZERO
-    }
-}
-
 /// One polygon in screen space, ready to scan-convert.
 struct ScreenPoly {
     n: usize,
@@ -221,41 +140,6 @@ struct Part<'a> {
     dims0: [u32; 3],
     cells: &'a [Prism],
     first_level: u32,
-}
-
-/// Slice depths and spacings, front to back.
-fn slice_depths(
-    camera: &Camera,
-    spacing: Spacing,
-    v0: f32,
-    z_min: f32,
-    z_max: f32,
-    limit: usize,
-) -> Result<Vec<(f32, f32)>, EvalError> {
-    let d_at = |z: f32| match spacing {
-        Spacing::Adaptive { bias } => bias * camera.pixel_size_at(z).max(v0),
-        Spacing::Uniform { spacing } => spacing,
-    };
-    let mut out = Vec::new();
-    let mut z = z_min + 0.5 * d_at(z_min);
-    while z < z_max {
-        if out.len() >= limit {
-            // Count how many would be needed (bounded estimate) for the message.
-            let needed = ((z_max - z_min) / d_at(z_min).max(f32::MIN_POSITIVE)) as usize;
-            return Err(EvalError::TooManySlices {
-                needed: needed.max(limit + 1),
-                limit,
-            });
-        }
-        let d = d_at(z);
-        out.push((z, d));
-        let next = z + d;
-        if !(next > z) {
-            break; // spacing below f32 resolution at this depth
-        }
-        z = next;
-    }
-    Ok(out)
 }
 
 /// Renders a volume asset from `camera`.
@@ -432,7 +316,14 @@ fn render_sliced(
         stats.seconds = start.elapsed().as_secs_f64();
         return Ok(SliceRender { image, stats });
     }
-    let mut slices = slice_depths(camera, params.spacing, v0, z_min, z_max, params.max_slices)?;
+    let mut slices = billow_core::slicing::slice_depths(
+        |z| camera.pixel_size_at(z),
+        params.spacing,
+        v0,
+        z_min,
+        z_max,
+        params.max_slices,
+    )?;
     slices.reverse(); // back to front
     stats.slices = slices.len();
     stats.min_spacing = slices.iter().map(|s| s.1).fold(f32::INFINITY, f32::min);

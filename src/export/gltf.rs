@@ -17,7 +17,7 @@
 //!   metallic 0, roughness 1), alpha mode `MASK` (cutoff 0.5, default) or `BLEND`.
 //! - **Atlases**: level 0 of each atlas as an 8-bit PNG with **straight** alpha (what glTF
 //!   specifies), colour dilated into transparent texels so viewer-made MIPs have no dark
-//!   fringes ([`crate::bbcloud::straight`]); sampler linear / linear-mipmap-linear, clamp.
+//!   fringes ([`super::straight`]); sampler linear / linear-mipmap-linear, clamp.
 //! - **Normal maps** (assets baked with `--normal-map`): each atlas's normal map (level 0,
 //!   RGB PNG, linear) is the materials' `normalTexture`; every quad vertex carries a
 //!   `TANGENT` = (U, w) with U the billboard's u direction and w = −1 on the front quad,
@@ -41,7 +41,7 @@ use billow_format::{CloudAsset, CloudError, FormatError, Mesh};
 use json::validation::{Checked::Valid, USize64};
 use json::Index;
 
-use crate::bbcloud::straight;
+use super::straight;
 
 mod build;
 use build::{extras, material, sampler, Bin};

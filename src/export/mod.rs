@@ -13,6 +13,7 @@
 pub mod gltf;
 pub mod ktx2;
 pub mod slices;
+pub mod straight;
 
 use std::path::PathBuf;
 

@@ -35,12 +35,12 @@ use obvhs::ray::Ray;
 use rayon::prelude::*;
 
 use super::grid::GridSpec;
-use super::shade::Shader;
 use super::slices::DirSlices;
 use crate::bvh::scene_bvh;
-use crate::eval::ray_triangle::WatertightRay;
 use crate::rng::Pcg32;
 use crate::scene::{AlphaMode, Scene};
+use crate::shade::Shader;
+use billow_core::ray_triangle::WatertightRay;
 
 /// Baked lighting (see the module docs).
 #[derive(Clone, Copy, Debug, PartialEq, Default)]

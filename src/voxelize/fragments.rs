@@ -14,10 +14,10 @@ use glam::{Vec2, Vec3, Vec4};
 
 use super::grid::GridSpec;
 use super::lanes::{at_least, negative};
-use super::shade::Shader;
 use super::slices::{RowOut, TriSetup, Vox, SUB};
 use super::Dir;
 use crate::scene::{AlphaMode, Scene};
+use crate::shade::Shader;
 
 /// A fragment: one triangle in one voxel, covering the samples of `mask`.
 struct Frag {

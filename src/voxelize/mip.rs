@@ -23,7 +23,6 @@
 //!
 //! An axis of size 1 stays 1 (`r = 1`: a copy along that axis).
 
-use glam::Vec4;
 use half::f16;
 use rayon::prelude::*;
 
@@ -31,11 +30,9 @@ use super::bricks::{local, Bricked, Layout, B, B3, EMPTY};
 use super::slices::DirSlices;
 use super::Dir;
 
-/// Premultiplied `front over back`.
-#[inline]
-pub fn over(front: Vec4, back: Vec4) -> Vec4 {
-    front + (1.0 - front.w) * back
-}
+/// Premultiplied `front over back`: the shared core's one `over`
+/// ([`billow_core::compositing::over`]), re-exported here.
+pub use billow_core::compositing::over;
 
 /// Storage of one RGBA (or normal) voxel; the arithmetic is always f32/f64.
 pub trait Texel: Copy + Send + Sync + Default + 'static {

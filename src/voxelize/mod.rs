@@ -45,7 +45,6 @@ pub mod grid;
 mod lanes;
 pub mod mip;
 pub mod quantize;
-pub(crate) mod shade;
 mod slices;
 pub mod toksvig;
 
@@ -66,6 +65,7 @@ pub use grid::{fit_grid, GridError, GridSpec, Resolution, ResolutionError, MAX_A
 pub use slices::MAX_SUPERSAMPLE;
 
 use crate::scene::{Aabb, Scene};
+use crate::shade;
 use mip::{Grid3, Texel};
 
 /// A view direction: the camera on that side of the object, looking at it.

@@ -41,9 +41,9 @@ use rayon::prelude::*;
 use super::fragments::{cross2, row_fn, simd_available, RowCtx, Scratch};
 use super::grid::GridSpec;
 use super::mip::{Grid3, Texel};
-use super::shade::Shader;
 use super::Dir;
 use crate::scene::Scene;
+use crate::shade::Shader;
 
 /// Sub-sample precision: vertices snap to 1/(2·K·SUB) of a voxel.
 pub(crate) const SUB: i64 = 16;

@@ -1,5 +1,8 @@
-//! The camera as the renderer needs it: a view matrix and a perspective with the
-//! conventions of `billow::camera::Camera` (same projection formula, same pixel size).
+//! The camera as the renderer needs it: a view matrix and a perspective (or, for the
+//! shadow map, orthographic) projection. The view, perspective and pixel-size math is the
+//! shared core's ([`billow_core::camera`], also `billow::camera::Camera`'s): one
+//! implementation; this type adds the orthographic mode and the checks the renderer needs,
+//! and the renderer converts it to its uniform layout.
 
 use glam::{Mat4, Vec3, Vec4};
 
@@ -39,6 +42,12 @@ impl ViewCamera {
         }
     }
 
+    /// The perspective camera of a core camera (`billow::camera::Camera`): its view,
+    /// field of view, size and clip distances.
+    pub fn from_camera(c: &billow_core::camera::Camera) -> Self {
+        Self::from_parts(c.view(), c.fov_y, c.width, c.height, c.near, c.far)
+    }
+
     /// An orthographic camera at `eye` looking along `dir`, `2·half_height` world units
     /// tall, depth range `[near, far]` from the eye.
     #[allow(clippy::too_many_arguments)]
@@ -57,7 +66,8 @@ impl ViewCamera {
         c
     }
 
-    /// A look-at camera; the view matrix is built exactly like `billow::camera::Camera::view`.
+    /// A look-at camera; the view matrix is [`billow_core::camera::look_at`]'s (as
+    /// `billow::camera::Camera::view`).
     #[allow(clippy::too_many_arguments)]
     pub fn look_at(
         eye: Vec3,
@@ -69,22 +79,7 @@ impl ViewCamera {
         near: f32,
         far: f32,
     ) -> Self {
-        let f = (target - eye).normalize();
-        let up = if f.cross(up).length_squared() > 1e-8 * up.length_squared() {
-            up
-        } else if f.y.abs() > 0.999 {
-            Vec3::NEG_Z
-        } else {
-            Vec3::Y
-        };
-        let s = f.cross(up).normalize();
-        let u = s.cross(f);
-        let view = Mat4::from_cols(
-            Vec4::new(s.x, u.x, -f.x, 0.0),
-            Vec4::new(s.y, u.y, -f.y, 0.0),
-            Vec4::new(s.z, u.z, -f.z, 0.0),
-            Vec4::new(-s.dot(eye), -u.dot(eye), f.dot(eye), 1.0),
-        );
+        let view = billow_core::camera::look_at(eye, target, up);
         Self::from_parts(view, fov_y, width, height, near, far)
     }
 
@@ -92,7 +87,8 @@ impl ViewCamera {
         self.width as f32 / self.height.max(1) as f32
     }
 
-    /// View → clip (wgpu depth 0..1), the formula of `billow::camera::Camera::projection`.
+    /// View → clip (wgpu depth 0..1): [`billow_core::camera::perspective`] (as
+    /// `billow::camera::Camera::projection`), or the orthographic projection.
     pub fn projection(&self) -> Mat4 {
         if let Some(hh) = self.ortho_half_height {
             let range = self.far - self.near;
@@ -103,15 +99,7 @@ impl ViewCamera {
                 Vec4::new(0.0, 0.0, -self.near / range, 1.0),
             );
         }
-        let h = 1.0 / (0.5 * self.fov_y).tan();
-        let w = h / self.aspect();
-        let r = self.far / (self.near - self.far);
-        Mat4::from_cols(
-            Vec4::new(w, 0.0, 0.0, 0.0),
-            Vec4::new(0.0, h, 0.0, 0.0),
-            Vec4::new(0.0, 0.0, r, -1.0),
-            Vec4::new(0.0, 0.0, r * self.near, 0.0),
-        )
+        billow_core::camera::perspective(self.fov_y, self.aspect(), self.near, self.far)
     }
 
     /// World size of one pixel at view depth `depth` (the paper's `z·tan(fov/2)/(h/2)`).
@@ -119,7 +107,7 @@ impl ViewCamera {
         if let Some(hh) = self.ortho_half_height {
             return 2.0 * hh / self.height as f32;
         }
-        depth * (0.5 * self.fov_y).tan() / (0.5 * self.height as f32)
+        billow_core::camera::pixel_size_at(self.fov_y, self.height, depth)
     }
 
     /// The camera position in world space.
@@ -129,7 +117,7 @@ impl ViewCamera {
 
     /// World point → view space.
     pub fn to_view(&self, p: Vec3) -> Vec3 {
-        (self.view * Vec4::new(p.x, p.y, p.z, 1.0)).truncate()
+        billow_core::camera::to_view(&self.view, p)
     }
 
     /// `Err` with the reason when the camera cannot render.

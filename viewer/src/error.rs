@@ -35,3 +35,12 @@ pub enum ViewError {
     #[error("{file}: {problem}")]
     SceneInput { file: String, problem: String },
 }
+
+impl From<billow_core::slicing::TooManySlices> for ViewError {
+    fn from(e: billow_core::slicing::TooManySlices) -> Self {
+        ViewError::TooManySlices {
+            needed: e.needed,
+            limit: e.limit,
+        }
+    }
+}

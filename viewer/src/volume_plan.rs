@@ -322,7 +322,14 @@ pub fn plan(
     if !(z_lo < z_hi) {
         return Ok(None);
     }
-    let mut slices = slice_depths(camera, params.spacing, v0, z_lo, z_hi, params.max_slices)?;
+    let mut slices = slice_depths(
+        |z| camera.pixel_size_at(z),
+        params.spacing,
+        v0,
+        z_lo,
+        z_hi,
+        params.max_slices,
+    )?;
     slices.reverse(); // back to front
     if slices.is_empty() {
         return Ok(None);
@@ -473,31 +480,8 @@ fn restrict_to_bands(
     }
 }
 
-/// The matrix taking a volume's stored normals to view space for one cell: a port of
-/// `src/eval/slicer.rs::normal_matrix` (see there). `object_to_view`: the linear part of
-/// camera view × instance; `shell`: the asset repeats its tile (normals in tile space);
+/// The matrix taking a volume's stored normals to view space for one cell: the shared
+/// core's (`billow::eval::slicer::normal_matrix` too). `object_to_view`: the linear part
+/// of camera view × instance; `shell`: the asset repeats its tile (normals in tile space);
 /// `pos`: the cell in view space.
-pub fn normal_matrix(
-    object_to_view: Mat3,
-    shell: bool,
-    pos: &[[f32; 3]; 6],
-    uvw: &[[f32; 3]; 6],
-) -> Mat3 {
-    let m = if shell {
-        let p = |i: usize| Vec3::from(pos[i]) - Vec3::from(pos[0]);
-        let t = |i: usize| Vec3::from(uvw[i]) - Vec3::from(uvw[0]);
-        let pm = Mat3::from_cols(p(1), p(2), p(3));
-        let tm = Mat3::from_cols(t(1), t(2), t(3));
-        if tm.determinant().abs() < 1e-20 {
-            return Mat3::ZERO;
-        }
-        pm * tm.inverse()
-    } else {
-        object_to_view
-    };
-    let det = m.determinant();
-    if !(det.abs() > 1e-30 && det.is_finite()) {
-        return Mat3::ZERO;
-    }
-    m.inverse().transpose()
-}
+pub use billow_core::slicing::normal_matrix;

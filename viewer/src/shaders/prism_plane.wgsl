@@ -1,5 +1,5 @@
 // Prism/plane intersection, Volumetric Billboards §3.3.2 and Appendix A: a line-by-line
-// port of src/eval/prism_plane.rs (the Rust reference; see its docs for the exact
+// port of core/src/prism_plane.rs (the Rust reference; see its docs for the exact
 // classification that replaces the paper's jitter). Input: a prism in camera space
 // (vertices 0,1,2 bottom, 3,4,5 top, k+3 above k) with uvw; the plane z = z_slice.
 // Output: 0 or 3..=5 vertices, counter-clockwise seen from +z.

@@ -126,7 +126,7 @@ fn expm1_(x: f32) -> f32 {
     return um * x / log(u);
 }
 
-// α' = 1 − (1 − α)^ratio, premultiplied colour scaled by α'/α (src/eval/compositing.rs).
+// α' = 1 − (1 − α)^ratio, premultiplied colour scaled by α'/α (core/src/compositing.rs).
 fn correct_premultiplied(c: vec4<f32>, ratio: f32) -> vec4<f32> {
     if ratio == 1.0 {
         return c;

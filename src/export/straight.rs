@@ -119,7 +119,7 @@ pub fn straight_rgba8(atlas: &Atlas, level: usize) -> Vec<u8> {
     let level = level.min(atlas.mips.len().saturating_sub(1));
     let colour = dilated_colour(atlas, level);
     let alpha = &atlas.mips[level];
-    let enc = |c: f32| super::atlas::encode_srgb(c.clamp(0.0, 1.0));
+    let enc = |c: f32| crate::texture::encode_srgb(c.clamp(0.0, 1.0));
     colour
         .par_iter()
         .enumerate()
@@ -131,7 +131,7 @@ pub fn straight_rgba8(atlas: &Atlas, level: usize) -> Vec<u8> {
 /// naive un-premultiply gives (for comparison in tests and docs).
 pub fn straight_rgba8_undilated(atlas: &Atlas, level: usize) -> Vec<u8> {
     let level = level.min(atlas.mips.len().saturating_sub(1));
-    let enc = |c: f32| super::atlas::encode_srgb(c.clamp(0.0, 1.0));
+    let enc = |c: f32| crate::texture::encode_srgb(c.clamp(0.0, 1.0));
     atlas.mips[level]
         .chunks_exact(4)
         .flat_map(|p| {

@@ -1,0 +1,192 @@
+//! Where the slices go: the slice planning of Volumetric Billboards §3.3 shared by the
+//! CPU slicer (`billow::eval::slicer`) and the viewer (`billow_view`'s volume plan), so
+//! both draw the same slices with the same f32 operations.
+//!
+//! - `v₀` ([`voxel_size`]): the world size of a level-0 voxel, minimum over the cells.
+//! - Adaptive spacing at depth `z` ([`Spacing::Adaptive`]): `d(z) = bias ·
+//!   max(pixel_size(z), v₀)`, one pixel's footprint, never finer than the magnified
+//!   voxel; [`Spacing::Uniform`]: constant `d`.
+//! - Slices front to back from the nearest cell depth ([`slice_depths`]): `z₀ = z_min +
+//!   d(z_min)/2`, `z_{i+1} = z_i + d(z_i)` while `z < z_max`; the renderers draw them in
+//!   reverse.
+//! - Stored normals → view space per cell: [`normal_matrix`], [`shade_normal`].
+
+// `!(a < b)` comparisons are deliberate: they also catch NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+use billow_format::Prism;
+use glam::{Mat3, Vec3};
+
+/// Slice spacing mode.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Spacing {
+    /// The paper's adaptive spacing scaled by `bias` (1 = paper; > 1 fewer slices).
+    Adaptive { bias: f32 },
+    /// Constant world-space spacing.
+    Uniform { spacing: f32 },
+}
+
+impl Spacing {
+    /// The same mode with slices `f` times farther apart.
+    pub fn scaled(self, f: f32) -> Spacing {
+        match self {
+            Spacing::Adaptive { bias } => Spacing::Adaptive { bias: bias * f },
+            Spacing::Uniform { spacing } => Spacing::Uniform {
+                spacing: spacing * f,
+            },
+        }
+    }
+}
+
+/// [`slice_depths`] would need more slices than its limit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TooManySlices {
+    /// A bounded estimate of how many the depth range needs (always > `limit`).
+    pub needed: usize,
+    pub limit: usize,
+}
+
+/// World size of a level-0 voxel: per cell, the affine map uvw → world (from vertices
+/// 0, 1, 2, 3) scaled by the level-0 dims, `cbrt(|det J| / (w·h·d))` (the geometric
+/// mean of the three voxel edge lengths); the minimum over the cells (the finest).
+/// `None` when no cell has a non-degenerate uvw mapping.
+pub fn voxel_size(cells: &[Prism], dims: [u32; 3]) -> Option<f32> {
+    let n = f64::from(dims[0]) * f64::from(dims[1]) * f64::from(dims[2]);
+    let mut best: Option<f32> = None;
+    for c in cells {
+        let p = |i: usize| Vec3::from(c.pos[i]) - Vec3::from(c.pos[0]);
+        let t = |i: usize| Vec3::from(c.uvw[i]) - Vec3::from(c.uvw[0]);
+        let pm = Mat3::from_cols(p(1), p(2), p(3));
+        let tm = Mat3::from_cols(t(1), t(2), t(3));
+        let dt = f64::from(tm.determinant());
+        if dt.abs() < 1e-12 {
+            continue;
+        }
+        let v = (f64::from(pm.determinant()) / dt).abs() / n;
+        let s = v.cbrt() as f32;
+        if s > 0.0 && s.is_finite() {
+            best = Some(best.map_or(s, |b| b.min(s)));
+        }
+    }
+    best
+}
+
+/// Slice depths and spacings `(depth, d)`, **front to back**, over `[z_min, z_max]`.
+/// `pixel_size_at(z)`: the world size of one pixel at view depth `z` (the camera's,
+/// e.g. [`crate::camera::Camera::pixel_size_at`]); `v0`: [`voxel_size`]; at most
+/// `limit` slices.
+pub fn slice_depths(
+    pixel_size_at: impl Fn(f32) -> f32,
+    spacing: Spacing,
+    v0: f32,
+    z_min: f32,
+    z_max: f32,
+    limit: usize,
+) -> Result<Vec<(f32, f32)>, TooManySlices> {
+    let d_at = |z: f32| match spacing {
+        Spacing::Adaptive { bias } => bias * pixel_size_at(z).max(v0),
+        Spacing::Uniform { spacing } => spacing,
+    };
+    let mut out = Vec::new();
+    let mut z = z_min + 0.5 * d_at(z_min);
+    while z < z_max {
+        if out.len() >= limit {
+            // Count how many would be needed (bounded estimate) for the message.
+            let needed = ((z_max - z_min) / d_at(z_min).max(f32::MIN_POSITIVE)) as usize;
+            return Err(TooManySlices {
+                needed: needed.max(limit + 1),
+                limit,
+            });
+        }
+        let d = d_at(z);
+        out.push((z, d));
+        let next = z + d;
+        if !(next > z) {
+            break; // spacing below f32 resolution at this depth
+        }
+        z = next;
+    }
+    Ok(out)
+}
+
+/// The matrix taking a volume's stored normals to view space, for one cell (`view_cell`:
+/// its vertices in view space, `uvw` its texture coordinates), used by the CPU slicer and
+/// the viewer's volume plan alike (the viewer's `object_to_view` is the linear part of
+/// camera view × instance):
+///
+/// - a box asset's normals are in its object space, which the cells' positions are given
+///   in: the normal matrix of `object_to_view` (the inverse transpose of its linear part;
+///   a rotation for the CPU slicer's camera, where objects are not transformed);
+/// - a shell's (`shell`: repeat addressing) are in the tile's space, which uvw addresses
+///   (a tile baked on the unit box, as `billow shell` expects): the inverse transpose of
+///   the cell's uvw → view Jacobian (from vertices 0, 1, 2, 3), so the fur of a torus
+///   turns with its surface.
+///
+/// Only the direction of the result matters ([`shade_normal`] keeps the Toksvig length).
+/// A degenerate map gives the zero matrix (unlit: the ambient term).
+pub fn normal_matrix(
+    object_to_view: Mat3,
+    shell: bool,
+    view_cell: &[[f32; 3]; 6],
+    uvw: &[[f32; 3]; 6],
+) -> Mat3 {
+    let m = if shell {
+        let p = |i: usize| Vec3::from(view_cell[i]) - Vec3::from(view_cell[0]);
+        let t = |i: usize| Vec3::from(uvw[i]) - Vec3::from(uvw[0]);
+        let pm = Mat3::from_cols(p(1), p(2), p(3));
+        let tm = Mat3::from_cols(t(1), t(2), t(3));
+        if tm.determinant().abs() < 1e-20 {
+            return Mat3::ZERO;
+        }
+        pm * tm.inverse()
+    } else {
+        object_to_view
+    };
+    let det = m.determinant();
+    if !(det.abs() > 1e-30 && det.is_finite()) {
+        return Mat3::ZERO;
+    }
+    m.inverse().transpose()
+}
+
+/// A stored-frame Toksvig normal `n` (`|n| ≤ 1`) in view space: the direction of
+/// `nmat · n` with the length of `n` (the roughness stays the stored one).
+#[inline]
+pub fn shade_normal(nmat: Mat3, n: Vec3) -> Vec3 {
+    let v = nmat * n;
+    let l = v.length();
+    if l > 0.0 && l.is_finite() {
+        v * (n.length() / l)
+    } else {
+        Vec3::ZERO
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Uniform spacing: `z₀ = z_min + d/2`, then steps of `d`, front to back, below
+    /// `z_max`; the limit is an error naming more than it.
+    #[test]
+    fn uniform_slices_start_half_a_step_in_and_stop_at_the_limit() {
+        let s = Spacing::Uniform { spacing: 0.5 };
+        let d = slice_depths(|_| 1.0, s, 0.1, 1.0, 3.0, 100).unwrap();
+        assert_eq!(d, vec![(1.25, 0.5), (1.75, 0.5), (2.25, 0.5), (2.75, 0.5)]);
+        let e = slice_depths(|_| 1.0, s, 0.1, 1.0, 3.0, 3).unwrap_err();
+        assert_eq!(e.limit, 3);
+        assert!(e.needed > 3);
+    }
+
+    /// Adaptive spacing follows the pixel footprint, never finer than `v₀`, times `bias`.
+    #[test]
+    fn adaptive_spacing_is_bias_times_max_of_pixel_and_voxel() {
+        let s = Spacing::Adaptive { bias: 2.0 };
+        let d = slice_depths(|z| 0.01 * z, s, 0.05, 1.0, 20.0, 10_000).unwrap();
+        for &(z, dz) in &d {
+            assert_eq!(dz, 2.0 * (0.01 * z).max(0.05), "{z}");
+        }
+        assert!(d.windows(2).all(|w| w[1].0 == w[0].0 + w[0].1));
+        assert_eq!(s.scaled(0.5), Spacing::Adaptive { bias: 1.0 });
+    }
+}
