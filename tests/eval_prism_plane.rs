@@ -429,3 +429,95 @@ proptest! {
         sweep(&p);
     }
 }
+
+/// Issue 25, item 5: the twisted prisms of a real shell — the furry torus's (the gallery's
+/// `billow shell` of procgen's torus, here 24 × 12 segments, 0.15 thick, as in
+/// fixtures/scenes/gallery/furry_torus.ron) — seen from four cameras and cut by planes at
+/// every vertex depth, its f32 neighbours and between them: each section against the f64
+/// crossings of the same prism (`check_with`: every vertex finite, exactly on the plane,
+/// on a distinct crossing edge at the f64 parameter within 2e-6 × scale, with its uvw;
+/// prisms with planar sides also convex, counter-clockwise, of the f64 hull's area).
+#[test]
+fn furry_torus_shell_prisms_against_f64() {
+    let surface = billow::procgen::torus(1.0, 0.35, 24, 12);
+    let prisms = billow::shell::shell_prisms(&surface, 0.15, glam::Vec2::new(4.0, 2.0)).unwrap();
+    assert_eq!(prisms.len(), 24 * 12 * 2);
+    let eyes = [
+        glam::Vec3::new(2.9, 2.3, 3.2),
+        glam::Vec3::new(0.0, 4.0, 0.01),
+        glam::Vec3::new(-3.5, 0.2, 0.4),
+        glam::Vec3::new(0.3, -0.1, 0.2), // inside the ring
+    ];
+    let (mut sections, mut twisted_n, mut twisted_cut) = (0usize, 0usize, 0usize);
+    for eye in eyes {
+        // Right-handed look-at (camera looks down −z).
+        let f = (-eye).normalize();
+        let r = f.cross(glam::Vec3::Y).normalize();
+        let u = r.cross(f);
+        let view = glam::Mat4::from_cols(
+            glam::Vec4::new(r.x, u.x, -f.x, 0.0),
+            glam::Vec4::new(r.y, u.y, -f.y, 0.0),
+            glam::Vec4::new(r.z, u.z, -f.z, 0.0),
+            glam::Vec4::new(-r.dot(eye), -u.dot(eye), f.dot(eye), 1.0),
+        );
+        for pr in &prisms {
+            let p: P6 = pr
+                .pos
+                .map(|v| view.transform_point3(glam::Vec3::from(v)).to_array());
+            // Twisted: any side face whose corners are not coplanar beyond f32 rounding,
+            // relative to the prism's own size (not the camera-space coordinates').
+            let w = |i: usize| glam::DVec3::from(pr.pos[i].map(f64::from));
+            let ext = (0..6)
+                .flat_map(|i| (0..6).map(move |j| (i, j)))
+                .map(|(i, j)| (w(i) - w(j)).length())
+                .fold(0.0, f64::max);
+            let tw = [(0, 1), (1, 2), (2, 0)].iter().any(|&(k, j)| {
+                let (a, b, c, d) = (w(k), w(j), w(j + 3), w(k + 3));
+                (b - a).cross(c - a).dot(d - a).abs() > 1e-6 * ext.powi(3)
+            });
+            twisted_n += usize::from(tw);
+            let mut zs: Vec<f32> = p.iter().map(|v| v[2]).collect();
+            zs.sort_by(f32::total_cmp);
+            let mids: Vec<f32> = zs.windows(2).map(|w| 0.5 * (w[0] + w[1])).collect();
+            for z in mids {
+                let poly = check_with(&p, z, !tw);
+                sections += usize::from(poly.count >= 3);
+                twisted_cut += usize::from(tw && poly.count >= 3);
+            }
+            sweep_with(&p, !tw);
+        }
+    }
+    // The shell really has twisted prisms (its normals are not coplanar along the edges).
+    assert!(
+        twisted_n > 100 && twisted_cut > 100,
+        "{twisted_n} twisted, {twisted_cut} cut"
+    );
+    assert!(sections > 10_000, "{sections}");
+}
+
+/// Issue 25, item 5: NaN or infinite prism input gives a defined result — the empty
+/// section, no panic, never a NaN vertex — whichever coordinate (position x, y or z,
+/// uvw) of whichever vertex it is in.
+#[test]
+fn nan_prism_input_gives_an_empty_section() {
+    let base = boxed([0.0, 0.0, 0.0], [1.0, 1.0, 1.0])[0];
+    let uvw = uvw_of(&base);
+    for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+        for v in 0..6 {
+            for c in 0..3 {
+                let mut p = base;
+                p[v][c] = bad;
+                for z in [0.0, 0.25, 0.5, 1.0] {
+                    let poly = intersect_prism_plane(&p, &uvw, z);
+                    assert!(poly.is_empty(), "pos[{v}][{c}] = {bad}, z {z}: {poly:?}");
+                }
+                let mut t = uvw;
+                t[v][c] = bad;
+                let poly = intersect_prism_plane(&base, &t, 0.5);
+                assert!(poly.is_empty(), "uvw[{v}][{c}] = {bad}: {poly:?}");
+            }
+        }
+        let poly = intersect_prism_plane(&base, &uvw, bad);
+        assert!(poly.is_empty(), "z_slice {bad}: {poly:?}");
+    }
+}

@@ -132,6 +132,9 @@ struct Summary {
     width: u32,
     height: u32,
     passes: Vec<&'static str>,
+    /// What the renderer built and what the last frame encoded (tests compare its
+    /// `pass_list` with `passes`).
+    record: billow_view::gpu::RenderRecord,
     frames: u32,
     /// Mean and minimum wall time per frame (encode, submit, wait for the GPU), ms.
     frame_ms_mean: f64,
@@ -455,7 +458,8 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         min = min.min(s);
         first.get_or_insert(s);
     }
-    let img = target.read(&r.gpu).map_err(view_err)?;
+    let img = r.read(&target).map_err(view_err)?;
+    let record = r.record();
     let bg = background.map(|b| b.extend(1.0));
     let image = ImageF32 {
         width: img.width,
@@ -488,6 +492,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         width,
         height,
         passes,
+        record,
         frames,
         frame_ms_mean: 1e3 * total / f64::from(frames),
         frame_ms_min: 1e3 * min,

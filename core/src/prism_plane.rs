@@ -62,7 +62,8 @@
 //! points (still at most 5, each on a distinct crossing edge, inside the prism's hull)
 //! may not be in convex order. Prisms with planar side faces never hit this.
 
-// `!(a < b)` comparisons are deliberate: they also catch NaN.
+// `!(a < b)` comparisons are deliberate: they also catch NaN. Non-finite input gives the
+// empty polygon (checked first).
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 /// Section polygon: `count` is 0 or 3..=5; entries beyond `count` are zero.
@@ -93,6 +94,12 @@ pub fn intersect_prism_plane(
     uvw: &[[f32; 3]; 6],
     z_slice: f32,
 ) -> SlicePolygon {
+    // Non-finite input (a NaN or infinite coordinate, a NaN plane) has no section: the
+    // defined result is the empty polygon, never a NaN vertex.
+    let finite = |v: &[f32; 3]| v.iter().all(|c| c.is_finite());
+    if !(z_slice.is_finite() && pos.iter().all(finite) && uvw.iter().all(finite)) {
+        return SlicePolygon::EMPTY;
+    }
     let mut above = [false; 6];
     for i in 0..6 {
         above[i] = pos[i][2] >= z_slice;

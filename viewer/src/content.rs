@@ -39,7 +39,7 @@ pub struct Needs {
 }
 
 /// The work of a frame with `n`, in order. First what is computed once at load, prefixed
-/// `bake:` (the detail noise with any particles, the phase LUT only with dust or smoke,
+/// `bake:` (the detail noise only with particle `detail > 0` or shimmer, the phase LUT only with dust or smoke,
 /// the black-body LUT only with fire), then per frame: `animate:cells` only with animated
 /// volumes, `shadow` only with shadows on and something to cast, `mesh` only with meshes
 /// (a ground, cloud trunks), `cloud` only with clouds, `volume` only with volumes,
@@ -48,7 +48,7 @@ pub struct Needs {
 pub fn pass_list(n: Needs) -> Vec<&'static str> {
     let pn = n.particles;
     [
-        (pn.any, "bake:detail-noise"),
+        (pn.detail, "bake:detail-noise"),
         (pn.scattering, "bake:phase-lut"),
         (pn.fire, "bake:blackbody-lut"),
         (n.animated, "animate:cells"),

@@ -5,8 +5,13 @@
 //! make ([`Gpu::resources_created`]): a frame that makes none shows as a count that stops
 //! growing (`viewer/tests/frame_resources.rs`). The cloud pass keeps its own count
 //! ([`crate::Renderer::cloud_resources_created`]).
+//!
+//! It also keeps the [`RenderRecord`]: what the renderer built at load (pipelines, LUT
+//! bakes, the shadow map) and which passes the last frame encoded, written where each is
+//! made or encoded, so tests compare what *runs* with `--print-passes` (issue 25).
 
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Mutex;
 
 use crate::ViewError;
 
@@ -19,6 +24,35 @@ pub struct Gpu {
     pub info: wgpu::AdapterInfo,
     /// Buffers, bind groups and textures made through this wrapper so far.
     created: AtomicU64,
+    record: Mutex<RenderRecord>,
+}
+
+/// What the renderer built and encoded, as it did it ([`Gpu::record`]).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct RenderRecord {
+    /// Made once, in the order made: `bake:…` (the particle tables and noise),
+    /// `pipeline:…` (each render pipeline), `texture:shadow-map`.
+    pub built: Vec<&'static str>,
+    /// The passes the last frame encoded, in order, each once (`animate:cells`, `shadow`,
+    /// `mesh`, `cloud`, `volume`, `particles`, `motion-blur`, `shimmer`, `composite`),
+    /// then `resolve` once the frame was read back or shown.
+    pub passes: Vec<&'static str>,
+}
+
+impl RenderRecord {
+    /// The bakes, then the frame's passes: the form of `--print-passes`.
+    pub fn pass_list(&self) -> Vec<&'static str> {
+        self.built
+            .iter()
+            .copied()
+            .filter(|b| b.starts_with("bake:"))
+            .chain(self.passes.iter().copied())
+            .collect()
+    }
+
+    pub fn built(&self, what: &str) -> bool {
+        self.built.contains(&what)
+    }
 }
 
 impl Gpu {
@@ -91,6 +125,7 @@ impl Gpu {
             queue,
             info,
             created: AtomicU64::new(0),
+            record: Mutex::new(RenderRecord::default()),
         })
     }
 
@@ -123,6 +158,40 @@ impl Gpu {
 
     fn count(&self) {
         self.created.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// What was built and what the last frame encoded ([`RenderRecord`]).
+    pub fn record(&self) -> RenderRecord {
+        self.record
+            .lock()
+            .map_or_else(|e| e.into_inner().clone(), |r| r.clone())
+    }
+
+    fn with_record(&self, f: impl FnOnce(&mut RenderRecord)) {
+        match self.record.lock() {
+            Ok(mut r) => f(&mut r),
+            Err(e) => f(&mut e.into_inner()),
+        }
+    }
+
+    /// Notes something built once (a pipeline, a bake, the shadow map).
+    pub fn note_built(&self, what: &'static str) {
+        self.with_record(|r| r.built.push(what));
+    }
+
+    /// Starts the record of a frame's passes.
+    pub fn note_frame_start(&self) {
+        self.with_record(|r| r.passes.clear());
+    }
+
+    /// Notes that the frame encoded `pass` (once per frame: cascades and time samples
+    /// repeat it).
+    pub fn note_pass(&self, pass: &'static str) {
+        self.with_record(|r| {
+            if !r.passes.contains(&pass) {
+                r.passes.push(pass)
+            }
+        });
     }
 
     /// An uninitialised buffer of `size` bytes (at least 4) for `usage`.

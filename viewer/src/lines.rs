@@ -73,6 +73,7 @@ impl LinePass {
             ..Pipeline::new("cell wireframe", &pl, &module)
         }
         .build(device);
+        gpu.note_built("pipeline:lines");
         let frame = gpu.empty_buffer(
             "lines frame",
             std::mem::size_of::<LineFrame>() as u64,

@@ -158,6 +158,8 @@ impl MeshPass {
         };
         let pipeline = make("mesh", "fs_main", true);
         let shadow_pipeline = make("mesh shadow", "fs_shadow", false);
+        gpu.note_built("pipeline:mesh");
+        gpu.note_built("pipeline:mesh-shadow");
         let sampler = repeat_sampler(device, "mesh texture");
         let white =
             upload_rgba8_mips(gpu, &TextureData::white(), "white").create_view(&Default::default());

@@ -1,7 +1,8 @@
 //! What the particle layer is and what it needs (scene file `particle_layer`), and the
 //! tables and textures baked for it — only those its systems need ([`ParticleNeeds`]):
-//! the phase LUT with dust or smoke, the black-body LUT with fire, the detail noise with
-//! any particles. A table a scene does not need is a 1×1 stand-in, never sampled.
+//! the phase LUT with dust or smoke, the black-body LUT with fire, the detail noise when
+//! some system has `detail > 0` or with heat shimmer. A LUT a scene does not need is a
+//! 1×1 stand-in, never sampled; the noise is not made at all without it.
 
 use serde::Deserialize;
 use wgpu::util::DeviceExt;
@@ -81,24 +82,31 @@ pub struct ParticleNeeds {
     pub fire: bool,
     pub shimmer: bool,
     pub motion_blur: bool,
+    /// The detail noise: some system has `detail > 0`, or heat shimmer (its offsets are
+    /// noise). Without it the noise is neither baked nor bound, and the particle shader
+    /// is built without the code that samples it.
+    pub detail: bool,
 }
 
 impl ParticleNeeds {
     pub fn of(systems: &[ParticleSystemDesc], layer: &ParticleLayerDesc) -> ParticleNeeds {
         let fire = systems.iter().any(|s| s.kind == ParticleKind::Fire);
+        let shimmer = fire && layer.shimmer.is_some_and(|s| s > 0.0);
         ParticleNeeds {
             any: !systems.is_empty(),
             scattering: systems.iter().any(|s| s.kind != ParticleKind::Fire),
             fire,
-            shimmer: fire && layer.shimmer.is_some_and(|s| s > 0.0),
+            shimmer,
             motion_blur: !systems.is_empty() && layer.motion_blur.is_some(),
+            detail: shimmer || systems.iter().any(|s| s.detail > 0.0),
         }
     }
 }
 
 /// The baked tables and textures the particle shader samples.
 pub(crate) struct Bakes {
-    pub detail: wgpu::TextureView,
+    /// Only with [`ParticleNeeds::detail`].
+    pub detail: Option<wgpu::TextureView>,
     pub phase: wgpu::TextureView,
     pub blackbody: wgpu::TextureView,
     pub dummy: wgpu::TextureView,
@@ -106,8 +114,33 @@ pub(crate) struct Bakes {
 
 impl Bakes {
     pub fn new(gpu: &Gpu, needs: ParticleNeeds) -> Bakes {
+        let detail = needs.detail.then(|| {
+            gpu.note_built("bake:detail-noise");
+            gpu.device
+                .create_texture_with_data(
+                    &gpu.queue,
+                    &wgpu::TextureDescriptor {
+                        label: Some("detail noise"),
+                        size: wgpu::Extent3d {
+                            width: noise::SIDE as u32,
+                            height: noise::SIDE as u32,
+                            depth_or_array_layers: noise::FRAMES as u32,
+                        },
+                        mip_level_count: 1,
+                        sample_count: 1,
+                        dimension: wgpu::TextureDimension::D3,
+                        format: wgpu::TextureFormat::R8Unorm,
+                        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                        view_formats: &[],
+                    },
+                    wgpu::util::TextureDataOrder::LayerMajor,
+                    &noise::detail_texture(7),
+                )
+                .create_view(&Default::default())
+        });
         let dummy = texture_2d(gpu, 1, 1, wgpu::TextureFormat::Rgba16Float, &[0; 8]);
         let phase = if needs.scattering {
+            gpu.note_built("bake:phase-lut");
             let lut = phase::lut();
             texture_2d(
                 gpu,
@@ -120,6 +153,7 @@ impl Bakes {
             texture_2d(gpu, 1, 1, wgpu::TextureFormat::R16Float, &[0; 2])
         };
         let blackbody = if needs.fire {
+            gpu.note_built("bake:blackbody-lut");
             let lut = blackbody::lut();
             texture_2d(
                 gpu,
@@ -131,28 +165,6 @@ impl Bakes {
         } else {
             texture_2d(gpu, 1, 1, wgpu::TextureFormat::Rgba16Float, &[0; 8])
         };
-        let detail = gpu
-            .device
-            .create_texture_with_data(
-                &gpu.queue,
-                &wgpu::TextureDescriptor {
-                    label: Some("detail noise"),
-                    size: wgpu::Extent3d {
-                        width: noise::SIDE as u32,
-                        height: noise::SIDE as u32,
-                        depth_or_array_layers: noise::FRAMES as u32,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D3,
-                    format: wgpu::TextureFormat::R8Unorm,
-                    usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-                    view_formats: &[],
-                },
-                wgpu::util::TextureDataOrder::LayerMajor,
-                &noise::detail_texture(7),
-            )
-            .create_view(&Default::default());
         Bakes {
             detail,
             phase,

@@ -6,7 +6,10 @@
 //! Only what the scene's particles need is built ([`ParticleNeeds`]): the phase LUT only
 //! with dust or smoke, the black-body LUT only with fire, the shimmer pipeline and target
 //! only with `shimmer`, the accumulation pipeline and target only with motion blur; the
-//! detail noise with any particles. Missing LUTs are 1×1 stand-ins never sampled.
+//! detail noise only when a system has `detail > 0` or with shimmer — without it the
+//! particle shader is built from `particle_no_detail.wgsl` (no noise binding, nothing
+//! sampled) and the bind group has no binding 3. Missing LUTs are 1×1 stand-ins never
+//! sampled.
 //!
 //! Order against the rest: the layer is composited after the volume slices, so particles
 //! are drawn over volumetric billboards wherever they overlap on screen — a particle
@@ -86,7 +89,7 @@ pub struct ParticlePass {
     composite: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
     comp_layout: wgpu::BindGroupLayout,
-    detail: wgpu::TextureView,
+    detail: Option<wgpu::TextureView>,
     phase: wgpu::TextureView,
     blackbody: wgpu::TextureView,
     dummy: wgpu::TextureView,
@@ -101,7 +104,14 @@ impl ParticlePass {
         let module = shader(
             device,
             "particles.wgsl",
-            &[include_str!("shaders/particles.wgsl")],
+            &[
+                include_str!("shaders/particles.wgsl"),
+                if needs.detail {
+                    include_str!("shaders/particle_detail.wgsl")
+                } else {
+                    include_str!("shaders/particle_no_detail.wgsl")
+                },
+            ],
         );
         let comp_module = shader(
             device,
@@ -117,18 +127,22 @@ impl ParticlePass {
             wgpu::TextureViewDimension::D2,
             wgpu::TextureViewDimension::D3,
         );
+        let entries: Vec<_> = [
+            entry(0, vf, uniform(false)),
+            entry(1, vf, storage()),
+            entry(2, fs, depth_texture()),
+            entry(3, fs, texture(d3)),
+            entry(4, fs, texture(d2)),
+            entry(5, fs, texture(d2)),
+            entry(6, fs, sampler()),
+            entry(7, fs, sampler()),
+        ]
+        .into_iter()
+        .filter(|e| needs.detail || e.binding != 3)
+        .collect();
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("particles"),
-            entries: &[
-                entry(0, vf, uniform(false)),
-                entry(1, vf, storage()),
-                entry(2, fs, depth_texture()),
-                entry(3, fs, texture(d3)),
-                entry(4, fs, texture(d2)),
-                entry(5, fs, texture(d2)),
-                entry(6, fs, sampler()),
-                entry(7, fs, sampler()),
-            ],
+            entries: &entries,
         });
         let comp_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("composite"),
@@ -211,6 +225,18 @@ impl ParticlePass {
             COLOR_FORMAT,
             wgpu::BlendState::REPLACE,
         );
+        gpu.note_built(if needs.detail {
+            "pipeline:particles"
+        } else {
+            "pipeline:particles-no-detail"
+        });
+        if needs.shimmer {
+            gpu.note_built("pipeline:shimmer");
+        }
+        if needs.motion_blur {
+            gpu.note_built("pipeline:motion-blur");
+        }
+        gpu.note_built("pipeline:composite");
         let Bakes {
             detail,
             phase,
@@ -403,6 +429,7 @@ impl ParticlePass {
                 &targets.layer
             };
             draws += self.pass(enc, &self.draw, &bind, parts.len(), into);
+            gpu.note_pass("particles");
             if times.len() > 1 {
                 // Add this sample into the layer with weight 1/N.
                 let cb = targets
@@ -428,10 +455,12 @@ impl ParticlePass {
                 rp.set_bind_group(0, cb, &[]);
                 rp.draw(0..3, 0..1);
                 draws += 1;
+                gpu.note_pass("motion-blur");
             }
             if k == 0 {
                 if let (Some(p), Some(target)) = (&self.shimmer, &targets.shimmer) {
                     draws += self.pass(enc, p, &bind, parts.len(), target);
+                    gpu.note_pass("shimmer");
                 }
             }
         }
@@ -446,6 +475,7 @@ impl ParticlePass {
         rp.set_pipeline(&self.composite);
         rp.set_bind_group(0, &targets.composite_bind, &[]);
         rp.draw(0..3, 0..1);
+        gpu.note_pass("composite");
         (drawn_now, draws + 1)
     }
 
@@ -508,7 +538,7 @@ impl ParticlePass {
                 return bind.clone();
             }
         }
-        let entries = [
+        let mut entries = vec![
             wgpu::BindGroupEntry {
                 binding: 0,
                 resource: slot.frame.as_entire_binding(),
@@ -520,10 +550,6 @@ impl ParticlePass {
             wgpu::BindGroupEntry {
                 binding: 2,
                 resource: wgpu::BindingResource::TextureView(depth),
-            },
-            wgpu::BindGroupEntry {
-                binding: 3,
-                resource: wgpu::BindingResource::TextureView(&self.detail),
             },
             wgpu::BindGroupEntry {
                 binding: 4,
@@ -542,6 +568,12 @@ impl ParticlePass {
                 resource: wgpu::BindingResource::Sampler(&self.smp_clamp),
             },
         ];
+        if let Some(detail) = &self.detail {
+            entries.push(wgpu::BindGroupEntry {
+                binding: 3,
+                resource: wgpu::BindingResource::TextureView(detail),
+            });
+        }
         let bind = gpu.bind_group(&wgpu::BindGroupDescriptor {
             label: Some("particles"),
             layout: &self.layout,

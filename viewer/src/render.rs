@@ -108,7 +108,11 @@ pub struct Renderer {
     receiver_layout: wgpu::BindGroupLayout,
     /// 1×1 stand-in bound where no shadow map is read.
     no_shadow: ShadowMap,
-    shadow_map: Option<ShadowMap>,
+    /// Shadows on ([`Renderer::set_shadows`]); the map is made by the first frame that
+    /// has something to cast (a scene with shadows on and nothing to cast never makes
+    /// its 2048² atlas).
+    shadows_on: bool,
+    shadow_map: std::cell::OnceCell<ShadowMap>,
     /// Light direction (towards the light) and ambient term.
     pub light_dir: Vec3,
     pub ambient: f32,
@@ -160,7 +164,8 @@ impl Renderer {
             clouds: Vec::new(),
             receiver_layout,
             no_shadow,
-            shadow_map: None,
+            shadows_on: false,
+            shadow_map: std::cell::OnceCell::new(),
             light_dir: Vec3::new(0.3, 1.0, 0.5).normalize(),
             ambient: 0.3,
             lod_distance_override: None,
@@ -211,7 +216,21 @@ impl Renderer {
     }
 
     pub fn shadows(&self) -> bool {
-        self.shadow_map.is_some()
+        self.shadows_on
+    }
+
+    /// What this renderer built (pipelines, bakes, the shadow map) and which passes its
+    /// last frame encoded ([`crate::gpu::RenderRecord`]); tests compare it with
+    /// [`Renderer::passes`] and `--print-passes`.
+    pub fn record(&self) -> crate::gpu::RenderRecord {
+        self.gpu.record()
+    }
+
+    /// Reads `target` back (the headless `resolve`, recorded as such).
+    pub fn read(&self, target: &Target) -> Result<RgbaImage, ViewError> {
+        let img = target.read(&self.gpu)?;
+        self.gpu.note_pass("resolve");
+        Ok(img)
     }
 
     /// Whether frames change with [`Renderer::time`] (particles, animated volume cells):
@@ -236,10 +255,13 @@ impl Renderer {
         pts
     }
 
-    /// Turns the shadow map on (built now) or off (dropped).
+    /// Turns shadows on (the map is made by the first frame with something to cast) or
+    /// off (the map dropped).
     pub fn set_shadows(&mut self, on: bool) {
-        self.shadow_map =
-            on.then(|| ShadowMap::new(&self.gpu, &self.receiver_layout, SHADOW_MAP_SIZE));
+        self.shadows_on = on;
+        if !on {
+            self.shadow_map = std::cell::OnceCell::new();
+        }
     }
 
     /// Adds a volume asset drawn once per transform in `instances` (they share its
@@ -341,7 +363,7 @@ impl Renderer {
             meshes: !self.meshes.is_empty(),
             clouds: !self.clouds.is_empty(),
             volumes: !self.volumes.is_empty(),
-            shadows: self.shadow_map.is_some(),
+            shadows: self.shadows_on,
             animated: self.volumes.iter().any(|v| v.animation.is_some()),
             particles: self
                 .particle_pass
@@ -395,6 +417,7 @@ impl Renderer {
             )));
         }
         let mut stats = FrameStats::default();
+        self.gpu.note_frame_start();
         let device = &self.gpu.device;
         let levels = self.cloud_levels(camera);
         stats.cloud_lods = levels.iter().map(|l| (l.level, l.morph)).collect();
@@ -413,8 +436,12 @@ impl Renderer {
         let mut enc = device.create_command_encoder(&Default::default());
 
         // 1. Shadow map.
-        let shadow = match &self.shadow_map {
-            Some(map) if self.has_casters() => {
+        let shadow = match self.shadows_on && self.has_casters() {
+            true => {
+                let map = self.shadow_map.get_or_init(|| {
+                    self.gpu.note_built("texture:shadow-map");
+                    ShadowMap::new(&self.gpu, &self.receiver_layout, SHADOW_MAP_SIZE)
+                });
                 let cs = shadow::cascades(self.light_dir, camera, self.content_bounds(), map.size);
                 self.gpu
                     .queue
@@ -428,7 +455,7 @@ impl Renderer {
                 }
                 Some((map, cs.base))
             }
-            _ => None,
+            false => None,
         };
         let receiver = shadow.map_or(&self.no_shadow.bind_group, |(m, _)| &m.bind_group);
         let world_to_shadow = shadow.map(|(_, l)| {
@@ -509,6 +536,9 @@ impl Renderer {
                 multiview_mask: None,
             });
             if let (Some(pass), Some(bind)) = (&self.mesh_pass, mesh_bind) {
+                if !self.meshes.is_empty() {
+                    self.gpu.note_pass("mesh");
+                }
                 for m in &self.meshes {
                     stats.mesh_triangles += m.triangles as usize;
                     stats.draw_calls += pass.draw(&mut rp, bind, receiver, m, false);
@@ -516,6 +546,7 @@ impl Renderer {
             }
             if let (Some(pass), Some(bind), Some(cf)) = (&self.cloud_pass, cloud_bind, &cloud_frame)
             {
+                self.gpu.note_pass("cloud");
                 stats.draw_calls += pass.draw(&mut rp, bind, receiver, cf, false);
             }
         }
@@ -547,6 +578,7 @@ impl Renderer {
                     .scene_depth
                     .get_or_init(|| pass.depth_bind_group(&self.gpu, &target.depth_view));
                 rp.set_bind_group(3, depth, &[]);
+                self.gpu.note_pass("volume");
                 stats.draw_calls += plan.draw(&mut rp, &pass.pipeline, &self.batches, receiver);
             }
             if let Some(lines) = &self.lines {
@@ -611,6 +643,7 @@ impl Renderer {
                 store: wgpu::StoreOp::Store,
             });
         }
+        self.gpu.note_pass("shadow");
         let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("shadow"),
             color_attachments: &[],
@@ -673,7 +706,7 @@ impl Renderer {
         camera.validate()?;
         let target = Target::new(&self.gpu, camera.width, camera.height);
         let stats = self.render(&target, camera)?;
-        Ok((target.read(&self.gpu)?, stats))
+        Ok((self.read(&target)?, stats))
     }
 }
 

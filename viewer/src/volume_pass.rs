@@ -291,6 +291,8 @@ impl VolumePass {
             ..Pipeline::new("volume shadow slices", &shadow_pl, &module)
         }
         .build(device);
+        gpu.note_built("pipeline:volume");
+        gpu.note_built("pipeline:volume-shadow");
         let mode = |r: bool| {
             if r {
                 wgpu::AddressMode::Repeat

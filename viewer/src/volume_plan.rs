@@ -240,7 +240,10 @@ pub fn plan(
                 .iter()
                 .map(|b| {
                     let local = match &v.animation {
-                        Some(a) => a.deform(&b.cells, v.bounds, time, ii as f32 * 2.399_963),
+                        Some(a) => {
+                            gpu.note_pass("animate:cells");
+                            a.deform(&b.cells, v.bounds, time, ii as f32 * 2.399_963)
+                        }
                         None => b.cells.clone(),
                     };
                     local

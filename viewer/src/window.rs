@@ -301,6 +301,7 @@ impl App {
             self.opts.background,
             Some(&line),
         );
+        st.renderer.gpu.note_pass("resolve");
         let submitted = st.renderer.gpu.queue.submit([enc.finish()]);
         st.window.pre_present_notify();
         st.renderer.gpu.queue.present(frame);

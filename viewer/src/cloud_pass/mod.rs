@@ -318,6 +318,7 @@ impl CloudPass {
             }
             .build(device)
         };
+        gpu.note_built("pipeline:cloud");
         let sampler = repeat_sampler(device, "cloud texture");
         let white =
             upload_rgba8_mips(gpu, &TextureData::white(), "white").create_view(&Default::default());

@@ -31,7 +31,8 @@ struct Particle {
 @group(0) @binding(0) var<uniform> pf: PFrame;
 @group(0) @binding(1) var<storage, read> parts: array<Particle>;
 @group(0) @binding(2) var scene_depth: texture_depth_2d;
-@group(0) @binding(3) var detail_tex: texture_3d<f32>;
+// Binding 3, the detail noise, and `detail_noise` are in particle_detail.wgsl (or its
+// stand-in particle_no_detail.wgsl, which samples nothing).
 @group(0) @binding(4) var phase_lut: texture_2d<f32>;
 @group(0) @binding(5) var bb_lut: texture_2d<f32>;
 @group(0) @binding(6) var smp_repeat: sampler;
@@ -118,11 +119,6 @@ fn scene_distance(frag: vec2<f32>) -> f32 {
     let near = pf.clip.x;
     let far = pf.clip.y;
     return near / (1.0 - z * (far - near) / far);
-}
-
-fn detail_noise(p: Particle, local: vec3<f32>) -> f32 {
-    let uvw = vec3<f32>(local.xy * 0.5 + p.detail.xy, pf.clip.z * 0.4 + p.detail.z);
-    return textureSampleLevel(detail_tex, smp_repeat, uvw, 0.0).r;
 }
 
 struct Shaded {
