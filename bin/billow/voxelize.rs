@@ -106,6 +106,10 @@ pub struct Args {
     /// --compress bc.
     #[arg(long)]
     prune: bool,
+    /// Refuse grids whose estimated peak memory (an upper bound, often several times the
+    /// real peak) exceeds this many GiB, > 0.
+    #[arg(long, value_name = "GIB", default_value_t = 16.0)]
+    memory_limit: f64,
     /// Also write a Makefile rule listing every file the bake read (the mesh, its buffers,
     /// textures and material libraries) as prerequisites of the outputs; committed with them.
     #[arg(long, value_name = "FILE")]
@@ -297,6 +301,16 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     }
     opts.align = align;
     opts.bake = parse_bake(&args.bake, args.ao_rays, args.ao_distance)?;
+    if !(args.memory_limit.is_finite() && args.memory_limit > 0.0) {
+        return Err(bad(
+            "--memory-limit",
+            format!(
+                "must be a positive number of GiB, got {}",
+                args.memory_limit
+            ),
+        ));
+    }
+    opts.memory_limit = (args.memory_limit * (1u64 << 30) as f64).min(u64::MAX as f64) as u64;
     let compression: Compression = args.compress.parse().map_err(|e| usage("--compress", e))?;
     if let Some(b) = &args.bounds {
         opts.bounds = Some(parse_bounds(b)?);

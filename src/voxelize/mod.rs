@@ -788,10 +788,10 @@ fn voxelize_as(
                 drop(zero);
                 progress(Stage::Combine, 1.0);
                 let mut out = vec![level0];
-                for l in 1..mips as usize {
+                for (l, &d) in dims.iter().enumerate().skip(1) {
                     let c = acc.finish_level_bricks(l);
                     let n = nacc.as_mut().map(|na| na.finish_level_bricks(l));
-                    out.push(sparse_level(dims[l], c, n));
+                    out.push(sparse_level(d, c, n));
                 }
                 times.combine += t.elapsed().as_secs_f64();
                 progress(Stage::Quantize, 1.0);
