@@ -5,12 +5,14 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use billow::compress::{compress_volume, Compression};
+use billow::emptyspace::{prune, prune_sparse, EmptySpaceOptions, EmptySpaceStats};
 use billow::export::{check_slices, ktx2_bytes, slice_bytes, slice_file_name, SliceFormat};
 use billow::import::{import, ImportOptions};
 use billow::provenance::{source_info, tool_version, with_companions};
 use billow::scene::Aabb;
 use billow::voxelize::{
-    bake_params, voxelize, Bake, CombineFn, Resolution, Stage, VoxelizeOptions,
+    bake_params, bake_params_for, voxelize, voxelize_sparse, Bake, CombineFn, Resolution, Stage,
+    VoxelizeOptions,
 };
 use glam::Vec3;
 use serde::Serialize;
@@ -98,6 +100,16 @@ pub struct Args {
     /// Treat import warnings (e.g. a missing texture) as errors.
     #[arg(long)]
     strict: bool,
+    /// Write the pruned volume (what `billow emptyspace` with its defaults makes of the
+    /// volume, byte for byte) straight from the brick-sparse working set, without ever
+    /// holding the dense volume: for large grids (1024³). Not with --ktx2, --slices or
+    /// --compress bc.
+    #[arg(long)]
+    prune: bool,
+    /// Refuse grids whose estimated peak memory (an upper bound, often several times the
+    /// real peak) exceeds this many GiB, > 0.
+    #[arg(long, value_name = "GIB", default_value_t = 16.0)]
+    memory_limit: f64,
     /// Also write a Makefile rule listing every file the bake read (the mesh, its buffers,
     /// textures and material libraries) as prerequisites of the outputs; committed with them.
     #[arg(long, value_name = "FILE")]
@@ -116,6 +128,8 @@ struct Seconds {
     combine: f64,
     quantize: f64,
     compress: f64,
+    /// With --prune: the empty-space removal.
+    prune: f64,
     write: f64,
     total: f64,
 }
@@ -144,6 +158,9 @@ struct Summary {
     non_empty_voxels: u64,
     fragments: u64,
     bytes: u64,
+    /// With --prune: what the empty-space removal did (as `billow emptyspace --json`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    prune: Option<EmptySpaceStats>,
     peak_memory_bytes: Option<u64>,
     seconds: Seconds,
     warnings: Vec<String>,
@@ -284,6 +301,16 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     }
     opts.align = align;
     opts.bake = parse_bake(&args.bake, args.ao_rays, args.ao_distance)?;
+    if !(args.memory_limit.is_finite() && args.memory_limit > 0.0) {
+        return Err(bad(
+            "--memory-limit",
+            format!(
+                "must be a positive number of GiB, got {}",
+                args.memory_limit
+            ),
+        ));
+    }
+    opts.memory_limit = (args.memory_limit * (1u64 << 30) as f64).min(u64::MAX as f64) as u64;
     let compression: Compression = args.compress.parse().map_err(|e| usage("--compress", e))?;
     if let Some(b) = &args.bounds {
         opts.bounds = Some(parse_bounds(b)?);
@@ -298,6 +325,23 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             ))
         }
     };
+    if args.prune {
+        let other = if args.ktx2.is_some() {
+            Some("--ktx2")
+        } else if args.slices.is_some() {
+            Some("--slices")
+        } else if compression == Compression::Bc {
+            Some("--compress bc")
+        } else {
+            None
+        };
+        if let Some(flag) = other {
+            return Err(usage(
+                "--prune",
+                format!("writes the pruned asset only and cannot be combined with {flag}"),
+            ));
+        }
+    }
     let mut outputs = vec![("-o", args.output.as_path())];
     outputs.extend(args.ktx2.as_deref().map(|k| ("--ktx2", k)));
     outputs.extend(args.depfile.as_deref().map(|k| ("--depfile", k)));
@@ -357,46 +401,59 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             format!("{stage:?}").to_lowercase()
         });
     };
-    let mut volume = voxelize(&scene, &opts, &report)
-        .or_else(|e| match e {
-            // auto: normals are an option, not a requirement; without them the bake may fit.
-            billow::voxelize::VoxelizeError::TooMuchMemory { .. }
-                if args.normals == NormalsArg::Auto =>
-            {
-                opts.normals = false;
-                voxelize(&scene, &opts, &report)
-            }
-            e => Err(e),
-        })
-        .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;
-    bar.finish();
-    // auto: keep the normals only where one normal per voxel describes the surface.
-    let mut coherence = None;
-    if args.normals == NormalsArg::Auto {
-        use billow::voxelize::toksvig::{normal_coherence, AUTO_NORMALS_LEVEL};
-        if let Some(n) = volume.normals.as_ref() {
-            let l = AUTO_NORMALS_LEVEL.min(volume.levels.len().saturating_sub(1));
-            let k = volume
-                .levels
-                .get(l)
-                .zip(n.get(l))
-                .and_then(|(c, n)| normal_coherence(c, n));
-            coherence = k;
-            if k.is_none_or(|k| k < billow::voxelize::toksvig::AUTO_NORMALS_MIN_COHERENCE) {
-                volume.normals = None;
-                opts.normals = false;
+    let mut pruned_stats = None;
+    let (mut asset, stats, dims, mip_count, coherence) = if args.prune {
+        let (asset, stats, dims, mips, coherence, ps) =
+            bake_pruned(&scene, &mut opts, args.normals, &report, &input, source)?;
+        bar.finish();
+        if let Some(note) = &ps.note {
+            warn(ctx, &format!("{input}: {note}"));
+        }
+        pruned_stats = Some(ps);
+        (asset, stats, dims, mips, coherence)
+    } else {
+        let mut volume = voxelize(&scene, &opts, &report)
+            .or_else(|e| match e {
+                // auto: normals are an option, not a requirement; without them the bake may fit.
+                billow::voxelize::VoxelizeError::TooMuchMemory { .. }
+                    if args.normals == NormalsArg::Auto =>
+                {
+                    opts.normals = false;
+                    voxelize(&scene, &opts, &report)
+                }
+                e => Err(e),
+            })
+            .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;
+        bar.finish();
+        // auto: keep the normals only where one normal per voxel describes the surface.
+        let mut coherence = None;
+        if args.normals == NormalsArg::Auto {
+            use billow::voxelize::toksvig::{normal_coherence, AUTO_NORMALS_LEVEL};
+            if let Some(n) = volume.normals.as_ref() {
+                let l = AUTO_NORMALS_LEVEL.min(volume.levels.len().saturating_sub(1));
+                let k = volume
+                    .levels
+                    .get(l)
+                    .zip(n.get(l))
+                    .and_then(|(c, n)| normal_coherence(c, n));
+                coherence = k;
+                if k.is_none_or(|k| k < billow::voxelize::toksvig::AUTO_NORMALS_MIN_COHERENCE) {
+                    volume.normals = None;
+                    opts.normals = false;
+                }
             }
         }
-    }
 
-    let stats = volume.stats;
-    let (dims, mip_count) = (volume.dims(), volume.mip_count());
-    let mut extra = BTreeMap::new();
-    if let Some(k) = coherence {
-        extra.insert("normal_coherence".to_string(), format!("{k:.3}"));
-    }
-    let params = bake_params(&volume, &opts, &extra);
-    let mut asset = volume.into_asset(&tool_version(), Some(source), params);
+        let stats = volume.stats;
+        let (dims, mip_count) = (volume.dims(), volume.mip_count());
+        let mut extra = BTreeMap::new();
+        if let Some(k) = coherence {
+            extra.insert("normal_coherence".to_string(), format!("{k:.3}"));
+        }
+        let params = bake_params(&volume, &opts, &extra);
+        let asset = volume.into_asset(&tool_version(), Some(source), params);
+        (asset, stats, dims, mip_count, coherence)
+    };
     let compress_start = Instant::now();
     let blocks = (compression == Compression::Bc).then(|| {
         asset.header.params.insert("compress".into(), "bc7".into());
@@ -443,6 +500,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     stage.commit_or_fail()?;
     let write_s = write_start.elapsed().as_secs_f64();
 
+    let prune_s = pruned_stats.as_ref().map_or(0.0, |p| p.seconds);
     let summary = Summary {
         input,
         output: args.output.display().to_string(),
@@ -457,6 +515,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         non_empty_voxels: stats.non_empty_voxels,
         fragments: stats.fragments,
         bytes,
+        prune: pruned_stats,
         peak_memory_bytes: peak_rss_bytes(),
         seconds: Seconds {
             import: import_s,
@@ -466,6 +525,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             combine: stats.seconds.combine,
             quantize: stats.seconds.quantize,
             compress: compress_s,
+            prune: prune_s,
             write: write_s,
             total: start.elapsed().as_secs_f64(),
         },
@@ -487,4 +547,103 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         );
     }
     Ok(())
+}
+
+/// `voxelize --prune`: the volume brick-sparse ([`voxelize_sparse`]), pruned by
+/// [`prune_sparse`] with `billow emptyspace`'s defaults; with an expression or custom
+/// combine (whose pyramids are dense anyway), the dense volume pruned by [`prune`]. Returns
+/// the pruned asset, the bake's statistics, the grid's dims and MIP count, the normal
+/// coherence `--normals auto` judged, and the prune's statistics.
+#[allow(clippy::type_complexity)]
+fn bake_pruned(
+    scene: &billow::scene::Scene,
+    opts: &mut VoxelizeOptions,
+    normals: NormalsArg,
+    report: &dyn Fn(Stage, f32),
+    input: &str,
+    source: billow_format::SourceInfo,
+) -> Result<
+    (
+        billow_format::VolumeAsset,
+        billow::voxelize::VoxelizeStats,
+        [u32; 3],
+        u32,
+        Option<f32>,
+        EmptySpaceStats,
+    ),
+    CliError,
+> {
+    use billow::voxelize::toksvig::{AUTO_NORMALS_LEVEL, AUTO_NORMALS_MIN_COHERENCE};
+    use billow::voxelize::VoxelizeError;
+    let err = |e: VoxelizeError| CliError::new(Code::from(&e), format!("{input}: {e}"));
+    let perr = |e: billow::emptyspace::EmptySpaceError| {
+        CliError::new(Code::from(&e), format!("{input}: {e}"))
+    };
+    let es = EmptySpaceOptions::default();
+    let keep = |k: Option<f32>| !k.is_none_or(|k| k < AUTO_NORMALS_MIN_COHERENCE);
+    if !matches!(opts.combine, CombineFn::Preset(_)) {
+        // Expressions and custom functions keep dense pyramids: prune the dense volume.
+        let mut volume = voxelize(scene, opts, report)
+            .or_else(|e| match e {
+                VoxelizeError::TooMuchMemory { .. } if normals == NormalsArg::Auto => {
+                    opts.normals = false;
+                    voxelize(scene, opts, report)
+                }
+                e => Err(e),
+            })
+            .map_err(err)?;
+        let mut coherence = None;
+        if normals == NormalsArg::Auto {
+            if let Some(n) = volume.normals.as_ref() {
+                let l = AUTO_NORMALS_LEVEL.min(volume.levels.len().saturating_sub(1));
+                let k = volume
+                    .levels
+                    .get(l)
+                    .zip(n.get(l))
+                    .and_then(|(c, n)| billow::voxelize::toksvig::normal_coherence(c, n));
+                coherence = k;
+                if !keep(k) {
+                    volume.normals = None;
+                    opts.normals = false;
+                }
+            }
+        }
+        let (stats, dims, mips) = (volume.stats, volume.dims(), volume.mip_count());
+        let mut extra = BTreeMap::new();
+        if let Some(k) = coherence {
+            extra.insert("normal_coherence".to_string(), format!("{k:.3}"));
+        }
+        let params = bake_params(&volume, opts, &extra);
+        let asset = volume.into_asset(&tool_version(), Some(source), params);
+        let p = prune(&asset, &es).map_err(perr)?;
+        return Ok((p.asset, stats, dims, mips, coherence, p.stats));
+    }
+    let mut volume = voxelize_sparse(scene, opts, report)
+        .or_else(|e| match e {
+            VoxelizeError::TooMuchMemory { .. } if normals == NormalsArg::Auto => {
+                opts.normals = false;
+                voxelize_sparse(scene, opts, report)
+            }
+            e => Err(e),
+        })
+        .map_err(err)?;
+    let mut coherence = None;
+    if normals == NormalsArg::Auto && volume.has_normals() {
+        let l = AUTO_NORMALS_LEVEL.min(volume.levels.len().saturating_sub(1));
+        let k = volume.normal_coherence(l);
+        coherence = k;
+        if !keep(k) {
+            volume.drop_normals();
+            opts.normals = false;
+        }
+    }
+    let (stats, dims, mips) = (volume.stats, volume.dims(), volume.mip_count());
+    let mut extra = BTreeMap::new();
+    if let Some(k) = coherence {
+        extra.insert("normal_coherence".to_string(), format!("{k:.3}"));
+    }
+    let params = bake_params_for(&volume.grid, opts, &extra);
+    let shell = volume.asset_shell(&tool_version(), Some(source), params);
+    let p = prune_sparse(&shell, volume.levels, &es).map_err(perr)?;
+    Ok((p.asset, stats, dims, mips, coherence, p.stats))
 }

@@ -32,6 +32,30 @@ pub fn fill_level(
     t: usize,
     bricks: &[Brick],
 ) {
+    let stride = [1, ns[0], ns[0] * ns[1]];
+    fill_level_with(
+        |p| {
+            let s = 4 * (p[0] * stride[0] + p[1] * stride[1] + p[2] * stride[2]);
+            [src[s], src[s + 1], src[s + 2], src[s + 3]]
+        },
+        ns,
+        dst,
+        nd,
+        t,
+        bricks,
+    );
+}
+
+/// [`fill_level`] reading the source texel at `p` (inside `ns`) through `src` (a
+/// brick-sparse source, [`super::sparse`]).
+pub fn fill_level_with(
+    src: impl Fn([usize; 3]) -> [u8; 4],
+    ns: [usize; 3],
+    dst: &mut [u8],
+    nd: [usize; 3],
+    t: usize,
+    bricks: &[Brick],
+) {
     for b in bricks {
         let size: [usize; 3] = b.perm.map(|p| b.size[p] * t);
         // Source texel of atlas-local texel j: along source axis perm[a], src·t + j[a].
@@ -40,17 +64,17 @@ pub fn fill_level(
             let v = b.src[s] * t as i64 + j as i64;
             v.clamp(0, ns[s] as i64 - 1) as usize
         };
-        let stride = [1, ns[0], ns[0] * ns[1]];
+        let mut p = [0usize; 3];
         for jz in 0..size[2] {
-            let oz = src_of(2, jz) * stride[b.perm[2]];
+            p[b.perm[2]] = src_of(2, jz);
             for jy in 0..size[1] {
-                let oy = oz + src_of(1, jy) * stride[b.perm[1]];
+                p[b.perm[1]] = src_of(1, jy);
                 let row =
                     4 * (b.dst[0] * t + nd[0] * (b.dst[1] * t + jy + nd[1] * (b.dst[2] * t + jz)));
                 for jx in 0..size[0] {
-                    let s = 4 * (oy + src_of(0, jx) * stride[b.perm[0]]);
+                    p[b.perm[0]] = src_of(0, jx);
                     let d = row + 4 * jx;
-                    dst[d..d + 4].copy_from_slice(&src[s..s + 4]);
+                    dst[d..d + 4].copy_from_slice(&src(p));
                 }
             }
         }

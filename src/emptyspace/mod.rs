@@ -25,6 +25,7 @@ pub mod bricks;
 pub mod kdtree;
 pub mod occupancy;
 pub mod pack;
+pub mod sparse;
 pub mod synthetic;
 pub mod tier;
 
@@ -36,6 +37,7 @@ use serde::Serialize;
 
 use self::kdtree::KdParams;
 use self::occupancy::{apply_threshold, TierSource};
+use self::sparse::{SparseLevel, SparseTier};
 use self::tier::{build_tier, Tier, TierParams};
 
 /// Header `params` key that marks a pruned asset (its value records the parameters).
@@ -220,6 +222,74 @@ fn level_bytes(levels: &[Vec<u8>], normals: Option<&[Vec<u8>]>, from: usize) -> 
     n(levels) + normals.map_or(0, n)
 }
 
+/// The levels a prune reads: dense bytes (an asset's) or brick-sparse ([`prune_sparse`]).
+enum Source {
+    Dense {
+        levels: Vec<Vec<u8>>,
+        normals: Option<Vec<Vec<u8>>>,
+    },
+    Sparse(Vec<SparseLevel>),
+}
+
+impl Source {
+    /// Texel bytes of levels `from..` (stored densely).
+    fn bytes_from(&self, from: usize) -> u64 {
+        match self {
+            Source::Dense { levels, normals } => level_bytes(levels, normals.as_deref(), from),
+            Source::Sparse(l) => l.iter().skip(from).map(SparseLevel::dense_bytes).sum(),
+        }
+    }
+    fn all_zero(&self) -> bool {
+        match self {
+            Source::Dense { levels, .. } => levels.iter().all(|l| l.iter().all(|&b| b == 0)),
+            Source::Sparse(l) => l.iter().all(SparseLevel::is_zero),
+        }
+    }
+    /// Levels `from..`, dense (colour, normals).
+    fn dense_from(&self, from: usize) -> (Vec<Vec<u8>>, Option<Vec<Vec<u8>>>) {
+        match self {
+            Source::Dense { levels, normals } => (
+                levels[from..].to_vec(),
+                normals.as_ref().map(|n| n[from..].to_vec()),
+            ),
+            Source::Sparse(l) => {
+                let d: Vec<_> = l[from..].iter().map(SparseLevel::to_dense).collect();
+                let has_n = d.first().is_some_and(|x| x.1.is_some());
+                let normals =
+                    has_n.then(|| d.iter().map(|x| x.1.clone().unwrap_or_default()).collect());
+                (d.into_iter().map(|x| x.0).collect(), normals)
+            }
+        }
+    }
+    fn build_tier(
+        &self,
+        k: usize,
+        n: [usize; 3],
+        world: (Vec3, Vec3),
+        p: &TierParams,
+    ) -> Option<Tier> {
+        match self {
+            Source::Dense { levels, normals } => {
+                let src = TierSource {
+                    n,
+                    colour: [&levels[k], &levels[k + 1]],
+                    normals: normals
+                        .as_ref()
+                        .map(|nr| [nr[k].as_slice(), nr[k + 1].as_slice()]),
+                };
+                build_tier(&src, world, p)
+            }
+            Source::Sparse(l) => build_tier(
+                &SparseTier {
+                    levels: [&l[k], &l[k + 1]],
+                },
+                world,
+                p,
+            ),
+        }
+    }
+}
+
 /// Removes the empty space of `asset` (see the module docs).
 pub fn prune(asset: &VolumeAsset, o: &EmptySpaceOptions) -> Result<Pruned, EmptySpaceError> {
     let start = Instant::now();
@@ -236,9 +306,6 @@ pub fn prune(asset: &VolumeAsset, o: &EmptySpaceOptions) -> Result<Pruned, Empty
         return Err(EmptySpaceError::HasBands);
     }
     check_options(o)?;
-    let vh = asset.header.volume.expect("validated volume header");
-    let dims0 = vh.dims;
-    let world = world_box(&asset.cells)?;
     // The source as it will be kept: faint texels dropped.
     let mut levels = asset.levels.clone();
     let mut normals = asset.normals.clone();
@@ -249,7 +316,72 @@ pub fn prune(asset: &VolumeAsset, o: &EmptySpaceOptions) -> Result<Pruned, Empty
             o.threshold,
         );
     }
-    let before = asset.texel_bytes();
+    prune_source(asset, Source::Dense { levels, normals }, o, start)
+}
+
+/// [`prune`] of a volume given brick-sparse: `asset` carries the header and cells (its
+/// `levels` are ignored, and `normals` need only be `Some` when `levels` have normals),
+/// `levels` the MIP levels `0..mip_count` of the header's dims. The result is the same
+/// as [`prune`] of the dense asset, byte for byte; the dense volume is never
+/// materialised (only the levels stored whole, the tail, and all of them when no brick
+/// layout pays off).
+pub fn prune_sparse(
+    asset: &VolumeAsset,
+    mut levels: Vec<SparseLevel>,
+    o: &EmptySpaceOptions,
+) -> Result<Pruned, EmptySpaceError> {
+    let start = Instant::now();
+    check_options(o)?;
+    let bad = |m: String| Err(EmptySpaceError::InvalidAsset(m));
+    let Some(vh) = asset.header.volume else {
+        return bad("header has no `volume` section".into());
+    };
+    if levels.len() != vh.mip_count as usize {
+        return bad(format!(
+            "{} sparse levels for {} MIP levels",
+            levels.len(),
+            vh.mip_count
+        ));
+    }
+    for (l, s) in levels.iter().enumerate() {
+        let d = mip_dims(vh.dims, l as u32).map(|d| d as usize);
+        if s.dims != d || s.has_normals() != vh.normals.is_some() {
+            return bad(format!("sparse level {l} is {:?}, expected {d:?}", s.dims));
+        }
+    }
+    if asset.header.params.contains_key("shell") {
+        return Err(EmptySpaceError::Shell);
+    }
+    if let Some(v) = asset.header.params.get(PARAM_KEY) {
+        return Err(EmptySpaceError::AlreadyPruned(v.clone()));
+    }
+    if !asset.bands.is_empty() {
+        return Err(EmptySpaceError::HasBands);
+    }
+    for l in &mut levels {
+        l.apply_threshold(o.threshold);
+    }
+    let shell = VolumeAsset {
+        header: asset.header.clone(),
+        levels: Vec::new(),
+        normals: vh.normals.map(|_| Vec::new()),
+        bands: Vec::new(),
+        cells: asset.cells.clone(),
+    };
+    prune_source(&shell, Source::Sparse(levels), o, start)
+}
+
+/// The prune of `src`, whose header and cells are `asset`'s (see the module docs).
+fn prune_source(
+    asset: &VolumeAsset,
+    src: Source,
+    o: &EmptySpaceOptions,
+    start: Instant,
+) -> Result<Pruned, EmptySpaceError> {
+    let vh = asset.header.volume.expect("validated volume header");
+    let dims0 = vh.dims;
+    let world = world_box(&asset.cells)?;
+    let before = src.bytes_from(0);
     let mut stats = EmptySpaceStats {
         boxes: 0,
         cells: asset.cells.len(),
@@ -269,7 +401,7 @@ pub fn prune(asset: &VolumeAsset, o: &EmptySpaceOptions) -> Result<Pruned, Empty
         seconds: 0.0,
     };
     let mut out = asset.clone();
-    let all_zero = levels.iter().all(|l| l.iter().all(|&b| b == 0));
+    let all_zero = src.all_zero();
     let Some(world) = world.filter(|_| !all_zero) else {
         empty_asset(&mut out, o, dims0);
         stats.cells = 0;
@@ -301,14 +433,7 @@ pub fn prune(asset: &VolumeAsset, o: &EmptySpaceOptions) -> Result<Pruned, Empty
             }
             break;
         }
-        let src = TierSource {
-            n: n.map(|d| d as usize),
-            colour: [&levels[k as usize], &levels[k as usize + 1]],
-            normals: normals
-                .as_ref()
-                .map(|nr| [nr[k as usize].as_slice(), nr[k as usize + 1].as_slice()]),
-        };
-        match build_tier(&src, world, &tier_params(k)) {
+        match src.build_tier(k as usize, n.map(|d| d as usize), world, &tier_params(k)) {
             Some(t) => tiers.push(t),
             None => break,
         }
@@ -316,10 +441,7 @@ pub fn prune(asset: &VolumeAsset, o: &EmptySpaceOptions) -> Result<Pruned, Empty
     // The tail level K: the most tiers whose bytes are within 1 % of the fewest bytes
     // (coarse tiers cost next to nothing and cut the fragments of distant views), each
     // of them leaving out at least a tenth of its level.
-    let cost = |k: usize| {
-        tiers[..k].iter().map(Tier::bytes).sum::<u64>()
-            + level_bytes(&levels, normals.as_deref(), k)
-    };
+    let cost = |k: usize| tiers[..k].iter().map(Tier::bytes).sum::<u64>() + src.bytes_from(k);
     let least = (0..=tiers.len()).map(cost).min().unwrap_or(0);
     let prunes = |t: &Tier| {
         let kept: u64 = t
@@ -334,8 +456,7 @@ pub fn prune(asset: &VolumeAsset, o: &EmptySpaceOptions) -> Result<Pruned, Empty
         .find(|&k| cost(k) as f64 <= 1.01 * least as f64 && (k == 0 || prunes(&tiers[k - 1])))
         .unwrap_or(0);
     if tail == 0 {
-        out.levels = levels;
-        out.normals = normals;
+        (out.levels, out.normals) = src.dense_from(0);
         out.header
             .params
             .insert(PARAM_KEY.into(), params_text(o, 0, 0, dims0));
@@ -393,11 +514,14 @@ pub fn prune(asset: &VolumeAsset, o: &EmptySpaceOptions) -> Result<Pruned, Empty
         });
     }
     let k = tail;
+    let tail_bytes = src.bytes_from(k);
+    let (tail_levels, tail_normals) = src.dense_from(k);
+    drop(src);
     let tail_band = LodBand {
         first_level: k as u32,
         dims: mip_dims(dims0, k as u32),
-        levels: levels[k..].to_vec(),
-        normals: normals.as_ref().map(|n| n[k..].to_vec()),
+        levels: tail_levels,
+        normals: tail_normals,
         cells: asset.cells.clone(),
     };
     stats.bands.push(BandStats {
@@ -406,7 +530,7 @@ pub fn prune(asset: &VolumeAsset, o: &EmptySpaceOptions) -> Result<Pruned, Empty
         mip_count: tail_band.levels.len() as u32,
         boxes: 0,
         cells: tail_band.cells.len(),
-        texel_bytes: level_bytes(&levels, normals.as_deref(), k),
+        texel_bytes: tail_bytes,
         whole: true,
     });
     out.bands.push(tail_band);

@@ -136,6 +136,120 @@ impl TierSource<'_> {
     }
 }
 
+/// What a tier reads of its two levels: [`TierSource`] (dense bytes) or a brick-sparse
+/// source ([`super::sparse`]). Every method must give the same answers as the dense
+/// levels would, so that a tier comes out byte for byte the same from either.
+pub trait TierTexels: Sync {
+    /// Level-`k` size in texels (every side even; level `k + 1` is `n / 2`).
+    fn n(&self) -> [usize; 3];
+    fn has_normals(&self) -> bool;
+    /// Colour (`normals = false`) or normal bytes of level `l ∈ {0, 1}` at `p` (inside
+    /// the level); zero normals when there are none.
+    fn get(&self, l: usize, normals: bool, p: [usize; 3]) -> [u8; 4];
+    /// Calls `f(p, colour)` for every texel of level `l` that is not empty at threshold 0
+    /// ([`is_empty_texel`]), in any order (it may also be called for empty ones).
+    fn for_each_texel(&self, l: usize, f: &mut dyn FnMut([usize; 3], [u8; 4]));
+
+    /// [`TierSource::block_has_data`].
+    fn block_has_data(&self, b: [i64; 3]) -> bool {
+        let n = self.n();
+        let nz = |l: usize, p: [i64; 3]| {
+            let c = [0, 1, 2].map(|a| p[a].clamp(0, (n[a] >> l) as i64 - 1) as usize);
+            self.get(l, false, c) != [0; 4]
+                || (self.has_normals() && self.get(l, true, c) != [0; 4])
+        };
+        if nz(1, b) {
+            return true;
+        }
+        (0..8).any(|i| {
+            let p = [0, 1, 2].map(|a| 2 * b[a] + ((i >> a) & 1) as i64);
+            nz(0, p)
+        })
+    }
+}
+
+impl TierTexels for TierSource<'_> {
+    fn n(&self) -> [usize; 3] {
+        self.n
+    }
+    fn has_normals(&self) -> bool {
+        self.normals.is_some()
+    }
+    fn get(&self, l: usize, normals: bool, p: [usize; 3]) -> [u8; 4] {
+        let n = self.n.map(|d| d >> l);
+        let o = 4 * (p[0] + n[0] * (p[1] + n[1] * p[2]));
+        let bytes = if normals {
+            match self.normals {
+                Some(nr) => nr[l],
+                None => return [0; 4],
+            }
+        } else {
+            self.colour[l]
+        };
+        [bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]
+    }
+    fn for_each_texel(&self, l: usize, f: &mut dyn FnMut([usize; 3], [u8; 4])) {
+        let n = self.n.map(|d| d >> l);
+        let bytes = self.colour[l];
+        for z in 0..n[2] {
+            for y in 0..n[1] {
+                for x in 0..n[0] {
+                    let o = 4 * (x + n[0] * (y + n[1] * z));
+                    let t = [bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]];
+                    if t != [0; 4] {
+                        f([x, y, z], t);
+                    }
+                }
+            }
+        }
+    }
+    fn block_has_data(&self, b: [i64; 3]) -> bool {
+        TierSource::block_has_data(self, b)
+    }
+}
+
+/// [`needed_blocks`] of a tier's two levels (blocks of 2, threshold 0) from any
+/// [`TierTexels`]: the same grid, since marking is an OR over the non-empty texels.
+pub fn tier_needed_blocks(src: &dyn TierTexels) -> BlockGrid {
+    let n0 = src.n();
+    let block = 2;
+    let dims = n0.map(|d| d.div_ceil(block));
+    let mut grid = BlockGrid {
+        dims,
+        needed: vec![false; dims[0] * dims[1] * dims[2]],
+    };
+    for l in 0..2 {
+        let nl = n0.map(|d| d >> l);
+        let ranges: [Vec<(usize, usize)>; 3] = std::array::from_fn(|ax| {
+            let scale = n0[ax] as f64 / nl[ax] as f64;
+            (0..nl[ax])
+                .map(|i| {
+                    let lo = (i as f64 - 0.5) * scale / block as f64;
+                    let hi = (i as f64 + 1.5) * scale / block as f64;
+                    let b0 = lo.floor().max(0.0) as usize;
+                    let b1 = (hi.ceil() as usize).saturating_sub(1).min(dims[ax] - 1);
+                    (b0.min(dims[ax] - 1), b1)
+                })
+                .collect()
+        });
+        src.for_each_texel(l, &mut |p, t| {
+            if is_empty_texel(&t, 0) {
+                return;
+            }
+            let (rx, ry, rz) = (ranges[0][p[0]], ranges[1][p[1]], ranges[2][p[2]]);
+            for bz in rz.0..=rz.1 {
+                for by in ry.0..=ry.1 {
+                    for bx in rx.0..=rx.1 {
+                        let i = bx + dims[0] * (by + dims[1] * bz);
+                        grid.needed[i] = true;
+                    }
+                }
+            }
+        });
+    }
+    grid
+}
+
 /// Blocks with data on the block grid (`n / 2` blocks) padded by one block on every side,
 /// as a summed-volume table so that any box can be queried in O(1).
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -147,8 +261,8 @@ pub struct DataGrid {
 }
 
 impl DataGrid {
-    pub fn new(src: &TierSource<'_>) -> DataGrid {
-        let dims = src.n.map(|d| d / 2);
+    pub fn new<S: TierTexels + ?Sized>(src: &S) -> DataGrid {
+        let dims = src.n().map(|d| d / 2);
         let s = dims.map(|d| d + 3);
         let mut sums = vec![0u32; s[0] * s[1] * s[2]];
         let at = |x: usize, y: usize, z: usize| x + s[0] * (y + s[1] * z);

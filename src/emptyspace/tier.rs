@@ -11,9 +11,9 @@
 use billow_format::Prism;
 use glam::Vec3;
 
-use super::bricks::{fill_level, Brick};
+use super::bricks::{fill_level_with, Brick};
 use super::kdtree::{subdivide, BlockBox, KdParams, TierGrid};
-use super::occupancy::{needed_blocks, DataGrid, TierSource};
+use super::occupancy::{tier_needed_blocks, DataGrid, TierTexels};
 use super::pack::{pack, Slot};
 use billow_core::cells::box_prisms;
 
@@ -86,11 +86,10 @@ pub fn box_cells(pmin: Vec3, pmax: Vec3, uvw: impl Fn([f32; 3]) -> [f32; 3]) -> 
 
 /// Builds the tier for `src` whose world box is `world` (`None` when the atlas would not
 /// fit `max_side`).
-pub fn build_tier(src: &TierSource<'_>, world: (Vec3, Vec3), p: &TierParams) -> Option<Tier> {
-    let n = src.n;
+pub fn build_tier<S: TierTexels>(src: &S, world: (Vec3, Vec3), p: &TierParams) -> Option<Tier> {
+    let n = src.n();
     let n1 = n.map(|d| d / 2);
-    let level_dims = [n, n1].map(|d| d.map(|v| v as u32));
-    let needed = needed_blocks(&src.colour, &level_dims, level_dims[0], 2, 2, 0);
+    let needed = tier_needed_blocks(src);
     let data = DataGrid::new(src);
     let boxes = subdivide(
         &TierGrid {
@@ -129,19 +128,19 @@ pub fn build_tier(src: &TierSource<'_>, world: (Vec3, Vec3), p: &TierParams) -> 
             perm: pl.perm,
         })
         .collect();
-    let fill = |levels: [&[u8]; 2]| -> Vec<Vec<u8>> {
+    let fill = |normals: bool| -> Vec<Vec<u8>> {
         [(dims, n, 2), (blocks, n1, 1)]
             .iter()
             .enumerate()
             .map(|(l, &(nd, ns, t))| {
                 let mut out = vec![0u8; 4 * nd.iter().product::<usize>()];
-                fill_level(levels[l], ns, &mut out, nd, t, &bricks);
+                fill_level_with(|q| src.get(l, normals, q), ns, &mut out, nd, t, &bricks);
                 out
             })
             .collect()
     };
-    let colour = fill(src.colour);
-    let normals = src.normals.map(fill);
+    let colour = fill(false);
+    let normals = src.has_normals().then(|| fill(true));
     // Cells: the box in the world (from the source's box cell), uvw into the atlas.
     let (wlo, whi) = world;
     let ext = whi - wlo;

@@ -8,7 +8,7 @@ use billow_format::{
 };
 
 use super::cells::box_prisms;
-use super::{Bake, Volume, VoxelizeOptions};
+use super::{Bake, GridSpec, Volume, VoxelizeOptions};
 
 /// The bake parameters `voxelize` records in the header (`res`, `combine`, `supersample`,
 /// `normals`, `margin`, `dims`; with AO also `bake = ao`, `ao_rays`, `ao_distance` (scene
@@ -18,7 +18,16 @@ pub fn bake_params(
     opts: &VoxelizeOptions,
     extra: &BTreeMap<String, String>,
 ) -> BTreeMap<String, String> {
-    let d = volume.dims();
+    bake_params_for(&volume.grid, opts, extra)
+}
+
+/// [`bake_params`] of a volume on `grid` (e.g. a [`super::SparseVolume`]'s).
+pub fn bake_params_for(
+    grid: &GridSpec,
+    opts: &VoxelizeOptions,
+    extra: &BTreeMap<String, String>,
+) -> BTreeMap<String, String> {
+    let d = grid.dims;
     let mut p = BTreeMap::new();
     p.insert("res".into(), opts.resolution.to_string());
     p.insert("dims".into(), format!("{}x{}x{}", d[0], d[1], d[2]));
@@ -41,10 +50,7 @@ pub fn bake_params(
         p.insert("ao_rays".into(), rays.to_string());
         p.insert(
             "ao_distance".into(),
-            opts.bake
-                .ao_distance(&volume.grid)
-                .unwrap_or(0.0)
-                .to_string(),
+            opts.bake.ao_distance(grid).unwrap_or(0.0).to_string(),
         );
         p.insert("ao_seed".into(), super::AO_SEED.to_string());
     }

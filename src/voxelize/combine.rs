@@ -31,12 +31,13 @@ use std::sync::Arc;
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
-use super::bricks::{for_each_voxel, local, BrickAccum, Bricked, B3};
+use super::bricks::{for_each_voxel, local, BrickAccum, Bricked, B, B3};
 use super::expr::{Expr, ExprError};
 use super::mip::{Disjoint, Grid3, Texel};
 use super::quantize::encode_normal;
 use super::slices::DirSlices;
 use super::toksvig::average_normal;
+use crate::emptyspace::sparse::SparseLevel;
 
 /// A voxel combination function. `s` is premultiplied RGBA in the order
 /// `+X, −X, +Y, −Y, +Z, −Z`. The result is clamped by [`clamp_premultiplied`].
@@ -293,6 +294,40 @@ impl Accum {
     }
 }
 
+impl Accum {
+    /// [`Accum::finish_level`] kept brick-sparse: the accumulator's bricks (in its slot
+    /// order) and their RGBA8 bytes (`4 · B3` per brick, x fastest inside it; zero
+    /// outside the level); frees the level's buffer.
+    pub fn finish_level_bricks(&mut self, level: usize) -> (Vec<u32>, Vec<u8>) {
+        let (w, preset) = (self.width, self.preset);
+        let acc = std::mem::replace(&mut self.levels[level], BrickAccum::new([0; 3], w));
+        let dims = acc.dims;
+        let mut out = vec![0u8; acc.bricks.len() * 4 * B3];
+        let enc = super::quantize::Encoder::get();
+        out.par_chunks_mut(4 * B3)
+            .zip(acc.data.par_chunks(B3 * w))
+            .zip(&acc.bricks)
+            .for_each(|((o, brick), &b)| {
+                for_each_voxel(acc.coords(b as usize), dims, |p| {
+                    let a = &brick[local(p) * w..local(p) * w + w];
+                    if a[..4] == [0.0; 4] {
+                        return;
+                    }
+                    let v = match preset {
+                        Preset::Mean => Vec4::from_slice(a) / 6.0,
+                        Preset::Max => Vec4::from_slice(a),
+                        Preset::Min if a[4] < 6.0 => return,
+                        Preset::Min => Vec4::from_slice(a),
+                        Preset::Opaque => opaque_colour(Vec3::from_slice(a), a[3], a[4]),
+                    };
+                    o[4 * local(p)..4 * local(p) + 4]
+                        .copy_from_slice(&enc.rgba8(clamp_premultiplied(v)));
+                });
+            });
+        (acc.bricks, out)
+    }
+}
+
 /// Combines six stored pyramids' level voxel by voxel with any [`Combine`], encoded RGBA8.
 pub(crate) fn combine_level<T: Texel>(f: &(dyn Combine + Sync), dirs: [&Grid3<T>; 6]) -> Vec<u8> {
     let n = dirs[0].data.len();
@@ -338,6 +373,127 @@ pub(crate) fn combine_level0(
 ) -> (Vec<u8>, Option<Vec<u8>>, u64) {
     let dims = dirs[0].dims;
     let plane = dims[0] * dims[1];
+    let ((out, out_n), count) = level0_planes(preset, dirs, normals, |init, work| {
+        let mut out = vec![0u8; plane * dims[2] * 4];
+        let mut out_n = normals.then(|| vec![0u8; plane * dims[2] * 4]);
+        match out_n.as_mut() {
+            Some(on) => out
+                .par_chunks_mut(plane * 4)
+                .zip(on.par_chunks_mut(plane * 4))
+                .enumerate()
+                .for_each_init(init, |b, (z, (o, on))| work(b, z, o, Some(on))),
+            None => out
+                .par_chunks_mut(plane * 4)
+                .enumerate()
+                .for_each_init(init, |b, (z, o)| work(b, z, o, None)),
+        }
+        (out, out_n)
+    });
+    (out, out_n, count)
+}
+
+/// [`combine_level0`] kept brick-sparse ([`SparseLevel`], 8³ bricks of RGBA8 and snorm8
+/// normals): the planes are combined one brick layer (8 planes) at a time into a slab,
+/// and only the bricks with a non-zero byte are kept, so level 0 is never dense. The same
+/// bytes as [`combine_level0`] where bricks are, zeros elsewhere (what it holds there).
+pub(crate) fn combine_level0_sparse(
+    preset: Preset,
+    dirs: &[DirSlices],
+    normals: bool,
+) -> (SparseLevel, u64) {
+    let dims = dirs[0].dims;
+    let plane = dims[0] * dims[1];
+    let nb = dims.map(|d| d.div_ceil(B));
+    level0_planes(preset, dirs, normals, |init, work| {
+        type Part = (Vec<u32>, Vec<u8>, Vec<u8>);
+        let parts: Vec<Part> = (0..nb[2])
+            .into_par_iter()
+            .map_init(init, |bufs, bz| {
+                let z0 = bz * B;
+                let nz = (dims[2] - z0).min(B);
+                let mut slab = vec![0u8; plane * nz * 4];
+                let mut slab_n = vec![0u8; plane * nz * 4 * normals as usize];
+                if normals {
+                    for (dz, (o, on)) in slab
+                        .chunks_mut(plane * 4)
+                        .zip(slab_n.chunks_mut(plane * 4))
+                        .enumerate()
+                    {
+                        work(bufs, z0 + dz, o, Some(on));
+                    }
+                } else {
+                    for (dz, o) in slab.chunks_mut(plane * 4).enumerate() {
+                        work(bufs, z0 + dz, o, None);
+                    }
+                }
+                let (mut bricks, mut colour, mut nrm) = (Vec::new(), Vec::new(), Vec::new());
+                let mut bc = vec![0u8; 4 * B3];
+                let mut bn = vec![0u8; 4 * B3 * normals as usize];
+                for by in 0..nb[1] {
+                    for bx in 0..nb[0] {
+                        bc.fill(0);
+                        bn.fill(0);
+                        let mut any = false;
+                        let (x0, x1) = (bx * B, ((bx + 1) * B).min(dims[0]));
+                        for dz in 0..nz {
+                            for y in by * B..((by + 1) * B).min(dims[1]) {
+                                let o = 4 * (x0 + dims[0] * (y + dims[1] * dz));
+                                let len = 4 * (x1 - x0);
+                                let i = 4 * local([x0, y, dz]);
+                                let row = &slab[o..o + len];
+                                any |= row.iter().any(|&v| v != 0);
+                                bc[i..i + len].copy_from_slice(row);
+                                if normals {
+                                    let row = &slab_n[o..o + len];
+                                    any |= row.iter().any(|&v| v != 0);
+                                    bn[i..i + len].copy_from_slice(row);
+                                }
+                            }
+                        }
+                        if any {
+                            bricks.push((bx + nb[0] * (by + nb[1] * bz)) as u32);
+                            colour.extend_from_slice(&bc);
+                            nrm.extend_from_slice(&bn);
+                        }
+                    }
+                }
+                (bricks, colour, nrm)
+            })
+            .collect();
+        let total: usize = parts.iter().map(|p| p.0.len()).sum();
+        let mut bricks = Vec::with_capacity(total);
+        let mut colour = Vec::with_capacity(total * 4 * B3);
+        let mut nrm = Vec::with_capacity(total * 4 * B3 * normals as usize);
+        for (b, c, n) in parts {
+            bricks.extend_from_slice(&b);
+            colour.extend_from_slice(&c);
+            nrm.extend_from_slice(&n);
+        }
+        SparseLevel::from_bricks(dims, bricks, colour, normals.then_some(nrm))
+    })
+}
+
+/// Per thread, the plane accumulators of [`level0_planes`] (left zeroed after each plane)
+/// and the plane indices folded into (a voxel is listed when it is first folded into,
+/// possibly more than once if a fold leaves it zero, which is harmless).
+type Level0Bufs = (Vec<f32>, Vec<[f32; 4]>, Vec<u32>);
+
+/// The plane work of [`combine_level0`]: `drive(init, work)` calls `work(bufs, z, o, on)`
+/// for every z plane (`o`, `on`: the plane's zeroed RGBA8 and snorm8 bytes, written there)
+/// with `bufs` from `init`, in any order and on any thread; returns what `drive` returns
+/// and the number of voxels whose alpha byte is not 0.
+#[allow(clippy::type_complexity)]
+fn level0_planes<R>(
+    preset: Preset,
+    dirs: &[DirSlices],
+    normals: bool,
+    drive: impl FnOnce(
+        &(dyn Fn() -> Level0Bufs + Sync),
+        &(dyn Fn(&mut Level0Bufs, usize, &mut [u8], Option<&mut [u8]>) + Sync),
+    ) -> R,
+) -> (R, u64) {
+    let dims = dirs[0].dims;
+    let plane = dims[0] * dims[1];
     let w = if matches!(preset, Preset::Opaque | Preset::Min) {
         5
     } else {
@@ -376,13 +532,7 @@ pub(crate) fn combine_level0(
         })
         .collect();
     let enc = super::quantize::Encoder::get();
-    let mut out = vec![0u8; plane * dims[2] * 4];
-    let mut out_n = normals.then(|| vec![0u8; plane * dims[2] * 4]);
-    // Per thread, the plane accumulators (left zeroed after each plane)
-    // and the plane indices folded into (a voxel is listed when it is first folded into,
-    // possibly more than once if a fold leaves it zero, which is harmless).
-    type Bufs = (Vec<f32>, Vec<[f32; 4]>, Vec<u32>);
-    let init = || -> Bufs {
+    let init = || -> Level0Bufs {
         (
             vec![0.0f32; plane * w],
             vec![[0.0f32; 4]; plane * normals as usize],
@@ -390,85 +540,76 @@ pub(crate) fn combine_level0(
         )
     };
     let non_empty = std::sync::atomic::AtomicU64::new(0);
-    let work = |(acc, nacc, list): &mut Bufs, z: usize, o: &mut [u8], mut on: Option<&mut [u8]>| {
-        list.clear();
-        let mut count = 0u64;
-        for (s, table) in dirs.iter().zip(&by_plane) {
-            let nrm = s.nrm.as_deref();
-            let mut fold = |i: usize, k: usize| {
-                let v = &s.vox[k];
-                let a = &mut acc[i * w..i * w + w];
-                if a[..4] == [0.0; 4] {
-                    list.push(i as u32);
-                }
-                Accum::fold_one(preset, a, v.rgba);
-                if let Some(n) = nrm {
-                    let (n, a) = (n[k], &mut nacc[i]);
-                    *a = [a[0] + n[0], a[1] + n[1], a[2] + n[2], a[3] + v.rgba[3]];
-                }
-            };
-            match table {
-                None => {
-                    let (row, first) = s.row(z);
-                    for (k, v) in row.iter().enumerate() {
-                        fold(s.index(z, v) - z * plane, first + k);
+    let work =
+        |(acc, nacc, list): &mut Level0Bufs, z: usize, o: &mut [u8], mut on: Option<&mut [u8]>| {
+            list.clear();
+            let mut count = 0u64;
+            for (s, table) in dirs.iter().zip(&by_plane) {
+                let nrm = s.nrm.as_deref();
+                let mut fold = |i: usize, k: usize| {
+                    let v = &s.vox[k];
+                    let a = &mut acc[i * w..i * w + w];
+                    if a[..4] == [0.0; 4] {
+                        list.push(i as u32);
                     }
-                }
-                Some((start, list)) => {
-                    // The plane's voxels lie scattered over the whole stack (one per
-                    // column at most): their reads are issued ahead of their use.
-                    let run = &list[start[z]..start[z + 1]];
-                    for (at, &(i, k)) in run.iter().enumerate() {
-                        if let Some(&(_, ahead)) = run.get(at + PREFETCH) {
-                            prefetch(&s.vox[ahead as usize]);
-                            if let Some(n) = nrm {
-                                prefetch(&n[ahead as usize]);
-                            }
-                        }
-                        fold(i as usize, k as usize);
+                    Accum::fold_one(preset, a, v.rgba);
+                    if let Some(n) = nrm {
+                        let (n, a) = (n[k], &mut nacc[i]);
+                        *a = [a[0] + n[0], a[1] + n[1], a[2] + n[2], a[3] + v.rgba[3]];
                     }
-                }
-            }
-        }
-        // Only the voxels folded into are finished (and left zeroed); the others stay 0.
-        for &i in list.iter() {
-            let i = i as usize;
-            let a = &mut acc[i * w..i * w + w];
-            if a[..4] != [0.0; 4] {
-                let v = match preset {
-                    Preset::Mean => Vec4::from_slice(a) / 6.0,
-                    Preset::Max => Vec4::from_slice(a),
-                    Preset::Min if a[4] < 6.0 => Vec4::ZERO,
-                    Preset::Min => Vec4::from_slice(a),
-                    Preset::Opaque => opaque_colour(Vec3::from_slice(a), a[3], a[4]),
                 };
-                let px = enc.rgba8(clamp_premultiplied(v));
-                count += u64::from(px[3] != 0);
-                o[4 * i..4 * i + 4].copy_from_slice(&px);
-            }
-            a.fill(0.0);
-            if let Some(on) = on.as_deref_mut() {
-                let a = &mut nacc[i];
-                if *a == [0.0; 4] {
-                    continue;
+                match table {
+                    None => {
+                        let (row, first) = s.row(z);
+                        for (k, v) in row.iter().enumerate() {
+                            fold(s.index(z, v) - z * plane, first + k);
+                        }
+                    }
+                    Some((start, list)) => {
+                        // The plane's voxels lie scattered over the whole stack (one per
+                        // column at most): their reads are issued ahead of their use.
+                        let run = &list[start[z]..start[z + 1]];
+                        for (at, &(i, k)) in run.iter().enumerate() {
+                            if let Some(&(_, ahead)) = run.get(at + PREFETCH) {
+                                prefetch(&s.vox[ahead as usize]);
+                                if let Some(n) = nrm {
+                                    prefetch(&n[ahead as usize]);
+                                }
+                            }
+                            fold(i as usize, k as usize);
+                        }
+                    }
                 }
-                let n = average_normal(Vec3::new(a[0], a[1], a[2]), a[3]);
-                *a = [0.0; 4];
-                on[4 * i..4 * i + 4].copy_from_slice(&encode_normal(n));
             }
-        }
-        non_empty.fetch_add(count, std::sync::atomic::Ordering::Relaxed);
-    };
-    match out_n.as_mut() {
-        Some(on) => out
-            .par_chunks_mut(plane * 4)
-            .zip(on.par_chunks_mut(plane * 4))
-            .enumerate()
-            .for_each_init(init, |b, (z, (o, on))| work(b, z, o, Some(on))),
-        None => out
-            .par_chunks_mut(plane * 4)
-            .enumerate()
-            .for_each_init(init, |b, (z, o)| work(b, z, o, None)),
-    }
-    (out, out_n, non_empty.into_inner())
+            // Only the voxels folded into are finished (and left zeroed); the others stay 0.
+            for &i in list.iter() {
+                let i = i as usize;
+                let a = &mut acc[i * w..i * w + w];
+                if a[..4] != [0.0; 4] {
+                    let v = match preset {
+                        Preset::Mean => Vec4::from_slice(a) / 6.0,
+                        Preset::Max => Vec4::from_slice(a),
+                        Preset::Min if a[4] < 6.0 => Vec4::ZERO,
+                        Preset::Min => Vec4::from_slice(a),
+                        Preset::Opaque => opaque_colour(Vec3::from_slice(a), a[3], a[4]),
+                    };
+                    let px = enc.rgba8(clamp_premultiplied(v));
+                    count += u64::from(px[3] != 0);
+                    o[4 * i..4 * i + 4].copy_from_slice(&px);
+                }
+                a.fill(0.0);
+                if let Some(on) = on.as_deref_mut() {
+                    let a = &mut nacc[i];
+                    if *a == [0.0; 4] {
+                        continue;
+                    }
+                    let n = average_normal(Vec3::new(a[0], a[1], a[2]), a[3]);
+                    *a = [0.0; 4];
+                    on[4 * i..4 * i + 4].copy_from_slice(&encode_normal(n));
+                }
+            }
+            non_empty.fetch_add(count, std::sync::atomic::Ordering::Relaxed);
+        };
+    let r = drive(&init, &work);
+    (r, non_empty.into_inner())
 }

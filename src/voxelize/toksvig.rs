@@ -215,6 +215,30 @@ impl NormalAccum {
     }
 }
 
+impl NormalAccum {
+    /// [`NormalAccum::finish_level`] of a level above 0 kept brick-sparse: the
+    /// accumulator's bricks (in its slot order) and their snorm8 bytes (`4 · B3` per
+    /// brick; zero outside the level).
+    pub fn finish_level_bricks(&mut self, level: usize) -> (Vec<u32>, Vec<u8>) {
+        debug_assert!(level > 0);
+        let acc = std::mem::replace(&mut self.levels[level], BrickAccum::new([0; 3], 1));
+        let dims = acc.dims;
+        let mut out = vec![0u8; acc.bricks.len() * 4 * B3];
+        out.par_chunks_mut(4 * B3)
+            .zip(acc.data.par_chunks(B3))
+            .zip(&acc.bricks)
+            .for_each(|((o, brick), &b)| {
+                for_each_voxel(acc.coords(b as usize), dims, |p| {
+                    let s = brick[local(p)].load();
+                    let n = average_normal(Vec3::new(s[0], s[1], s[2]), s[3]);
+                    o[4 * local(p)..4 * local(p) + 4]
+                        .copy_from_slice(&super::quantize::encode_normal(n));
+                });
+            });
+        (acc.bricks, out)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     //! Toksvig filtering through the real MIP path ([`downsample_normals`], the

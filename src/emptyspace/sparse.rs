@@ -1,0 +1,374 @@
+//! A brick-sparse source for empty-space removal: the MIP levels of a volume held as
+//! [`BRICK`]³ bricks of RGBA8 colour (and snorm8 normals), only the bricks that hold a
+//! non-zero byte allocated. `voxelize --prune` hands its working set over in this form
+//! ([`super::prune_sparse`]), so the dense volume is never materialised; a tier reads it
+//! through [`TierTexels`] and comes out byte for byte as from the dense levels (an absent
+//! brick reads as the zeros the dense level holds there).
+
+use super::occupancy::TierTexels;
+
+/// Brick side in texels.
+pub const BRICK: usize = 8;
+const B3: usize = BRICK * BRICK * BRICK;
+const EMPTY: u32 = u32::MAX;
+
+/// One MIP level, brick-sparse (see the module docs).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SparseLevel {
+    /// Level size in texels.
+    pub dims: [usize; 3],
+    /// Bricks per axis (`ceil(dims / BRICK)`).
+    nb: [usize; 3],
+    /// Per brick (x fastest), its slot or `EMPTY`.
+    slot: Vec<u32>,
+    /// Per slot, its brick.
+    bricks: Vec<u32>,
+    /// `4 · BRICK³` bytes per slot, x fastest inside the brick; texels outside `dims` zero.
+    colour: Vec<u8>,
+    normals: Option<Vec<u8>>,
+}
+
+/// A texel's byte offset inside its brick.
+#[inline]
+fn local(p: [usize; 3]) -> usize {
+    4 * ((p[0] % BRICK) + BRICK * ((p[1] % BRICK) + BRICK * (p[2] % BRICK)))
+}
+
+impl SparseLevel {
+    /// A level of `dims` whose slot `i` is brick `bricks[i]` (x-fastest brick index, all
+    /// distinct), with `4 · BRICK³` bytes per slot of colour (and normals). Bytes of
+    /// texels outside `dims` must be zero.
+    pub fn from_bricks(
+        dims: [usize; 3],
+        bricks: Vec<u32>,
+        colour: Vec<u8>,
+        normals: Option<Vec<u8>>,
+    ) -> SparseLevel {
+        let nb = dims.map(|d| d.div_ceil(BRICK));
+        assert_eq!(
+            colour.len(),
+            bricks.len() * 4 * B3,
+            "colour bytes per brick"
+        );
+        if let Some(n) = &normals {
+            assert_eq!(n.len(), colour.len(), "normal bytes per brick");
+        }
+        let mut slot = vec![EMPTY; nb.iter().product()];
+        for (s, &b) in bricks.iter().enumerate() {
+            assert_eq!(slot[b as usize], EMPTY, "brick {b} given twice");
+            slot[b as usize] = s as u32;
+        }
+        SparseLevel {
+            dims,
+            nb,
+            slot,
+            bricks,
+            colour,
+            normals,
+        }
+    }
+
+    pub fn has_normals(&self) -> bool {
+        self.normals.is_some()
+    }
+
+    /// Bricks allocated.
+    pub fn brick_count(&self) -> usize {
+        self.bricks.len()
+    }
+
+    /// Bytes held (colour and normals of the allocated bricks, and the brick table).
+    pub fn heap_bytes(&self) -> u64 {
+        (self.colour.len() + self.normals.as_ref().map_or(0, Vec::len) + 8 * self.bricks.len())
+            as u64
+            + 4 * self.slot.len() as u64
+    }
+
+    /// Bytes of the level stored densely (colour, and normals when present).
+    pub fn dense_bytes(&self) -> u64 {
+        let n: usize = self.dims.iter().product();
+        (4 * n * (1 + self.has_normals() as usize)) as u64
+    }
+
+    /// Removes the normals.
+    pub fn drop_normals(&mut self) {
+        self.normals = None;
+    }
+
+    /// Whether every byte is zero.
+    pub fn is_zero(&self) -> bool {
+        self.colour.iter().all(|&b| b == 0)
+            && self
+                .normals
+                .as_ref()
+                .is_none_or(|n| n.iter().all(|&b| b == 0))
+    }
+
+    #[inline]
+    fn brick_coords(&self, b: usize) -> [usize; 3] {
+        [
+            b % self.nb[0],
+            (b / self.nb[0]) % self.nb[1],
+            b / (self.nb[0] * self.nb[1]),
+        ]
+    }
+
+    /// Colour (or normal) bytes at `p` (inside `dims`); zero in an absent brick.
+    #[inline]
+    pub fn get(&self, normals: bool, p: [usize; 3]) -> [u8; 4] {
+        let bc = p.map(|v| v / BRICK);
+        let s = self.slot[bc[0] + self.nb[0] * (bc[1] + self.nb[1] * bc[2])];
+        if s == EMPTY {
+            return [0; 4];
+        }
+        let bytes = if normals {
+            match &self.normals {
+                Some(n) => n,
+                None => return [0; 4],
+            }
+        } else {
+            &self.colour
+        };
+        let o = s as usize * 4 * B3 + local(p);
+        [bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]
+    }
+
+    /// Calls `f(p, colour)` for every texel of every allocated brick inside `dims`.
+    pub fn for_each_texel(&self, f: &mut dyn FnMut([usize; 3], [u8; 4])) {
+        for (s, &b) in self.bricks.iter().enumerate() {
+            let bc = self.brick_coords(b as usize);
+            let hi = [0, 1, 2].map(|a| ((bc[a] + 1) * BRICK).min(self.dims[a]));
+            let brick = &self.colour[s * 4 * B3..(s + 1) * 4 * B3];
+            for z in bc[2] * BRICK..hi[2] {
+                for y in bc[1] * BRICK..hi[1] {
+                    for x in bc[0] * BRICK..hi[0] {
+                        let o = local([x, y, z]);
+                        f(
+                            [x, y, z],
+                            [brick[o], brick[o + 1], brick[o + 2], brick[o + 3]],
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    /// Zeroes the colour and normal of every texel whose alpha byte is ≤ `threshold`
+    /// ([`super::occupancy::apply_threshold`]); 0 changes nothing.
+    pub fn apply_threshold(&mut self, threshold: u8) {
+        if threshold == 0 {
+            return;
+        }
+        for i in 0..self.colour.len() / 4 {
+            if self.colour[4 * i + 3] <= threshold {
+                self.colour[4 * i..4 * i + 4].fill(0);
+                if let Some(n) = self.normals.as_mut() {
+                    n[4 * i..4 * i + 4].fill(0);
+                }
+            }
+        }
+    }
+
+    /// The dense level: colour, and normals when present (x fastest, then y, then z).
+    pub fn to_dense(&self) -> (Vec<u8>, Option<Vec<u8>>) {
+        let n: usize = self.dims.iter().product();
+        let d = self.dims;
+        let scatter = |src: &[u8]| {
+            let mut out = vec![0u8; 4 * n];
+            for (s, &b) in self.bricks.iter().enumerate() {
+                let bc = self.brick_coords(b as usize);
+                let hi = [0, 1, 2].map(|a| ((bc[a] + 1) * BRICK).min(d[a]));
+                for z in bc[2] * BRICK..hi[2] {
+                    for y in bc[1] * BRICK..hi[1] {
+                        let x0 = bc[0] * BRICK;
+                        let len = 4 * (hi[0] - x0);
+                        let o = 4 * (x0 + d[0] * (y + d[1] * z));
+                        let i = s * 4 * B3 + local([x0, y, z]);
+                        out[o..o + len].copy_from_slice(&src[i..i + len]);
+                    }
+                }
+            }
+            out
+        };
+        (scatter(&self.colour), self.normals.as_deref().map(scatter))
+    }
+}
+
+/// Two consecutive sparse levels `k`, `k + 1`: the input of one tier.
+#[derive(Clone, Copy, Debug)]
+pub struct SparseTier<'a> {
+    pub levels: [&'a SparseLevel; 2],
+}
+
+impl TierTexels for SparseTier<'_> {
+    fn n(&self) -> [usize; 3] {
+        self.levels[0].dims
+    }
+    fn has_normals(&self) -> bool {
+        self.levels[0].has_normals()
+    }
+    fn get(&self, l: usize, normals: bool, p: [usize; 3]) -> [u8; 4] {
+        self.levels[l].get(normals, p)
+    }
+    fn for_each_texel(&self, l: usize, f: &mut dyn FnMut([usize; 3], [u8; 4])) {
+        self.levels[l].for_each_texel(f)
+    }
+}
+
+/// The levels of a dense volume (`levels[l]`: RGBA8 of `dims[l]`), brick-sparse: the
+/// bricks with a non-zero colour or normal byte (tests, and a reference for producers).
+pub fn from_dense(
+    dims: &[[usize; 3]],
+    levels: &[Vec<u8>],
+    normals: Option<&[Vec<u8>]>,
+) -> Vec<SparseLevel> {
+    (0..levels.len())
+        .map(|l| {
+            let d = dims[l];
+            let nb = d.map(|v| v.div_ceil(BRICK));
+            let (mut bricks, mut colour) = (Vec::new(), Vec::new());
+            let mut nrm = normals.map(|_| Vec::new());
+            let mut c = vec![0u8; 4 * B3];
+            let mut n = vec![0u8; 4 * B3];
+            for bz in 0..nb[2] {
+                for by in 0..nb[1] {
+                    for bx in 0..nb[0] {
+                        c.fill(0);
+                        n.fill(0);
+                        let mut any = false;
+                        for z in bz * BRICK..((bz + 1) * BRICK).min(d[2]) {
+                            for y in by * BRICK..((by + 1) * BRICK).min(d[1]) {
+                                for x in bx * BRICK..((bx + 1) * BRICK).min(d[0]) {
+                                    let o = 4 * (x + d[0] * (y + d[1] * z));
+                                    let i = local([x, y, z]);
+                                    c[i..i + 4].copy_from_slice(&levels[l][o..o + 4]);
+                                    if let Some(nr) = normals {
+                                        n[i..i + 4].copy_from_slice(&nr[l][o..o + 4]);
+                                    }
+                                    any |= c[i..i + 4] != [0; 4] || n[i..i + 4] != [0; 4];
+                                }
+                            }
+                        }
+                        if any {
+                            bricks.push((bx + nb[0] * (by + nb[1] * bz)) as u32);
+                            colour.extend_from_slice(&c);
+                            if let Some(v) = nrm.as_mut() {
+                                v.extend_from_slice(&n);
+                            }
+                        }
+                    }
+                }
+            }
+            SparseLevel::from_bricks(d, bricks, colour, nrm)
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::synthetic::volume_from_fn;
+    use super::super::{prune, prune_sparse, EmptySpaceOptions, Pruned};
+    use super::*;
+    use billow_format::{mip_dims, VolumeAsset};
+
+    fn sparse_of(a: &VolumeAsset) -> Vec<SparseLevel> {
+        let v = a.header.volume.unwrap();
+        let dims: Vec<[usize; 3]> = (0..v.mip_count)
+            .map(|l| mip_dims(v.dims, l).map(|d| d as usize))
+            .collect();
+        from_dense(&dims, &a.levels, a.normals.as_deref())
+    }
+
+    fn shell(a: &VolumeAsset) -> VolumeAsset {
+        VolumeAsset {
+            levels: Vec::new(),
+            normals: a.normals.as_ref().map(|_| Vec::new()),
+            ..a.clone()
+        }
+    }
+
+    fn same(mut a: Pruned, mut b: Pruned) {
+        a.stats.seconds = 0.0;
+        b.stats.seconds = 0.0;
+        assert_eq!(a.stats, b.stats);
+        assert_eq!(a.asset.to_bytes().unwrap(), b.asset.to_bytes().unwrap());
+    }
+
+    /// Blobs in a volume of `dims` (some texels faint), with or without normals.
+    fn blobs(dims: [u32; 3], normals: bool) -> VolumeAsset {
+        volume_from_fn(dims, normals, |x, y, z| {
+            let on = (x.abs_diff(9) <= 3 && y.abs_diff(6) <= 2 && z.abs_diff(9) <= 4)
+                || (x.abs_diff(dims[0] - 6) <= 3 && y.abs_diff(dims[1] - 5) <= 2 && z < 5)
+                || ((20..30).contains(&x) && y == 16 && z == 20);
+            if on {
+                let a = if (x + y + z) % 5 == 0 { 6 } else { 200 };
+                [
+                    (x * 5 % 200) as u8 % a,
+                    (y * 7) as u8 % a,
+                    (z * 3) as u8 % a,
+                    a,
+                ]
+            } else {
+                [0; 4]
+            }
+        })
+    }
+
+    #[test]
+    fn a_sparse_source_prunes_to_the_same_bytes_as_the_dense_one() {
+        let cases = [
+            (blobs([48, 32, 40], true), EmptySpaceOptions::default()),
+            (blobs([64, 40, 48], false), EmptySpaceOptions::default()),
+            (
+                blobs([48, 32, 40], true),
+                EmptySpaceOptions {
+                    threshold: 10,
+                    ..Default::default()
+                },
+            ),
+            // Odd sides: kept whole (densified from the bricks).
+            (blobs([47, 32, 40], true), EmptySpaceOptions::default()),
+            // Nothing at all: the empty asset.
+            (
+                volume_from_fn([32, 16, 16], false, |_, _, _| [0; 4]),
+                EmptySpaceOptions::default(),
+            ),
+            // Full: no layout is smaller, kept whole.
+            (
+                volume_from_fn([32, 16, 16], true, |_, _, _| [9, 9, 9, 90]),
+                EmptySpaceOptions::default(),
+            ),
+        ];
+        for (a, o) in cases {
+            let dense = prune(&a, &o).unwrap();
+            let sparse = prune_sparse(&shell(&a), sparse_of(&a), &o).unwrap();
+            same(dense, sparse);
+        }
+    }
+
+    #[test]
+    fn bricks_read_back_as_the_dense_level() {
+        let a = blobs([40, 24, 17], true);
+        for (l, s) in sparse_of(&a).iter().enumerate() {
+            let (c, n) = s.to_dense();
+            assert_eq!(c, a.levels[l]);
+            assert_eq!(n.as_ref(), a.normals.as_ref().map(|n| &n[l]));
+            if l == 0 {
+                let all: usize = s.dims.iter().map(|d| d.div_ceil(BRICK)).product();
+                assert!(s.brick_count() < all, "{} of {all} bricks", s.brick_count());
+            }
+        }
+    }
+
+    #[test]
+    fn a_sparse_prune_refuses_levels_that_do_not_match_the_header() {
+        let a = blobs([48, 32, 40], false);
+        let mut levels = sparse_of(&a);
+        levels.pop();
+        let e = prune_sparse(&shell(&a), levels, &EmptySpaceOptions::default()).unwrap_err();
+        assert!(
+            matches!(e, super::super::EmptySpaceError::InvalidAsset(_)),
+            "{e}"
+        );
+    }
+}

@@ -1,0 +1,113 @@
+//! `billow voxelize --prune` (issue 26) as the real binary: the pruned asset written
+//! straight from the brick-sparse working set equals `voxelize` (same options) followed by
+//! `billow emptyspace` with its defaults, byte for byte; `--compress none` on both sides.
+
+mod common;
+
+use std::path::Path;
+use std::time::Duration;
+
+use common::*;
+
+fn oak() -> String {
+    repo()
+        .join("fixtures/oak/eztree_oak_medium.gltf")
+        .display()
+        .to_string()
+}
+
+fn ok(r: &Run, what: &str) {
+    assert_eq!(r.code, Some(0), "{what}: {}", r.stderr);
+}
+
+fn billow(dir: &Path, args: &[&str], threads: &str) -> Run {
+    run_with(
+        args,
+        dir,
+        Duration::from_secs(300),
+        8 << 20,
+        &[("RAYON_NUM_THREADS", threads)],
+    )
+}
+
+/// `voxelize` + `emptyspace` against `voxelize --prune` for one set of options.
+fn same_bytes(dir: &Path, opts: &[&str], threads: &str) -> serde_json::Value {
+    let oak = oak();
+    let mut dense = vec!["voxelize", &oak, "-o", "dense.billow", "--compress", "none"];
+    dense.extend_from_slice(opts);
+    ok(&billow(dir, &dense, threads), "voxelize");
+    let es = ["emptyspace", "dense.billow", "-o", "pruned.billow"];
+    ok(&billow(dir, &es, threads), "emptyspace");
+    let mut direct = vec![
+        "voxelize",
+        &oak,
+        "-o",
+        "direct.billow",
+        "--compress",
+        "none",
+        "--prune",
+        "--json",
+    ];
+    direct.extend_from_slice(opts);
+    let r = billow(dir, &direct, threads);
+    ok(&r, "voxelize --prune");
+    let a = std::fs::read(dir.join("pruned.billow")).unwrap();
+    let b = std::fs::read(dir.join("direct.billow")).unwrap();
+    assert!(
+        a == b,
+        "{opts:?}: voxelize --prune differs from voxelize + emptyspace"
+    );
+    serde_json::from_str(&r.stdout).expect("one JSON document")
+}
+
+#[test]
+fn prune_equals_voxelize_then_emptyspace_byte_for_byte() {
+    let dir = tempfile::tempdir().unwrap();
+    // Pruned into bands (the oak at 64: sides multiples of 8).
+    let v = same_bytes(dir.path(), &["--res", "64"], "2");
+    let p = &v["prune"];
+    assert_eq!(p["kept_whole"], false, "{p}");
+    assert!(p["tail_level"].as_u64().unwrap() >= 1, "{p}");
+    assert!(p["texel_bytes_after"].as_u64() < p["texel_bytes_before"].as_u64());
+    // Normals kept, another preset, one thread.
+    same_bytes(
+        dir.path(),
+        &["--res", "48", "--normals", "on", "--combine", "min"],
+        "1",
+    );
+    // Odd sides: emptyspace keeps the volume whole.
+    let v = same_bytes(dir.path(), &["--res", "40x24x33"], "2");
+    assert_eq!(v["prune"]["kept_whole"], true);
+    // An expression keeps dense pyramids; --prune prunes them all the same.
+    same_bytes(
+        dir.path(),
+        &[
+            "--res",
+            "32",
+            "--combine",
+            "expr:max(px,nx)",
+            "--supersample",
+            "1",
+        ],
+        "2",
+    );
+}
+
+#[test]
+fn prune_refuses_the_outputs_of_the_dense_volume() {
+    let dir = tempfile::tempdir().unwrap();
+    let oak = oak();
+    for extra in [
+        &["--ktx2", "x.ktx2"][..],
+        &["--slices", "sl"][..],
+        &["--compress", "bc"][..],
+    ] {
+        let mut args = vec!["voxelize", &oak, "-o", "x.billow", "--res", "16", "--prune"];
+        args.extend_from_slice(extra);
+        let r = run(&args, dir.path());
+        assert_eq!(r.code, Some(2), "{extra:?}: {}", r.stderr);
+        let line = r.error_line().unwrap();
+        assert!(line.contains("--prune"), "{line}");
+        assert!(!dir.path().join("x.billow").exists());
+    }
+}
