@@ -132,6 +132,11 @@ fn generate(dir: &Path) -> String {
     row(vol, "eval RMSE by distance", by_distance(&e["by_distance"]));
     row(
         vol,
+        "eval RMSE over covered pixels (mean)",
+        sig3(num(&e, &["mean", "asset", "rmse_covered"])),
+    );
+    row(
+        vol,
         "mesh 1 spp RMSE (mean)",
         sig3(num(&e, &["mean", "raster_1spp", "rmse"])),
     );
@@ -160,6 +165,11 @@ fn generate(dir: &Path) -> String {
         );
         row(
             cl,
+            &format!("LOD {k} eval RMSE over covered pixels (mean)"),
+            sig3(num(l, &["mean", "rmse_covered"])),
+        );
+        row(
+            cl,
             &format!("LOD {k} eval RMSE by distance"),
             by_distance(&l["by_distance"]),
         );
@@ -176,7 +186,8 @@ fn generate(dir: &Path) -> String {
          voxelize oak.gltf -o oak.billow` and `billow bbcloud oak.gltf -o cloud.billow`, each \
          scored by `billow eval` with its defaults (6 axes × 1×, 4×, 16× the framed distance, \
          128×128, 16-spp reference; RMSE over the whole frame, premultiplied RGBA, to 3 \
-         significant digits). Counts and bytes are exact and load-independent; no times are \
+         significant digits; *over covered pixels*: over the union of the reference's and the \
+         asset's coverage). Counts and bytes are exact and load-independent; no times are \
          recorded. The full sweeps are in [accuracy.md](../accuracy.md).\n"
     )
     .unwrap();
