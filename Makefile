@@ -132,11 +132,13 @@ $(OUT_DIR)/%.cloud.done: $(IN_DIR)/% | $(BILLOW) $(OUT_DIR)/%.volume.billow
 fixtures:
 	$(CARGO) run --release --example gen_fixtures -- $(OUT)/procedural
 
-## Accuracy against cost: regenerates docs/accuracy.md and docs/accuracy/*.svg (a few
+## Accuracy against cost: regenerates docs/accuracy.md, docs/accuracy/*.svg and the quick
+## headline numbers docs/accuracy/quick.md that tests/accuracy_drift.rs checks (a few
 ## minutes in release; Spot and the Bunny need ../shared/assets, skipped with a note otherwise).
 accuracy:
 	$(CARGO) run --release --locked --example accuracy -- docs/accuracy.md
 	$(MAKE) accuracy-emptyspace
+	BILLOW_BLESS=1 $(CARGO) test --locked --test accuracy_drift
 
 ## Empty-space removal: memory, render work and image change of `billow emptyspace` on the
 ## oak (128³, 256³) and Spot, and its --threshold / --min-box sweep; rewrites

@@ -8,12 +8,14 @@
 //! `<!-- emptyspace-sweep:begin -->` and `<!-- emptyspace-sweep:end -->` (appended when
 //! absent) with its plot `docs/accuracy/emptyspace.svg`.
 //!
-//! Volumes: the bundled oak at 128³ and 256³ and, when `../shared/assets` exists, the spot
-//! cow at 128³, baked with `voxelize` defaults plus `--align 8` (the unaligned bake's size
-//! is reported too). Views: the eval view set (14 directions × 1×, 4×, 16× the framed
-//! distance, 128×128; `--quick`: the 6 axes, 64×64, no 256³), the CPU slicer, compared
-//! with the eval's 16-spp ray-traced reference of the mesh. Render times are the best of
-//! 3 runs of the whole view set; fragments (slice samples shaded) are exact.
+//! Volumes: the bundled oak at 128³ and 256³ and, when `../shared/assets` (or
+//! `$BILLOW_SHARED/assets`) exists, the spot cow at 128³, baked like `voxelize --normals
+//! off --align 8` (so with the CLI's `--combine opaque`, not the library's `mean`; the
+//! unaligned bake's size is reported too). Views: the eval view set (14 directions × 1×,
+//! 4×, 16× the framed distance, 128×128; `--quick`: the 6 axes, 64×64, no 256³), the CPU
+//! slicer, compared with the eval's 16-spp ray-traced reference of the mesh. Render times
+//! are the best of 5 runs of the whole view set; fragments (slice samples shaded) are
+//! exact.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -39,6 +41,9 @@ fn bake(scene: &Scene, res: u32, align: u32) -> VolumeAsset {
     let opts = VoxelizeOptions {
         resolution: Resolution::Longest(res),
         align,
+        // The CLI's default combine (the library's default is `mean`); normals stay off, as
+        // with `--normals off`.
+        combine: "opaque".parse().expect("combine opaque"),
         ..VoxelizeOptions::default()
     };
     let v = voxelize(scene, &opts, &|_, _| {}).expect("voxelize");
@@ -427,7 +432,7 @@ fn method(quick: bool) -> String {
         (128, "14 (6 axes + 8 diagonals)")
     };
     format!(
-        "Volumes baked with `voxelize` defaults plus `--align 8` (even sides, required for MIP-exact bricks; \"unaligned\" is the same bake without it), pruned with `billow emptyspace` at the given settings. Views: the eval view set, {views} directions × 1×, 4×, 16× the framed distance, {px}×{px}, the CPU slicer (`billow eval`'s renderer, adaptive spacing, linear MIP filter). *fragments* = slice samples shaded (machine-independent), *render time* = slicer wall time, best of {REPEATS} runs over the whole view set (2 cores shared with other jobs: times of equal work still differ by up to ±30 %; fragments are exact); both as pruned / unpruned. *RMSE vs mesh*: against the 16-spp ray-traced reference (premultiplied RGBA), mean over the views. *max \\|Δ\\|*: largest per-pixel channel difference between the pruned and the unpruned renders over all views.\n"
+        "Volumes baked with `voxelize --normals off --align 8` (the CLI's other defaults, including `--combine opaque`; even sides, required for MIP-exact bricks; \"unaligned\" is the same bake without it), pruned with `billow emptyspace` at the given settings. Views: the eval view set, {views} directions × 1×, 4×, 16× the framed distance, {px}×{px}, the CPU slicer (`billow eval`'s renderer, adaptive spacing, linear MIP filter). *fragments* = slice samples shaded (machine-independent), *render time* = slicer wall time, best of {REPEATS} runs over the whole view set (2 cores shared with other jobs: times of equal work still differ by up to ±30 %; fragments are exact); both as pruned / unpruned. *RMSE vs mesh*: against the 16-spp ray-traced reference (premultiplied RGBA), mean over the views. *max \\|Δ\\|*: largest per-pixel channel difference between the pruned and the unpruned renders over all views.\n"
     )
 }
 
@@ -550,7 +555,10 @@ fn main() {
     let accuracy_path = value("--accuracy", "docs/accuracy.md");
     let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let oak = repo.join("fixtures/oak/eztree_oak_medium.gltf");
-    let cow = repo.join("../shared/assets/spot_cow/spot.obj");
+    // `BILLOW_SHARED` names the optional corpus where `../shared` is not beside the
+    // checkout (a git worktree elsewhere).
+    let shared = std::env::var_os("BILLOW_SHARED").map_or(repo.join("../shared"), PathBuf::from);
+    let cow = shared.join("assets/spot_cow/spot.obj");
     let start = Instant::now();
     let load = |p: &Path| import(p, &ImportOptions::default()).expect("import");
     let oak_scene = load(&oak);

@@ -2,6 +2,11 @@
 //!
 //! - RMSE per channel (r, g, b, a) and over all four channels; PSNR = `10·log10(1/MSE)`
 //!   (peak 1; `+∞` for identical images).
+//! - The same RMSE over the **covered pixels** only (`rmse_covered`): the union of the
+//!   reference's and the asset's coverage, pixels where either alpha exceeds
+//!   [`COVERED_ALPHA`] (half an 8-bit step). The whole-frame RMSE shrinks with the empty
+//!   background (at 16× the framed distance the object is a few pixels wide); this one
+//!   does not: `rmse² · pixels = rmse_covered² · covered pixels`.
 //! - Alpha coverage: mean `|Δα|`, and the relative coverage difference
 //!   `(Σα_test − Σα_ref) / Σα_ref` (signed: negative = the asset is too transparent).
 //! - SSIM ([`super::ssim`]) on sRGB-encoded luma of the premultiplied colour (i.e. over
@@ -23,6 +28,11 @@ use super::{EvalError, ImageF32};
 pub struct ImageError {
     pub rmse_rgba: [f64; 4],
     pub rmse: f64,
+    /// RMSE over all four channels over the covered pixels only (see the module docs); 0
+    /// when no pixel is covered.
+    pub rmse_covered: f64,
+    /// Fraction of the frame's pixels that are covered (the union of both coverages).
+    pub covered_fraction: f64,
     pub psnr_rgba: [f64; 4],
     pub psnr: f64,
     pub mean_abs_alpha: f64,
@@ -35,6 +45,10 @@ pub struct ImageError {
     /// Mean LDR-FLIP error of the colour over black (0 = identical).
     pub flip: f64,
 }
+
+/// A pixel is covered when the reference's or the test's alpha exceeds this: half an 8-bit
+/// step, so that a pixel an 8-bit display shows as empty in both is not.
+pub const COVERED_ALPHA: f32 = 0.5 / 255.0;
 
 /// The viewing condition of the FLIP metric: `nv_flip::DEFAULT_PIXELS_PER_DEGREE`, 67 pixels
 /// per degree (a 0.7 m wide 3840-pixel monitor seen from 0.7 m).
@@ -93,10 +107,17 @@ pub fn compare(reference: &ImageF32, test: &ImageF32) -> Result<ImageError, Eval
     let mut se = [0.0f64; 4];
     let mut abs_a = 0.0;
     let (mut cov_r, mut cov_t) = (0.0, 0.0);
+    let (mut se_covered, mut covered) = (0.0f64, 0u64);
     for (r, t) in reference.data.iter().zip(&test.data) {
+        let mut se_px = 0.0;
         for c in 0..4 {
             let d = f64::from(t[c]) - f64::from(r[c]);
             se[c] += d * d;
+            se_px += d * d;
+        }
+        if r.w > COVERED_ALPHA || t.w > COVERED_ALPHA {
+            covered += 1;
+            se_covered += se_px;
         }
         abs_a += (f64::from(t.w) - f64::from(r.w)).abs();
         cov_r += f64::from(r.w);
@@ -122,6 +143,12 @@ pub fn compare(reference: &ImageF32, test: &ImageF32) -> Result<ImageError, Eval
     Ok(ImageError {
         rmse_rgba: mse.map(f64::sqrt),
         rmse: mse_all.sqrt(),
+        rmse_covered: if covered > 0 {
+            (se_covered / (4.0 * covered as f64)).sqrt()
+        } else {
+            0.0
+        },
+        covered_fraction: covered as f64 / n,
         psnr_rgba: mse.map(psnr),
         psnr: psnr(mse_all),
         mean_abs_alpha: abs_a / n,
@@ -161,6 +188,30 @@ mod tests {
             1.0
         };
         Vec4::new(v * 0.9, v * 0.6, v * 0.3, 1.0) * a
+    }
+
+    #[test]
+    fn covered_rmse_is_over_the_union_of_both_coverages() {
+        // 8×8, empty but for one pixel covered only in the reference (α 1 → 0) and one
+        // only in the test (α 0 → 0.5): 2 of 64 pixels covered. Squared errors: 4·1 and
+        // 4·0.25, so over the covered pixels MSE = 5 / 8, over the frame 5 / 256.
+        let r = image(8, 8, |x, y| {
+            Vec4::splat(if (x, y) == (1, 1) { 1.0 } else { 0.0 })
+        });
+        let t = image(8, 8, |x, y| {
+            Vec4::splat(if (x, y) == (6, 2) { 0.5 } else { 0.0 })
+        });
+        let e = compare(&r, &t).unwrap();
+        assert_eq!(e.covered_fraction, 2.0 / 64.0);
+        assert!(
+            (e.rmse_covered - (5.0f64 / 8.0).sqrt()).abs() < 1e-9,
+            "{e:?}"
+        );
+        assert!((e.rmse - (5.0f64 / 256.0).sqrt()).abs() < 1e-9, "{e:?}");
+        // Below half an 8-bit step is not covered; nothing covered is 0, not NaN.
+        let faint = image(8, 8, |_, _| Vec4::splat(0.25 / 255.0));
+        let e = compare(&faint, &image(8, 8, |_, _| Vec4::ZERO)).unwrap();
+        assert_eq!((e.covered_fraction, e.rmse_covered), (0.0, 0.0));
     }
 
     #[test]

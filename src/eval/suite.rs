@@ -111,6 +111,8 @@ pub struct ViewResult {
 pub struct MeanErrors {
     pub views: usize,
     pub rmse: f64,
+    /// Mean RMSE over the covered pixels ([`ImageError::rmse_covered`]).
+    pub rmse_covered: f64,
     /// PSNR of the mean MSE.
     pub psnr: f64,
     pub mean_abs_alpha: f64,
@@ -129,6 +131,7 @@ pub fn mean_errors<'a>(errors: impl IntoIterator<Item = &'a ImageError>) -> Mean
     for e in errors {
         m.views += 1;
         m.rmse += e.rmse;
+        m.rmse_covered += e.rmse_covered;
         mse += e.rmse * e.rmse;
         m.mean_abs_alpha += e.mean_abs_alpha;
         m.coverage_rel_diff += if e.coverage_rel_diff.is_finite() {
@@ -145,6 +148,7 @@ pub fn mean_errors<'a>(errors: impl IntoIterator<Item = &'a ImageError>) -> Mean
     }
     let n = m.views as f64;
     m.rmse /= n;
+    m.rmse_covered /= n;
     mse /= n;
     m.psnr = if mse > 0.0 {
         -10.0 * mse.log10()
@@ -414,6 +418,8 @@ mod tests {
         ImageError {
             rmse_rgba: [rmse; 4],
             rmse,
+            rmse_covered: 2.0 * rmse,
+            covered_fraction: 0.25,
             psnr_rgba: [0.0; 4],
             psnr: 0.0,
             mean_abs_alpha: rmse,
