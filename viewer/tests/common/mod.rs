@@ -29,7 +29,7 @@ pub fn gpu_or_skip(test: &str) -> Option<Gpu> {
     match Gpu::headless() {
         Ok(g) => Some(g),
         Err(e) => {
-            skip(test, &format!("no GPU adapter: {e}"));
+            skip(test, &e.to_string());
             None
         }
     }
