@@ -222,7 +222,7 @@ pub fn shell(surface: &Scene, height: f32, uv_scale: Vec2) -> Result<Shell, Shel
 pub fn shell_asset(volume: &VolumeAsset, shell: Shell) -> VolumeAsset {
     let mut header = volume.header.clone();
     header.bounds = shell.bounds;
-    header.params.insert("shell".into(), shell.describe());
+    header.set_shell(shell.describe());
     VolumeAsset {
         header,
         levels: volume.levels.clone(),

@@ -2,6 +2,8 @@
 
 use std::path::Path;
 
+mod common;
+
 use billow::export::{ktx2_bytes, write_ktx2, ExportError};
 use billow_format::{full_mip_count, mip_dims, ColourSpace, Header, Prism, VolumeAsset};
 use ktx2::dfd::{Basic, ChannelTypeQualifiers, DataFormatFlags};
@@ -218,8 +220,9 @@ fn khronos_ktx_validate_if_installed() {
         .output()
         .is_ok_and(|o| o.status.success());
     if !available {
-        eprintln!(
-            "SKIPPED: Khronos `ktx` tool (KTX-Software) not installed; `ktx validate` not run"
+        common::skip(
+            "khronos_ktx_validate_if_installed",
+            "Khronos `ktx` tool (KTX-Software) not installed; `ktx validate` not run",
         );
         return;
     }

@@ -12,6 +12,12 @@ fn asset(rel: &str) -> Option<PathBuf> {
     common::shared_assets(&format!("import_assets ({rel})")).map(|root| root.join(rel))
 }
 
+/// The bundled oak (fixtures/oak, the same files as the shared corpus's
+/// eztree_oak_medium): always there, so the oak tests never skip.
+fn oak(file: &str) -> PathBuf {
+    common::repo().join("fixtures/oak").join(file)
+}
+
 fn ok(p: &Path) -> Scene {
     import(p, &ImportOptions::default()).unwrap_or_else(|e| panic!("{e}"))
 }
@@ -71,9 +77,7 @@ fn check_oak(s: &Scene) {
 
 #[test]
 fn oak_gltf() {
-    let Some(p) = asset("eztree_oak_medium/eztree_oak_medium.gltf") else {
-        return;
-    };
+    let p = oak("eztree_oak_medium.gltf");
     let s = ok(&p);
     check_oak(&s);
     let r = inspect(&s, &p);
@@ -89,13 +93,11 @@ fn oak_gltf() {
 
 #[test]
 fn oak_obj_matches_gltf() {
-    let Some(p) = asset("eztree_oak_medium/eztree_oak_medium.obj") else {
-        return;
-    };
+    let p = oak("eztree_oak_medium.obj");
     let s = ok(&p);
     check_oak(&s);
     // Same leaf UVs as the glTF (OBJ v flipped back into glTF convention).
-    let g = ok(&asset("eztree_oak_medium/eztree_oak_medium.gltf").unwrap());
+    let g = ok(&oak("eztree_oak_medium.gltf"));
     let leaf_uv = |s: &Scene| {
         let mut uv: Vec<(i64, i64)> = s
             .triangles

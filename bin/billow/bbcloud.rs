@@ -419,7 +419,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
 
     let compress_start = Instant::now();
     let blocks = (compression == Compression::Bc).then(|| {
-        asset.header.params.insert("compress".into(), "bc7".into());
+        asset.header.set_compress("bc7");
         compress_cloud(&mut asset)
     });
     let seconds_compress = compress_start.elapsed().as_secs_f64();

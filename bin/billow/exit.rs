@@ -11,7 +11,7 @@ use billow::eval::EvalError;
 use billow::export::ExportError;
 use billow::import::{ImportError, ImportErrorKind};
 use billow::shell::ShellError;
-use billow::voxelize::{CombineParseError, ResolutionError, VoxelizeError};
+use billow::voxelize::{CombineParseError, GridError, ResolutionError, VoxelizeError};
 use billow_format::{CloudError, FormatError};
 use billow_view::ViewError;
 
@@ -124,13 +124,28 @@ impl From<&CombineParseError> for Code {
     }
 }
 
+impl From<&GridError> for Code {
+    fn from(e: &GridError) -> Code {
+        match e {
+            // Every grid failure comes from the flags (resolution, margin, alignment) applied
+            // to the scene's bounds: a bad parameter, as before this mapping was spelled out.
+            GridError::BadBounds { .. }
+            | GridError::BadMargin(_)
+            | GridError::Resolution(_)
+            | GridError::BadAlign(_)
+            | GridError::AlignTooLarge { .. } => Code::BadParameter,
+        }
+    }
+}
+
 impl From<&VoxelizeError> for Code {
     fn from(e: &VoxelizeError) -> Code {
         match e {
             VoxelizeError::Resolution(r) => Code::from(r),
-            VoxelizeError::Grid(_)
-            | VoxelizeError::InvalidOption(_)
-            | VoxelizeError::TooMuchMemory { .. } => Code::BadParameter,
+            VoxelizeError::Grid(g) => Code::from(g),
+            VoxelizeError::InvalidOption(_) | VoxelizeError::TooMuchMemory { .. } => {
+                Code::BadParameter
+            }
             VoxelizeError::EmptyScene | VoxelizeError::InvalidScene(_) => Code::InvalidInput,
         }
     }

@@ -130,7 +130,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             None
         }
         Compression::Bc => {
-            asset.header.params.insert("compress".into(), "bc7".into());
+            asset.header.set_compress("bc7");
             Some(match volume_blocks.filter(|_| !args.surface_normals) {
                 Some(b) => b,
                 None => compress_volume(&mut asset),

@@ -456,7 +456,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     };
     let compress_start = Instant::now();
     let blocks = (compression == Compression::Bc).then(|| {
-        asset.header.params.insert("compress".into(), "bc7".into());
+        asset.header.set_compress("bc7");
         compress_volume(&mut asset)
     });
     let compress_s = compress_start.elapsed().as_secs_f64();

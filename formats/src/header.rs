@@ -114,7 +114,47 @@ pub enum NormalEncoding {
     Rgba8Snorm,
 }
 
+/// Names of the header `params` that a reader acts on (the baker writes them, the
+/// viewer and the evaluators read them; SPEC.md §8). Read them through the typed
+/// accessors on [`Header`] ([`Header::shell`], [`Header::light`]), not as string literals.
+pub mod param {
+    /// Present on a shell asset (a volume on prism cells, tiled in x and z): the shell's
+    /// description, e.g. `"height=0.1 ..."`.
+    pub const SHELL: &str = "shell";
+    /// The light a billboard cloud's colours were baked under: `"x,y,z"` or `"unlit"`.
+    pub const LIGHT: &str = "light";
+    /// Block compression of the texels, e.g. `"bc7"`.
+    pub const COMPRESS: &str = "compress";
+}
+
 impl Header {
+    /// The shell description (`params["shell"]`), present iff the asset is a shell
+    /// (prism cells; repeat addressing in x and z).
+    pub fn shell(&self) -> Option<&str> {
+        self.params.get(param::SHELL).map(String::as_str)
+    }
+
+    /// Whether the asset is a shell (`params` has `"shell"`).
+    pub fn is_shell(&self) -> bool {
+        self.params.contains_key(param::SHELL)
+    }
+
+    /// Marks the asset as a shell with `description` (see [`Header::shell`]).
+    pub fn set_shell(&mut self, description: impl Into<String>) {
+        self.params.insert(param::SHELL.into(), description.into());
+    }
+
+    /// The baked light (`params["light"]`) as written, if any. Readers choose the
+    /// default for a missing key.
+    pub fn light(&self) -> Option<&str> {
+        self.params.get(param::LIGHT).map(String::as_str)
+    }
+
+    /// Records the texels' block compression (`params["compress"]`, e.g. `"bc7"`).
+    pub fn set_compress(&mut self, codec: impl Into<String>) {
+        self.params.insert(param::COMPRESS.into(), codec.into());
+    }
+
     /// Check the rules a header must follow, independent of the chunks.
     pub fn validate(&self) -> Result<(), FormatError> {
         let bad = |m: String| Err(FormatError::Header(m));

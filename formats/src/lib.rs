@@ -39,7 +39,8 @@ pub use container::{
 };
 pub use error::{tag_str, FormatError};
 pub use header::{
-    AssetKind, Bounds, ColourSpace, Header, NormalEncoding, SourceInfo, TexelFormat, VolumeHeader,
+    param, AssetKind, Bounds, ColourSpace, Header, NormalEncoding, SourceInfo, TexelFormat,
+    VolumeHeader,
 };
 pub use inspect::{inspect_bytes, ChunkInfo, Report};
 pub use volume::{

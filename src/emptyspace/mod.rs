@@ -296,7 +296,7 @@ pub fn prune(asset: &VolumeAsset, o: &EmptySpaceOptions) -> Result<Pruned, Empty
     asset
         .validate()
         .map_err(|e| EmptySpaceError::InvalidAsset(e.to_string()))?;
-    if asset.header.params.contains_key("shell") {
+    if asset.header.is_shell() {
         return Err(EmptySpaceError::Shell);
     }
     if let Some(v) = asset.header.params.get(PARAM_KEY) {

@@ -218,7 +218,9 @@ impl Lighting {
     /// The reference lighting of a billboard-cloud asset (header `light` = `x,y,z` or
     /// `unlit`, `ambient`).
     pub fn for_cloud(params: &BTreeMap<String, String>) -> Result<Lighting, String> {
-        let light = params.get("light").map_or("unlit", |l| l.trim());
+        let light = params
+            .get(billow_format::param::LIGHT)
+            .map_or("unlit", |l| l.trim());
         if light == "unlit" || light.is_empty() {
             return Ok(Lighting::Unlit);
         }

@@ -72,7 +72,7 @@ pub struct DecodedBand {
 /// The addressing a reader must use for `asset` (SPEC §8.5): repeat in x and z for a
 /// shell asset (its `params` contain the key `shell`), clamp everywhere otherwise.
 pub fn repeat_axes(asset: &VolumeAsset) -> [bool; 3] {
-    let shell = asset.header.params.contains_key("shell");
+    let shell = asset.header.is_shell();
     [shell, false, shell]
 }
 
@@ -429,10 +429,7 @@ mod tests {
             cells: vec![],
         };
         assert_eq!(repeat_axes(&asset), [false; 3]);
-        asset
-            .header
-            .params
-            .insert("shell".into(), "height=0.1".into());
+        asset.header.set_shell("height=0.1");
         assert_eq!(repeat_axes(&asset), [true, false, true]);
     }
 }

@@ -519,6 +519,10 @@ mod tests {
     #[test]
     fn simd_and_baseline_rows_agree_bit_for_bit() {
         if !simd_available() {
+            crate::test_skip(
+                "simd_and_baseline_rows_agree_bit_for_bit",
+                "no AVX2/BMI1/BMI2/LZCNT/POPCNT on this CPU",
+            );
             return;
         }
         let s = scene();

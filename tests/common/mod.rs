@@ -13,9 +13,10 @@ pub fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// A test that cannot run says so on stderr (`SKIP: <test>: <reason>`, shown even when
-/// the runner captures stdout), and fails instead under CI (`CI` set) or
-/// `BILLOW_REQUIRE=all`, where every resource it needs must be there.
+/// A test that cannot run says so on stderr (`SKIP: <test>: <reason>`, written to the
+/// process's stderr so it shows even though the harness captures `eprintln!`), and fails
+/// instead under CI (`CI` set) or `BILLOW_REQUIRE=all`, where every resource it needs
+/// must be there.
 pub fn skip(test: &str, reason: &str) {
     let required = std::env::var_os("CI").is_some()
         || std::env::var("BILLOW_REQUIRE").is_ok_and(|v| v == "all");
@@ -23,7 +24,9 @@ pub fn skip(test: &str, reason: &str) {
         !required,
         "{test}: {reason} (required under CI / BILLOW_REQUIRE=all)"
     );
-    eprintln!("SKIP: {test}: {reason}");
+    // Straight to the process's stderr: the test harness captures `eprintln!`.
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr(), "SKIP: {test}: {reason}");
 }
 
 /// `../shared/assets`, or `None` (after [`skip`]) when absent.

@@ -213,7 +213,7 @@ pub struct VolumePass {
 /// The addressing of `asset` (SPEC §8.5): repeat in x and z for shells (header param
 /// `shell`), clamp everywhere otherwise.
 pub fn repeat_axes(asset: &VolumeAsset) -> [bool; 3] {
-    let shell = asset.header.params.contains_key("shell");
+    let shell = asset.header.is_shell();
     [shell, false, shell]
 }
 

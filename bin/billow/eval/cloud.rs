@@ -91,7 +91,7 @@ pub(super) fn run(
         }
         None => (0..prepared.level_count()).collect(),
     };
-    let light = asset.header.params.get("light").cloned();
+    let light = asset.header.light().map(str::to_owned);
     let lit = light.as_deref().is_some_and(|l| l.trim() != "unlit");
     let (lighting, note) = match args.lighting {
         LightingArg::Auto => (

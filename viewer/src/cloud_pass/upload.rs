@@ -247,7 +247,7 @@ impl CloudPass {
             })
             .collect();
         // Runtime lighting: every atlas has a normal map and the bake left lighting out.
-        let unlit = asset.header.params.get("light").map(String::as_str) == Some("unlit");
+        let unlit = asset.header.light() == Some("unlit");
         let has_normals =
             !asset.atlases.is_empty() && asset.atlases.iter().all(|a| a.normals.is_some());
         let runtime_lit = unlit && has_normals;

@@ -7,20 +7,29 @@ use std::path::PathBuf;
 use billow_format::{full_mip_count, mip_dims, ColourSpace, Header, Prism, VolumeAsset};
 use billow_view::Gpu;
 
-/// The headless device, or `None` with a `SKIP: <test>: <reason>` line on stderr when no
-/// adapter exists.
-/// Under CI (env `CI` set) a missing adapter fails the test instead: rendering must be
-/// possible there (`.ci/ensure-vulkan` installs lavapipe).
+/// A test that cannot run says so on stderr (`SKIP: <test>: <reason>`, written to the
+/// process's stderr so the harness does not capture it), and fails instead under CI (`CI`
+/// set) or `BILLOW_REQUIRE=all`, where every resource it needs must be there. The same
+/// contract as `tests/common::skip` of the `billow` package.
+pub fn skip(test: &str, reason: &str) {
+    let required = std::env::var_os("CI").is_some()
+        || std::env::var("BILLOW_REQUIRE").is_ok_and(|v| v == "all");
+    assert!(
+        !required,
+        "{test}: {reason} (required under CI / BILLOW_REQUIRE=all)"
+    );
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr(), "SKIP: {test}: {reason}");
+}
+
+/// The headless device, or `None` after [`skip`] when no adapter exists (under CI or
+/// `BILLOW_REQUIRE=all` a missing adapter fails the test instead: rendering must be
+/// possible there; `.ci/ensure-vulkan` installs lavapipe).
 pub fn gpu_or_skip(test: &str) -> Option<Gpu> {
     match Gpu::headless() {
         Ok(g) => Some(g),
         Err(e) => {
-            if std::env::var_os("CI").is_some() {
-                panic!("{test}: CI is set but no GPU adapter is available: {e}");
-            }
-            // Straight to the process's stderr: the test harness captures `eprintln!`.
-            use std::io::Write;
-            let _ = writeln!(std::io::stderr(), "SKIP: {test}: {e}");
+            skip(test, &e.to_string());
             None
         }
     }
