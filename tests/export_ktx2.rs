@@ -220,8 +220,9 @@ fn khronos_ktx_validate_if_installed() {
         .output()
         .is_ok_and(|o| o.status.success());
     if !available {
-        common::skip(
+        common::skip_tool(
             "khronos_ktx_validate_if_installed",
+            "ktx",
             "Khronos `ktx` tool (KTX-Software) not installed; `ktx validate` not run",
         );
         return;
