@@ -155,22 +155,42 @@ pub fn encode_bc7_with(
 /// The exact-zero constraint: if a texel of `tile` that is all zero bytes does not decode
 /// from `block` to all zero bytes (BC7 interpolates, so the encoder leaves faint colour
 /// and alpha in the empty texels of a block that is partly full), `block` is replaced by
-/// [`zero_anchored_block`]. Returns whether it was.
+/// the candidate of least squared error that keeps every empty texel empty: the
+/// encoder's "alpha basic" profile (more modes and partitions than the default) or
+/// [`zero_anchored_block`], which always does. Returns whether it was replaced.
 pub fn repair_zero_texels(tile: &[u8; 64], block: &mut [u8; 16]) -> bool {
-    let zero = |t: &[u8]| t.iter().all(|&b| b == 0);
-    if !tile.chunks_exact(4).any(zero) {
+    if !tile.chunks_exact(4).any(|t| t == [0; 4]) || keeps_zero(tile, block).is_some() {
         return false;
     }
+    let mut basic = [0u8; 16];
+    let variant = CompressionVariant::BC7(BC7Settings::alpha_basic());
+    compress_rgba8(variant, tile, &mut basic, 4, 4, 16);
+    let anchored = zero_anchored_block(tile);
+    *block = match (keeps_zero(tile, &basic), keeps_zero(tile, &anchored)) {
+        (Some(b), Some(a)) if b <= a => basic,
+        (Some(_), None) => basic,
+        _ => anchored,
+    };
+    REPAIRED_BLOCKS.fetch_add(1, Ordering::Relaxed);
+    true
+}
+
+/// The squared error of `block` against `tile`, or `None` if an empty texel of `tile`
+/// does not decode to zero.
+fn keeps_zero(tile: &[u8; 64], block: &[u8; 16]) -> Option<u64> {
     let dec = decode_bc7_block(block);
-    let leaks = tile
-        .chunks_exact(4)
-        .zip(dec.chunks_exact(4))
-        .any(|(s, d)| zero(s) && !zero(d));
-    if leaks {
-        *block = zero_anchored_block(tile);
-        REPAIRED_BLOCKS.fetch_add(1, Ordering::Relaxed);
+    let mut sse = 0u64;
+    for (s, d) in tile.chunks_exact(4).zip(dec.chunks_exact(4)) {
+        if s == [0; 4] && d != [0; 4] {
+            return None;
+        }
+        sse += s
+            .iter()
+            .zip(d)
+            .map(|(a, b)| u64::from(a.abs_diff(*b)).pow(2))
+            .sum::<u64>();
     }
-    leaks
+    Some(sse)
 }
 
 /// BC7 mode-6 interpolation weights of 4-bit indices.
@@ -221,22 +241,28 @@ pub fn zero_anchored_block(tile: &[u8; 64]) -> [u8; 16] {
     });
     let (mut c7, e) = quant(max);
     let (mut idx, err) = choose(e);
-    // One least-squares step for the free endpoint: e = Σ w·t / Σ w² per channel.
-    let (sw2, swt) = (0..16).fold((0f64, [0f64; 4]), |(a, b), i| {
-        let w = f64::from(W4[idx[i]]) / 64.0;
-        let t = texel(i);
-        (
-            a + w * w,
-            std::array::from_fn(|c| b[c] + w * f64::from(t[c])),
-        )
-    });
-    if sw2 > 0.0 {
+    // A few least-squares steps for the free endpoint: e = Σ w·t / Σ w² per channel,
+    // each kept only if it lowers the error.
+    let mut err = err;
+    for _ in 0..4 {
+        let (sw2, swt) = (0..16).fold((0f64, [0f64; 4]), |(a, b), i| {
+            let w = f64::from(W4[idx[i]]) / 64.0;
+            let t = texel(i);
+            (
+                a + w * w,
+                std::array::from_fn(|c| b[c] + w * f64::from(t[c])),
+            )
+        });
+        if sw2 == 0.0 {
+            break;
+        }
         let ls = swt.map(|v| (v / sw2).round().clamp(0.0, 255.0) as u32);
         let (c7b, eb) = quant(ls);
         let (idxb, errb) = choose(eb);
-        if errb < err {
-            (c7, idx) = (c7b, idxb);
+        if errb >= err {
+            break;
         }
+        (c7, idx, err) = (c7b, idxb, errb);
     }
     // Endpoint 0 is zero; texel 0's index must have its top bit clear (the anchor), else
     // swap the endpoints and mirror every index.
