@@ -106,9 +106,7 @@ fn independent_reader_agrees_with_the_rust_reader() {
             "--compress",
             "bc",
         ],
-        // Raw texels (--compress none), and the volume emptyspace prunes: BC7's error
-        // leaves faint alpha in empty texels of non-empty blocks, which at 64³ keeps
-        // emptyspace (threshold 0) from pruning anything.
+        // Raw texels (--compress none).
         vec![
             "voxelize",
             oak,
@@ -122,7 +120,17 @@ fn independent_reader_agrees_with_the_rust_reader() {
             "--compress",
             "none",
         ],
-        vec!["emptyspace", "raw.billow", "-o", "pruned.billow"],
+        vec![
+            "emptyspace",
+            "raw.billow",
+            "-o",
+            "pruned.billow",
+            "--compress",
+            "none",
+        ],
+        // The compressed volume prunes too (its empty texels stay exactly empty), into
+        // compressed bands (format 1.3, emptyspace's default --compress bc).
+        vec!["emptyspace", "vol.billow", "-o", "pruned_bc.billow"],
         vec![
             "shell",
             oak,
@@ -153,9 +161,12 @@ fn independent_reader_agrees_with_the_rust_reader() {
         .filter(|p| p.extension().is_some_and(|e| e == "billow"))
         .collect();
     paths.sort();
-    assert_eq!(paths.len(), 6, "{paths:?}");
+    assert_eq!(paths.len(), 7, "{paths:?}");
     let f = paths.len();
-    paths.extend(["vol", "pruned", "cloud", "shell", "raw"].map(|n| d.join(format!("{n}.billow"))));
+    paths.extend(
+        ["vol", "pruned", "cloud", "shell", "raw", "pruned_bc"]
+            .map(|n| d.join(format!("{n}.billow"))),
+    );
     let (lines, code) = read_py(py, &paths);
     for (line, path) in lines.iter().zip(&paths) {
         assert_agree(line, path);
@@ -170,9 +181,23 @@ fn independent_reader_agrees_with_the_rust_reader() {
         lines[f + 1]
     );
     assert_eq!(lines[f + 2]["normal_maps"], true, "{}", lines[f + 2]);
-    for (i, compressed) in [(f, true), (f + 2, true), (f + 3, true), (f + 4, false)] {
+    for (i, compressed) in [
+        (f, true),
+        (f + 1, false),
+        (f + 2, true),
+        (f + 3, true),
+        (f + 4, false),
+        (f + 5, true),
+    ] {
         assert_eq!(lines[i]["compressed"], compressed, "{}", lines[i]);
     }
+    assert!(
+        lines[f + 5]["bands"].as_u64().unwrap() >= 1,
+        "{}",
+        lines[f + 5]
+    );
+    assert_eq!(lines[f + 5]["compressed_bands"], true, "{}", lines[f + 5]);
+    assert_eq!(lines[f + 5]["minor"], 3, "{}", lines[f + 5]);
 }
 
 #[test]

@@ -4,12 +4,13 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
+use billow::compress::{compress_volume, Compression};
 use billow::emptyspace::{prune, EmptySpaceOptions, EmptySpaceStats, DEFAULT_CELL_COST};
 use billow_format::{read_file, AssetKind, VolumeAsset};
 use serde::Serialize;
 
 use crate::depfile;
-use crate::exit::{CliError, Code};
+use crate::exit::{usage, CliError, Code};
 use crate::output::{print_json, refuse_clobbering, warn};
 use crate::staged::{out_err, Staged};
 use crate::Ctx;
@@ -42,6 +43,10 @@ pub struct Args {
     /// volume whole.
     #[arg(long)]
     max_tiers: Option<u32>,
+    /// Texel storage of the output: bc (default; BC7 blocks for the base texture and every
+    /// LOD band, format 1.3, empty texels kept exactly empty) or none (raw RGBA8, format 1.1).
+    #[arg(long, default_value = "bc")]
+    compress: String,
     /// Also write a Makefile rule with the input asset as the output's prerequisite;
     /// committed with the output.
     #[arg(long, value_name = "FILE")]
@@ -66,6 +71,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let start = Instant::now();
     let mut outputs = vec![("-o", args.output.as_path())];
     outputs.extend(args.depfile.as_deref().map(|d| ("--depfile", d)));
+    let compression: Compression = args.compress.parse().map_err(|e| usage("--compress", e))?;
     refuse_clobbering(&[&args.input], &outputs)?;
     depfile::check(args.depfile.as_deref(), &[&args.input, &args.output])?;
     let shown = args.input.display().to_string();
@@ -91,14 +97,22 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         max_tiers: args.max_tiers,
         apron: true,
     };
-    let pruned = prune(&asset, &options)
+    let mut pruned = prune(&asset, &options)
         .map_err(|e| CliError::new(Code::from(&e), format!("{shown}: {e}")))?;
     if let Some(note) = &pruned.stats.note {
         warn(ctx, &format!("{shown}: {note}"));
     }
+    let blocks = (compression == Compression::Bc).then(|| {
+        let a = &mut pruned.asset;
+        a.header.params.insert("compress".into(), "bc7".into());
+        compress_volume(a)
+    });
+    if blocks.is_none() {
+        pruned.asset.header.params.remove("compress");
+    }
     let bytes = pruned
         .asset
-        .to_bytes()
+        .to_bytes_with(blocks.as_ref())
         .map_err(|e| CliError::new(Code::Internal, e))?;
     let mut stage = Staged::new(&args.output);
     stage

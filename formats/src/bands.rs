@@ -9,6 +9,8 @@
 //! - `BNRM` × Σ `mip_count`, element `I8`, iff `volume.normals`: normals likewise;
 //! - `BCEL` × number of bands, element `F32`: each band's prisms ([`PRISM_BYTES`] each).
 
+use crate::blocks::{check_block_levels, decode_levels, unorm_to_snorm_in_place, BandBlocks};
+use crate::volume::mip_dims;
 use crate::volume::{check_level_sizes, full_mip_count, Prism, MAX_DIM, PRISM_BYTES};
 use crate::FormatError;
 
@@ -165,6 +167,9 @@ pub(crate) struct RawBands {
     pub levels: Vec<Vec<u8>>,
     pub normals: Vec<Vec<u8>>,
     pub cells: Vec<Vec<u8>>,
+    /// `BLB7` and `BNB7` payloads (format 1.3), instead of `BLEV`/`BNRM`.
+    pub bc_levels: Vec<Vec<u8>>,
+    pub bc_normals: Vec<Vec<u8>>,
 }
 
 impl RawBands {
@@ -173,15 +178,37 @@ impl RawBands {
             && self.levels.is_empty()
             && self.normals.is_empty()
             && self.cells.is_empty()
+            && self.bc_levels.is_empty()
+            && self.bc_normals.is_empty()
     }
 
-    /// Splits the collected chunks into bands (sizes are checked by [`validate_bands`]).
-    pub(crate) fn into_bands(self, normals: bool) -> Result<Vec<LodBand>, FormatError> {
+    /// Splits the collected chunks into bands (sizes are checked by [`validate_bands`]),
+    /// decoding compressed levels (`BLB7`/`BNB7`); returns their blocks too, if any.
+    pub(crate) fn into_bands(
+        mut self,
+        normals: bool,
+    ) -> Result<(Vec<LodBand>, Option<Vec<BandBlocks>>), FormatError> {
         if self.is_empty() {
-            return Ok(Vec::new());
+            return Ok((Vec::new(), None));
         }
+        let compressed = !self.bc_levels.is_empty() || !self.bc_normals.is_empty();
+        if compressed {
+            if !self.levels.is_empty() || !self.normals.is_empty() {
+                return bad(
+                    "both raw (BLEV/BNRM) and compressed (BLB7/BNB7) band levels: compressed bands store all their levels as blocks"
+                        .into(),
+                );
+            }
+            self.levels = std::mem::take(&mut self.bc_levels);
+            self.normals = std::mem::take(&mut self.bc_normals);
+        }
+        let (lev_tag, nrm_tag) = if compressed {
+            ("BLB7", "BNB7")
+        } else {
+            ("BLEV", "BNRM")
+        };
         let Some(table) = self.table else {
-            return bad("BLEV/BNRM/BCEL chunks without a VBND band table".into());
+            return bad("BLEV/BNRM/BLB7/BNB7/BCEL chunks without a VBND band table".into());
         };
         if table.is_empty() || !table.len().is_multiple_of(BAND_RECORD_BYTES) {
             return bad(format!(
@@ -216,14 +243,14 @@ impl RawBands {
         }
         if self.levels.len() as u64 != want_levels {
             return bad(format!(
-                "{} BLEV chunks but the bands have {want_levels} levels",
+                "{} {lev_tag} chunks but the bands have {want_levels} levels",
                 self.levels.len()
             ));
         }
         let want_normals = if normals { want_levels } else { 0 };
         if self.normals.len() as u64 != want_normals {
             return bad(format!(
-                "{} BNRM chunks, expected {want_normals}",
+                "{} {nrm_tag} chunks, expected {want_normals}",
                 self.normals.len()
             ));
         }
@@ -237,7 +264,8 @@ impl RawBands {
         let mut levels = self.levels.into_iter();
         let mut nrm = self.normals.into_iter();
         let mut out = Vec::with_capacity(recs.len());
-        for (r, cells) in recs.iter().zip(self.cells) {
+        let mut blocks = Vec::new();
+        for (n, (r, cells)) in recs.iter().zip(self.cells).enumerate() {
             if !cells.len().is_multiple_of(PRISM_BYTES) {
                 return bad(format!(
                     "BCEL length {} is not a multiple of the {PRISM_BYTES}-byte prism",
@@ -245,17 +273,49 @@ impl RawBands {
                 ));
             }
             let m = r[4] as usize;
+            let dims = [r[1], r[2], r[3]];
+            let mut band_levels: Vec<Vec<u8>> = levels.by_ref().take(m).collect();
+            let mut band_normals: Option<Vec<Vec<u8>>> =
+                normals.then(|| nrm.by_ref().take(m).collect());
+            if compressed {
+                if dims.iter().any(|&d| d == 0 || d > MAX_DIM) || m as u32 > full_mip_count(dims) {
+                    return bad(format!(
+                        "band {}: dims {dims:?} with {m} levels cannot hold BC7 levels",
+                        n + 1
+                    ));
+                }
+                let dims_of = |i| mip_dims(dims, i);
+                let what = format!("band {} BLB7", n + 1);
+                check_block_levels(&what, &band_levels, dims_of).map_err(FormatError::Volume)?;
+                let colour = std::mem::take(&mut band_levels);
+                band_levels = decode_levels(&colour, dims_of, 0);
+                let nb = match band_normals.take() {
+                    Some(nb) => {
+                        let what = format!("band {} BNB7", n + 1);
+                        check_block_levels(&what, &nb, dims_of).map_err(FormatError::Volume)?;
+                        let mut dec = decode_levels(&nb, dims_of, 0x80);
+                        dec.iter_mut().for_each(|l| unorm_to_snorm_in_place(l));
+                        band_normals = Some(dec);
+                        Some(nb)
+                    }
+                    None => None,
+                };
+                blocks.push(BandBlocks {
+                    colour,
+                    normals: nb,
+                });
+            }
             out.push(LodBand {
                 first_level: r[0],
-                dims: [r[1], r[2], r[3]],
-                levels: levels.by_ref().take(m).collect(),
-                normals: normals.then(|| nrm.by_ref().take(m).collect()),
+                dims,
+                levels: band_levels,
+                normals: band_normals,
                 cells: cells
                     .chunks_exact(PRISM_BYTES)
                     .map(Prism::read_le)
                     .collect(),
             });
         }
-        Ok(out)
+        Ok((out, compressed.then_some(blocks)))
     }
 }

@@ -26,6 +26,10 @@ pub const TAG_ATB7: [u8; 4] = *b"ATB7";
 pub const TAG_ANB7: [u8; 4] = *b"ANB7";
 /// Cloud mesh texture, BC7 (replaces `MTEX`).
 pub const TAG_MTB7: [u8; 4] = *b"MTB7";
+/// LOD band colour level, BC7 (format 1.3; replaces `BLEV`).
+pub const TAG_BLB7: [u8; 4] = *b"BLB7";
+/// LOD band normal level, BC7 of the normal bytes XOR 0x80 (format 1.3; replaces `BNRM`).
+pub const TAG_BNB7: [u8; 4] = *b"BNB7";
 
 /// A BC7 block that decodes to 16 zero texels (mode 6, every endpoint, p-bit and index
 /// zero): what an omitted block of a colour stream is, for a renderer that needs every
@@ -140,6 +144,13 @@ pub fn decode_bc7(payload: &[u8], dims: [u32; 3], omitted: u8) -> Vec<u8> {
     out
 }
 
+/// Decodes one BC7 block into its 16 RGBA8 texels, row by row.
+pub fn decode_bc7_block(block: &[u8; 16]) -> [u8; 64] {
+    let mut tile = [0u8; 64];
+    bcdec_rs::bc7(block, &mut tile, 16);
+    tile
+}
+
 /// Normal texels (`Rgba8Snorm` bytes) to the unsigned bytes BC7 encodes: each byte XOR
 /// 0x80, i.e. `v + 128` (SPEC §12.2).
 pub fn snorm_to_unorm(texels: &[u8]) -> Vec<u8> {
@@ -153,9 +164,20 @@ pub fn unorm_to_snorm_in_place(texels: &mut [u8]) {
 
 /// The BC7 blocks of a volume's base texture, as stored in `VLB7`/`VNB7` chunks: one
 /// entry per MIP level, [`bc7_len`] of `mip_dims(dims, i)` bytes each. The normal blocks
-/// encode the normal bytes XOR 0x80.
+/// encode the normal bytes XOR 0x80. `bands`: the blocks of each LOD band (`BLB7`/`BNB7`,
+/// format 1.3), in band order, or empty when the bands are stored raw (`BLEV`/`BNRM`) or
+/// the asset has none.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct VolumeBlocks {
+    pub colour: Vec<Vec<u8>>,
+    pub normals: Option<Vec<Vec<u8>>>,
+    pub bands: Vec<BandBlocks>,
+}
+
+/// The BC7 blocks of one LOD band: one entry per MIP level of the band, as
+/// [`VolumeBlocks::colour`] and [`VolumeBlocks::normals`] are for the base texture.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct BandBlocks {
     pub colour: Vec<Vec<u8>>,
     pub normals: Option<Vec<Vec<u8>>>,
 }

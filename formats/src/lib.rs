@@ -25,9 +25,10 @@ pub use bands::{
     LodBand, BAND_RECORD_BYTES, MAX_FIRST_LEVEL, TAG_BCEL, TAG_BLEV, TAG_BNRM, TAG_VBND,
 };
 pub use blocks::{
-    bc7_len, block_count, decode_bc7, expand_blocks, mask_len, pack_blocks, snorm_to_unorm,
-    sparse_len, unorm_to_snorm_in_place, CloudBlocks, VolumeBlocks, BC7_BLOCK_BYTES, TAG_ANB7,
-    TAG_ATB7, TAG_MTB7, TAG_VLB7, TAG_VNB7, ZERO_BLOCK,
+    bc7_len, block_count, decode_bc7, decode_bc7_block, expand_blocks, mask_len, pack_blocks,
+    snorm_to_unorm, sparse_len, unorm_to_snorm_in_place, BandBlocks, CloudBlocks, VolumeBlocks,
+    BC7_BLOCK_BYTES, TAG_ANB7, TAG_ATB7, TAG_BLB7, TAG_BNB7, TAG_MTB7, TAG_VLB7, TAG_VNB7,
+    ZERO_BLOCK,
 };
 pub use cloud::{
     Atlas, AtlasRect, Billboard, CloudAsset, CloudError, CloudLevel, Mesh, MeshMaterial,
@@ -52,9 +53,9 @@ pub use volume::{
 pub const FORMAT_MAJOR: u16 = 1;
 /// Minor format version implemented: additive changes (new chunks, new optional header
 /// fields). 1.1 added LOD bands to Volume assets (SPEC §8.6) and normal maps to Cloud
-/// atlases (`ANRM`, §9); 1.2 block-compressed (BC7) texel chunks (§12). A writer writes
+/// atlases (`ANRM`, §9); 1.2 block-compressed (BC7) texel chunks (§12); 1.3 BC7 chunks for LOD bands (`BLB7`/`BNB7`, §12.4). A writer writes
 /// the lowest minor version whose features the file uses (SPEC §5).
-pub const FORMAT_MINOR: u16 = 2;
+pub const FORMAT_MINOR: u16 = 3;
 /// The minor version written for files that use no 1.1 feature (SPEC §5).
 pub const FORMAT_MINOR_BASE: u16 = 0;
 /// The first 8 bytes of every billow asset.

@@ -14,6 +14,7 @@ use crate::bands::{TAG_BCEL, TAG_BLEV, TAG_BNRM, TAG_VBND};
 use crate::blocks::{
     check_block_levels, decode_levels, unorm_to_snorm_in_place, VolumeBlocks, TAG_VLB7, TAG_VNB7,
 };
+use crate::blocks::{TAG_BLB7, TAG_BNB7};
 use crate::container::{encode_with_minor, with_parts_minor, write_with_minor, ChunkRef};
 use crate::{
     from_bytes, AssetKind, Chunk, Container, ElemType, FormatError, Header, NormalEncoding,
@@ -208,19 +209,39 @@ impl VolumeAsset {
                 elem: ElemType::U32,
                 data: &table,
             });
-            for l in self.bands.iter().flat_map(|b| &b.levels) {
-                refs.push(ChunkRef {
-                    tag: TAG_BLEV,
-                    elem: ElemType::U8,
-                    data: l,
-                });
-            }
-            for l in self.bands.iter().flat_map(|b| b.normals.iter().flatten()) {
-                refs.push(ChunkRef {
-                    tag: TAG_BNRM,
-                    elem: ElemType::I8,
-                    data: l,
-                });
+            match blocks.filter(|b| !b.bands.is_empty()) {
+                Some(b) => {
+                    for l in b.bands.iter().flat_map(|b| &b.colour) {
+                        refs.push(ChunkRef {
+                            tag: TAG_BLB7,
+                            elem: ElemType::U8,
+                            data: l,
+                        });
+                    }
+                    for l in b.bands.iter().flat_map(|b| b.normals.iter().flatten()) {
+                        refs.push(ChunkRef {
+                            tag: TAG_BNB7,
+                            elem: ElemType::U8,
+                            data: l,
+                        });
+                    }
+                }
+                None => {
+                    for l in self.bands.iter().flat_map(|b| &b.levels) {
+                        refs.push(ChunkRef {
+                            tag: TAG_BLEV,
+                            elem: ElemType::U8,
+                            data: l,
+                        });
+                    }
+                    for l in self.bands.iter().flat_map(|b| b.normals.iter().flatten()) {
+                        refs.push(ChunkRef {
+                            tag: TAG_BNRM,
+                            elem: ElemType::I8,
+                            data: l,
+                        });
+                    }
+                }
             }
             for c in &band_cells {
                 refs.push(ChunkRef {
@@ -275,11 +296,48 @@ impl VolumeAsset {
             .map_err(FormatError::Volume)?;
         match (&b.normals, &self.normals) {
             (Some(n), Some(l)) if n.len() == l.len() => {
-                check_block_levels("VNB7", n, |i| mip_dims(dims, i)).map_err(FormatError::Volume)
+                check_block_levels("VNB7", n, |i| mip_dims(dims, i)).map_err(FormatError::Volume)?
             }
-            (None, None) => Ok(()),
-            _ => bad("normal blocks do not match the asset's normals".into()),
+            (None, None) => {}
+            _ => return bad("normal blocks do not match the asset's normals".into()),
         }
+        if b.bands.is_empty() {
+            return Ok(());
+        }
+        if b.bands.len() != self.bands.len() {
+            return bad(format!(
+                "{} band block sets for {} bands",
+                b.bands.len(),
+                self.bands.len()
+            ));
+        }
+        for (n, (bb, band)) in b.bands.iter().zip(&self.bands).enumerate() {
+            let dims_of = |i| mip_dims(band.dims, i);
+            if bb.colour.len() != band.levels.len() {
+                return bad(format!(
+                    "band {}: {} colour block levels for {} levels",
+                    n + 1,
+                    bb.colour.len(),
+                    band.levels.len()
+                ));
+            }
+            check_block_levels(&format!("band {} BLB7", n + 1), &bb.colour, dims_of)
+                .map_err(FormatError::Volume)?;
+            match (&bb.normals, &band.normals) {
+                (Some(nb), Some(l)) if nb.len() == l.len() => {
+                    check_block_levels(&format!("band {} BNB7", n + 1), nb, dims_of)
+                        .map_err(FormatError::Volume)?
+                }
+                (None, None) => {}
+                _ => {
+                    return bad(format!(
+                        "band {}: normal blocks do not match its normals",
+                        n + 1
+                    ))
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Decode and validate a volume asset from a container. Chunks with
@@ -310,6 +368,8 @@ impl VolumeAsset {
                 b"VBND" => Some((ElemType::U32, None)),
                 b"BLEV" => Some((ElemType::U8, Some(&mut raw.levels))),
                 b"BNRM" => Some((ElemType::I8, Some(&mut raw.normals))),
+                b"BLB7" => Some((ElemType::U8, Some(&mut raw.bc_levels))),
+                b"BNB7" => Some((ElemType::U8, Some(&mut raw.bc_normals))),
                 b"BCEL" => Some((ElemType::F32, Some(&mut raw.cells))),
                 _ => None,
             };
@@ -405,6 +465,7 @@ impl VolumeAsset {
             Some(VolumeBlocks {
                 colour: bc_colour,
                 normals: bc_normals,
+                bands: Vec::new(),
             })
         };
         let normals = match (v.normals, normals.is_empty()) {
@@ -414,7 +475,18 @@ impl VolumeAsset {
             }
             (Some(_), _) => Some(normals),
         };
-        let bands = raw.into_bands(v.normals.is_some())?;
+        let (bands, band_blocks) = raw.into_bands(v.normals.is_some())?;
+        let mut blocks = blocks;
+        match (&mut blocks, band_blocks) {
+            (_, None) => {}
+            (Some(b), Some(bb)) => b.bands = bb,
+            (None, Some(_)) => {
+                return bad(
+                    "compressed band levels (BLB7/BNB7) but a raw base texture: a file with BLB7 stores its base texture as VLB7/VNB7"
+                        .into(),
+                )
+            }
+        }
         let asset = VolumeAsset {
             header,
             levels,

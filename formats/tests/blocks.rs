@@ -20,9 +20,13 @@ fn path(name: &str) -> PathBuf {
         .join(name)
 }
 
+const BANDS_FIXTURE_LEN: usize = 1384;
+const BANDS_FIXTURE_CRC: u32 = 0x7e6e_4f9e;
+const BANDS_TEXEL_1: [u8; 4] = [66, 44, 26, 131];
 const VOLUME_FIXTURE: &str = "v1_2_volume_bc7.billow";
 const CLOUD_FIXTURE: &str = "v1_2_cloud_bc7.billow";
 const CLOUD_1_1: &str = "v1_1_cloud_normals.billow";
+const BANDS_FIXTURE: &str = "v1_3_volume_bands_bc7.billow";
 
 /// The compressed payload of a `dims` level (the generator's encoder: edge texels
 /// repeated, tiles of all-`omit` texels omitted).
@@ -156,6 +160,57 @@ fn volume_source() -> VolumeAsset {
     }
 }
 
+/// [`volume_source`] with one LOD band (first level 1, 3×2×1 with two levels, normals).
+fn bands_source() -> VolumeAsset {
+    let mut a = volume_source();
+    let colour = |n: usize| -> Vec<u8> {
+        (0..n)
+            .flat_map(|i| {
+                let a = if i % 3 == 0 {
+                    0
+                } else {
+                    90 + 40 * (i as u8 % 4)
+                };
+                [a / 2, a / 3, a / 5, a]
+            })
+            .collect()
+    };
+    let normal =
+        |n: usize| -> Vec<u8> { (0..n).flat_map(|i| [i as u8 * 9, 20, 0x90, 0]).collect() };
+    let cells = a.cells.clone();
+    a.bands.push(LodBand {
+        first_level: 1,
+        dims: [3, 2, 1],
+        levels: vec![colour(6), colour(1)],
+        normals: Some(vec![normal(6), normal(1)]),
+        cells,
+    });
+    a
+}
+
+/// [`compress_volume`] and every band: `a` then holds the decoded texels.
+fn compress_volume_bands(a: &mut VolumeAsset) -> VolumeBlocks {
+    let mut b = compress_volume(a);
+    for band in &mut a.bands {
+        let mut bb = BandBlocks::default();
+        for (i, l) in band.levels.iter_mut().enumerate() {
+            let d = mip_dims(band.dims, i as u32);
+            bb.colour.push(encode(l, d, 0));
+            *l = decode_bc7(bb.colour.last().unwrap(), d, 0);
+        }
+        let mut nb = Vec::new();
+        for (i, l) in band.normals.iter_mut().flatten().enumerate() {
+            let d = mip_dims(band.dims, i as u32);
+            nb.push(encode(&snorm_to_unorm(l), d, 0x80));
+            *l = decode_bc7(nb.last().unwrap(), d, 0x80);
+            unorm_to_snorm_in_place(l);
+        }
+        bb.normals = Some(nb);
+        b.bands.push(bb);
+    }
+    b
+}
+
 /// Compresses `a`'s base texture; `a` then holds the decoded texels.
 fn compress_volume(a: &mut VolumeAsset) -> VolumeBlocks {
     let dims = a.level_dims(0);
@@ -211,6 +266,85 @@ fn generate_v1_2() {
     c.header.params.insert("compress".into(), "bc7".into());
     let cb = compress_cloud(&mut c);
     c.write_with(&path(CLOUD_FIXTURE), Some(&cb)).unwrap();
+}
+
+#[test]
+#[ignore = "writes the frozen fixture; only for new fixture files"]
+fn generate_v1_3() {
+    let mut v = bands_source();
+    let vb = compress_volume_bands(&mut v);
+    v.write_with(&path(BANDS_FIXTURE), Some(&vb)).unwrap();
+}
+
+/// Compressed bands (format 1.3): written as BLB7/BNB7, read back as the same blocks and
+/// decoded texels; a raw-banded volume with a compressed base stays 1.2.
+#[test]
+fn compressed_bands_round_trip_as_1_3() {
+    let mut a = bands_source();
+    let b = compress_volume_bands(&mut a);
+    let bytes = a.to_bytes_with(Some(&b)).unwrap();
+    assert_eq!(u16::from_le_bytes([bytes[10], bytes[11]]), 3);
+    assert_eq!(
+        tags(&bytes),
+        "HEAD VLB7 VLB7 VNB7 VNB7 CELL VBND BLB7 BLB7 BNB7 BNB7 BCEL END "
+    );
+    let (back, bb) = VolumeAsset::from_bytes_with_blocks(&bytes).unwrap();
+    assert_eq!(back, a);
+    assert_eq!(bb.as_ref(), Some(&b));
+    let base_only = VolumeBlocks {
+        bands: Vec::new(),
+        ..b.clone()
+    };
+    let raw_bands = a.to_bytes_with(Some(&base_only)).unwrap();
+    assert_eq!(u16::from_le_bytes([raw_bands[10], raw_bands[11]]), 2);
+    assert!(tags(&raw_bands).contains("BLEV BLEV BNRM BNRM"));
+    // A wrong number of band block sets is refused by the writer.
+    let mut two = b.clone();
+    two.bands.push(b.bands[0].clone());
+    assert!(a.to_bytes_with(Some(&two)).is_err());
+}
+
+/// FROZEN: the 1.3 fixture: the 1.2 volume fixture's source with one compressed band.
+#[test]
+fn decodes_frozen_v1_3_bands_fixture() {
+    let bytes =
+        std::fs::read(path(BANDS_FIXTURE)).expect("fixtures/format/v1_3_volume_bands_bc7.billow");
+    assert_eq!(
+        &bytes[8..16],
+        &[1, 0, 3, 0, 1, 0, 0, 0],
+        "format 1.3, Volume"
+    );
+    assert_eq!(bytes.len(), BANDS_FIXTURE_LEN);
+    assert_eq!(
+        crc(&bytes),
+        BANDS_FIXTURE_CRC,
+        "fixture file changed on disk"
+    );
+    assert_eq!(
+        tags(&bytes),
+        "HEAD VLB7 VLB7 VNB7 VNB7 CELL VBND BLB7 BLB7 BNB7 BNB7 BCEL END "
+    );
+    let (a, blocks) = VolumeAsset::from_bytes_with_blocks(&bytes).unwrap();
+    let blocks = blocks.expect("a compressed volume");
+    assert_eq!(blocks.bands.len(), 1);
+    let band = &a.bands[0];
+    assert_eq!((band.first_level, band.dims), (1, [3, 2, 1]));
+    // Texels 0 and 3 of the band's level 0 are empty in the source: exactly zero.
+    assert_eq!(&band.levels[0][0..4], &[0; 4]);
+    assert_eq!(&band.levels[0][12..16], &[0; 4]);
+    assert_eq!(&band.levels[0][4..8], &BANDS_TEXEL_1);
+    for (i, (b, l)) in blocks.bands[0].colour.iter().zip(&band.levels).enumerate() {
+        assert_eq!(
+            &other_decoder(b, mip_dims([3, 2, 1], i as u32)),
+            l,
+            "level {i}"
+        );
+    }
+    let src = bands_source();
+    for (l, s) in band.levels.iter().zip(&src.bands[0].levels) {
+        assert!(max_diff(l, s) <= 12, "{}", max_diff(l, s));
+    }
+    assert_eq!(a.to_bytes_with(Some(&blocks)).unwrap(), bytes);
 }
 
 fn tags(bytes: &[u8]) -> String {

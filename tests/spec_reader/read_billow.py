@@ -417,6 +417,14 @@ def volume_level_check(ch, dims, level, what):
     return [w, h, d]
 
 
+def band_level_check(ch, dims, level, compressed, what):
+    if not compressed:
+        return volume_level_check(ch, dims, level, what)
+    w, h, d = mip_dims(dims, level)
+    bc7_check(ch, w, h, d, "%s level %d" % (what, level))
+    return [w, h, d]
+
+
 def check_cells(ch, what):
     if ch["len"] % 144:
         fail("%s: length %d is not a multiple of 144 (one prism = 36 f32)" % (what, ch["len"]))
@@ -478,12 +486,18 @@ def decode_volume(header, by_tag, out):
     out["compressed"] = vbc
     cell = by_tag.get(b"CELL", [])
     vbnd = by_tag.get(b"VBND", [])
-    blev = by_tag.get(b"BLEV", [])
-    bnrm = by_tag.get(b"BNRM", [])
+    # SPEC 12.1 (format 1.3): BLB7/BNB7 replace BLEV/BNRM one for one.
+    blev, blbc = raw_or_blocks(by_tag, b"BLEV", b"BLB7")
+    bnrm, bnbc = raw_or_blocks(by_tag, b"BNRM", b"BNB7")
+    if bnrm and blbc != bnbc:
+        fail("Volume: band colour and normals must both be raw or both compressed (SPEC 12.1)")
+    if blbc and not vbc:
+        fail("Volume: BLB7 chunks but a raw base texture (SPEC 12.1: BLB7 needs VLB7)")
+    out["compressed_bands"] = blbc
     bcel = by_tag.get(b"BCEL", [])
     for tag, lst, elem in ((b"VLEV", vlev, E_U8), (b"VNRM", vnrm, E_U8 if nbc else E_I8),
                            (b"CELL", cell, E_F32),
-                           (b"VBND", vbnd, E_U32), (b"BLEV", blev, E_U8), (b"BNRM", bnrm, E_I8),
+                           (b"VBND", vbnd, E_U32), (b"BLEV", blev, E_U8), (b"BNRM", bnrm, E_U8 if bnbc else E_I8),
                            (b"BCEL", bcel, E_F32)):
         for ch in lst:
             need_elem(ch, elem, tag_str(tag))
@@ -510,7 +524,7 @@ def decode_volume(header, by_tag, out):
     bands = []
     if not vbnd:
         if blev or bnrm or bcel:
-            fail("Volume: BLEV/BNRM/BCEL chunk without a VBND chunk")
+            fail("Volume: BLEV/BNRM/BLB7/BNB7/BCEL chunk without a VBND chunk")
     else:
         if len(vbnd) > 1:
             fail("Volume: %d VBND chunks, at most 1 allowed" % len(vbnd))
@@ -540,19 +554,22 @@ def decode_volume(header, by_tag, out):
             prev_f, prev_m = f, m
         total = sum(b["mip_levels"] for b in bands)
         if len(blev) != total:
-            fail("Volume: %d BLEV chunks, expected %d (sum of band mip_counts)" % (len(blev), total))
+            fail("Volume: %d %s chunks, expected %d (sum of band mip_counts)"
+                 % (len(blev), "BLB7" if blbc else "BLEV", total))
         want = total if has_n else 0
         if len(bnrm) != want:
-            fail("Volume: %d BNRM chunks, expected %d" % (len(bnrm), want))
+            fail("Volume: %d %s chunks, expected %d" % (len(bnrm), "BNB7" if bnbc else "BNRM", want))
         if len(bcel) != len(bands):
             fail("Volume: %d BCEL chunks, expected %d (one per band)" % (len(bcel), len(bands)))
         k = 0
         for bi, b in enumerate(bands, 1):
-            b["level_sizes"] = [volume_level_check(blev[k + j], b["dims"], j, "band %d BLEV" % bi)
+            b["level_sizes"] = [band_level_check(blev[k + j], b["dims"], j, blbc,
+                                                 "band %d %s" % (bi, "BLB7" if blbc else "BLEV"))
                                 for j in range(b["mip_levels"])]
             if has_n:
                 for j in range(b["mip_levels"]):
-                    volume_level_check(bnrm[k + j], b["dims"], j, "band %d BNRM" % bi)
+                    band_level_check(bnrm[k + j], b["dims"], j, bnbc,
+                                     "band %d %s" % (bi, "BNB7" if bnbc else "BNRM"))
             k += b["mip_levels"]
             b["cells"] = check_cells(bcel[bi - 1], "band %d BCEL" % bi)
     out.update({
@@ -803,7 +820,7 @@ def decode_cloud(header, by_tag, out):
 
 # ------------------------------------------------------------------ main
 
-VOLUME_TAGS = {b"VLEV", b"VNRM", b"CELL", b"VBND", b"BLEV", b"BNRM", b"BCEL", b"VLB7", b"VNB7"}
+VOLUME_TAGS = {b"VLEV", b"VNRM", b"CELL", b"VBND", b"BLEV", b"BNRM", b"BCEL", b"VLB7", b"VNB7", b"BLB7", b"BNB7"}
 
 
 def read_billow(data):

@@ -393,8 +393,8 @@ impl VolumePass {
         self.upload_with(gpu, asset, None)
     }
 
-    /// [`VolumePass::upload`] of a compressed asset: the base texture is uploaded as its BC7
-    /// `blocks` when the device allows it ([`Gpu::block_upload`]), else as the decoded
+    /// [`VolumePass::upload`] of a compressed asset: the base texture (and each LOD band
+    /// whose blocks are given, format 1.3) is uploaded as its BC7 `blocks` when the device allows it ([`Gpu::block_upload`]), else as the decoded
     /// texels in `asset.levels` (what the reader decoded on load).
     pub fn upload_with(
         &self,
@@ -442,16 +442,39 @@ impl VolumePass {
                 repeat,
             )?,
         }];
-        for b in &asset.bands {
+        // Compressed bands (format 1.3): uploaded as their blocks where the device allows it.
+        let band_blocks = blocks
+            .map(|b| b.bands.as_slice())
+            .filter(|bb| bb.len() == asset.bands.len());
+        for (i, b) in asset.bands.iter().enumerate() {
+            let direct = band_blocks
+                .map(|bb| &bb[i])
+                .filter(|bb| bb.colour.len() == b.levels.len() && gpu.block_upload(b.dims, true));
             // Bands address their textures with clamp-to-edge (SPEC §8.6).
-            out.push(upload_levels(
-                gpu,
-                b.dims,
-                &b.levels,
-                b.normals.as_deref(),
-                cs,
-                false,
-            )?);
+            out.push(match direct {
+                Some(bb) => {
+                    check_3d(gpu, b.dims, bb.colour.len() as u32)?;
+                    let texture = upload_bc7(
+                        gpu,
+                        "volume band (BC7)",
+                        b.dims,
+                        wgpu::TextureDimension::D3,
+                        &bb.colour,
+                        cs == ColourSpace::SrgbPremultiplied,
+                    );
+                    let view = texture.create_view(&Default::default());
+                    GpuVolume {
+                        dims0: b.dims,
+                        levels: bb.colour.len() as u32,
+                        repeat: false,
+                        texture,
+                        view,
+                        normals: normal_texture(gpu, b.dims, &b.levels, b.normals.as_deref()),
+                        blocks: true,
+                    }
+                }
+                None => upload_levels(gpu, b.dims, &b.levels, b.normals.as_deref(), cs, false)?,
+            });
         }
         Ok(out)
     }
