@@ -107,9 +107,10 @@ fn case(command: &str, flag: &str) -> Option<Case> {
             extra: &[],
         },
         ("voxelize", "normals") => keyword("bogus"),
-        ("voxelize", "compress") | ("bbcloud", "compress") | ("shell", "compress") => {
-            keyword("bogus")
-        }
+        ("voxelize", "compress")
+        | ("bbcloud", "compress")
+        | ("shell", "compress")
+        | ("emptyspace", "compress") => keyword("bogus"),
         ("voxelize", "mips") => both("abc", "99"),
         ("voxelize", "margin") => both("abc", "100"),
         ("voxelize", "align") => both("abc", "0"),
