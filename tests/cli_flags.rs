@@ -114,6 +114,8 @@ fn case(command: &str, flag: &str) -> Option<Case> {
         ("voxelize", "mips") => both("abc", "99"),
         ("voxelize", "margin") => both("abc", "100"),
         ("voxelize", "align") => both("abc", "0"),
+        ("voxelize", "prune") => SWITCH,
+        ("voxelize", "memory-limit") => both("abc", "0"),
         ("voxelize", "bounds") => both("a,b", "1,1,1,0,0,0"),
         ("voxelize", "ktx2") | ("voxelize", "slices") => PATH,
         ("voxelize", "slice-level") => Values {

@@ -1,6 +1,6 @@
 //! `billow voxelize --prune` (issue 26) as the real binary: the pruned asset written
 //! straight from the brick-sparse working set equals `voxelize` (same options) followed by
-//! `billow emptyspace` with its defaults, byte for byte; `--compress none` on both sides.
+//! `billow emptyspace --compress none` with its other defaults, byte for byte (`--prune` writes raw bricks).
 
 mod common;
 
@@ -36,7 +36,14 @@ fn same_bytes(dir: &Path, opts: &[&str], threads: &str) -> serde_json::Value {
     let mut dense = vec!["voxelize", &oak, "-o", "dense.billow", "--compress", "none"];
     dense.extend_from_slice(opts);
     ok(&billow(dir, &dense, threads), "voxelize");
-    let es = ["emptyspace", "dense.billow", "-o", "pruned.billow"];
+    let es = [
+        "emptyspace",
+        "dense.billow",
+        "-o",
+        "pruned.billow",
+        "--compress",
+        "none",
+    ];
     ok(&billow(dir, &es, threads), "emptyspace");
     let mut direct = vec![
         "voxelize",

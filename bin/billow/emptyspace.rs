@@ -102,13 +102,24 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     if let Some(note) = &pruned.stats.note {
         warn(ctx, &format!("{shown}: {note}"));
     }
-    let blocks = (compression == Compression::Bc).then(|| {
+    // A volume kept whole is written as it came (apart from the marker): a raw input stays
+    // raw, a compressed one is compressed again.
+    let input_compressed = asset
+        .header
+        .params
+        .contains_key(billow_format::param::COMPRESS);
+    let compress = compression == Compression::Bc && (!pruned.stats.kept_whole || input_compressed);
+    let blocks = compress.then(|| {
         let a = &mut pruned.asset;
-        a.header.params.insert("compress".into(), "bc7".into());
+        a.header.set_compress("bc7");
         compress_volume(a)
     });
     if blocks.is_none() {
-        pruned.asset.header.params.remove("compress");
+        pruned
+            .asset
+            .header
+            .params
+            .remove(billow_format::param::COMPRESS);
     }
     let bytes = pruned
         .asset

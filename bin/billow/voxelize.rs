@@ -100,7 +100,7 @@ pub struct Args {
     /// Treat import warnings (e.g. a missing texture) as errors.
     #[arg(long)]
     strict: bool,
-    /// Write the pruned volume (what `billow emptyspace` with its defaults makes of the
+    /// Write the pruned volume (what `billow emptyspace --compress none` makes of the
     /// volume, byte for byte) straight from the brick-sparse working set, without ever
     /// holding the dense volume: for large grids (1024³). Not with --ktx2, --slices or
     /// --compress bc.
