@@ -46,6 +46,7 @@ mod lanes;
 pub mod mip;
 pub mod quantize;
 mod slices;
+mod sparse;
 pub mod toksvig;
 
 use std::time::Instant;
@@ -63,6 +64,8 @@ pub use combine::{clamp_premultiplied, Combine, CombineFn, CombineParseError, Pr
 pub use expr::{Expr, ExprError};
 pub use grid::{fit_grid, GridError, GridSpec, Resolution, ResolutionError, MAX_AXIS};
 pub use slices::MAX_SUPERSAMPLE;
+use sparse::sparse_level;
+pub use sparse::{voxelize_sparse, SparseVolume};
 
 use crate::emptyspace::sparse::SparseLevel;
 use crate::scene::{Aabb, Scene};
@@ -547,141 +550,11 @@ pub fn voxelize(
     })
 }
 
-/// The result of [`voxelize_sparse`]: every MIP level brick-sparse (8³ bricks of RGBA8
-/// and snorm8 normals holding a non-zero byte), what `voxelize --prune` hands to
-/// [`crate::emptyspace::prune_sparse`].
-#[derive(Clone, Debug, PartialEq)]
-pub struct SparseVolume {
-    pub grid: GridSpec,
-    pub levels: Vec<SparseLevel>,
-    pub stats: VoxelizeStats,
-}
-
-impl SparseVolume {
-    pub fn dims(&self) -> [u32; 3] {
-        self.grid.dims
-    }
-    pub fn mip_count(&self) -> u32 {
-        self.levels.len() as u32
-    }
-    pub fn has_normals(&self) -> bool {
-        self.levels.first().is_some_and(SparseLevel::has_normals)
-    }
-    /// Removes the normals of every level.
-    pub fn drop_normals(&mut self) {
-        self.levels.iter_mut().for_each(SparseLevel::drop_normals);
-    }
-    /// [`toksvig::normal_coherence`] of `level` (same sums in the same order, so the same
-    /// value), `None` without normals or for an empty level.
-    pub fn normal_coherence(&self, level: usize) -> Option<f32> {
-        let l = self.levels.get(level).filter(|l| l.has_normals())?;
-        let (mut num, mut den) = (0.0f64, 0.0f64);
-        let d = l.dims;
-        for z in 0..d[2] {
-            for y in 0..d[1] {
-                for x in 0..d[0] {
-                    let c = l.get(false, [x, y, z]);
-                    if c[3] == 0 {
-                        continue;
-                    }
-                    let a = f64::from(c[3]) / 255.0;
-                    let len = quantize::decode_normal(l.get(true, [x, y, z])).length();
-                    num += a * f64::from(len.min(1.0));
-                    den += a;
-                }
-            }
-        }
-        (den > 0.0).then(|| (num / den) as f32)
-    }
-    /// The asset that [`Volume::into_asset`] would make, without its texels (`levels`
-    /// empty; `normals` `Some(empty)` when the volume has normals): the header and cells
-    /// [`crate::emptyspace::prune_sparse`] takes beside [`SparseVolume::levels`].
-    pub fn asset_shell(
-        &self,
-        tool: &str,
-        source: Option<billow_format::SourceInfo>,
-        params: std::collections::BTreeMap<String, String>,
-    ) -> billow_format::VolumeAsset {
-        let empty = Volume {
-            grid: self.grid,
-            levels: vec![Vec::new(); self.levels.len()],
-            normals: self
-                .has_normals()
-                .then(|| vec![Vec::new(); self.levels.len()]),
-            stats: self.stats,
-        };
-        let mut a = empty.into_asset(tool, source, params);
-        a.levels = Vec::new();
-        a.normals = a.normals.map(|_| Vec::new());
-        a
-    }
-}
-
-/// [`voxelize`] whose levels stay brick-sparse ([`SparseVolume`]): no level is ever dense.
-/// Needs a preset combine ([`VoxelizeError::InvalidOption`] otherwise). The levels hold
-/// exactly the bytes of [`voxelize`]'s (zeros where no brick is).
-pub fn voxelize_sparse(
-    scene: &Scene,
-    opts: &VoxelizeOptions,
-    progress: &dyn Fn(Stage, f32),
-) -> Result<SparseVolume, VoxelizeError> {
-    if !matches!(opts.combine, CombineFn::Preset(_)) {
-        return Err(VoxelizeError::InvalidOption(format!(
-            "a brick-sparse volume needs a preset combine (mean, max, min, opaque), not {}",
-            opts.combine
-        )));
-    }
-    let (grid, out, stats) = voxelize_as(scene, opts, progress, true)?;
-    let Output::Sparse(levels) = out else {
-        unreachable!("a sparse voxelize")
-    };
-    Ok(SparseVolume {
-        grid,
-        levels,
-        stats,
-    })
-}
-
 /// What [`voxelize_as`] produces.
 enum Output {
     /// RGBA8 levels and snorm8 normals, dense.
     Dense(Vec<Vec<u8>>, Option<Vec<Vec<u8>>>),
     Sparse(Vec<SparseLevel>),
-}
-
-/// One sparse level from the colour and normal accumulators' bricks (each `(bricks,
-/// 4 · B3 bytes per brick)`); both come from the same layouts in the same order, so their
-/// brick lists agree, but a difference is merged all the same.
-fn sparse_level(
-    dims: [usize; 3],
-    (bricks, colour): (Vec<u32>, Vec<u8>),
-    normals: Option<(Vec<u32>, Vec<u8>)>,
-) -> SparseLevel {
-    let Some((nb, nbytes)) = normals else {
-        return SparseLevel::from_bricks(dims, bricks, colour, None);
-    };
-    if nb == bricks {
-        return SparseLevel::from_bricks(dims, bricks, colour, Some(nbytes));
-    }
-    let per = 4 * bricks::B3;
-    let mut all = bricks.clone();
-    let mut c = colour;
-    let at: std::collections::HashMap<u32, usize> =
-        bricks.iter().enumerate().map(|(i, &b)| (b, i)).collect();
-    for &b in &nb {
-        if !at.contains_key(&b) {
-            all.push(b);
-            c.resize(c.len() + per, 0);
-        }
-    }
-    let at: std::collections::HashMap<u32, usize> =
-        all.iter().enumerate().map(|(i, &b)| (b, i)).collect();
-    let mut n = vec![0u8; all.len() * per];
-    for (i, &b) in nb.iter().enumerate() {
-        let j = at[&b];
-        n[j * per..(j + 1) * per].copy_from_slice(&nbytes[i * per..(i + 1) * per]);
-    }
-    SparseLevel::from_bricks(dims, all, c, Some(n))
 }
 
 fn voxelize_as(
