@@ -520,7 +520,10 @@ mod tests {
     #[ignore = "measurement; needs BILLOW_MEASURE_VOLUME"]
     fn measure_exact_zero_constraint() {
         let Ok(p) = std::env::var("BILLOW_MEASURE_VOLUME") else {
-            eprintln!("SKIP: measure_exact_zero_constraint: BILLOW_MEASURE_VOLUME unset");
+            crate::test_skip(
+                "measure_exact_zero_constraint",
+                "BILLOW_MEASURE_VOLUME unset",
+            );
             return;
         };
         let a = VolumeAsset::read(std::path::Path::new(&p)).unwrap();
