@@ -412,47 +412,9 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         pruned_stats = Some(ps);
         (asset, stats, dims, mips, coherence)
     } else {
-        let mut volume = voxelize(&scene, &opts, &report)
-            .or_else(|e| match e {
-                // auto: normals are an option, not a requirement; without them the bake may fit.
-                billow::voxelize::VoxelizeError::TooMuchMemory { .. }
-                    if args.normals == NormalsArg::Auto =>
-                {
-                    opts.normals = false;
-                    voxelize(&scene, &opts, &report)
-                }
-                e => Err(e),
-            })
-            .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;
+        let baked = bake_dense(&scene, &mut opts, args.normals, &report, &input, source)?;
         bar.finish();
-        // auto: keep the normals only where one normal per voxel describes the surface.
-        let mut coherence = None;
-        if args.normals == NormalsArg::Auto {
-            use billow::voxelize::toksvig::{normal_coherence, AUTO_NORMALS_LEVEL};
-            if let Some(n) = volume.normals.as_ref() {
-                let l = AUTO_NORMALS_LEVEL.min(volume.levels.len().saturating_sub(1));
-                let k = volume
-                    .levels
-                    .get(l)
-                    .zip(n.get(l))
-                    .and_then(|(c, n)| normal_coherence(c, n));
-                coherence = k;
-                if k.is_none_or(|k| k < billow::voxelize::toksvig::AUTO_NORMALS_MIN_COHERENCE) {
-                    volume.normals = None;
-                    opts.normals = false;
-                }
-            }
-        }
-
-        let stats = volume.stats;
-        let (dims, mip_count) = (volume.dims(), volume.mip_count());
-        let mut extra = BTreeMap::new();
-        if let Some(k) = coherence {
-            extra.insert("normal_coherence".to_string(), format!("{k:.3}"));
-        }
-        let params = bake_params(&volume, &opts, &extra);
-        let asset = volume.into_asset(&tool_version(), Some(source), params);
-        (asset, stats, dims, mip_count, coherence)
+        baked
     };
     let compress_start = Instant::now();
     let blocks = (compression == Compression::Bc).then(|| {
@@ -549,6 +511,70 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     Ok(())
 }
 
+/// The dense bake: [`voxelize`] (retried without normals when `--normals auto` and the
+/// estimate refuses them), `--normals auto` judged at [`AUTO_NORMALS_LEVEL`], and the asset.
+/// Returns the asset, the bake's statistics, the grid's dims and MIP count and the normal
+/// coherence `--normals auto` judged.
+#[allow(clippy::type_complexity)]
+fn bake_dense(
+    scene: &billow::scene::Scene,
+    opts: &mut VoxelizeOptions,
+    normals: NormalsArg,
+    report: &dyn Fn(Stage, f32),
+    input: &str,
+    source: billow_format::SourceInfo,
+) -> Result<
+    (
+        billow_format::VolumeAsset,
+        billow::voxelize::VoxelizeStats,
+        [u32; 3],
+        u32,
+        Option<f32>,
+    ),
+    CliError,
+> {
+    use billow::voxelize::toksvig::{
+        normal_coherence, AUTO_NORMALS_LEVEL, AUTO_NORMALS_MIN_COHERENCE,
+    };
+    let mut volume = voxelize(scene, opts, report)
+        .or_else(|e| match e {
+            // auto: normals are an option, not a requirement; without them the bake may fit.
+            billow::voxelize::VoxelizeError::TooMuchMemory { .. }
+                if normals == NormalsArg::Auto =>
+            {
+                opts.normals = false;
+                voxelize(scene, opts, report)
+            }
+            e => Err(e),
+        })
+        .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;
+    // auto: keep the normals only where one normal per voxel describes the surface.
+    let mut coherence = None;
+    if normals == NormalsArg::Auto {
+        if let Some(n) = volume.normals.as_ref() {
+            let l = AUTO_NORMALS_LEVEL.min(volume.levels.len().saturating_sub(1));
+            let k = volume
+                .levels
+                .get(l)
+                .zip(n.get(l))
+                .and_then(|(c, n)| normal_coherence(c, n));
+            coherence = k;
+            if k.is_none_or(|k| k < AUTO_NORMALS_MIN_COHERENCE) {
+                volume.normals = None;
+                opts.normals = false;
+            }
+        }
+    }
+    let (stats, dims, mips) = (volume.stats, volume.dims(), volume.mip_count());
+    let mut extra = BTreeMap::new();
+    if let Some(k) = coherence {
+        extra.insert("normal_coherence".to_string(), format!("{k:.3}"));
+    }
+    let params = bake_params(&volume, opts, &extra);
+    let asset = volume.into_asset(&tool_version(), Some(source), params);
+    Ok((asset, stats, dims, mips, coherence))
+}
+
 /// `voxelize --prune`: the volume brick-sparse ([`voxelize_sparse`]), pruned by
 /// [`prune_sparse`] with `billow emptyspace`'s defaults; with an expression or custom
 /// combine (whose pyramids are dense anyway), the dense volume pruned by [`prune`]. Returns
@@ -583,38 +609,8 @@ fn bake_pruned(
     let keep = |k: Option<f32>| !k.is_none_or(|k| k < AUTO_NORMALS_MIN_COHERENCE);
     if !matches!(opts.combine, CombineFn::Preset(_)) {
         // Expressions and custom functions keep dense pyramids: prune the dense volume.
-        let mut volume = voxelize(scene, opts, report)
-            .or_else(|e| match e {
-                VoxelizeError::TooMuchMemory { .. } if normals == NormalsArg::Auto => {
-                    opts.normals = false;
-                    voxelize(scene, opts, report)
-                }
-                e => Err(e),
-            })
-            .map_err(err)?;
-        let mut coherence = None;
-        if normals == NormalsArg::Auto {
-            if let Some(n) = volume.normals.as_ref() {
-                let l = AUTO_NORMALS_LEVEL.min(volume.levels.len().saturating_sub(1));
-                let k = volume
-                    .levels
-                    .get(l)
-                    .zip(n.get(l))
-                    .and_then(|(c, n)| billow::voxelize::toksvig::normal_coherence(c, n));
-                coherence = k;
-                if !keep(k) {
-                    volume.normals = None;
-                    opts.normals = false;
-                }
-            }
-        }
-        let (stats, dims, mips) = (volume.stats, volume.dims(), volume.mip_count());
-        let mut extra = BTreeMap::new();
-        if let Some(k) = coherence {
-            extra.insert("normal_coherence".to_string(), format!("{k:.3}"));
-        }
-        let params = bake_params(&volume, opts, &extra);
-        let asset = volume.into_asset(&tool_version(), Some(source), params);
+        let (asset, stats, dims, mips, coherence) =
+            bake_dense(scene, opts, normals, report, input, source)?;
         let p = prune(&asset, &es).map_err(perr)?;
         return Ok((p.asset, stats, dims, mips, coherence, p.stats));
     }
