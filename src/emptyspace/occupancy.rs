@@ -64,18 +64,7 @@ pub fn needed_blocks(
     for (l, bytes) in levels.iter().enumerate().take(levels_used) {
         let nl = level_dims[l].map(|d| d as usize);
         // Per axis and texel index: the block range its support meets (inclusive).
-        let ranges: [Vec<(usize, usize)>; 3] = std::array::from_fn(|ax| {
-            let scale = n0[ax] as f64 / nl[ax] as f64;
-            (0..nl[ax])
-                .map(|i| {
-                    let lo = (i as f64 - 0.5) * scale / block as f64;
-                    let hi = (i as f64 + 1.5) * scale / block as f64;
-                    let b0 = lo.floor().max(0.0) as usize;
-                    let b1 = (hi.ceil() as usize).saturating_sub(1).min(dims[ax] - 1);
-                    (b0.min(dims[ax] - 1), b1)
-                })
-                .collect()
-        });
+        let ranges = support_ranges(n0, nl, block, dims);
         for z in 0..nl[2] {
             for y in 0..nl[1] {
                 for x in 0..nl[0] {
@@ -220,18 +209,7 @@ pub fn tier_needed_blocks(src: &dyn TierTexels) -> BlockGrid {
     };
     for l in 0..2 {
         let nl = n0.map(|d| d >> l);
-        let ranges: [Vec<(usize, usize)>; 3] = std::array::from_fn(|ax| {
-            let scale = n0[ax] as f64 / nl[ax] as f64;
-            (0..nl[ax])
-                .map(|i| {
-                    let lo = (i as f64 - 0.5) * scale / block as f64;
-                    let hi = (i as f64 + 1.5) * scale / block as f64;
-                    let b0 = lo.floor().max(0.0) as usize;
-                    let b1 = (hi.ceil() as usize).saturating_sub(1).min(dims[ax] - 1);
-                    (b0.min(dims[ax] - 1), b1)
-                })
-                .collect()
-        });
+        let ranges = support_ranges(n0, nl, block, dims);
         src.for_each_texel(l, &mut |p, t| {
             if is_empty_texel(&t, 0) {
                 return;
@@ -322,6 +300,29 @@ pub fn apply_threshold(colour: &mut [u8], normals: Option<&mut [u8]>, threshold:
             n[4 * i..4 * i + 4].fill(0);
         }
     }
+}
+
+/// Per axis and texel index of a level of `nl` texels over a level 0 of `n0`: the range of
+/// `block`-wide blocks (of `dims` per axis) that the texel's trilinear support meets,
+/// inclusive.
+fn support_ranges(
+    n0: [usize; 3],
+    nl: [usize; 3],
+    block: usize,
+    dims: [usize; 3],
+) -> [Vec<(usize, usize)>; 3] {
+    std::array::from_fn(|ax| {
+        let scale = n0[ax] as f64 / nl[ax] as f64;
+        (0..nl[ax])
+            .map(|i| {
+                let lo = (i as f64 - 0.5) * scale / block as f64;
+                let hi = (i as f64 + 1.5) * scale / block as f64;
+                let b0 = lo.floor().max(0.0) as usize;
+                let b1 = (hi.ceil() as usize).saturating_sub(1).min(dims[ax] - 1);
+                (b0.min(dims[ax] - 1), b1)
+            })
+            .collect()
+    })
 }
 
 #[cfg(test)]
