@@ -6,9 +6,12 @@ NanoVDB").
 Usage: emptyspace_vdb.py --billow BIN --out DIR [--vdb] NAME=MESH@RES ...
 
 For each NAME=MESH@RES: `billow voxelize MESH -o DIR/NAME.billow --res RES` (default
-options otherwise), `billow emptyspace` at default settings (--json), then the occupancy of
-every MIP level of the source: non-empty texels (any byte non-zero), the 8³ leaves, 16³
-lower and 32³ upper internal nodes that hold them. From those counts:
+options otherwise: BC7 blocks), `billow emptyspace` at default settings (--json: file and
+GPU texture bytes before and after, voxels drawn), then, from the same bake with
+`--compress none` (the same texels before compression; empty texels stay exactly empty
+through BC7, SPEC §12.3), the occupancy of every MIP level: non-empty texels (any byte
+non-zero), the 8³ leaves, 16³ lower and 32³ upper internal nodes that hold them. From
+those counts:
 
 - NanoVDB (nanovdb/NanoVDB.h, a 4-byte value such as float or Rgba8): leaf 2,144 bytes
   (coordinate, bbox, flags, 64-byte value mask, 4 statistics, 512 values), lower internal
@@ -95,11 +98,14 @@ def main():
         mesh, res = rest.rsplit("@", 1)
         src = os.path.join(a.out, name + ".billow")
         pruned = os.path.join(a.out, name + "_pruned.billow")
+        raw = os.path.join(a.out, name + "_raw.billow")
         subprocess.run([a.billow, "voxelize", mesh, "-o", src, "--res", res, "-q"], check=True)
+        subprocess.run([a.billow, "voxelize", mesh, "-o", raw, "--res", res, "-q",
+                        "--compress", "none"], check=True)
         r = subprocess.run([a.billow, "emptyspace", src, "-o", pruned, "--json"], check=True,
                            capture_output=True, text=True)
         s = json.loads(r.stdout)
-        dims, lv = levels(src)
+        dims, lv = levels(raw)
         nano0, leaves0 = nanovdb_bytes(lv[0])
         nano_all = sum(nanovdb_bytes(m)[0] for m in lv)
         row = {
@@ -107,6 +113,9 @@ def main():
             "voxels": int(lv[0].sum()), "fill": lv[0].mean(), "leaves": leaves0,
             "before": s["texel_bytes_before"], "after": s["texel_bytes_after"],
             "saving": s["saving"], "bands": len(s["bands"]), "warning": r.stderr.strip(),
+            "file0": s["file_bytes_before"], "file1": s["file_bytes_after"],
+            "gpu0": s["gpu_bytes_before"], "gpu1": s["gpu_bytes_after"],
+            "drawn": s["voxels_kept"] / max(1, s["voxels_before"]),
             "level0_dense": 4 * lv[0].size, "nano0": nano0, "nano_all": nano_all,
         }
         if a.vdb:
@@ -114,14 +123,17 @@ def main():
             row["vdb_all"] = sum(openvdb_bytes(m) for m in lv)
         rows.append(row)
         print(json.dumps(row), file=sys.stderr)
-    print("| volume | grid | non-empty voxels (level 0) | 8³ leaves | billow dense, all levels MiB |"
-          " billow pruned MiB | saving | NanoVDB level 0 MiB | NanoVDB all levels MiB |"
+    print("| volume | grid | non-empty voxels (level 0) | 8³ leaves | RGBA8 texels, all levels MiB |"
+          " BC7 GPU textures MiB: volume → pruned | BC7 file MiB: volume → pruned |"
+          " voxels drawn | NanoVDB level 0 MiB | NanoVDB all levels MiB |"
           + (" OpenVDB level 0 MiB | OpenVDB all levels MiB |" if a.vdb else ""))
-    print("|---|---|---:|---:|---:|---:|---:|---:|---:|" + ("---:|---:|" if a.vdb else ""))
+    print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|" + ("---:|---:|" if a.vdb else ""))
     for r in rows:
-        line = "| %s %s³ | %s | %s (%.1f %%) | %s | %s | %s | **%.0f %%** | %s | %s |" % (
+        line = "| %s %s³ | %s | %s (%.1f %%) | %s | %s | %s → %s (**%+.0f %%**) | %s → %s (%+.0f %%) | %.0f %% | %s | %s |" % (
             r["name"], r["res"], r["dims"], f"{r['voxels']:,}", 100 * r["fill"],
-            f"{r['leaves']:,}", mib(r["before"]), mib(r["after"]), 100 * r["saving"],
+            f"{r['leaves']:,}", mib(r["before"]), mib(r["gpu0"]), mib(r["gpu1"]),
+            100 * (r["gpu1"] / r["gpu0"] - 1), mib(r["file0"]), mib(r["file1"]),
+            100 * (r["file1"] / r["file0"] - 1), 100 * r["drawn"],
             mib(r["nano0"]), mib(r["nano_all"]))
         if a.vdb:
             line += " %s | %s |" % (mib(r["vdb0"]), mib(r["vdb_all"]))

@@ -8,7 +8,7 @@ use billow::emptyspace::occupancy::apply_threshold;
 use billow::emptyspace::synthetic::{set_normal_field, volume_from_fn};
 use billow::emptyspace::{prune, EmptySpaceError, EmptySpaceOptions, PARAM_KEY};
 use billow::eval::volume_sampler::DecodedVolume;
-use billow_format::{ColourSpace, Prism, VolumeAsset};
+use billow_format::{mip_dims, ColourSpace, Prism, VolumeAsset};
 use glam::{Mat3, Vec3};
 
 fn roundtrip(a: &VolumeAsset) {
@@ -255,6 +255,73 @@ fn even_non_cubic_sizes_prune_for_real_and_sample_exactly_at_every_level() {
         p.asset.validate().unwrap();
         exact(&src, &p.asset);
         roundtrip(&p.asset);
+    }
+}
+
+/// The 4×4 block layout of a compressed prune (`bc_blocks`, `emptyspace --compress bc`):
+/// just as exact at every level, every band's level-0 atlas in whole 4×4 blocks, and each
+/// atlas block a copy of one source block — checked through the cells: every box's uvw
+/// corner on the atlas's x/y sits on the same 4-texel phase as its world corner on the
+/// source's (the box's inset in its slot is what carries the alignment).
+#[test]
+fn the_bc_block_layout_is_exact_and_keeps_4x4_blocks_whole() {
+    for dims in [[48u32, 32, 40], [96, 48, 24], [64, 64, 32]] {
+        let src = sparse(dims);
+        let o = EmptySpaceOptions {
+            bc_blocks: true,
+            ..EmptySpaceOptions::default()
+        };
+        let p = prune(&src, &o).unwrap();
+        let s = &p.stats;
+        assert!(!s.kept_whole, "{dims:?}: {s:?}");
+        assert!(
+            p.asset.header.params["emptyspace"].contains("blocks=4x4"),
+            "{:?}",
+            p.asset.header.params
+        );
+        exact(&src, &p.asset);
+        roundtrip(&p.asset);
+        let bands = std::iter::once((p.asset.level_dims(0), &p.asset.cells, 0u32)).chain(
+            p.asset
+                .bands
+                .iter()
+                .filter(|b| b.levels.len() == 2)
+                .map(|b| (b.dims, &b.cells, b.first_level)),
+        );
+        for (d, cells, k) in bands {
+            assert!(
+                d[0].is_multiple_of(4) && d[1].is_multiple_of(4),
+                "{dims:?}: band {k} atlas {d:?}"
+            );
+            let n = mip_dims(dims, k);
+            for c in cells {
+                // Texel coordinates of the corners in the atlas and in the source level (the
+                // source's cells map the unit cube onto the texture).
+                let atlas: Vec<[i64; 3]> = (0..6)
+                    .map(|v| [0, 1, 2].map(|a| (c.uvw[v][a] * d[a] as f32).round() as i64))
+                    .collect();
+                let source: Vec<[i64; 3]> = (0..6)
+                    .map(|v| [0, 1, 2].map(|a| (c.pos[v][a] * n[a] as f32).round() as i64))
+                    .collect();
+                for a in 0..2 {
+                    // The source axis atlas axis `a` holds (x and y may swap; z stays z):
+                    // the one whose corner offsets it repeats.
+                    let b = (0..2)
+                        .find(|&b| {
+                            (0..6).all(|v| atlas[v][a] - atlas[0][a] == source[v][b] - source[0][b])
+                        })
+                        .unwrap_or_else(|| panic!("{dims:?}: band {k}: no axis for {a}"));
+                    for v in 0..6 {
+                        assert_eq!(
+                            atlas[v][a].rem_euclid(4),
+                            source[v][b].rem_euclid(4),
+                            "{dims:?}: band {k}, atlas axis {a} (source {b}): {atlas:?} {source:?}"
+                        );
+                    }
+                }
+                assert!((0..6).all(|v| atlas[v][2] - atlas[0][2] == source[v][2] - source[0][2]));
+            }
+        }
     }
 }
 

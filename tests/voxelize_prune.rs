@@ -1,6 +1,7 @@
 //! `billow voxelize --prune` (issue 26) as the real binary: the pruned asset written
-//! straight from the brick-sparse working set equals `voxelize` (same options) followed by
-//! `billow emptyspace --compress none` with its other defaults, byte for byte (`--prune` writes raw bricks).
+//! straight from the brick-sparse working set equals `voxelize --compress none` (same
+//! options) followed by `billow emptyspace` with its other defaults and the same
+//! `--compress` (raw bricks, or the default BC7 bricks), byte for byte.
 
 mod common;
 
@@ -30,8 +31,13 @@ fn billow(dir: &Path, args: &[&str], threads: &str) -> Run {
     )
 }
 
-/// `voxelize` + `emptyspace` against `voxelize --prune` for one set of options.
+/// `voxelize --compress none` + `emptyspace --compress C` against `voxelize --prune
+/// --compress C` for one set of options (`C` = `compress`).
 fn same_bytes(dir: &Path, opts: &[&str], threads: &str) -> serde_json::Value {
+    same_bytes_as(dir, opts, threads, "none")
+}
+
+fn same_bytes_as(dir: &Path, opts: &[&str], threads: &str, compress: &str) -> serde_json::Value {
     let oak = oak();
     let mut dense = vec!["voxelize", &oak, "-o", "dense.billow", "--compress", "none"];
     dense.extend_from_slice(opts);
@@ -42,7 +48,7 @@ fn same_bytes(dir: &Path, opts: &[&str], threads: &str) -> serde_json::Value {
         "-o",
         "pruned.billow",
         "--compress",
-        "none",
+        compress,
     ];
     ok(&billow(dir, &es, threads), "emptyspace");
     let mut direct = vec![
@@ -51,7 +57,7 @@ fn same_bytes(dir: &Path, opts: &[&str], threads: &str) -> serde_json::Value {
         "-o",
         "direct.billow",
         "--compress",
-        "none",
+        compress,
         "--prune",
         "--json",
     ];
@@ -76,6 +82,21 @@ fn prune_equals_voxelize_then_emptyspace_byte_for_byte() {
     assert_eq!(p["kept_whole"], false, "{p}");
     assert!(p["tail_level"].as_u64().unwrap() >= 1, "{p}");
     assert!(p["texel_bytes_after"].as_u64() < p["texel_bytes_before"].as_u64());
+    // The default --compress bc: BC7 bricks on the 4×4 grid, the same bytes either way (at
+    // 128: at 64 the 4×4 layout saves nothing and the volume is kept whole, which
+    // `emptyspace` writes raw for a raw input and `--prune --compress bc` compresses).
+    let v = same_bytes_as(dir.path(), &["--res", "128"], "2", "bc");
+    assert_eq!(v["prune"]["kept_whole"], false, "{v}");
+    let pruned = billow_format::VolumeAsset::read(&dir.path().join("direct.billow")).unwrap();
+    assert_eq!(
+        pruned.header.params.get("compress").map(String::as_str),
+        Some("bc7")
+    );
+    let d = pruned.level_dims(0);
+    assert!(
+        d[0].is_multiple_of(4) && d[1].is_multiple_of(4),
+        "a BC7 atlas is whole 4×4 blocks: {d:?}"
+    );
     // Normals kept, another preset, one thread.
     same_bytes(
         dir.path(),
@@ -104,11 +125,7 @@ fn prune_equals_voxelize_then_emptyspace_byte_for_byte() {
 fn prune_refuses_the_outputs_of_the_dense_volume() {
     let dir = tempfile::tempdir().unwrap();
     let oak = oak();
-    for extra in [
-        &["--ktx2", "x.ktx2"][..],
-        &["--slices", "sl"][..],
-        &["--compress", "bc"][..],
-    ] {
+    for extra in [&["--ktx2", "x.ktx2"][..], &["--slices", "sl"][..]] {
         let mut args = vec!["voxelize", &oak, "-o", "x.billow", "--res", "16", "--prune"];
         args.extend_from_slice(extra);
         let r = run(&args, dir.path());

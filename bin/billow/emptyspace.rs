@@ -64,6 +64,10 @@ struct Summary {
     stats: EmptySpaceStats,
     file_bytes_before: u64,
     file_bytes_after: u64,
+    /// Texture memory a renderer uploads (dense: 4 bytes a texel raw, 16 a 4×4 BC7 block),
+    /// before and after.
+    gpu_bytes_before: u64,
+    gpu_bytes_after: u64,
     seconds_total: f64,
 }
 
@@ -96,6 +100,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         cell_cost: args.cell_cost,
         max_tiers: args.max_tiers,
         apron: true,
+        bc_blocks: compression == Compression::Bc,
     };
     let mut pruned = prune(&asset, &options)
         .map_err(|e| CliError::new(Code::from(&e), format!("{shown}: {e}")))?;
@@ -140,14 +145,17 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         stats: pruned.stats,
         file_bytes_before,
         file_bytes_after: bytes.len() as u64,
+        gpu_bytes_before: asset.gpu_bytes(input_compressed),
+        gpu_bytes_after: pruned.asset.gpu_bytes(blocks.is_some()),
         seconds_total: start.elapsed().as_secs_f64(),
     };
     if args.json {
         print_json(&summary)?;
     } else if !ctx.quiet {
         let s = &summary.stats;
+        let pct = |a: u64, b: u64| 100.0 * (b as f64 / a.max(1) as f64 - 1.0);
         eprintln!(
-            "{}: {} boxes, {} bands ({} cells), atlas {}x{}x{} from {}x{}x{}, texels {} -> {} bytes ({:.1}% saved){}",
+            "{}: {} boxes, {} bands ({} cells), atlas {}x{}x{} from {}x{}x{}, voxels drawn {:.1}% of the source's, GPU textures {} -> {} bytes ({:+.1}%), file {} -> {} bytes ({:+.1}%){}",
             summary.output,
             s.boxes,
             s.bands.len(),
@@ -158,9 +166,13 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             s.source_dims[0],
             s.source_dims[1],
             s.source_dims[2],
-            s.texel_bytes_before,
-            s.texel_bytes_after,
-            100.0 * s.saving,
+            100.0 * s.voxels_kept as f64 / s.voxels_before.max(1) as f64,
+            summary.gpu_bytes_before,
+            summary.gpu_bytes_after,
+            pct(summary.gpu_bytes_before, summary.gpu_bytes_after),
+            summary.file_bytes_before,
+            summary.file_bytes_after,
+            pct(summary.file_bytes_before, summary.file_bytes_after),
             if s.kept_whole {
                 "; kept whole"
             } else {

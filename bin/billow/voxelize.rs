@@ -70,10 +70,10 @@ pub struct Args {
     /// for a tileable volume texture used by `billow shell`.
     #[arg(long)]
     bounds: Option<String>,
-    /// Texel storage: none (raw RGBA8, readable by format 1.0/1.1 readers; the default
-    /// until `billow emptyspace` writes compressed bricks) or bc (BC7 blocks, one byte per
-    /// texel, format 1.2). --ktx2 carries the same blocks.
-    #[arg(long, default_value = "none")]
+    /// Texel storage: bc (default: BC7 blocks, one byte per texel on the GPU, empty 4×4
+    /// blocks not stored, format 1.2) or none (raw RGBA8, readable by format 1.0/1.1
+    /// readers). --ktx2 carries the same blocks.
+    #[arg(long, default_value = "bc")]
     compress: String,
     /// Also write the volume as a KTX2 3D texture with its MIP chain (premultiplied, sRGB).
     #[arg(long, value_name = "FILE")]
@@ -100,10 +100,10 @@ pub struct Args {
     /// Treat import warnings (e.g. a missing texture) as errors.
     #[arg(long)]
     strict: bool,
-    /// Write the pruned volume (what `billow emptyspace --compress none` makes of the
-    /// volume, byte for byte) straight from the brick-sparse working set, without ever
-    /// holding the dense volume: for large grids (1024³). Not with --ktx2, --slices or
-    /// --compress bc.
+    /// Write the pruned volume (what `billow emptyspace` makes of the `--compress none`
+    /// volume, byte for byte, with the same --compress) straight from the brick-sparse
+    /// working set, without ever holding the dense volume: for large grids (1024³). Not
+    /// with --ktx2 or --slices.
     #[arg(long)]
     prune: bool,
     /// Refuse grids whose estimated peak memory (an upper bound, often several times the
@@ -330,8 +330,6 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             Some("--ktx2")
         } else if args.slices.is_some() {
             Some("--slices")
-        } else if compression == Compression::Bc {
-            Some("--compress bc")
         } else {
             None
         };
@@ -403,8 +401,15 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     };
     let mut pruned_stats = None;
     let (mut asset, stats, dims, mip_count, coherence) = if args.prune {
-        let (asset, stats, dims, mips, coherence, ps) =
-            bake_pruned(&scene, &mut opts, args.normals, &report, &input, source)?;
+        let (asset, stats, dims, mips, coherence, ps) = bake_pruned(
+            &scene,
+            &mut opts,
+            args.normals,
+            compression,
+            &report,
+            &input,
+            source,
+        )?;
         bar.finish();
         if let Some(note) = &ps.note {
             warn(ctx, &format!("{input}: {note}"));
@@ -585,6 +590,7 @@ fn bake_pruned(
     scene: &billow::scene::Scene,
     opts: &mut VoxelizeOptions,
     normals: NormalsArg,
+    compression: Compression,
     report: &dyn Fn(Stage, f32),
     input: &str,
     source: billow_format::SourceInfo,
@@ -605,7 +611,10 @@ fn bake_pruned(
     let perr = |e: billow::emptyspace::EmptySpaceError| {
         CliError::new(Code::from(&e), format!("{input}: {e}"))
     };
-    let es = EmptySpaceOptions::default();
+    let es = EmptySpaceOptions {
+        bc_blocks: compression == Compression::Bc,
+        ..EmptySpaceOptions::default()
+    };
     let keep = |k: Option<f32>| !k.is_none_or(|k| k < AUTO_NORMALS_MIN_COHERENCE);
     if !matches!(opts.combine, CombineFn::Preset(_)) {
         // Expressions and custom functions keep dense pyramids: prune the dense volume.

@@ -14,7 +14,9 @@
 //! an all-zero apron is shared with the neighbouring bricks in the atlas
 //! ([`super::pack`]), so it costs nothing — plus `W`, the cost of one more cell (two
 //! prisms clipped against every slice, a draw's worth of set-up), expressed in voxels
-//! ([`KdParams::cell_cost`]). A tree costs the sum over its leaves.
+//! ([`KdParams::cell_cost`]). A tree costs the sum over its leaves. For a block-compressed
+//! output ([`KdParams::pair_align`]) the x and y spans are grown to whole pairs of blocks
+//! (4 texels, one BC block) on the source's grid, as the slots will be.
 //!
 //! **Splitting.** A node is first shrunk to the tight bounds of its needed blocks (free:
 //! it removes only empty space). Every plane between blocks along x, y and z is tried; the
@@ -62,6 +64,22 @@ pub struct KdParams {
     pub max_depth: u32,
     /// Smallest relative cost reduction worth a split, in `[0, 1)`.
     pub min_gain: f64,
+    /// Slots whose x and y extents are whole pairs of blocks on the source's even block
+    /// grid ([`aligned_span`]): what keeps a block-compressed atlas's 4×4 blocks one to one
+    /// with the source's (`billow emptyspace --compress bc`).
+    pub pair_align: bool,
+}
+
+/// The span of blocks `[lo − h⁻, hi + h⁺)` along one axis, grown outward to even block
+/// coordinates when `pair` is set (the x and y axes of a [`KdParams::pair_align`] tier):
+/// `(start, len)`.
+pub fn aligned_span(lo: i64, hi: i64, pair: bool) -> (i64, i64) {
+    if pair {
+        let (a, b) = (lo.div_euclid(2) * 2, (hi + 1).div_euclid(2) * 2);
+        (a, b - a)
+    } else {
+        (lo, hi - lo)
+    }
 }
 
 /// Needed-block oracle (a [`super::occupancy::BlockGrid`] in practice).
@@ -118,13 +136,15 @@ pub fn apron_slab(b: &BlockBox, axis: usize, upper: bool) -> ([i64; 3], [i64; 3]
     (lo, hi)
 }
 
-/// The cost `C(B)` of the module docs.
+/// The cost `C(B)` of the module docs (with [`KdParams::pair_align`], the x and y spans
+/// grown to whole pairs of blocks).
 pub fn box_cost(grid: &impl Needed, b: &BlockBox, p: &KdParams) -> f64 {
-    let s = b.size();
     (0..3)
         .map(|a| {
-            let h = |upper| usize::from(p.apron && grid.apron_has_data(b, a, upper));
-            (p.block * (s[a] + h(false) + h(true))) as f64
+            let h = |upper| i64::from(p.apron && grid.apron_has_data(b, a, upper));
+            let (lo, hi) = (b.lo[a] as i64 - h(false), b.hi[a] as i64 + h(true));
+            let (_, len) = aligned_span(lo, hi, p.pair_align && a < 2);
+            (p.block as i64 * len) as f64
         })
         .product::<f64>()
         + p.cell_cost
@@ -279,6 +299,7 @@ mod tests {
             min_box: 1,
             max_depth: 16,
             min_gain: 0.0,
+            pair_align: false,
         }
     }
 

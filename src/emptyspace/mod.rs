@@ -77,6 +77,11 @@ pub struct EmptySpaceOptions {
     pub max_tiers: Option<u32>,
     /// Aprons around bricks. `false` exists only to show what seams look like (tests).
     pub apron: bool,
+    /// Lay bricks out for 4×4 block compression (`billow emptyspace --compress bc`): every
+    /// slot's x and y start and end on the source's 4-texel grid and land on the atlas's,
+    /// so each BC block of the atlas holds one source block (no block mixes two bricks,
+    /// and aprons inside a source block cost no extra block).
+    pub bc_blocks: bool,
 }
 
 /// Default per-box cost, texels.
@@ -94,6 +99,7 @@ impl Default for EmptySpaceOptions {
             cell_cost: DEFAULT_CELL_COST,
             max_tiers: None,
             apron: true,
+            bc_blocks: false,
         }
     }
 }
@@ -180,13 +186,14 @@ fn world_box(cells: &[Prism]) -> Result<Option<(Vec3, Vec3)>, EmptySpaceError> {
 
 fn params_text(o: &EmptySpaceOptions, tail: u32, boxes: usize, dims: [u32; 3]) -> String {
     format!(
-        "threshold={} min_box={} max_depth={} min_gain={} cell_cost={} apron={} tail_level={} boxes={} source_dims={}x{}x{}",
+        "threshold={} min_box={} max_depth={} min_gain={} cell_cost={} apron={}{} tail_level={} boxes={} source_dims={}x{}x{}",
         o.threshold,
         o.min_box,
         o.max_depth,
         o.min_gain,
         o.cell_cost,
         if o.apron { "on" } else { "off" },
+        if o.bc_blocks { " blocks=4x4" } else { "" },
         tail,
         boxes,
         dims[0],
@@ -416,6 +423,7 @@ fn prune_source(
             min_box: (o.min_box as usize).div_ceil(2 << k).max(1),
             max_depth: o.max_depth,
             min_gain: o.min_gain,
+            pair_align: o.bc_blocks,
         },
         max_side: MAX_ATLAS_SIDE / 2,
     };

@@ -228,26 +228,30 @@ pub fn tier_needed_blocks(src: &dyn TierTexels) -> BlockGrid {
     grid
 }
 
-/// Blocks with data on the block grid (`n / 2` blocks) padded by one block on every side,
+/// Blocks with data on the block grid (`n / 2` blocks) padded by two blocks on every side
+/// (a slot's apron, grown to a pair of blocks for block compression, reaches that far),
 /// as a summed-volume table so that any box can be queried in O(1).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct DataGrid {
     /// Unpadded grid size in blocks.
     pub dims: [usize; 3],
-    /// `(d + 3)` entries per axis (padded size + 1), x fastest.
+    /// `(d + 5)` entries per axis (padded size + 1), x fastest.
     sums: Vec<u32>,
 }
+
+/// Blocks of padding of [`DataGrid`] on each side.
+const PAD: i64 = 2;
 
 impl DataGrid {
     pub fn new<S: TierTexels + ?Sized>(src: &S) -> DataGrid {
         let dims = src.n().map(|d| d / 2);
-        let s = dims.map(|d| d + 3);
+        let s = dims.map(|d| d + 2 * PAD as usize + 1);
         let mut sums = vec![0u32; s[0] * s[1] * s[2]];
         let at = |x: usize, y: usize, z: usize| x + s[0] * (y + s[1] * z);
         for z in 1..s[2] {
             for y in 1..s[1] {
                 for x in 1..s[0] {
-                    let b = [x as i64 - 2, y as i64 - 2, z as i64 - 2];
+                    let b = [x, y, z].map(|v| v as i64 - 1 - PAD);
                     let v = u32::from(src.block_has_data(b));
                     sums[at(x, y, z)] =
                         v + sums[at(x - 1, y, z)] + sums[at(x, y - 1, z)] + sums[at(x, y, z - 1)]
@@ -261,10 +265,10 @@ impl DataGrid {
         DataGrid { dims, sums }
     }
 
-    /// Data blocks in `[lo, hi)` (block coordinates, clipped to `-1 ..= dims`).
+    /// Data blocks in `[lo, hi)` (block coordinates, clipped to `-2 ..= dims + 1`).
     pub fn count(&self, lo: [i64; 3], hi: [i64; 3]) -> u32 {
-        let s = self.dims.map(|d| d + 3);
-        let c = |v: i64, a: usize| (v + 1).clamp(0, s[a] as i64 - 1) as usize;
+        let s = self.dims.map(|d| d + 2 * PAD as usize + 1);
+        let c = |v: i64, a: usize| (v + PAD).clamp(0, s[a] as i64 - 1) as usize;
         let (l, h) = (
             [0, 1, 2].map(|a| c(lo[a], a)),
             [0, 1, 2].map(|a| c(hi[a], a)),

@@ -174,10 +174,15 @@ impl Buckets {
 fn strip(
     slots: &[Slot],
     order: &[usize],
-    x_max: usize,
-    z_max: usize,
-    y_max: usize,
+    (x_max, z_max, y_max): (usize, usize, usize),
+    pair_align: bool,
 ) -> Option<Packing> {
+    // Pair-aligned slots keep x and y at even block coordinates and z where it is (only
+    // the orientations that keep z), so every 4×4 texel block of the atlas is one of the
+    // source's.
+    const KEEP_Z: [[usize; 3]; 2] = [PERMS[0], PERMS[2]];
+    let perms = if pair_align { &KEEP_Z[..] } else { &PERMS[..] };
+    let even = |a: usize, o: usize| if pair_align && a < 2 { o & !1 } else { o };
     let mut placed: Vec<Boxed> = Vec::with_capacity(slots.len());
     let mut result = vec![
         Placed {
@@ -206,11 +211,11 @@ fn strip(
             {
                 break;
             }
-            for (pi, perm) in PERMS.iter().enumerate() {
+            for (pi, perm) in perms.iter().enumerate() {
                 let (size, soft) = oriented(&slots[i], *perm);
                 let shifts = match pt.from {
-                    Some((a, s)) if s.min(soft[2 * a]) > 0 => {
-                        let o = s.min(soft[2 * a]).min(pt.pos[a]);
+                    Some((a, s)) if even(a, s.min(soft[2 * a]).min(pt.pos[a])) > 0 => {
+                        let o = even(a, s.min(soft[2 * a]).min(pt.pos[a]));
                         let mut q = pt.pos;
                         q[a] -= o;
                         [Some(pt.pos), Some(q)]
@@ -277,8 +282,9 @@ fn strip(
 }
 
 /// Packs `slots`; no side of the atlas exceeds `max_side` blocks (`None` when this packer
-/// cannot do it).
-pub fn pack(slots: &[Slot], max_side: usize) -> Option<Packing> {
+/// cannot do it). With `pair_align` (slots of even x and y sizes, for block compression)
+/// every slot lands at even x and y, and z stays z.
+pub fn pack(slots: &[Slot], max_side: usize, pair_align: bool) -> Option<Packing> {
     if slots.is_empty() {
         return Some(Packing {
             placed: Vec::new(),
@@ -327,7 +333,7 @@ pub fn pack(slots: &[Slot], max_side: usize) -> Option<Packing> {
     footprints
         .par_iter()
         .filter_map(|&(x, z)| {
-            let p = strip(slots, &order, x, z, max_side)?;
+            let p = strip(slots, &order, (x, z, max_side), pair_align)?;
             let v = p.dims.iter().product::<usize>();
             let side = p.dims.iter().copied().max().unwrap_or(0);
             Some(((v, side, x, z), p))
@@ -377,7 +383,7 @@ mod tests {
             .iter()
             .map(|&size| Slot { size, soft: [0; 6] })
             .collect();
-        let p = pack(&slots, 64).unwrap();
+        let p = pack(&slots, 64, false).unwrap();
         check(&slots, &p);
         let total: usize = sizes.iter().map(|s| s.iter().product::<usize>()).sum();
         assert!(p.dims.iter().product::<usize>() >= total);
@@ -389,14 +395,14 @@ mod tests {
             size: [2, 2, 2],
             soft: [0; 6],
         };
-        let p = pack(&[s; 8], 64).unwrap();
+        let p = pack(&[s; 8], 64, false).unwrap();
         assert_eq!(p.dims.iter().product::<usize>(), 64);
         let long = Slot {
             size: [5, 5, 1],
             soft: [0; 6],
         };
-        assert!(pack(&[long], 4).is_none());
-        assert_eq!(pack(&[], 4).unwrap().dims, [0; 3]);
+        assert!(pack(&[long], 4, false).is_none());
+        assert_eq!(pack(&[], 4, false).unwrap().dims, [0; 3]);
     }
 
     #[test]
@@ -406,7 +412,7 @@ mod tests {
             size: [4, 3, 3],
             soft: [2, 2, 0, 0, 0, 0],
         };
-        let p = pack(&[s, s], 64).unwrap();
+        let p = pack(&[s, s], 64, false).unwrap();
         check(&[s, s], &p);
         assert_eq!(p.dims.iter().product::<usize>(), 6 * 3 * 3, "{p:?}");
         // A long thin slot fits a narrow atlas only lying down.
@@ -414,7 +420,7 @@ mod tests {
             size: [1, 1, 9],
             soft: [0; 6],
         };
-        let p = pack(&[thin], 9).unwrap();
+        let p = pack(&[thin], 9, false).unwrap();
         check(&[thin], &p);
         assert_eq!(p.dims.iter().product::<usize>(), 9);
     }

@@ -12,7 +12,7 @@ use billow_format::Prism;
 use glam::Vec3;
 
 use super::bricks::{fill_level_with, Brick};
-use super::kdtree::{subdivide, BlockBox, KdParams, TierGrid};
+use super::kdtree::{aligned_span, subdivide, BlockBox, KdParams, TierGrid};
 use super::occupancy::{tier_needed_blocks, DataGrid, TierTexels};
 use super::pack::{pack, Slot};
 use billow_core::cells::box_prisms;
@@ -102,9 +102,13 @@ pub fn build_tier<S: TierTexels>(src: &S, world: (Vec3, Vec3), p: &TierParams) -
     let slots: Vec<([i64; 3], Slot)> = boxes
         .iter()
         .map(|b| {
-            let lo = b.lo.map(|v| v as i64 - ring);
-            let hi = b.hi.map(|v| v as i64 + ring);
-            let size = [0, 1, 2].map(|a| (hi[a] - lo[a]) as usize);
+            let span = [0, 1, 2].map(|a| {
+                let (lo, hi) = (b.lo[a] as i64 - ring, b.hi[a] as i64 + ring);
+                aligned_span(lo, hi, p.kd.pair_align && a < 2)
+            });
+            let lo = span.map(|s| s.0);
+            let hi = span.map(|s| s.0 + s.1);
+            let size = span.map(|s| s.1 as usize);
             let soft = if p.kd.apron {
                 soft_depths(&data, lo, hi)
             } else {
@@ -114,7 +118,7 @@ pub fn build_tier<S: TierTexels>(src: &S, world: (Vec3, Vec3), p: &TierParams) -
         })
         .collect();
     let plain: Vec<Slot> = slots.iter().map(|s| s.1).collect();
-    let packing = pack(&plain, p.max_side)?;
+    let packing = pack(&plain, p.max_side, p.kd.pair_align)?;
     // An empty tier still needs a valid two-level texture.
     let blocks = packing.dims.map(|d| d.max(1));
     let dims = blocks.map(|d| 2 * d);
@@ -145,7 +149,7 @@ pub fn build_tier<S: TierTexels>(src: &S, world: (Vec3, Vec3), p: &TierParams) -
     let (wlo, whi) = world;
     let ext = whi - wlo;
     let mut cells = Vec::with_capacity(2 * boxes.len());
-    for (b, pl) in boxes.iter().zip(&packing.placed) {
+    for ((b, (slot_lo, _)), pl) in boxes.iter().zip(&slots).zip(&packing.placed) {
         let w = |a: usize, v: usize| wlo[a] + ext[a] * (2.0 * v as f64 / n[a] as f64) as f32;
         let pmin = Vec3::from_array([0, 1, 2].map(|a| w(a, b.lo[a])));
         let pmax = Vec3::from_array([0, 1, 2].map(|a| w(a, b.hi[a])));
@@ -153,7 +157,8 @@ pub fn build_tier<S: TierTexels>(src: &S, world: (Vec3, Vec3), p: &TierParams) -
         let uvw = |t: [f32; 3]| {
             [0, 1, 2].map(|a| {
                 let src_axis = pl.perm[a];
-                let start = 2 * (pl.origin[a] + ring as usize);
+                let inset = (b.lo[src_axis] as i64 - slot_lo[src_axis]) as usize;
+                let start = 2 * (pl.origin[a] + inset);
                 let v = start
                     + if t[src_axis] > 0.5 {
                         2 * s[src_axis]
