@@ -46,7 +46,7 @@ build:
 	$(CARGO) build --release --locked
 
 $(BILLOW): $(BILLOW_SRC)
-	$(CARGO) build --release --locked -p billow
+	$(CARGO) build --release --locked -p billow-cli
 	@touch $@
 
 ## The main job on the bundled oak: bake it into a volumetric billboard (plus a KTX2 copy),

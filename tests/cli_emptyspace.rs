@@ -183,7 +183,7 @@ fn odd_sides_are_kept_whole_with_a_warning_naming_the_fix() {
 #[test]
 fn default_voxelize_output_of_the_oak_is_pruned() {
     let dir = tempfile::tempdir().unwrap();
-    let oak = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/oak/eztree_oak_medium.gltf");
+    let oak = repo().join("fixtures/oak/eztree_oak_medium.gltf");
     let r = run_with(
         &["voxelize", oak.to_str().unwrap(), "-o", "oak.billow", "-q"],
         dir.path(),

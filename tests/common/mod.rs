@@ -5,12 +5,25 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
+/// The `billow` binary Cargo built for this test (only the CLI package's tests,
+/// bin/billow/Cargo.toml, have one).
 pub fn bin() -> PathBuf {
-    PathBuf::from(env!("CARGO_BIN_EXE_billow"))
+    match option_env!("CARGO_BIN_EXE_billow") {
+        Some(p) => PathBuf::from(p),
+        None => panic!(
+            "this test drives the binary: declare it in bin/billow/Cargo.toml, not in the library's Cargo.toml"
+        ),
+    }
 }
 
+/// The repository root (the library's package; the CLI package is bin/billow).
 pub fn repo() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+    let m = Path::new(env!("CARGO_MANIFEST_DIR"));
+    if m.ends_with("bin/billow") {
+        m.join("../..").canonicalize().expect("the repository root")
+    } else {
+        m.to_path_buf()
+    }
 }
 
 /// A test that cannot run says so on stderr (`SKIP: <test>: <reason>`, written to the
