@@ -26,6 +26,8 @@ pub mod kdtree;
 pub mod occupancy;
 pub mod pack;
 pub mod sparse;
+/// Test support (feature `test-support`, on for billow's own tests): not part of the API.
+#[cfg(any(test, feature = "test-support"))]
 pub mod synthetic;
 pub mod tier;
 

@@ -26,6 +26,8 @@ pub mod overlay;
 pub mod particle_layer;
 pub mod particle_pass;
 pub mod particles;
+/// Test support (feature `test-support`, on for the viewer's own tests): not part of the API.
+#[cfg(any(test, feature = "test-support"))]
 pub mod prism_plane_gpu;
 pub mod render;
 pub mod scene;
