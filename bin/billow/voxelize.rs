@@ -55,7 +55,7 @@ pub struct Args {
     /// (and no file) when none does. Explicit --res / --supersample stay fixed.
     #[arg(long, value_name = "E")]
     target_error: Option<f64>,
-    /// --target-error's view distance, a multiple of the framed distance, in (0, 1000].
+    /// The view distance of --target-error, a multiple of the framed distance, in (0, 1000].
     #[arg(
         long,
         value_name = "F",
@@ -63,7 +63,7 @@ pub struct Args {
         requires = "target_error"
     )]
     target_distance: f32,
-    /// --target-error's image size WxH (16-spp reference, as `billow eval`).
+    /// The image size WxH of --target-error (16-spp reference, as `billow eval`).
     #[arg(
         long,
         value_name = "WxH",
