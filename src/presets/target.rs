@@ -152,14 +152,20 @@ pub enum SearchError<E> {
     Bake(E),
 }
 
+/// Proposes a candidate between a failing `lo` and a passing `hi`, or `None` ([`search`]).
+pub type Refine<'f, S> = &'f dyn Fn(&Candidate<S>, &Candidate<S>) -> Option<Candidate<S>>;
+
+/// Bakes a candidate and returns the asset and its error ([`search`]).
+pub type Measure<'f, S, A, E> = &'f mut dyn FnMut(&Candidate<S>) -> Result<(A, f64), E>;
+
 /// Measures the ladder cheapest first and refines (see the module docs). `measure` bakes a
 /// candidate and returns the asset and its error; `refine(lo, hi)` proposes a candidate
 /// between a failing `lo` and a passing `hi`, or `None` when there is none.
 pub fn search<S, A, E>(
     ladder: Vec<Candidate<S>>,
     target: &TargetOptions,
-    refine: &dyn Fn(&Candidate<S>, &Candidate<S>) -> Option<Candidate<S>>,
-    measure: &mut dyn FnMut(&Candidate<S>) -> Result<(A, f64), E>,
+    refine: Refine<'_, S>,
+    measure: Measure<'_, S, A, E>,
 ) -> Result<Found<S, A>, SearchError<E>> {
     target.validate().map_err(SearchError::Target)?;
     let mut trials: Vec<Trial> = Vec::new();
