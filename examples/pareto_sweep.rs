@@ -392,7 +392,11 @@ fn svg(title: &str, points: &[Point]) -> String {
         .map(|p| p.mean.rmse)
         .fold(f64::INFINITY, f64::min)
         * 0.92;
+    let all = points;
     for (ci, (x_label, cost)) in COSTS.iter().enumerate() {
+        // A log axis cannot show a zero cost (a cloud whose atlas starved: no fragments).
+        let points: Vec<Point> = all.iter().filter(|p| cost(p) > 0.0).cloned().collect();
+        let points = points.as_slice();
         let x0 = ci as f64 * pw;
         let (ax, ay, aw, ah) = (x0 + ml, mt, pw - ml - mr, ph - mt - mb + 20.0);
         let xs: Vec<f64> = points.iter().map(|p| cost(p).max(1e-9)).collect();
