@@ -38,7 +38,7 @@ CLOUDS  := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.cloud.done,$(MESHES))
 BATCH_RES ?= 128
 BATCH_CLOUD_ARGS ?=
 
-.PHONY: all build demo test lint fmt batch clean fixtures accuracy accuracy-emptyspace bench bench-bbcloud gallery bench-view bench-particles check-gltf check-ktx2 check-threejs fuzz lod-sweep
+.PHONY: all build demo test lint fmt batch clean fixtures accuracy accuracy-emptyspace accuracy-pareto bench bench-bbcloud gallery bench-view bench-particles check-gltf check-ktx2 check-threejs fuzz lod-sweep
 
 all: build
 
@@ -138,6 +138,7 @@ fixtures:
 accuracy:
 	$(CARGO) run --release --locked --example accuracy -- docs/accuracy.md
 	$(MAKE) accuracy-emptyspace
+	$(MAKE) accuracy-pareto
 	BILLOW_BLESS=1 $(CARGO) test --locked --test accuracy_drift
 
 ## Empty-space removal: memory, render work and image change of `billow emptyspace` on the
@@ -146,6 +147,13 @@ accuracy:
 ## markers, and docs/accuracy/emptyspace.svg (about 2 minutes in release).
 accuracy-emptyspace:
 	$(CARGO) run --release --locked --example emptyspace_sweep -- --sweep-md docs/emptyspace_sweep.md --accuracy docs/accuracy.md
+
+## Combined sweeps and Pareto fronts (resolution x supersampling x compression x slice
+## spacing; epsilon x N x atlas size) on the oak, and the preset table (oak, a generated
+## tree); rewrites docs/accuracy/pareto.md, docs/accuracy/pareto_*.svg and the section of
+## docs/accuracy.md between the pareto markers (about 10 minutes on 2 cores, release).
+accuracy-pareto:
+	$(CARGO) run --release --locked --example pareto_sweep -- --md docs/accuracy/pareto.md --accuracy docs/accuracy.md
 
 clean:
 	rm -rf $(OUT)

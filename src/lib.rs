@@ -9,6 +9,7 @@ pub mod export;
 pub mod import;
 pub mod inspect;
 pub mod noise_volume;
+pub mod presets;
 pub mod procgen;
 pub mod provenance;
 pub mod rng;

@@ -100,6 +100,18 @@ fn case(command: &str, flag: &str) -> Option<Case> {
         (_, "depfile") => PATH,
 
         ("voxelize", "res") => both("abc", "0"),
+        ("voxelize", "preset") | ("bbcloud", "preset") => keyword("bogus"),
+        ("voxelize", "target-error") | ("bbcloud", "target-error") => both("abc", "0"),
+        ("voxelize", "target-distance") | ("bbcloud", "target-distance") => Values {
+            unparsable: Some("abc"),
+            out_of_range: Some("0"),
+            extra: &["--target-error", "0.5"],
+        },
+        ("voxelize", "target-size") | ("bbcloud", "target-size") => Values {
+            unparsable: Some("abc"),
+            out_of_range: Some("0x16"),
+            extra: &["--target-error", "0.5"],
+        },
         ("voxelize", "supersample") => both("abc", "9"),
         ("voxelize", "combine") => Values {
             unparsable: Some("bogus"),

@@ -12,7 +12,10 @@ use billow::compress::{compress_cloud, Compression};
 use billow::export::gltf::cloud_glb_bytes_with;
 use billow::export::{GltfAlpha, GltfOptions};
 use billow::import::{import, ImportOptions};
+use billow::presets::target::{search, Candidate, Judge, SearchError, TargetOptions};
+use billow::presets::{resolve_cloud, CloudFlags, CloudSettings, Preset, Source};
 use billow::provenance::{source_info_all, tool_version};
+use billow_format::{CloudAsset, CloudBlocks};
 use glam::Vec3;
 use serde::Serialize;
 
@@ -23,6 +26,7 @@ use crate::output::{
 };
 use crate::progress::{self, Monotone};
 use crate::staged::{out_err, Staged};
+use crate::voxelize::{target_options, TargetSummary};
 use crate::Ctx;
 
 #[derive(clap::Args, Debug)]
@@ -33,12 +37,39 @@ pub struct Args {
     #[arg(short, long)]
     output: PathBuf,
     /// Slab half-width ε of the plane search, in foliage bounding-sphere radii (doubled per LOD);
-    /// in (0, 2].
-    #[arg(long, default_value_t = 0.04)]
-    epsilon: f32,
-    /// Candidate planes tried per billboard (N), 1–1000000.
-    #[arg(long, default_value_t = 500)]
-    samples: u32,
+    /// in (0, 2] (default: the preset's, else 0.04).
+    #[arg(long)]
+    epsilon: Option<f32>,
+    /// Candidate planes tried per billboard (N), 1–1000000 (default: the preset's, else 500).
+    #[arg(long)]
+    samples: Option<u32>,
+    /// A named point of the measured accuracy/cost front, setting --epsilon, --samples and
+    /// --atlas-size: draft, balanced, quality or hero (docs/cli.md, "Presets"). Explicit
+    /// flags override it.
+    #[arg(long, value_name = "NAME", conflicts_with = "target_error")]
+    preset: Option<String>,
+    /// Bake the cheapest setting whose measured error is at most E: `billow eval`'s mean
+    /// RMSE of LOD 0 over the six axis views at --target-distance. Tries the presets
+    /// cheapest first, then refines --epsilon between the last that failed and the first
+    /// that met E; exit 10 (and no file) when none does. Explicit flags stay fixed.
+    #[arg(long, value_name = "E")]
+    target_error: Option<f64>,
+    /// The view distance of --target-error, a multiple of the framed distance, in (0, 1000].
+    #[arg(
+        long,
+        value_name = "F",
+        default_value_t = 1.0,
+        requires = "target_error"
+    )]
+    target_distance: f32,
+    /// The image size WxH of --target-error (16-spp reference, as `billow eval`).
+    #[arg(
+        long,
+        value_name = "WxH",
+        default_value = "128x128",
+        requires = "target_error"
+    )]
+    target_size: String,
     /// Random seed (PCG32), any 64-bit number; the same seed gives the same bytes.
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -65,9 +96,10 @@ pub struct Args {
     /// level mixes two billboards.
     #[arg(long, default_value_t = 4)]
     mip_levels: u32,
-    /// Largest atlas side in texels: a power of two, 64–16384.
-    #[arg(long, default_value_t = 2048)]
-    atlas_size: u32,
+    /// Largest atlas side in texels: a power of two, 64–16384 (default: the preset's, else
+    /// 2048).
+    #[arg(long)]
+    atlas_size: Option<u32>,
     /// Texels per world unit at LOD 0, > 0 (default: the most that fits one atlas per level).
     #[arg(long)]
     texel_density: Option<f32>,
@@ -124,10 +156,28 @@ enum GltfAlphaArg {
     Blend,
 }
 
+/// Where the resolved ε, N and atlas size came from.
+#[derive(Serialize)]
+struct SettingsFrom {
+    epsilon: Source,
+    samples: Source,
+    atlas_size: Source,
+}
+
 #[derive(Serialize)]
 struct Summary<'a> {
     input: String,
     output: String,
+    /// The preset the settings came from (with --target-error: the chosen one's).
+    preset: Option<Preset>,
+    /// The resolved --epsilon, --samples and --atlas-size.
+    epsilon: f32,
+    samples: u32,
+    atlas_size: u32,
+    settings_from: SettingsFrom,
+    /// With --target-error: what was tried and chosen.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    target: Option<TargetSummary>,
     seed: u64,
     billboards_per_lod: Vec<usize>,
     atlas_fill_per_lod: Vec<f64>,
@@ -248,6 +298,22 @@ const SLOW_SECONDS: f64 = 60.0;
 
 pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let start = Instant::now();
+    let preset = args
+        .preset
+        .as_deref()
+        .map(str::parse::<Preset>)
+        .transpose()
+        .map_err(|e| usage("--preset", e))?;
+    let flags = CloudFlags {
+        epsilon: args.epsilon,
+        samples: args.samples,
+        atlas_size: args.atlas_size,
+    };
+    let resolved = resolve_cloud(preset, &flags);
+    let target = args
+        .target_error
+        .map(|error| target_options(error, args.target_distance, &args.target_size))
+        .transpose()?;
     let compression: Compression = args.compress.parse().map_err(|e| usage("--compress", e))?;
     let mut outputs = vec![("-o", args.output.as_path())];
     outputs.extend(args.gltf.as_deref().map(|g| ("--gltf", g)));
@@ -277,12 +343,12 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         .as_deref()
         .map(|s| parse_view(s, up, args.view_strength))
         .transpose()?;
-    let opts = BbcloudOptions {
-        epsilon: args.epsilon,
-        samples: args.samples,
+    let mut opts = BbcloudOptions {
+        epsilon: resolved.settings.epsilon,
+        samples: resolved.settings.samples,
         seed: args.seed,
         lods: args.lods,
-        atlas_size: args.atlas_size,
+        atlas_size: resolved.settings.atlas_size,
         texel_density: args.texel_density,
         shading: Shading {
             light,
@@ -324,63 +390,33 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         .map_err(|e| CliError::new(Code::InputIo, format!("{input}: cannot read: {e}")))?;
     let seconds_import = start.elapsed().as_secs_f64();
 
-    // What the bake will cost, before any heavy work: refused when the atlases would be
-    // too large, a warning with the expected time when the plane search will be long.
-    let cost = estimate(&scene, &opts)
-        .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;
-    let mib = |b: u64| b as f64 / f64::from(1u32 << 20);
-    if cost.atlas_bytes > MAX_ATLAS_BYTES {
-        return Err(bad(
-            if args.texel_density.is_some() {
-                "--texel-density"
-            } else {
-                "--atlas-size"
-            },
-            format!(
-                "the atlases would take {}about {:.0} MiB (peak memory about 3x that), more \
-                 than the limit of {:.0} MiB; lower --atlas-size, --texel-density, --lods or \
-                 --mip-levels (nothing was baked)",
-                if args.texel_density.is_some() {
-                    "at least "
-                } else {
-                    ""
-                },
-                mib(cost.atlas_bytes),
-                mib(MAX_ATLAS_BYTES)
-            ),
-        ));
-    }
-    if cost.search_seconds > SLOW_SECONDS {
-        warn(
-            ctx,
-            &format!(
-                "{input}: about {} billboards per level from {} foliage triangles: the plane \
-                 search will take roughly {:.0} s ({:.1e} candidate tests; --epsilon {} and \
-                 --max-extent {} set it, the defaults take a few seconds)",
-                cost.billboards,
-                cost.foliage_triangles,
-                cost.search_seconds,
-                cost.search_tests,
-                short(args.epsilon),
-                args.max_extent.map_or("none".into(), short)
-            ),
-        );
-    }
-
-    let bar = Monotone::new(progress(ctx, progress::LEN, "bbcloud"));
-    let report = |stage: Stage, f: f32| {
-        bar.set(
-            progress::bbcloud_fraction(stage, f, opts.lods),
-            || match stage {
-                Stage::Search { level } => format!("plane search, LOD {level}"),
-                Stage::Render => "billboard textures".to_string(),
-                Stage::Pack => "atlases".to_string(),
-            },
-        );
+    let (cloud, target_summary) = match &target {
+        None => (
+            bake_once(&scene, &opts, &args, ctx, &input, source, None)?,
+            None,
+        ),
+        Some(t) => {
+            let (cloud, chosen, summary) = bake_to_target(
+                &scene,
+                &opts,
+                &args,
+                &flags,
+                t,
+                compression,
+                ctx,
+                &input,
+                &source,
+            )?;
+            opts = chosen;
+            (cloud, Some(summary))
+        }
     };
-    let (mut asset, stats) = bake(&scene, &opts, &tool_version(), Some(source), &report)
-        .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;
-    bar.finish();
+    let Cloud {
+        mut asset,
+        stats,
+        cost,
+        compressed,
+    } = cloud;
 
     // Everything is encoded before anything is written, so a failure leaves no output.
     // The atlas PNGs are encoded once for both the .glb and the --atlas dump.
@@ -418,10 +454,17 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let seconds_export = export_start.elapsed().as_secs_f64();
 
     let compress_start = Instant::now();
-    let blocks = (compression == Compression::Bc).then(|| {
-        asset.header.set_compress("bc7");
-        compress_cloud(&mut asset)
-    });
+    let blocks = match compressed {
+        // --target-error measured the compressed cloud already.
+        Some((c, b)) => {
+            asset = *c;
+            Some(b)
+        }
+        None => (compression == Compression::Bc).then(|| {
+            asset.header.set_compress("bc7");
+            compress_cloud(&mut asset)
+        }),
+    };
     let seconds_compress = compress_start.elapsed().as_secs_f64();
     let write_start = Instant::now();
     let bytes = asset
@@ -464,9 +507,23 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         .collect();
     let seconds_write = write_start.elapsed().as_secs_f64();
 
+    let by_target = target_summary.is_some();
+    let from = |s: Source| if by_target { Source::Target } else { s };
     let summary = Summary {
         input,
         output: args.output.display().to_string(),
+        preset: target_summary
+            .as_ref()
+            .map_or(preset, |t: &TargetSummary| t.chosen_preset),
+        epsilon: opts.epsilon,
+        samples: opts.samples,
+        atlas_size: opts.atlas_size,
+        settings_from: SettingsFrom {
+            epsilon: from(resolved.epsilon_from),
+            samples: from(resolved.samples_from),
+            atlas_size: from(resolved.atlas_size_from),
+        },
+        target: target_summary,
         seed: args.seed,
         mip_levels: args.mip_levels,
         normal_map: args.normal_map,
@@ -486,6 +543,9 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         seconds_total: start.elapsed().as_secs_f64(),
         warnings: scene.warnings.iter().map(|w| w.message.clone()).collect(),
     };
+    if let (Some(t), false) = (&summary.target, ctx.quiet) {
+        eprintln!("{}", t.line());
+    }
     if args.json {
         print_json(&summary)?;
     } else if !ctx.quiet {
@@ -501,4 +561,194 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         );
     }
     Ok(())
+}
+
+/// One bake: the cloud, its statistics and the estimate it was checked against; with
+/// `measure_compressed` = bc, also the compressed copy (what a reader of the file gets)
+/// and its blocks.
+struct Cloud {
+    asset: CloudAsset,
+    stats: BbcloudStats,
+    cost: Estimate,
+    compressed: Option<(Box<CloudAsset>, CloudBlocks)>,
+}
+
+/// Estimates (refusing atlases over the limit, warning about a long search) and bakes.
+fn bake_once(
+    scene: &billow::scene::Scene,
+    opts: &BbcloudOptions,
+    args: &Args,
+    ctx: &Ctx,
+    input: &str,
+    source: billow_format::SourceInfo,
+    measure_compressed: Option<Compression>,
+) -> Result<Cloud, CliError> {
+    // What the bake will cost, before any heavy work: refused when the atlases would be
+    // too large, a warning with the expected time when the plane search will be long.
+    let cost = estimate(scene, opts)
+        .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;
+    let mib = |b: u64| b as f64 / f64::from(1u32 << 20);
+    if cost.atlas_bytes > MAX_ATLAS_BYTES {
+        return Err(bad(
+            if args.texel_density.is_some() {
+                "--texel-density"
+            } else {
+                "--atlas-size"
+            },
+            format!(
+                "the atlases would take {}about {:.0} MiB (peak memory about 3x that), more \
+                 than the limit of {:.0} MiB; lower --atlas-size, --texel-density, --lods or \
+                 --mip-levels (nothing was baked)",
+                if args.texel_density.is_some() {
+                    "at least "
+                } else {
+                    ""
+                },
+                mib(cost.atlas_bytes),
+                mib(MAX_ATLAS_BYTES)
+            ),
+        ));
+    }
+    if cost.search_seconds > SLOW_SECONDS {
+        warn(
+            ctx,
+            &format!(
+                "{input}: about {} billboards per level from {} foliage triangles: the plane \
+                 search will take roughly {:.0} s ({:.1e} candidate tests; --epsilon {} and \
+                 --max-extent {} set it, the defaults take a few seconds)",
+                cost.billboards,
+                cost.foliage_triangles,
+                cost.search_seconds,
+                cost.search_tests,
+                short(opts.epsilon),
+                args.max_extent.map_or("none".into(), short)
+            ),
+        );
+    }
+
+    let bar = Monotone::new(progress(ctx, progress::LEN, "bbcloud"));
+    let report = |stage: Stage, f: f32| {
+        bar.set(
+            progress::bbcloud_fraction(stage, f, opts.lods),
+            || match stage {
+                Stage::Search { level } => format!("plane search, LOD {level}"),
+                Stage::Render => "billboard textures".to_string(),
+                Stage::Pack => "atlases".to_string(),
+            },
+        );
+    };
+    let (asset, stats) = bake(scene, opts, &tool_version(), Some(source), &report)
+        .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;
+    bar.finish();
+
+    let compressed = (measure_compressed == Some(Compression::Bc)).then(|| {
+        let mut c = asset.clone();
+        c.header.set_compress("bc7");
+        let blocks = compress_cloud(&mut c);
+        (Box::new(c), blocks)
+    });
+    Ok(Cloud {
+        asset,
+        stats,
+        cost,
+        compressed,
+    })
+}
+
+/// `--target-error`: the preset ladder (explicit flags fixed), cheapest first, then ε
+/// bisected geometrically ([`search`]); each bake measured by a [`Judge`] as the file
+/// would read back. Returns the chosen bake, its options and what was tried.
+#[allow(clippy::too_many_arguments)]
+fn bake_to_target(
+    scene: &billow::scene::Scene,
+    opts: &BbcloudOptions,
+    args: &Args,
+    flags: &CloudFlags,
+    target: &TargetOptions,
+    compression: Compression,
+    ctx: &Ctx,
+    input: &str,
+    source: &billow_format::SourceInfo,
+) -> Result<(Cloud, BbcloudOptions, TargetSummary), CliError> {
+    let describe = |s: &CloudSettings| {
+        format!(
+            "--epsilon {} --samples {} --atlas-size {}",
+            short(s.epsilon),
+            s.samples,
+            s.atlas_size
+        )
+    };
+    let mut ladder: Vec<Candidate<CloudSettings>> = Preset::LADDER
+        .iter()
+        .map(|&p| {
+            let s = resolve_cloud(Some(p), flags).settings;
+            Candidate {
+                label: format!("{p} ({})", describe(&s)),
+                preset: Some(p),
+                settings: s,
+            }
+        })
+        .collect();
+    ladder.dedup_by(|a, b| a.settings == b.settings);
+    let pinned = flags.epsilon.is_some();
+    // Between a failing (larger) and a passing (smaller) ε: their geometric mean, to three
+    // significant digits.
+    let refine = |lo: &Candidate<CloudSettings>, hi: &Candidate<CloudSettings>| {
+        let (a, b) = (lo.settings.epsilon, hi.settings.epsilon);
+        let m = (a * b).sqrt();
+        let m = if m > 0.0 && m.is_finite() {
+            let k = 10f32.powi(2 - m.log10().floor() as i32);
+            (m * k).round() / k
+        } else {
+            return None;
+        };
+        (!pinned && m < a && m > b).then(|| {
+            let settings = CloudSettings {
+                epsilon: m,
+                ..hi.settings
+            };
+            Candidate {
+                label: format!(
+                    "{}, refined ({})",
+                    hi.preset.map_or("", Preset::name),
+                    describe(&settings)
+                ),
+                preset: hi.preset,
+                settings,
+            }
+        })
+    };
+    let mut judge = Judge::new(scene, target);
+    let mut measure = |c: &Candidate<CloudSettings>| {
+        let o = BbcloudOptions {
+            epsilon: c.settings.epsilon,
+            samples: c.settings.samples,
+            atlas_size: c.settings.atlas_size,
+            ..opts.clone()
+        };
+        let cloud = bake_once(
+            scene,
+            &o,
+            args,
+            ctx,
+            input,
+            source.clone(),
+            Some(compression),
+        )?;
+        let measured = cloud.compressed.as_ref().map_or(&cloud.asset, |c| &*c.0);
+        let error = judge
+            .cloud_error(measured)
+            .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;
+        if !ctx.quiet {
+            eprintln!("--target-error: {} → RMSE {error:.4}", c.label);
+        }
+        Ok::<_, CliError>(((cloud, o), error))
+    };
+    let found = search(ladder, target, &refine, &mut measure).map_err(|e| match e {
+        SearchError::Target(t) => CliError::new(Code::from(&t), format!("--target-error: {t}")),
+        SearchError::Bake(e) => e,
+    })?;
+    let summary = TargetSummary::new(target, &found);
+    let (cloud, chosen) = found.asset;
+    Ok((cloud, chosen, summary))
 }

@@ -10,6 +10,7 @@ use billow::emptyspace::EmptySpaceError;
 use billow::eval::EvalError;
 use billow::export::ExportError;
 use billow::import::{ImportError, ImportErrorKind};
+use billow::presets::target::TargetError;
 use billow::shell::ShellError;
 use billow::voxelize::{CombineParseError, GridError, ResolutionError, VoxelizeError};
 use billow_format::{CloudError, FormatError};
@@ -40,6 +41,8 @@ pub enum Code {
     BadParameter = 8,
     /// The input is valid but holds nothing this command bakes (bbcloud: no foliage).
     NothingToBake = 9,
+    /// `--target-error`: no setting tried reaches the target error (nothing is written).
+    TargetNotMet = 10,
 }
 
 /// An error on its way to the user: one line, and the exit code it maps to.
@@ -183,6 +186,15 @@ impl From<&EmptySpaceError> for Code {
             EmptySpaceError::InvalidAsset(_)
             | EmptySpaceError::AlreadyPruned(_)
             | EmptySpaceError::HasBands => Code::InvalidInput,
+        }
+    }
+}
+
+impl From<&TargetError> for Code {
+    fn from(e: &TargetError) -> Code {
+        match e {
+            TargetError::InvalidTarget(_) => Code::BadParameter,
+            TargetError::Unreachable { .. } => Code::TargetNotMet,
         }
     }
 }

@@ -8,6 +8,8 @@ use billow::compress::{compress_volume, Compression};
 use billow::emptyspace::{prune, prune_sparse, EmptySpaceOptions, EmptySpaceStats};
 use billow::export::{check_slices, ktx2_bytes, slice_bytes, slice_file_name, SliceFormat};
 use billow::import::{import, ImportOptions};
+use billow::presets::target::{search, Candidate, Found, Judge, SearchError, TargetOptions, Trial};
+use billow::presets::{resolve_volume, Preset, Source, VolumeFlags, VolumeSettings};
 use billow::provenance::{source_info, tool_version, with_companions};
 use billow::scene::Aabb;
 use billow::voxelize::{
@@ -35,12 +37,40 @@ pub struct Args {
     #[arg(short, long)]
     output: PathBuf,
     /// Voxels along the longest axis (others in proportion), or exactly XxYxZ (e.g. 256x128x128);
-    /// each axis 1–2048, and the estimated memory must fit.
-    #[arg(long, default_value = "128")]
-    res: String,
-    /// K: K×K coverage samples per voxel column, 1–8; gives thin parts fractional opacity.
-    #[arg(long, default_value_t = 4)]
-    supersample: u32,
+    /// each axis 1–2048, and the estimated memory must fit (default: the preset's, else 128).
+    #[arg(long)]
+    res: Option<String>,
+    /// K: K×K coverage samples per voxel column, 1–8; gives thin parts fractional opacity
+    /// (default: the preset's, else 4).
+    #[arg(long)]
+    supersample: Option<u32>,
+    /// A named point of the measured accuracy/cost front, setting --res and --supersample:
+    /// draft, balanced, quality or hero (docs/cli.md, "Presets"). Explicit --res or
+    /// --supersample override it.
+    #[arg(long, value_name = "NAME", conflicts_with = "target_error")]
+    preset: Option<String>,
+    /// Bake the cheapest setting whose measured error is at most E: `billow eval`'s mean
+    /// RMSE over the six axis views at --target-distance. Tries the presets cheapest first,
+    /// then refines --res between the last that failed and the first that met E; exit 10
+    /// (and no file) when none does. Explicit --res / --supersample stay fixed.
+    #[arg(long, value_name = "E")]
+    target_error: Option<f64>,
+    /// The view distance of --target-error, a multiple of the framed distance, in (0, 1000].
+    #[arg(
+        long,
+        value_name = "F",
+        default_value_t = 1.0,
+        requires = "target_error"
+    )]
+    target_distance: f32,
+    /// The image size WxH of --target-error (16-spp reference, as `billow eval`).
+    #[arg(
+        long,
+        value_name = "WxH",
+        default_value = "128x128",
+        requires = "target_error"
+    )]
+    target_size: String,
     /// How the six directional volumes merge: opaque (max opacity, averaged colour: keeps thin
     /// leaves and closed surfaces solid), mean (the paper's neutral average), max, min, or
     /// expr:<expression over px nx py ny pz nz> (see docs/voxelize.md).
@@ -142,10 +172,94 @@ pub enum NormalsArg {
     Off,
 }
 
+/// Where the resolved `--res` and `--supersample` came from.
+#[derive(Serialize)]
+struct SettingsFrom {
+    resolution: Source,
+    supersample: Source,
+}
+
+/// What `--target-error` tried and chose.
+#[derive(Serialize)]
+pub(crate) struct TargetSummary {
+    /// E.
+    pub(crate) error: f64,
+    pub(crate) distance: f32,
+    pub(crate) size: [u32; 2],
+    /// The chosen setting, e.g. `balanced` or `quality, --res 96`.
+    pub(crate) chosen: String,
+    pub(crate) chosen_preset: Option<Preset>,
+    /// Its measured mean RMSE (≤ `error`).
+    pub(crate) measured_error: f64,
+    /// Every bake measured, in order.
+    pub(crate) trials: Vec<Trial>,
+}
+
+impl TargetSummary {
+    pub(crate) fn new<S, A>(t: &TargetOptions, found: &Found<S, A>) -> Self {
+        TargetSummary {
+            error: t.error,
+            distance: t.distance,
+            size: [t.width, t.height],
+            chosen: found.candidate.label.clone(),
+            chosen_preset: found.candidate.preset,
+            measured_error: found.error,
+            trials: found.trials.clone(),
+        }
+    }
+
+    /// The line printed on stderr: the choice and its measured error.
+    pub(crate) fn line(&self) -> String {
+        format!(
+            "--target-error {}: chose {} (RMSE {:.4} at {}x the framed distance; {} bake(s) measured)",
+            self.error,
+            self.chosen,
+            self.measured_error,
+            self.distance,
+            self.trials.len()
+        )
+    }
+}
+
+/// `--target-error E --target-distance F --target-size WxH`, checked before any work.
+pub(crate) fn target_options(
+    error: f64,
+    distance: f32,
+    size: &str,
+) -> Result<TargetOptions, CliError> {
+    let (width, height) = crate::eval::parse_size(size).map_err(|e| CliError {
+        message: e.message.replacen("--size", "--target-size", 1),
+        ..e
+    })?;
+    let t = TargetOptions {
+        error,
+        distance,
+        width,
+        height,
+    };
+    t.validate().map_err(|e| {
+        let flag = if !(error.is_finite() && error > 0.0) {
+            "--target-error"
+        } else {
+            "--target-distance"
+        };
+        CliError::new(Code::from(&e), format!("{flag}: {e}"))
+    })?;
+    Ok(t)
+}
+
 #[derive(Serialize)]
 struct Summary {
     input: String,
     output: String,
+    /// The preset the settings came from (with --target-error: the chosen one's).
+    preset: Option<Preset>,
+    /// The resolved --res.
+    resolution: String,
+    settings_from: SettingsFrom,
+    /// With --target-error: what was tried and chosen.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    target: Option<TargetSummary>,
     dims: [u32; 3],
     mip_count: u32,
     combine: String,
@@ -170,19 +284,24 @@ fn bad(flag: &str, e: impl std::fmt::Display) -> CliError {
     CliError::new(Code::BadParameter, format!("{flag}: {e}"))
 }
 
-pub fn options(
-    res: &str,
-    supersample: u32,
-    combine: &str,
-    normals: bool,
-    margin: f32,
-) -> Result<VoxelizeOptions, CliError> {
+/// `--res` → a validated [`Resolution`].
+fn parse_res(res: &str) -> Result<Resolution, CliError> {
     let resolution: Resolution = res
         .parse()
         .map_err(|e| CliError::new(Code::from(&e), format!("--res: {e}")))?;
     resolution
         .validate()
         .map_err(|e| CliError::new(Code::from(&e), format!("--res: {e}")))?;
+    Ok(resolution)
+}
+
+pub fn options(
+    resolution: Resolution,
+    supersample: u32,
+    combine: &str,
+    normals: bool,
+    margin: f32,
+) -> Result<VoxelizeOptions, CliError> {
     let combine: CombineFn = combine
         .parse()
         .map_err(|e| CliError::new(Code::from(&e), format!("--combine: {e}")))?;
@@ -279,27 +398,43 @@ fn parse_bake(bake: &str, rays: u32, distance: Option<f32>) -> Result<Bake, CliE
 
 pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let start = Instant::now();
+    let preset = args
+        .preset
+        .as_deref()
+        .map(str::parse::<Preset>)
+        .transpose()
+        .map_err(|e| usage("--preset", e))?;
+    let flags = VolumeFlags {
+        resolution: args.res.as_deref().map(parse_res).transpose()?,
+        supersample: args.supersample,
+    };
+    let resolved = resolve_volume(preset, &flags);
+    let target = args
+        .target_error
+        .map(|error| target_options(error, args.target_distance, &args.target_size))
+        .transpose()?;
     let mut opts = options(
-        &args.res,
-        args.supersample,
+        resolved.settings.resolution,
+        resolved.settings.supersample,
         &args.combine,
         args.normals != NormalsArg::Off,
         args.margin,
     )?;
     opts.mip_levels = args.mips;
-    let align = args
+    if let Some(align) = args.align {
+        if !(1..=billow::voxelize::MAX_AXIS).contains(&align) {
+            return Err(bad(
+                "--align",
+                format!(
+                    "must be between 1 and {} voxels, got {align}",
+                    billow::voxelize::MAX_AXIS,
+                ),
+            ));
+        }
+    }
+    opts.align = args
         .align
         .unwrap_or_else(|| default_align(&opts.resolution, &args.bounds));
-    if !(1..=billow::voxelize::MAX_AXIS).contains(&align) {
-        return Err(bad(
-            "--align",
-            format!(
-                "must be between 1 and {} voxels, got {align}",
-                billow::voxelize::MAX_AXIS,
-            ),
-        ));
-    }
-    opts.align = align;
     opts.bake = parse_bake(&args.bake, args.ao_rays, args.ao_distance)?;
     if !(args.memory_limit.is_finite() && args.memory_limit > 0.0) {
         return Err(bad(
@@ -393,40 +528,37 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     }
     let import_s = start.elapsed().as_secs_f64();
 
-    let bar = Monotone::new(progress(ctx, progress::LEN, "voxelize"));
-    let report = |stage: Stage, f: f32| {
-        bar.set(progress::voxelize_fraction(stage, f), || {
-            format!("{stage:?}").to_lowercase()
-        });
-    };
-    let mut pruned_stats = None;
-    let (mut asset, stats, dims, mip_count, coherence) = if args.prune {
-        let (asset, stats, dims, mips, coherence, ps) = bake_pruned(
-            &scene,
-            &mut opts,
-            args.normals,
-            compression,
-            &report,
-            &input,
-            source,
-        )?;
-        bar.finish();
-        if let Some(note) = &ps.note {
-            warn(ctx, &format!("{input}: {note}"));
+    let (baked, target_summary) = match &target {
+        None => (
+            bake_once(&scene, &mut opts, &args, compression, ctx, &input, source)?,
+            None,
+        ),
+        Some(t) => {
+            let (baked, chosen, summary) = bake_to_target(
+                &scene,
+                &opts,
+                &args,
+                &flags,
+                t,
+                compression,
+                ctx,
+                &input,
+                &source,
+            )?;
+            opts = chosen;
+            (baked, Some(summary))
         }
-        pruned_stats = Some(ps);
-        (asset, stats, dims, mips, coherence)
-    } else {
-        let baked = bake_dense(&scene, &mut opts, args.normals, &report, &input, source)?;
-        bar.finish();
-        baked
     };
-    let compress_start = Instant::now();
-    let blocks = (compression == Compression::Bc).then(|| {
-        asset.header.set_compress("bc7");
-        compress_volume(&mut asset)
-    });
-    let compress_s = compress_start.elapsed().as_secs_f64();
+    let Baked {
+        asset,
+        blocks,
+        stats,
+        dims,
+        mip_count,
+        coherence,
+        pruned: pruned_stats,
+        compress_s,
+    } = baked;
     let write_start = Instant::now();
     // All outputs go to temporary files first and are renamed into place together, -o last
     // (see staged.rs): a failure or a kill leaves the old outputs as they were.
@@ -468,9 +600,20 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let write_s = write_start.elapsed().as_secs_f64();
 
     let prune_s = pruned_stats.as_ref().map_or(0.0, |p| p.seconds);
+    let by_target = target_summary.is_some();
+    let from = |s: Source| if by_target { Source::Target } else { s };
     let summary = Summary {
         input,
         output: args.output.display().to_string(),
+        preset: target_summary
+            .as_ref()
+            .map_or(preset, |t: &TargetSummary| t.chosen_preset),
+        resolution: opts.resolution.to_string(),
+        settings_from: SettingsFrom {
+            resolution: from(resolved.resolution_from),
+            supersample: from(resolved.supersample_from),
+        },
+        target: target_summary,
         dims,
         mip_count,
         combine: opts.combine.to_string(),
@@ -498,6 +641,9 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         },
         warnings,
     };
+    if let (Some(t), false) = (&summary.target, ctx.quiet) {
+        eprintln!("{}", t.line());
+    }
     if args.json {
         print_json(&summary)?;
     } else if !ctx.quiet {
@@ -514,6 +660,152 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         );
     }
     Ok(())
+}
+
+/// One bake, compressed as asked: what is written and what the summary reports.
+struct Baked {
+    asset: billow_format::VolumeAsset,
+    blocks: Option<billow_format::VolumeBlocks>,
+    stats: billow::voxelize::VoxelizeStats,
+    dims: [u32; 3],
+    mip_count: u32,
+    coherence: Option<f32>,
+    pruned: Option<EmptySpaceStats>,
+    compress_s: f64,
+}
+
+/// Bakes with `opts` (dense or `--prune`d) and compresses as `compression` says; the asset
+/// in memory is then what a reader of the file gets.
+fn bake_once(
+    scene: &billow::scene::Scene,
+    opts: &mut VoxelizeOptions,
+    args: &Args,
+    compression: Compression,
+    ctx: &Ctx,
+    input: &str,
+    source: billow_format::SourceInfo,
+) -> Result<Baked, CliError> {
+    let bar = Monotone::new(progress(ctx, progress::LEN, "voxelize"));
+    let report = |stage: Stage, f: f32| {
+        bar.set(progress::voxelize_fraction(stage, f), || {
+            format!("{stage:?}").to_lowercase()
+        });
+    };
+    let mut pruned = None;
+    let (mut asset, stats, dims, mip_count, coherence) = if args.prune {
+        let (asset, stats, dims, mips, coherence, ps) =
+            bake_pruned(scene, opts, args.normals, compression, &report, input, source)?;
+        bar.finish();
+        if let Some(note) = &ps.note {
+            warn(ctx, &format!("{input}: {note}"));
+        }
+        pruned = Some(ps);
+        (asset, stats, dims, mips, coherence)
+    } else {
+        let baked = bake_dense(scene, opts, args.normals, &report, input, source)?;
+        bar.finish();
+        baked
+    };
+    let compress_start = Instant::now();
+    let blocks = (compression == Compression::Bc).then(|| {
+        asset.header.set_compress("bc7");
+        compress_volume(&mut asset)
+    });
+    Ok(Baked {
+        asset,
+        blocks,
+        stats,
+        dims,
+        mip_count,
+        coherence,
+        pruned,
+        compress_s: compress_start.elapsed().as_secs_f64(),
+    })
+}
+
+/// `--target-error`: the preset ladder (explicit --res / --supersample fixed), cheapest
+/// first, then --res bisected ([`search`]); each bake measured by a [`Judge`]. Returns the
+/// chosen bake, its options and what was tried.
+#[allow(clippy::too_many_arguments)]
+fn bake_to_target(
+    scene: &billow::scene::Scene,
+    opts: &VoxelizeOptions,
+    args: &Args,
+    flags: &VolumeFlags,
+    target: &TargetOptions,
+    compression: Compression,
+    ctx: &Ctx,
+    input: &str,
+    source: &billow_format::SourceInfo,
+) -> Result<(Baked, VoxelizeOptions, TargetSummary), CliError> {
+    let label = |p: Preset, s: &VolumeSettings| {
+        format!(
+            "{p} (--res {} --supersample {})",
+            s.resolution, s.supersample
+        )
+    };
+    let mut ladder: Vec<Candidate<VolumeSettings>> = Preset::LADDER
+        .iter()
+        .map(|&p| {
+            let s = resolve_volume(Some(p), flags).settings;
+            Candidate {
+                label: label(p, &s),
+                preset: Some(p),
+                settings: s,
+            }
+        })
+        .collect();
+    ladder.dedup_by(|a, b| a.settings == b.settings);
+    let pinned = flags.resolution.is_some();
+    // Between a failing and a passing resolution: the midpoint, a multiple of 8 (so the
+    // default --align stays 8).
+    let refine = |lo: &Candidate<VolumeSettings>, hi: &Candidate<VolumeSettings>| {
+        let (Resolution::Longest(a), Resolution::Longest(b)) =
+            (lo.settings.resolution, hi.settings.resolution)
+        else {
+            return None;
+        };
+        let m = (a + b) / 2 / 8 * 8;
+        (!pinned && m > a && m < b).then(|| {
+            let settings = VolumeSettings {
+                resolution: Resolution::Longest(m),
+                ..hi.settings
+            };
+            Candidate {
+                label: format!(
+                    "{}, refined (--res {m} --supersample {})",
+                    hi.preset.map_or("", Preset::name),
+                    settings.supersample
+                ),
+                preset: hi.preset,
+                settings,
+            }
+        })
+    };
+    let mut judge = Judge::new(scene, target);
+    let mut measure = |c: &Candidate<VolumeSettings>| {
+        let mut o = opts.clone();
+        o.resolution = c.settings.resolution;
+        o.supersample = c.settings.supersample;
+        o.align = args
+            .align
+            .unwrap_or_else(|| default_align(&o.resolution, &args.bounds));
+        let baked = bake_once(scene, &mut o, args, compression, ctx, input, source.clone())?;
+        let error = judge
+            .volume_error(&baked.asset)
+            .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;
+        if !ctx.quiet {
+            eprintln!("--target-error: {} → RMSE {error:.4}", c.label);
+        }
+        Ok::<_, CliError>(((baked, o), error))
+    };
+    let found = search(ladder, target, &refine, &mut measure).map_err(|e| match e {
+        SearchError::Target(t) => CliError::new(Code::from(&t), format!("--target-error: {t}")),
+        SearchError::Bake(e) => e,
+    })?;
+    let summary = TargetSummary::new(target, &found);
+    let (baked, chosen) = found.asset;
+    Ok((baked, chosen, summary))
 }
 
 /// The dense bake: [`voxelize`] (retried without normals when `--normals auto` and the

@@ -16,8 +16,9 @@
 //! bake time and texture bytes, and a 4-level LOD chain's error against distance.
 //!
 //! Text between `<!-- emptyspace-sweep:begin -->` and `<!-- emptyspace-sweep:end -->` in
-//! the existing report (written by another sweep) is kept as it is; the markers are
-//! written when absent.
+//! the existing report (written by another sweep), and likewise between the
+//! `particle-layer` and `pareto` markers, is kept as it is; the markers are written when
+//! absent.
 
 mod cloud;
 mod plot;
@@ -91,6 +92,7 @@ fn main() {
     }
     extra.push_str(&kept_block(&out, ES_BEGIN, ES_END));
     extra.push_str(&kept_block(&out, PL_BEGIN, PL_END));
+    extra.push_str(&kept_block(&out, PA_BEGIN, PA_END));
     // Relative paths in the report assume the plots sit next to it in `accuracy/`.
     let text = report::report(
         &reports,
@@ -113,6 +115,10 @@ const ES_END: &str = "<!-- emptyspace-sweep:end -->";
 
 const PL_BEGIN: &str = "<!-- particle-layer:begin -->";
 const PL_END: &str = "<!-- particle-layer:end -->";
+
+/// Written by `examples/pareto_sweep.rs` (`make accuracy-pareto`).
+const PA_BEGIN: &str = "<!-- pareto:begin -->";
+const PA_END: &str = "<!-- pareto:end -->";
 
 /// The block between `begin` and `end` of the existing report at `path` (written by
 /// another generator: the emptyspace sweep, the particle-layer bench), markers included,
