@@ -433,8 +433,8 @@ fn cells_within_a_slice_are_drawn_in_id_order() {
 ///   the slicing model, not this case's.
 ///
 /// Seen failing on a broken build: without the slicer's near clamp (`z_min.max(near)`)
-/// the slices start behind the eye (16 planned) and the two between the eye and the
-/// near plane are drawn: α = 1 − (1 − α₈)⁸ = 0.577.
+/// the slices start behind the eye: 16 planned instead of 6 (and the two between the
+/// eye and the near plane would be drawn: α = 1 − (1 − α₈)⁸ = 0.577).
 #[test]
 fn camera_inside_the_volume_sees_the_part_in_front() {
     let alpha = 0.1f32;
