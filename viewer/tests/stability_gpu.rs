@@ -6,7 +6,8 @@
 //! - a unit cell at a 1e5 offset;
 //! - NaN / ∞ prism input: no section, no fragments, no NaN pixels.
 //!
-//! Each renders at most 32² pixels (a few hundred ms on lavapipe).
+//! Each renders at most 32² pixels; the file runs in about 10 s on lavapipe on two shared
+//! cores, mostly pipeline compilation (each `Renderer` builds its own).
 
 mod common;
 
@@ -145,8 +146,8 @@ fn five_hundred_faint_slices_accumulate_in_f16_within_the_mantissa_bound() {
 /// one slab (0.03) of the path-length 1 − (1 − α₈)^6.4.
 ///
 /// Seen failing on a broken build: without the volume plan's near clamp (`z_min.max(
-/// camera.near)`) 16 slices are planned, half of them behind the eye (the hardware clips
-/// those and the two in front of the near plane, so the picture alone does not show it).
+/// camera.near)`) 16 slices are planned instead of 6, half of them behind the eye (the
+/// rasterizer clips at the near plane anyway, so the slice count is what shows it).
 #[test]
 fn camera_inside_the_volume_sees_the_part_in_front_on_the_gpu() {
     let name = "camera_inside_the_volume_sees_the_part_in_front_on_the_gpu";
