@@ -13,7 +13,8 @@ pub struct ViewCamera {
     /// The eye in world space: as given ([`ViewCamera::look_at`], a core camera) or
     /// recovered from `view` ([`ViewCamera::from_parts`]). [`ViewCamera::to_view`]
     /// subtracts it before rotating: far from the origin (a cell at 1e5) `view·p = R·p +
-    /// t` cancels in f32 and moves each point by its own rounding.
+    /// t` cancels in f32 and moves each point by its own rounding. It must stay the eye
+    /// of `view`: change the view with [`ViewCamera::with_view`], not a struct update.
     pub eye: Vec3,
     /// Vertical field of view, radians, in `(0, π)`.
     pub fov_y: f32,
@@ -92,6 +93,15 @@ impl ViewCamera {
         Self {
             eye,
             ..Self::from_parts(view, fov_y, width, height, near, far)
+        }
+    }
+
+    /// The same camera with another view matrix (its eye recovered from it).
+    pub fn with_view(self, view: Mat4) -> Self {
+        ViewCamera {
+            view,
+            eye: view.inverse().w_axis.truncate(),
+            ..self
         }
     }
 
