@@ -229,3 +229,84 @@ fn trunk_and_billboards_are_depth_sorted() {
         }
     }
 }
+
+/// Twice the signed area of a polygon (shoelace).
+fn shoelace(p: &[(f32, f32)]) -> f64 {
+    (0..p.len())
+        .map(|i| {
+            let (a, b) = (p[i], p[(i + 1) % p.len()]);
+            f64::from(a.0) * f64::from(b.1) - f64::from(b.0) * f64::from(a.1)
+        })
+        .sum()
+}
+
+/// Issue 25, item 5: an edge-on and grazing billboard. The unit square (z = 0) seen from
+/// 3 away at 0, 1e-6, 1e-3 and 1e-1 rad from edge-on (the eye rotated about the square's
+/// vertical centre line; 65² pixels, so the edge-on square projects onto the centre
+/// column's pixel centres, where centre rays run exactly in its plane: the zero
+/// denominator of the plane hit). At every angle each pixel is finite with α in [0, 1];
+/// the coverage (Σα, in pixels; 16 samples per pixel) is at most the analytic projected
+/// area (the shoelace area of the projected corners: perspective maps the planar quad
+/// to the quad of its projected corners) plus a one-pixel rim (every pixel the outline
+/// touches may count whole: at most 2 × the perimeter + 4), and it does not decrease as
+/// the square turns towards the eye. Centre sampling too (every ray of the centre column
+/// runs in the plane edge-on).
+///
+/// Not seen failing on a broken build: with the plane hit's zero-denominator guard and
+/// the sampler's NaN-lod guard both removed the output is unchanged — the hit's own
+/// `t.is_finite()` and the `RangeInclusive::contains` tests reject the 0/0 NaN, and
+/// `f32::max` drops a NaN derivative, so no NaN lod reaches the sampler.
+#[test]
+fn an_edge_on_billboard_is_finite_and_covers_no_more_than_its_projection() {
+    let asset = cloud(atlas(8, 4, |_| RED), atlas(8, 4, |_| BLUE), None);
+    let prepared = PreparedCloud::new(&asset).unwrap();
+    let r = CloudRenderer::new(&prepared, Lighting::Unlit).unwrap();
+    let n = 65;
+    let centre = Vec3::new(0.5, 0.5, 0.0);
+    for sampling in [Sampling::default(), Sampling::Centre] {
+        let mut last = 0.0f64;
+        for theta in [0.0f32, 1e-6, 1e-3, 1e-1] {
+            let cam = camera(centre + 3.0 * Vec3::new(theta.cos(), 0.0, theta.sin()), n);
+            let img = r.render(0, &cam, sampling).unwrap().image;
+            for (i, p) in img.data.iter().enumerate() {
+                assert!(p.is_finite(), "θ {theta}: pixel {i}: {p}");
+                assert!(
+                    (0.0..=1.0).contains(&p.w),
+                    "θ {theta}: pixel {i}: α {}",
+                    p.w
+                );
+            }
+            let coverage: f64 = img.data.iter().map(|p| f64::from(p.w)).sum();
+            let view = cam.view();
+            let corners: Vec<(f32, f32)> = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]
+                .iter()
+                .map(|c| {
+                    let v = billow::camera::to_view(&view, Vec3::new(c[0], c[1], 0.0));
+                    cam.view_to_pixel(v).expect("in front of the eye")
+                })
+                .collect();
+            let area = 0.5 * shoelace(&corners).abs();
+            let perimeter: f64 = (0..4)
+                .map(|i| {
+                    let (a, b) = (corners[i], corners[(i + 1) % 4]);
+                    f64::from((a.0 - b.0).hypot(a.1 - b.1))
+                })
+                .sum();
+            let bound = area + 2.0 * perimeter + 4.0;
+            println!(
+                "{sampling:?} θ {theta:e}: coverage {coverage:.3} px, projected area {area:.4}, \
+                 bound {bound:.2}"
+            );
+            assert!(
+                coverage <= bound,
+                "θ {theta}: coverage {coverage} above the projection {area} + rim"
+            );
+            assert!(
+                coverage >= last,
+                "θ {theta}: coverage {coverage} below the smaller angle's {last}"
+            );
+            last = coverage;
+        }
+        assert!(last > 0.0, "the square shows at 0.1 rad");
+    }
+}

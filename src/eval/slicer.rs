@@ -61,7 +61,7 @@ use super::prism_plane::intersect_prism_plane;
 use super::reference::validate_camera;
 use super::volume_sampler::{DecodedVolume, MipFilter};
 use super::{EvalError, ImageF32};
-use crate::camera::{to_view, Camera};
+use crate::camera::Camera;
 
 /// Slice spacing mode, [`voxel_size`], the per-cell [`normal_matrix`] and
 /// [`shade_normal`]: the shared slice planning of the rendering core
@@ -279,16 +279,23 @@ fn render_sliced(
         let d = view.transform_vector3(l.dir).normalize_or_zero();
         (d != Vec3::ZERO && (0.0..=1.0).contains(&l.ambient)).then_some((d, l.ambient))
     });
+    // Camera-relative: `R·(p − eye)`, not `view·p = R·p + t`. Equal in exact arithmetic
+    // (`t = −R·eye`), but far from the origin (a cell at 1e5) `R·p` and `t` are both large
+    // and their f32 sum cancels, moving each vertex by its own ~1e5·2⁻²⁴ per product
+    // (tests/eval_slicer.rs, the 1e5 offset); `p − eye` is exact for points near the eye.
+    let object_to_view = Mat3::from_mat4(view);
     let cam_cells: Vec<Vec<[[f32; 3]; 6]>> = parts
         .iter()
         .map(|part| {
             part.cells
                 .iter()
-                .map(|c| c.pos.map(|p| to_view(&view, Vec3::from(p)).to_array()))
+                .map(|c| {
+                    c.pos
+                        .map(|p| (object_to_view * (Vec3::from(p) - camera.eye)).to_array())
+                })
                 .collect()
         })
         .collect();
-    let object_to_view = Mat3::from_mat4(view);
     let nmats: Vec<Option<Vec<Mat3>>> = parts
         .iter()
         .zip(&cam_cells)

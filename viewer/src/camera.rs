@@ -10,6 +10,12 @@ use glam::{Mat4, Vec3, Vec4};
 pub struct ViewCamera {
     /// World → view (right-handed, looking down −Z).
     pub view: Mat4,
+    /// The eye in world space: as given ([`ViewCamera::look_at`], a core camera) or
+    /// recovered from `view` ([`ViewCamera::from_parts`]). [`ViewCamera::to_view`]
+    /// subtracts it before rotating: far from the origin (a cell at 1e5) `view·p = R·p +
+    /// t` cancels in f32 and moves each point by its own rounding. It must stay the eye
+    /// of `view`: change the view with [`ViewCamera::with_view`], not a struct update.
+    pub eye: Vec3,
     /// Vertical field of view, radians, in `(0, π)`.
     pub fov_y: f32,
     pub width: u32,
@@ -33,6 +39,7 @@ impl ViewCamera {
     ) -> Self {
         ViewCamera {
             view,
+            eye: view.inverse().w_axis.truncate(),
             fov_y,
             width,
             height,
@@ -45,7 +52,10 @@ impl ViewCamera {
     /// The perspective camera of a core camera (`billow::camera::Camera`): its view,
     /// field of view, size and clip distances.
     pub fn from_camera(c: &billow_core::camera::Camera) -> Self {
-        Self::from_parts(c.view(), c.fov_y, c.width, c.height, c.near, c.far)
+        Self {
+            eye: c.eye,
+            ..Self::from_parts(c.view(), c.fov_y, c.width, c.height, c.near, c.far)
+        }
     }
 
     /// An orthographic camera at `eye` looking along `dir`, `2·half_height` world units
@@ -80,7 +90,19 @@ impl ViewCamera {
         far: f32,
     ) -> Self {
         let view = billow_core::camera::look_at(eye, target, up);
-        Self::from_parts(view, fov_y, width, height, near, far)
+        Self {
+            eye,
+            ..Self::from_parts(view, fov_y, width, height, near, far)
+        }
+    }
+
+    /// The same camera with another view matrix (its eye recovered from it).
+    pub fn with_view(self, view: Mat4) -> Self {
+        ViewCamera {
+            view,
+            eye: view.inverse().w_axis.truncate(),
+            ..self
+        }
     }
 
     pub fn aspect(&self) -> f32 {
@@ -112,12 +134,13 @@ impl ViewCamera {
 
     /// The camera position in world space.
     pub fn eye(&self) -> Vec3 {
-        self.view.inverse().w_axis.truncate()
+        self.eye
     }
 
-    /// World point → view space.
+    /// World point → view space, camera-relative: `R·(p − eye)` (as the CPU slicer),
+    /// equal to `view·p` in exact arithmetic.
     pub fn to_view(&self, p: Vec3) -> Vec3 {
-        billow_core::camera::to_view(&self.view, p)
+        glam::Mat3::from_mat4(self.view) * (p - self.eye)
     }
 
     /// `Err` with the reason when the camera cannot render.

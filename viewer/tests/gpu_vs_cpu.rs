@@ -24,7 +24,7 @@ const RMSE_TOL: f64 = 0.005;
 const MAX_ABS_TOL: f32 = 0.05;
 
 fn to_view_camera(c: &Camera) -> ViewCamera {
-    ViewCamera::from_parts(c.view(), c.fov_y, c.width, c.height, c.near, c.far)
+    ViewCamera::from_camera(c)
 }
 
 fn check(

@@ -198,10 +198,8 @@ fn the_fitted_windows_move_by_whole_texels() {
     let (l, cam, bounds) = oak_clouds();
     let ca = cascades(l, &cam, bounds, SIZE);
     for step in [0.37f32, 1.3, 4.1] {
-        let moved = ViewCamera {
-            view: cam.view * glam::Mat4::from_translation(Vec3::new(-step, 0.0, 0.6 * step)),
-            ..cam
-        };
+        let moved = cam
+            .with_view(cam.view * glam::Mat4::from_translation(Vec3::new(-step, 0.0, 0.6 * step)));
         let cb = cascades(l, &moved, bounds, SIZE);
         let pairs = std::iter::once((&ca.base, &cb.base)).chain(ca.cameras.iter().zip(&cb.cameras));
         for (k, (a, b)) in pairs.enumerate() {

@@ -40,7 +40,7 @@ fn box_camera(dir: Vec3, size: u32) -> Camera {
 }
 
 fn to_view_camera(c: &Camera) -> ViewCamera {
-    ViewCamera::from_parts(c.view(), c.fov_y, c.width, c.height, c.near, c.far)
+    ViewCamera::from_camera(c)
 }
 
 fn gpu_render(

@@ -2,7 +2,7 @@
 // port of core/src/prism_plane.rs (the Rust reference; see its docs for the exact
 // classification that replaces the paper's jitter). Input: a prism in camera space
 // (vertices 0,1,2 bottom, 3,4,5 top, k+3 above k) with uvw; the plane z = z_slice.
-// Output: 0 or 3..=5 vertices, counter-clockwise seen from +z.
+// Output: 0 or 3..=5 vertices, counter-clockwise seen from +z; 0 for non-finite input.
 
 struct Cell {
     pos: array<vec4<f32>, 6>,
@@ -68,9 +68,30 @@ fn pp_signed_area(p: ptr<function, Poly>) -> f32 {
     return a;
 }
 
+// Whether `x` is a NaN or an infinity: all exponent bits set. Tested on the bits, not
+// with `x != x` comparisons, which WGSL implementations may fold away (they may assume
+// finite floats).
+fn pp_non_finite(x: f32) -> bool {
+    return (bitcast<u32>(x) & 0x7f800000u) == 0x7f800000u;
+}
+
+fn pp_non_finite3(v: vec3<f32>) -> bool {
+    return pp_non_finite(v.x) || pp_non_finite(v.y) || pp_non_finite(v.z);
+}
+
 fn intersect_prism_plane(c: ptr<function, Cell>, z: f32) -> Poly {
     var out: Poly;
     out.count = 0u;
+    // Non-finite input (a NaN or infinite coordinate or uvw, a NaN plane) has no section:
+    // the empty polygon, never a NaN vertex (billow-core's guard). Only xyz: w carries
+    // the volume index and the normal matrix.
+    var bad = pp_non_finite(z);
+    for (var i = 0u; i < 6u; i++) {
+        bad = bad || pp_non_finite3((*c).pos[i].xyz) || pp_non_finite3((*c).uvw[i].xyz);
+    }
+    if bad {
+        return out;
+    }
     var above = 0u;
     for (var i = 0u; i < 6u; i++) {
         if (*c).pos[i].z >= z {
