@@ -235,8 +235,9 @@ pub fn repair_zero_texels(tile: &[u8; 64], block: &mut [u8; 16]) -> bool {
 /// kernel's "opaque ultra fast" block of its xyz (3 channels, mode 6: the same xyz error
 /// as "alpha ultra fast", about 3× faster), its alpha endpoints then set to 0x80's 7 bits,
 /// so that w decodes to 0x80, or 0x81 where the endpoint's p-bit (shared with xyz) is 1:
-/// w, which nothing reads, is then 0 or 1/127. A tile whose w is not all 0x80, or a
-/// block that is not mode 6, keeps "alpha ultra fast".
+/// w, which nothing reads, is then 0 or 1/127. A tile whose w is not all 0x80, a block
+/// that is not mode 6, or one that would decode a zero normal (all 0x80: an empty voxel's)
+/// as anything else, keeps "alpha ultra fast".
 fn encode_normal_tile(tile: &[u8; 64]) -> [u8; 16] {
     let fallback = || bc7(tile, BC7Settings::alpha_ultrafast());
     if !tile.chunks_exact(4).all(|t| t[3] == 0x80) {
@@ -255,7 +256,21 @@ fn encode_normal_tile(tile: &[u8; 64]) -> [u8; 16] {
     for at in [49, 56] {
         bits = (bits & !(0x7F << at)) | (a7 << at);
     }
-    bits.to_le_bytes()
+    let b = bits.to_le_bytes();
+    // A zero normal (an empty voxel's) must stay exactly zero, or `billow emptyspace`
+    // would see data there: where this block changes one, the alpha profile it is.
+    let zero = [0x80u8; 4];
+    if tile.chunks_exact(4).any(|t| t == zero) {
+        let dec = decode_bc7_block(&b);
+        let kept = tile
+            .chunks_exact(4)
+            .zip(dec.chunks_exact(4))
+            .all(|(t, d)| t != zero || d == zero);
+        if !kept {
+            return fallback();
+        }
+    }
+    b
 }
 
 /// The squared error of `block` against `tile`, or `None` if an empty texel of `tile`
