@@ -260,14 +260,21 @@ lod-sweep: build
 ## The KTX2 exports read back by ktx-parse (the KTX2 reader three.js and glTF-Transform use;
 ## needs Node.js and npm, installed under $(OUT)/ktx-parse): header, DFD premultiplied flag,
 ## level sizes of the full MIP chain, on a cubic-ish and an odd non-cubic volume (BC7 blocks,
-## --compress bc) and the odd one raw (--compress none, the volumes' default, RGBA8).
+## --compress bc) and the odd one raw (--compress none, RGBA8); and the oak and the raw one
+## again with --ktx2-zstd (Zstandard supercompression), each level inflated with zstddec (the
+## decoder of three.js's KTX2Loader) and compared byte for byte with the plain file's.
 KTX_PARSE ?= 2.0.0
+ZSTDDEC ?= 0.1.0
 check-ktx2: build
-	$(call npm_package,ktx-parse,$(KTX_PARSE))
+	mkdir -p $(OUT)/ktx-parse && cd $(OUT)/ktx-parse && { [ -d node_modules/ktx-parse ] && [ -d node_modules/zstddec ] || \
+		npm install --no-save --no-package-lock --silent ktx-parse@$(KTX_PARSE) zstddec@$(ZSTDDEC); }
 	$(BILLOW) voxelize $(SAMPLE) -o $(OUT)/ktx-parse/oak.billow --res 128 --align 8 --compress bc --ktx2 $(OUT)/ktx-parse/oak.ktx2 -q
+	$(BILLOW) voxelize $(SAMPLE) -o $(OUT)/ktx-parse/oak_z.billow --res 128 --align 8 --compress bc --ktx2 $(OUT)/ktx-parse/oak_z.ktx2 --ktx2-zstd 19 -q
 	$(BILLOW) voxelize $(SAMPLE) -o $(OUT)/ktx-parse/odd.billow --res 45x17x30 --compress bc --ktx2 $(OUT)/ktx-parse/odd.ktx2 -q
 	$(BILLOW) voxelize $(SAMPLE) -o $(OUT)/ktx-parse/raw.billow --res 45x17x30 --compress none --ktx2 $(OUT)/ktx-parse/raw.ktx2 -q
-	node tests/ktx2_reader/check.mjs $(OUT)/ktx-parse/node_modules $(OUT)/ktx-parse/oak.ktx2 $(OUT)/ktx-parse/odd.ktx2 $(OUT)/ktx-parse/raw.ktx2
+	$(BILLOW) voxelize $(SAMPLE) -o $(OUT)/ktx-parse/raw_z.billow --res 45x17x30 --compress none --ktx2 $(OUT)/ktx-parse/raw_z.ktx2 --ktx2-zstd 3 -q
+	node tests/ktx2_reader/check.mjs $(OUT)/ktx-parse/node_modules $(OUT)/ktx-parse/oak.ktx2 $(OUT)/ktx-parse/odd.ktx2 $(OUT)/ktx-parse/raw.ktx2 \
+		$(OUT)/ktx-parse/oak_z.ktx2=$(OUT)/ktx-parse/oak.ktx2 $(OUT)/ktx-parse/raw_z.ktx2=$(OUT)/ktx-parse/raw.ktx2
 
 ## The oak's cloud export rendered by a real glTF client: three.js (GLTFLoader) in headless
 ## Chromium (Debian's chromium, driven by playwright-core; WebGL on SwiftShader, no network)

@@ -130,6 +130,11 @@ fn case(command: &str, flag: &str) -> Option<Case> {
         ("voxelize", "memory-limit") => both("abc", "0"),
         ("voxelize", "bounds") => both("a,b", "1,1,1,0,0,0"),
         ("voxelize", "ktx2") | ("voxelize", "slices") => PATH,
+        ("voxelize", "ktx2-zstd") => Values {
+            unparsable: Some("abc"),
+            out_of_range: Some("23"),
+            extra: &["--ktx2", "x.ktx2"],
+        },
         ("voxelize", "slice-level") => Values {
             unparsable: Some("abc"),
             out_of_range: Some("99"),

@@ -310,3 +310,82 @@ fn compressed_volumes_export_their_bc7_blocks() {
         assert_eq!(&l0.data[..16], &billow_format::ZERO_BLOCK);
     }
 }
+
+/// `--ktx2-zstd`: Zstandard supercompression (`supercompressionScheme` 2). The `ktx2` crate
+/// reads the file; each level inflates to exactly the level of the plain export, raw and
+/// BC7; the rest of the file (header but the scheme, DFD, KVD) is the plain file's; the
+/// levels follow each other without padding, and the bytes are the same at any thread
+/// count.
+#[test]
+fn zstd_supercompressed_levels_inflate_to_the_plain_export() {
+    use billow::export::{ktx2_bytes_with, Supercompression};
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("z.ktx2");
+    let mut bc = asset([12, 9, 5], 4, ColourSpace::SrgbPremultiplied);
+    // An empty region, so that the BC7 levels have omitted (zero) blocks.
+    for z in 0..5 {
+        for y in 0..8 {
+            for x in 0..8 {
+                let i = 4 * (x + 12 * (y + 9 * z));
+                bc.levels[0][i..i + 4].fill(0);
+            }
+        }
+    }
+    let blocks = billow::compress::compress_volume(&mut bc);
+    let raw = asset([7, 5, 3], 3, ColourSpace::LinearPremultiplied);
+    for (a, b) in [(&raw, None), (&bc, Some(&blocks))] {
+        let plain = ktx2_bytes(a, b, &path).unwrap();
+        assert_eq!(
+            ktx2_bytes_with(a, b, Supercompression::None, &path).unwrap(),
+            plain
+        );
+        let z = ktx2_bytes_with(a, b, Supercompression::Zstd(19), &path).unwrap();
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap()
+            .install(|| ktx2_bytes_with(a, b, Supercompression::Zstd(19), &path).unwrap());
+        assert_eq!(one, z, "same bytes on one thread");
+        let p = ktx2::Reader::new(&plain[..]).unwrap();
+        let r = ktx2::Reader::new(&z[..]).expect("ktx2 crate parses the zstd file");
+        assert_eq!(
+            r.header().supercompression_scheme,
+            Some(ktx2::SupercompressionScheme::Zstandard)
+        );
+        assert_eq!(u32::from_le_bytes(z[44..48].try_into().unwrap()), 2);
+        // Header (but the scheme), index, DFD and KVD as in the plain file.
+        assert_eq!(z[..44], plain[..44]);
+        assert_eq!(z[48..80], plain[48..80]);
+        let n = a.levels.len();
+        let meta = 80 + 24 * n;
+        let dfd_kvd =
+            (p.header().index.kvd_byte_offset + p.header().index.kvd_byte_length) as usize;
+        assert_eq!(z[meta..dfd_kvd], plain[meta..dfd_kvd]);
+        let (pl, zl): (Vec<_>, Vec<_>) = (p.levels().collect(), r.levels().collect());
+        assert_eq!(zl.len(), n);
+        let mut packed = 0;
+        for (i, (pl, zl)) in pl.iter().zip(&zl).enumerate() {
+            assert_eq!(
+                zl.uncompressed_byte_length,
+                pl.data.len() as u64,
+                "level {i}"
+            );
+            let inflated = zstd::decode_all(zl.data).expect("a Zstandard frame");
+            assert_eq!(inflated, pl.data, "level {i} inflates to the plain level");
+            packed += zl.data.len();
+        }
+        // No mipPadding: the smallest level starts right after the KVD, level 0 ends the
+        // file, and the frames are all there is.
+        assert_eq!(z.len(), dfd_kvd + packed);
+        let off = |i: usize| u64::from_le_bytes(z[80 + 24 * i..88 + 24 * i].try_into().unwrap());
+        assert_eq!(off(n - 1), dfd_kvd as u64);
+        if b.is_some() {
+            // Its empty blocks shrink (the raw test texels are noise: no gain there).
+            assert!(z.len() < plain.len(), "{} !< {}", z.len(), plain.len());
+        }
+    }
+    // A level out of range is refused, naming the file.
+    let e = ktx2_bytes_with(&raw, None, Supercompression::Zstd(23), &path).unwrap_err();
+    assert!(matches!(e, ExportError::Encode { .. }), "{e}");
+    assert!(e.to_string().contains("z.ktx2"), "{e}");
+}

@@ -6,7 +6,10 @@ use std::time::Instant;
 
 use billow::compress::{compress_volume, Compression};
 use billow::emptyspace::{prune, prune_sparse, EmptySpaceOptions, EmptySpaceStats};
-use billow::export::{check_slices, ktx2_bytes, slice_bytes, slice_file_name, SliceFormat};
+use billow::export::ktx2::ZSTD_LEVELS;
+use billow::export::{
+    check_slices, ktx2_bytes_with, slice_bytes, slice_file_name, SliceFormat, Supercompression,
+};
 use billow::import::{import, ImportOptions};
 use billow::presets::target::{search, Candidate, Found, Judge, SearchError, TargetOptions, Trial};
 use billow::presets::{resolve_volume, Preset, Source, VolumeFlags, VolumeSettings};
@@ -108,6 +111,10 @@ pub struct Args {
     /// Also write the volume as a KTX2 3D texture with its MIP chain (premultiplied, sRGB).
     #[arg(long, value_name = "FILE")]
     ktx2: Option<PathBuf>,
+    /// Supercompress the --ktx2 file's levels with Zstandard at this level, 1–22
+    /// (`supercompressionScheme` 2; a loader inflates each level before upload). Needs --ktx2.
+    #[arg(long, value_name = "LEVEL")]
+    ktx2_zstd: Option<i32>,
     /// Also write every slice of one MIP level (see --slice-level) into this folder.
     #[arg(long, value_name = "DIR")]
     slices: Option<PathBuf>,
@@ -447,6 +454,23 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     }
     opts.memory_limit = (args.memory_limit * (1u64 << 30) as f64).min(u64::MAX as f64) as u64;
     let compression: Compression = args.compress.parse().map_err(|e| usage("--compress", e))?;
+    let supercompression = match args.ktx2_zstd {
+        None => Supercompression::None,
+        Some(_) if args.ktx2.is_none() => {
+            return Err(usage("--ktx2-zstd", "needs --ktx2 FILE"));
+        }
+        Some(l) if !ZSTD_LEVELS.contains(&l) => {
+            return Err(bad(
+                "--ktx2-zstd",
+                format!(
+                    "must be a Zstandard level {}–{}, got {l}",
+                    ZSTD_LEVELS.start(),
+                    ZSTD_LEVELS.end()
+                ),
+            ));
+        }
+        Some(l) => Supercompression::Zstd(l),
+    };
     if let Some(b) = &args.bounds {
         opts.bounds = Some(parse_bounds(b)?);
     }
@@ -572,7 +596,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         .map_err(|e| CliError::new(Code::Internal, e))?
         .map_err(|e| out_err(&args.output, e))?;
     if let Some(path) = &args.ktx2 {
-        let ktx = ktx2_bytes(&asset, blocks.as_ref(), path)
+        let ktx = ktx2_bytes_with(&asset, blocks.as_ref(), supercompression, path)
             .map_err(|e| CliError::new(Code::from(&e), e))?;
         stage.stage(path, &ktx).map_err(|e| out_err(path, e))?;
     }

@@ -5,12 +5,12 @@
 //! | part | content |
 //! |------|---------|
 //! | identifier | `«KTX 20»\r\n\x1A\n` (12 bytes) |
-//! | header | `vkFormat` 43 `R8G8B8A8_SRGB` (`SrgbPremultiplied`) or 37 `R8G8B8A8_UNORM` (`LinearPremultiplied`); `typeSize` 1; `pixelWidth/Height/Depth` = level-0 dims x, y, z (a 3D texture); `layerCount` 0; `faceCount` 1; `levelCount` = the asset's `mip_count`; `supercompressionScheme` 0 (none) |
+//! | header | `vkFormat` 43 `R8G8B8A8_SRGB` (`SrgbPremultiplied`) or 37 `R8G8B8A8_UNORM` (`LinearPremultiplied`); `typeSize` 1; `pixelWidth/Height/Depth` = level-0 dims x, y, z (a 3D texture); `layerCount` 0; `faceCount` 1; `levelCount` = the asset's `mip_count`; `supercompressionScheme` 0 (none; 2 with Zstandard, below) |
 //! | index | DFD, KVD offsets/lengths; SGD 0/0 |
 //! | level index | one `{byteOffset, byteLength, uncompressedByteLength}` per level, level 0 first |
 //! | DFD | `dfdTotalSize` + one Basic Data Format Descriptor block (88 bytes) |
 //! | KVD | `KTXorientation` = `"ruo"`, `KTXwriter` = `"billow <version>"`, sorted by key, each entry padded to 4 bytes |
-//! | levels | level data, **smallest level first** (level `mip_count − 1` … level 0), each level's offset aligned to `lcm(4, texel size 4) = 4` (`mipPadding` zero bytes, never needed for RGBA8 but computed) |
+//! | levels | level data, **smallest level first** (level `mip_count − 1` … level 0), each level's offset aligned to `lcm(4, texel size 4) = 4` (`mipPadding` zero bytes, never needed for RGBA8 but computed; none when supercompressed) |
 //!
 //! **Block-compressed** (the asset's `VolumeBlocks`, `billow voxelize --compress bc`, the
 //! default): `vkFormat` 146 `BC7_SRGB_BLOCK` or 145 `BC7_UNORM_BLOCK`, `typeSize` 1, the
@@ -18,8 +18,17 @@
 //! decodes to zero, SPEC §12.1; each z slice's 4×4 blocks, rows of blocks
 //! top to bottom: KTX's order for a block-compressed 3D image), levels aligned to
 //! `lcm(16, 4) = 16`; the DFD's colour model is `KHR_DF_MODEL_BC7` with a 4×4×1×1 texel
-//! block of 16 bytes and one 128-bit sample (channel 0, lower 0, upper `0xFFFFFFFF`). No
-//! supercompression.
+//! block of 16 bytes and one 128-bit sample (channel 0, lower 0, upper `0xFFFFFFFF`).
+//!
+//! **Zstandard supercompression** ([`Supercompression::Zstd`], `billow voxelize --ktx2-zstd
+//! LEVEL`, off by default): `supercompressionScheme` 2, each level's bytes (the same bytes as
+//! without it) one Zstandard frame of its own at the given level, compressed on one thread
+//! (no `zstdmt`), so the same asset and level give the same file; `byteLength` is the
+//! frame's length and `uncompressedByteLength` the level's, the levels follow each other
+//! with no `mipPadding` (the required alignment of a supercompressed level is 1) and the
+//! DFD is the one of the uncompressed data, `bytesPlane0` included (KTX-Software's `ktx
+//! deflate` keeps it too, and its validator warns when a supercompressed file's is 0; an
+//! older revision of the KTX 2.0 text asked for 0). SGD stays empty (Zstandard needs none).
 //!
 //! The level bytes are the asset's bytes unchanged: texel `(x, y, z)` at `4·(x + w·(y + h·z))`,
 //! which is KTX's row-major, slice-by-slice image order.
@@ -44,6 +53,8 @@ use billow_format::{
     bc7_len, expand_blocks, mip_dims, write_atomic, ColourSpace, VolumeAsset, VolumeBlocks,
     ZERO_BLOCK,
 };
+
+use rayon::prelude::*;
 
 use super::{check_asset, ExportError};
 
@@ -84,6 +95,22 @@ const SAMPLES: usize = 4;
 /// Basic descriptor block: 24 bytes of header + 16 per sample.
 const BASIC_BLOCK_BYTES: usize = 24 + 16 * SAMPLES;
 
+/// `supercompressionScheme` 2, `KTX_SS_ZSTD`.
+pub const KTX_SS_ZSTD: u32 = 2;
+/// The Zstandard levels [`Supercompression::Zstd`] takes (those of `ktx deflate --zstd`).
+pub const ZSTD_LEVELS: std::ops::RangeInclusive<i32> = 1..=22;
+
+/// Supercompression of a KTX2 file's level data (`billow voxelize --ktx2-zstd LEVEL`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Supercompression {
+    /// None (`supercompressionScheme` 0): the levels as a GPU uploads them.
+    #[default]
+    None,
+    /// Zstandard (`supercompressionScheme` 2) at this level, one of [`ZSTD_LEVELS`]: each
+    /// MIP level one frame, compressed single-threaded (deterministic).
+    Zstd(i32),
+}
+
 /// Writes `asset`'s colour levels as a KTX 2.0 3D texture at `path`, atomically: its BC7
 /// `blocks` when given (the asset's compressed colour levels), else the raw texels.
 /// Normals and cells are not part of the KTX file.
@@ -102,7 +129,32 @@ pub fn ktx2_bytes(
     blocks: Option<&VolumeBlocks>,
     path: &Path,
 ) -> Result<Vec<u8>, ExportError> {
+    ktx2_bytes_with(asset, blocks, Supercompression::None, path)
+}
+
+/// [`ktx2_bytes`] with the level data supercompressed as `supercompression` says; with
+/// [`Supercompression::None`] exactly [`ktx2_bytes`]. A Zstandard level outside
+/// [`ZSTD_LEVELS`] is refused ([`ExportError::Encode`]).
+pub fn ktx2_bytes_with(
+    asset: &VolumeAsset,
+    blocks: Option<&VolumeBlocks>,
+    supercompression: Supercompression,
+    path: &Path,
+) -> Result<Vec<u8>, ExportError> {
     let dims = check_asset(asset, path)?;
+    if let Supercompression::Zstd(level) = supercompression {
+        if !ZSTD_LEVELS.contains(&level) {
+            return Err(ExportError::Encode {
+                path: path.to_path_buf(),
+                format: "KTX2 (zstd)",
+                message: format!(
+                    "Zstandard level {level} is not one of {}..={}",
+                    ZSTD_LEVELS.start(),
+                    ZSTD_LEVELS.end()
+                ),
+            });
+        }
+    }
     let bc = blocks.is_some();
     // The dense blocks: a GPU texture has every block (omitted ones decode to zero).
     let dense: Option<Vec<Vec<u8>>> = blocks.map(|b| {
@@ -131,29 +183,57 @@ pub fn ktx2_bytes(
     let kvd_offset = dfd_offset + dfd.len();
     let data_start = kvd_offset + kvd.len();
 
-    // Level placement: smallest (last) level first, each aligned.
-    let align = lcm(if bc { 16 } else { TEXEL_BYTES }, 4);
-    let mut placement = vec![(0usize, 0usize); level_count];
-    let mut end = data_start;
-    for i in (0..level_count).rev() {
-        let offset = end.next_multiple_of(align);
+    // Level placement: smallest (last) level first, each aligned (a supercompressed level
+    // needs no alignment).
+    let zstd = match supercompression {
+        Supercompression::None => None,
+        Supercompression::Zstd(level) => Some(level),
+    };
+    let align = if zstd.is_some() {
+        1
+    } else {
+        lcm(if bc { 16 } else { TEXEL_BYTES }, 4)
+    };
+    for (i, l) in levels.iter().enumerate() {
         let d = mip_dims(dims, i as u32);
         let want = if bc {
             bc7_len(d[0], d[1], d[2]) as usize
         } else {
             d.iter().map(|&v| v as usize).product::<usize>() * TEXEL_BYTES
         };
-        if levels[i].len() != want {
+        if l.len() != want {
             return Err(ExportError::InvalidAsset {
                 path: path.to_path_buf(),
                 source: billow_format::FormatError::Volume(format!(
                     "level {i} is {} bytes, expected {want}",
-                    levels[i].len()
+                    l.len()
                 )),
             });
         }
-        placement[i] = (offset, levels[i].len());
-        end = offset + levels[i].len();
+    }
+    // The bytes stored for each level: the level itself, or its Zstandard frame (levels
+    // in parallel, each frame single-threaded: the same bytes at any thread count).
+    let packed: Option<Vec<Vec<u8>>> = match zstd {
+        None => None,
+        Some(level) => Some(
+            levels
+                .par_iter()
+                .map(|l| zstd::bulk::compress(l, level))
+                .collect::<Result<_, _>>()
+                .map_err(|e| ExportError::Encode {
+                    path: path.to_path_buf(),
+                    format: "KTX2 (zstd)",
+                    message: e.to_string(),
+                })?,
+        ),
+    };
+    let stored = packed.as_ref().unwrap_or(levels);
+    let mut placement = vec![(0usize, 0usize); level_count];
+    let mut end = data_start;
+    for i in (0..level_count).rev() {
+        let offset = end.next_multiple_of(align);
+        placement[i] = (offset, stored[i].len());
+        end = offset + stored[i].len();
     }
 
     let mut out = Vec::with_capacity(end);
@@ -167,7 +247,7 @@ pub fn ktx2_bytes(
         0,
         1,
         level_count as u32,
-        0,
+        if zstd.is_some() { KTX_SS_ZSTD } else { 0 },
     ] {
         put_u32(&mut out, v);
     }
@@ -178,17 +258,17 @@ pub fn ktx2_bytes(
     put_u64(&mut out, 0); // sgdByteOffset
     put_u64(&mut out, 0); // sgdByteLength
     debug_assert_eq!(out.len(), LEVEL_INDEX_OFFSET);
-    for &(offset, len) in &placement {
+    for (&(offset, len), level) in placement.iter().zip(levels) {
         put_u64(&mut out, offset as u64);
         put_u64(&mut out, len as u64);
-        put_u64(&mut out, len as u64); // uncompressedByteLength: no supercompression
+        put_u64(&mut out, level.len() as u64); // uncompressedByteLength
     }
     debug_assert_eq!(out.len(), dfd_offset);
     out.extend_from_slice(&dfd);
     out.extend_from_slice(&kvd);
     for i in (0..level_count).rev() {
         out.resize(placement[i].0, 0); // mipPadding
-        out.extend_from_slice(&levels[i]);
+        out.extend_from_slice(&stored[i]);
     }
     debug_assert_eq!(out.len(), end);
     Ok(out)

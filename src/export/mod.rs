@@ -20,7 +20,7 @@ use std::path::PathBuf;
 use billow_format::{ColourSpace, FormatError, VolumeAsset};
 
 pub use self::gltf::{cloud_glb_bytes, write_cloud_glb, GltfAlpha, GltfError, GltfOptions};
-pub use self::ktx2::{ktx2_bytes, write_ktx2};
+pub use self::ktx2::{ktx2_bytes, ktx2_bytes_with, write_ktx2, Supercompression};
 pub use self::slices::{check_slices, slice_bytes, slice_file_name, write_slices, SliceFormat};
 
 /// Everything that can go wrong exporting.
