@@ -139,7 +139,7 @@ accuracy:
 	$(CARGO) run --release --locked --example accuracy -- docs/accuracy.md
 	$(MAKE) accuracy-emptyspace
 	$(MAKE) accuracy-pareto
-	BILLOW_BLESS=1 $(CARGO) test --locked --test accuracy_drift
+	BILLOW_BLESS=1 $(CARGO) test --locked -p billow-cli --test accuracy_drift
 
 ## Empty-space removal: memory, render work and image change of `billow emptyspace` on the
 ## oak (128³, 256³) and Spot, and its --threshold / --min-box sweep; rewrites
@@ -293,7 +293,7 @@ check-threejs: build
 ## Coverage-guided fuzzing (docs/robustness.md, "Fuzzing"): runs each target of fuzz/ in
 ## turn for FUZZ_TIME seconds with cargo-fuzz on the nightly toolchain
 ## (`cargo install cargo-fuzz --locked`). New inputs land in fuzz/corpus/<target>/, crashes
-## in fuzz/artifacts/<target>/. CI does not fuzz: `cargo test --test fuzz_corpus_replay`
+## in fuzz/artifacts/<target>/. CI does not fuzz: `cargo test -p billow-cli --test fuzz_corpus_replay`
 ## replays the committed corpora.
 FUZZ_TARGETS ?= asset_reader gltf_import obj_import combine_expr scene_ron
 FUZZ_TIME    ?= 600

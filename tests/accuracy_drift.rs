@@ -22,7 +22,7 @@ use common::*;
 use serde_json::Value;
 
 const DOC: &str = "docs/accuracy/quick.md";
-const REGENERATE: &str = "BILLOW_BLESS=1 cargo test --test accuracy_drift";
+const REGENERATE: &str = "BILLOW_BLESS=1 cargo test -p billow-cli --test accuracy_drift";
 const OAK: &str = "fixtures/oak/eztree_oak_medium.gltf";
 
 /// `x` to 3 significant digits (`0.0171`, `1.23e-5` below 1e-4).

@@ -717,8 +717,15 @@ fn bake_once(
     };
     let mut pruned = None;
     let (mut asset, stats, dims, mip_count, coherence) = if args.prune {
-        let (asset, stats, dims, mips, coherence, ps) =
-            bake_pruned(scene, opts, args.normals, compression, &report, input, source)?;
+        let (asset, stats, dims, mips, coherence, ps) = bake_pruned(
+            scene,
+            opts,
+            args.normals,
+            compression,
+            &report,
+            input,
+            source,
+        )?;
         bar.finish();
         if let Some(note) = &ps.note {
             warn(ctx, &format!("{input}: {note}"));
