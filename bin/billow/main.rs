@@ -21,6 +21,7 @@ mod staged;
 mod view;
 mod view_load;
 mod voxelize;
+mod voxelize_bake;
 
 use std::process::ExitCode;
 

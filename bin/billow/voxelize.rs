@@ -1,63 +1,59 @@
 //! `billow voxelize IN -o OUT.billow`: a volumetric billboard from a mesh (VB paper §3.2).
 
-use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use billow::compress::{compress_volume, Compression};
-use billow::emptyspace::{prune, prune_sparse, EmptySpaceOptions, EmptySpaceStats};
+use billow::compress::Compression;
+use billow::emptyspace::EmptySpaceStats;
 use billow::export::ktx2::ZSTD_LEVELS;
 use billow::export::{
     check_slices, ktx2_bytes_with, slice_bytes, slice_file_name, SliceFormat, Supercompression,
 };
 use billow::import::{import, ImportOptions};
-use billow::presets::target::{search, Candidate, Found, Judge, SearchError, TargetOptions, Trial};
-use billow::presets::{resolve_volume, Preset, Source, VolumeFlags, VolumeSettings};
-use billow::provenance::{source_info, tool_version, with_companions};
+use billow::presets::target::{Found, TargetOptions, Trial};
+use billow::presets::{resolve_volume, Preset, Source, VolumeFlags};
+use billow::provenance::{source_info, with_companions};
 use billow::scene::Aabb;
-use billow::voxelize::{
-    bake_params, bake_params_for, voxelize, voxelize_sparse, Bake, CombineFn, Resolution, Stage,
-    VoxelizeOptions,
-};
+use billow::voxelize::{Bake, CombineFn, Resolution, VoxelizeOptions};
 use glam::Vec3;
 use serde::Serialize;
 
 use crate::depfile;
 use crate::exit::{usage, CliError, Code};
 use crate::output::{
-    peak_rss_bytes, print_json, progress, refuse_clobbering, refuse_clobbering_read,
-    refuse_file_as_folder, warn,
+    peak_rss_bytes, print_json, refuse_clobbering, refuse_clobbering_read, refuse_file_as_folder,
+    warn,
 };
-use crate::progress::{self, Monotone};
 use crate::staged::{out_err, Staged};
+use crate::voxelize_bake::{bake_once, bake_to_target, Baked};
 use crate::Ctx;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// The mesh to bake: .gltf, .glb or .obj (+ .mtl).
-    input: PathBuf,
+    pub(crate) input: PathBuf,
     /// Where to write the volume asset (.billow). Written atomically.
     #[arg(short, long)]
-    output: PathBuf,
+    pub(crate) output: PathBuf,
     /// Voxels along the longest axis (others in proportion), or exactly XxYxZ (e.g. 256x128x128);
     /// each axis 1–2048, and the estimated memory must fit (default: the preset's, else 128).
     #[arg(long)]
-    res: Option<String>,
+    pub(crate) res: Option<String>,
     /// K: K×K coverage samples per voxel column, 1–8; gives thin parts fractional opacity
     /// (default: the preset's, else 4).
     #[arg(long)]
-    supersample: Option<u32>,
+    pub(crate) supersample: Option<u32>,
     /// A named point of the measured accuracy/cost front, setting --res and --supersample:
     /// draft, balanced, quality or hero (docs/cli.md, "Presets"). Explicit --res or
     /// --supersample override it.
     #[arg(long, value_name = "NAME", conflicts_with = "target_error")]
-    preset: Option<String>,
+    pub(crate) preset: Option<String>,
     /// Bake the cheapest setting whose measured error is at most E: `billow eval`'s mean
     /// RMSE over the six axis views at --target-distance. Tries the presets cheapest first,
     /// then refines --res between the last that failed and the first that met E; exit 10
     /// (and no file) when none does. Explicit --res / --supersample stay fixed.
     #[arg(long, value_name = "E")]
-    target_error: Option<f64>,
+    pub(crate) target_error: Option<f64>,
     /// The view distance of --target-error, a multiple of the framed distance, in (0, 1000].
     #[arg(
         long,
@@ -65,7 +61,7 @@ pub struct Args {
         default_value_t = 1.0,
         requires = "target_error"
     )]
-    target_distance: f32,
+    pub(crate) target_distance: f32,
     /// The image size WxH of --target-error (16-spp reference, as `billow eval`).
     #[arg(
         long,
@@ -73,87 +69,87 @@ pub struct Args {
         default_value = "128x128",
         requires = "target_error"
     )]
-    target_size: String,
+    pub(crate) target_size: String,
     /// How the six directional volumes merge: opaque (max opacity, averaged colour: keeps thin
     /// leaves and closed surfaces solid), mean (the paper's neutral average), max, min, or
     /// expr:<expression over px nx py ny pz nz> (see docs/voxelize.md).
     #[arg(long, default_value = "opaque")]
-    combine: String,
+    pub(crate) combine: String,
     /// Normals (Toksvig-filtered MIPs) for runtime shading: auto (bake them, keep them only
     /// for a smooth solid surface, drop them for thin or fuzzy ones such as foliage and fur;
     /// see docs/voxelize.md), on (a bare --normals), or off. With normals the colour is
     /// albedo and viewers shade it under the scene light.
     #[arg(long, value_enum, value_name = "WHEN", default_value_t = NormalsArg::Auto,
           num_args = 0..=1, default_missing_value = "on")]
-    normals: NormalsArg,
+    pub(crate) normals: NormalsArg,
     /// Number of MIP levels, 1–the full chain (default: the full chain down to 1×1×1).
     #[arg(long)]
-    mips: Option<u32>,
+    pub(crate) mips: Option<u32>,
     /// Empty border around the mesh, in voxels, 0–64.
     #[arg(long, default_value_t = 0.5)]
-    margin: f32,
+    pub(crate) margin: f32,
     /// Round every side of the grid up to a multiple of N voxels, 1–2048 (the box grows evenly with
     /// empty voxels). `billow emptyspace` needs even sides, and sides that are multiples of
     /// 2^k to prune MIP levels 1..k as well. Default: with `--res N` and no `--bounds`, the
     /// largest of 8, 4, 2, 1 that divides N (so the longest axis stays N: 8 for 128, 256, 512);
     /// with `--res XxYxZ` or `--bounds`, 1 (the grid is exactly as asked).
     #[arg(long)]
-    align: Option<u32>,
+    pub(crate) align: Option<u32>,
     /// Bake exactly this box, `minx,miny,minz,maxx,maxy,maxz` (no margin), e.g. `0,0,0,1,1,1`
     /// for a tileable volume texture used by `billow shell`.
     #[arg(long)]
-    bounds: Option<String>,
+    pub(crate) bounds: Option<String>,
     /// Texel storage: bc (default: BC7 blocks, one byte per texel on the GPU, empty 4×4
     /// blocks not stored, format 1.2) or none (raw RGBA8, readable by format 1.0/1.1
     /// readers). --ktx2 carries the same blocks.
     #[arg(long, default_value = "bc")]
-    compress: String,
+    pub(crate) compress: String,
     /// Also write the volume as a KTX2 3D texture with its MIP chain (premultiplied, sRGB).
     #[arg(long, value_name = "FILE")]
-    ktx2: Option<PathBuf>,
+    pub(crate) ktx2: Option<PathBuf>,
     /// Supercompress the --ktx2 file's levels with Zstandard at this level, 1–22
     /// (`supercompressionScheme` 2; a loader inflates each level before upload). Needs --ktx2.
     #[arg(long, value_name = "LEVEL")]
-    ktx2_zstd: Option<i32>,
+    pub(crate) ktx2_zstd: Option<i32>,
     /// Also write every slice of one MIP level (see --slice-level) into this folder.
     #[arg(long, value_name = "DIR")]
-    slices: Option<PathBuf>,
+    pub(crate) slices: Option<PathBuf>,
     /// MIP level whose slices --slices writes, 0–(MIP levels − 1).
     #[arg(long, default_value_t = 0)]
-    slice_level: u32,
+    pub(crate) slice_level: u32,
     /// Slice image format: png (8-bit, straight alpha) or exr (float, premultiplied).
     #[arg(long, default_value = "png")]
-    slice_format: String,
+    pub(crate) slice_format: String,
     /// Baked lighting multiplied into the colour: none, or ao (ambient occlusion traced
     /// against the source mesh; see docs/voxelize.md).
     #[arg(long, default_value = "none")]
-    bake: String,
+    pub(crate) bake: String,
     /// Rays per voxel for --bake ao, 1–4096.
     #[arg(long, default_value_t = billow::voxelize::DEFAULT_AO_RAYS)]
-    ao_rays: u32,
+    pub(crate) ao_rays: u32,
     /// Occlusion distance for --bake ao, in scene units, > 0 (default: 0.2 × the grid's diagonal).
     #[arg(long)]
-    ao_distance: Option<f32>,
+    pub(crate) ao_distance: Option<f32>,
     /// Treat import warnings (e.g. a missing texture) as errors.
     #[arg(long)]
-    strict: bool,
+    pub(crate) strict: bool,
     /// Write the pruned volume (what `billow emptyspace` makes of the `--compress none`
     /// volume, byte for byte, with the same --compress) straight from the brick-sparse
     /// working set, without ever holding the dense volume: for large grids (1024³). Not
     /// with --ktx2 or --slices.
     #[arg(long)]
-    prune: bool,
+    pub(crate) prune: bool,
     /// Refuse grids whose estimated peak memory (an upper bound, often several times the
     /// real peak) exceeds this many GiB, > 0.
     #[arg(long, value_name = "GIB", default_value_t = 16.0)]
-    memory_limit: f64,
+    pub(crate) memory_limit: f64,
     /// Also write a Makefile rule listing every file the bake read (the mesh, its buffers,
     /// textures and material libraries) as prerequisites of the outputs; committed with them.
     #[arg(long, value_name = "FILE")]
-    depfile: Option<PathBuf>,
+    pub(crate) depfile: Option<PathBuf>,
     /// Print a machine-readable summary on stdout.
     #[arg(long)]
-    json: bool,
+    pub(crate) json: bool,
 }
 
 #[derive(Serialize)]
@@ -332,7 +328,7 @@ pub fn options(
 /// divides `N`, so that `billow emptyspace` can prune the output (it needs even sides; 8
 /// lets it brick MIP levels 0–2, and keeps levels 0 and 1 in whole 4×4 blocks for block
 /// compression) while the longest axis stays `N`; 1 for an exact `XxYxZ` or `--bounds`.
-fn default_align(res: &Resolution, bounds: &Option<String>) -> u32 {
+pub(crate) fn default_align(res: &Resolution, bounds: &Option<String>) -> u32 {
     match res {
         Resolution::Longest(n) if bounds.is_none() => 1 << n.trailing_zeros().min(3),
         _ => 1,
@@ -684,294 +680,4 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         );
     }
     Ok(())
-}
-
-/// One bake, compressed as asked: what is written and what the summary reports.
-struct Baked {
-    asset: billow_format::VolumeAsset,
-    blocks: Option<billow_format::VolumeBlocks>,
-    stats: billow::voxelize::VoxelizeStats,
-    dims: [u32; 3],
-    mip_count: u32,
-    coherence: Option<f32>,
-    pruned: Option<EmptySpaceStats>,
-    compress_s: f64,
-}
-
-/// Bakes with `opts` (dense or `--prune`d) and compresses as `compression` says; the asset
-/// in memory is then what a reader of the file gets.
-fn bake_once(
-    scene: &billow::scene::Scene,
-    opts: &mut VoxelizeOptions,
-    args: &Args,
-    compression: Compression,
-    ctx: &Ctx,
-    input: &str,
-    source: billow_format::SourceInfo,
-) -> Result<Baked, CliError> {
-    let bar = Monotone::new(progress(ctx, progress::LEN, "voxelize"));
-    let report = |stage: Stage, f: f32| {
-        bar.set(progress::voxelize_fraction(stage, f), || {
-            format!("{stage:?}").to_lowercase()
-        });
-    };
-    let mut pruned = None;
-    let (mut asset, stats, dims, mip_count, coherence) = if args.prune {
-        let (asset, stats, dims, mips, coherence, ps) = bake_pruned(
-            scene,
-            opts,
-            args.normals,
-            compression,
-            &report,
-            input,
-            source,
-        )?;
-        bar.finish();
-        if let Some(note) = &ps.note {
-            warn(ctx, &format!("{input}: {note}"));
-        }
-        pruned = Some(ps);
-        (asset, stats, dims, mips, coherence)
-    } else {
-        let baked = bake_dense(scene, opts, args.normals, &report, input, source)?;
-        bar.finish();
-        baked
-    };
-    let compress_start = Instant::now();
-    let blocks = (compression == Compression::Bc).then(|| {
-        asset.header.set_compress("bc7");
-        compress_volume(&mut asset)
-    });
-    Ok(Baked {
-        asset,
-        blocks,
-        stats,
-        dims,
-        mip_count,
-        coherence,
-        pruned,
-        compress_s: compress_start.elapsed().as_secs_f64(),
-    })
-}
-
-/// `--target-error`: the preset ladder (explicit --res / --supersample fixed), cheapest
-/// first, then --res bisected ([`search`]); each bake measured by a [`Judge`]. Returns the
-/// chosen bake, its options and what was tried.
-#[allow(clippy::too_many_arguments)]
-fn bake_to_target(
-    scene: &billow::scene::Scene,
-    opts: &VoxelizeOptions,
-    args: &Args,
-    flags: &VolumeFlags,
-    target: &TargetOptions,
-    compression: Compression,
-    ctx: &Ctx,
-    input: &str,
-    source: &billow_format::SourceInfo,
-) -> Result<(Baked, VoxelizeOptions, TargetSummary), CliError> {
-    let label = |p: Preset, s: &VolumeSettings| {
-        format!(
-            "{p} (--res {} --supersample {})",
-            s.resolution, s.supersample
-        )
-    };
-    let mut ladder: Vec<Candidate<VolumeSettings>> = Preset::LADDER
-        .iter()
-        .map(|&p| {
-            let s = resolve_volume(Some(p), flags).settings;
-            Candidate {
-                label: label(p, &s),
-                preset: Some(p),
-                settings: s,
-            }
-        })
-        .collect();
-    ladder.dedup_by(|a, b| a.settings == b.settings);
-    let pinned = flags.resolution.is_some();
-    // Between a failing and a passing resolution: the midpoint, a multiple of 8 (so the
-    // default --align stays 8).
-    let refine = |lo: &Candidate<VolumeSettings>, hi: &Candidate<VolumeSettings>| {
-        let (Resolution::Longest(a), Resolution::Longest(b)) =
-            (lo.settings.resolution, hi.settings.resolution)
-        else {
-            return None;
-        };
-        let m = (a + b) / 2 / 8 * 8;
-        (!pinned && m > a && m < b).then(|| {
-            let settings = VolumeSettings {
-                resolution: Resolution::Longest(m),
-                ..hi.settings
-            };
-            Candidate {
-                label: format!(
-                    "{}, refined (--res {m} --supersample {})",
-                    hi.preset.map_or("", Preset::name),
-                    settings.supersample
-                ),
-                preset: hi.preset,
-                settings,
-            }
-        })
-    };
-    let mut judge = Judge::new(scene, target);
-    let mut measure = |c: &Candidate<VolumeSettings>| {
-        let mut o = opts.clone();
-        o.resolution = c.settings.resolution;
-        o.supersample = c.settings.supersample;
-        o.align = args
-            .align
-            .unwrap_or_else(|| default_align(&o.resolution, &args.bounds));
-        let baked = bake_once(scene, &mut o, args, compression, ctx, input, source.clone())?;
-        let error = judge
-            .volume_error(&baked.asset)
-            .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;
-        if !ctx.quiet {
-            eprintln!("--target-error: {} → RMSE {error:.4}", c.label);
-        }
-        Ok::<_, CliError>(((baked, o), error))
-    };
-    let found = search(ladder, target, &refine, &mut measure).map_err(|e| match e {
-        SearchError::Target(t) => CliError::new(Code::from(&t), format!("--target-error: {t}")),
-        SearchError::Bake(e) => e,
-    })?;
-    let summary = TargetSummary::new(target, &found);
-    let (baked, chosen) = found.asset;
-    Ok((baked, chosen, summary))
-}
-
-/// The dense bake: [`voxelize`] (retried without normals when `--normals auto` and the
-/// estimate refuses them), `--normals auto` judged at [`AUTO_NORMALS_LEVEL`], and the asset.
-/// Returns the asset, the bake's statistics, the grid's dims and MIP count and the normal
-/// coherence `--normals auto` judged.
-#[allow(clippy::type_complexity)]
-fn bake_dense(
-    scene: &billow::scene::Scene,
-    opts: &mut VoxelizeOptions,
-    normals: NormalsArg,
-    report: &dyn Fn(Stage, f32),
-    input: &str,
-    source: billow_format::SourceInfo,
-) -> Result<
-    (
-        billow_format::VolumeAsset,
-        billow::voxelize::VoxelizeStats,
-        [u32; 3],
-        u32,
-        Option<f32>,
-    ),
-    CliError,
-> {
-    use billow::voxelize::toksvig::{
-        normal_coherence, AUTO_NORMALS_LEVEL, AUTO_NORMALS_MIN_COHERENCE,
-    };
-    let mut volume = voxelize(scene, opts, report)
-        .or_else(|e| match e {
-            // auto: normals are an option, not a requirement; without them the bake may fit.
-            billow::voxelize::VoxelizeError::TooMuchMemory { .. }
-                if normals == NormalsArg::Auto =>
-            {
-                opts.normals = false;
-                voxelize(scene, opts, report)
-            }
-            e => Err(e),
-        })
-        .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;
-    // auto: keep the normals only where one normal per voxel describes the surface.
-    let mut coherence = None;
-    if normals == NormalsArg::Auto {
-        if let Some(n) = volume.normals.as_ref() {
-            let l = AUTO_NORMALS_LEVEL.min(volume.levels.len().saturating_sub(1));
-            let k = volume
-                .levels
-                .get(l)
-                .zip(n.get(l))
-                .and_then(|(c, n)| normal_coherence(c, n));
-            coherence = k;
-            if k.is_none_or(|k| k < AUTO_NORMALS_MIN_COHERENCE) {
-                volume.normals = None;
-                opts.normals = false;
-            }
-        }
-    }
-    let (stats, dims, mips) = (volume.stats, volume.dims(), volume.mip_count());
-    let mut extra = BTreeMap::new();
-    if let Some(k) = coherence {
-        extra.insert("normal_coherence".to_string(), format!("{k:.3}"));
-    }
-    let params = bake_params(&volume, opts, &extra);
-    let asset = volume.into_asset(&tool_version(), Some(source), params);
-    Ok((asset, stats, dims, mips, coherence))
-}
-
-/// `voxelize --prune`: the volume brick-sparse ([`voxelize_sparse`]), pruned by
-/// [`prune_sparse`] with `billow emptyspace`'s defaults; with an expression or custom
-/// combine (whose pyramids are dense anyway), the dense volume pruned by [`prune`]. Returns
-/// the pruned asset, the bake's statistics, the grid's dims and MIP count, the normal
-/// coherence `--normals auto` judged, and the prune's statistics.
-#[allow(clippy::type_complexity)]
-fn bake_pruned(
-    scene: &billow::scene::Scene,
-    opts: &mut VoxelizeOptions,
-    normals: NormalsArg,
-    compression: Compression,
-    report: &dyn Fn(Stage, f32),
-    input: &str,
-    source: billow_format::SourceInfo,
-) -> Result<
-    (
-        billow_format::VolumeAsset,
-        billow::voxelize::VoxelizeStats,
-        [u32; 3],
-        u32,
-        Option<f32>,
-        EmptySpaceStats,
-    ),
-    CliError,
-> {
-    use billow::voxelize::toksvig::{AUTO_NORMALS_LEVEL, AUTO_NORMALS_MIN_COHERENCE};
-    use billow::voxelize::VoxelizeError;
-    let err = |e: VoxelizeError| CliError::new(Code::from(&e), format!("{input}: {e}"));
-    let perr = |e: billow::emptyspace::EmptySpaceError| {
-        CliError::new(Code::from(&e), format!("{input}: {e}"))
-    };
-    let es = EmptySpaceOptions {
-        bc_blocks: compression == Compression::Bc,
-        ..EmptySpaceOptions::default()
-    };
-    let keep = |k: Option<f32>| !k.is_none_or(|k| k < AUTO_NORMALS_MIN_COHERENCE);
-    if !matches!(opts.combine, CombineFn::Preset(_)) {
-        // Expressions and custom functions keep dense pyramids: prune the dense volume.
-        let (asset, stats, dims, mips, coherence) =
-            bake_dense(scene, opts, normals, report, input, source)?;
-        let p = prune(&asset, &es).map_err(perr)?;
-        return Ok((p.asset, stats, dims, mips, coherence, p.stats));
-    }
-    let mut volume = voxelize_sparse(scene, opts, report)
-        .or_else(|e| match e {
-            VoxelizeError::TooMuchMemory { .. } if normals == NormalsArg::Auto => {
-                opts.normals = false;
-                voxelize_sparse(scene, opts, report)
-            }
-            e => Err(e),
-        })
-        .map_err(err)?;
-    let mut coherence = None;
-    if normals == NormalsArg::Auto && volume.has_normals() {
-        let l = AUTO_NORMALS_LEVEL.min(volume.levels.len().saturating_sub(1));
-        let k = volume.normal_coherence(l);
-        coherence = k;
-        if !keep(k) {
-            volume.drop_normals();
-            opts.normals = false;
-        }
-    }
-    let (stats, dims, mips) = (volume.stats, volume.dims(), volume.mip_count());
-    let mut extra = BTreeMap::new();
-    if let Some(k) = coherence {
-        extra.insert("normal_coherence".to_string(), format!("{k:.3}"));
-    }
-    let params = bake_params_for(&volume.grid, opts, &extra);
-    let shell = volume.asset_shell(&tool_version(), Some(source), params);
-    let p = prune_sparse(&shell, volume.levels, &es).map_err(perr)?;
-    Ok((p.asset, stats, dims, mips, coherence, p.stats))
 }

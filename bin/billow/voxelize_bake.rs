@@ -1,0 +1,312 @@
+//! The bake step of `billow voxelize` (bin/billow/voxelize.rs): one bake (dense, or
+//! `--prune`d brick-sparse) compressed as asked, and the `--target-error` search over such
+//! bakes.
+
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+use billow::compress::{compress_volume, Compression};
+use billow::emptyspace::{prune, prune_sparse, EmptySpaceOptions, EmptySpaceStats};
+use billow::presets::target::{search, Candidate, Judge, SearchError, TargetOptions};
+use billow::presets::{resolve_volume, Preset, VolumeFlags, VolumeSettings};
+use billow::provenance::tool_version;
+use billow::voxelize::{
+    bake_params, bake_params_for, voxelize, voxelize_sparse, CombineFn, Resolution, Stage,
+    VoxelizeOptions,
+};
+
+use crate::exit::{CliError, Code};
+use crate::output::{progress, warn};
+use crate::progress::{self, Monotone};
+use crate::voxelize::{default_align, Args, NormalsArg, TargetSummary};
+use crate::Ctx;
+
+/// One bake, compressed as asked: what is written and what the summary reports.
+pub(crate) struct Baked {
+    pub(crate) asset: billow_format::VolumeAsset,
+    pub(crate) blocks: Option<billow_format::VolumeBlocks>,
+    pub(crate) stats: billow::voxelize::VoxelizeStats,
+    pub(crate) dims: [u32; 3],
+    pub(crate) mip_count: u32,
+    pub(crate) coherence: Option<f32>,
+    pub(crate) pruned: Option<EmptySpaceStats>,
+    pub(crate) compress_s: f64,
+}
+
+/// Bakes with `opts` (dense or `--prune`d) and compresses as `compression` says; the asset
+/// in memory is then what a reader of the file gets.
+pub(crate) fn bake_once(
+    scene: &billow::scene::Scene,
+    opts: &mut VoxelizeOptions,
+    args: &Args,
+    compression: Compression,
+    ctx: &Ctx,
+    input: &str,
+    source: billow_format::SourceInfo,
+) -> Result<Baked, CliError> {
+    let bar = Monotone::new(progress(ctx, progress::LEN, "voxelize"));
+    let report = |stage: Stage, f: f32| {
+        bar.set(progress::voxelize_fraction(stage, f), || {
+            format!("{stage:?}").to_lowercase()
+        });
+    };
+    let mut pruned = None;
+    let (mut asset, stats, dims, mip_count, coherence) = if args.prune {
+        let (asset, stats, dims, mips, coherence, ps) = bake_pruned(
+            scene,
+            opts,
+            args.normals,
+            compression,
+            &report,
+            input,
+            source,
+        )?;
+        bar.finish();
+        if let Some(note) = &ps.note {
+            warn(ctx, &format!("{input}: {note}"));
+        }
+        pruned = Some(ps);
+        (asset, stats, dims, mips, coherence)
+    } else {
+        let baked = bake_dense(scene, opts, args.normals, &report, input, source)?;
+        bar.finish();
+        baked
+    };
+    let compress_start = Instant::now();
+    let blocks = (compression == Compression::Bc).then(|| {
+        asset.header.set_compress("bc7");
+        compress_volume(&mut asset)
+    });
+    Ok(Baked {
+        asset,
+        blocks,
+        stats,
+        dims,
+        mip_count,
+        coherence,
+        pruned,
+        compress_s: compress_start.elapsed().as_secs_f64(),
+    })
+}
+
+/// `--target-error`: the preset ladder (explicit --res / --supersample fixed), cheapest
+/// first, then --res bisected ([`search`]); each bake measured by a [`Judge`]. Returns the
+/// chosen bake, its options and what was tried.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn bake_to_target(
+    scene: &billow::scene::Scene,
+    opts: &VoxelizeOptions,
+    args: &Args,
+    flags: &VolumeFlags,
+    target: &TargetOptions,
+    compression: Compression,
+    ctx: &Ctx,
+    input: &str,
+    source: &billow_format::SourceInfo,
+) -> Result<(Baked, VoxelizeOptions, TargetSummary), CliError> {
+    let label = |p: Preset, s: &VolumeSettings| {
+        format!(
+            "{p} (--res {} --supersample {})",
+            s.resolution, s.supersample
+        )
+    };
+    let mut ladder: Vec<Candidate<VolumeSettings>> = Preset::LADDER
+        .iter()
+        .map(|&p| {
+            let s = resolve_volume(Some(p), flags).settings;
+            Candidate {
+                label: label(p, &s),
+                preset: Some(p),
+                settings: s,
+            }
+        })
+        .collect();
+    ladder.dedup_by(|a, b| a.settings == b.settings);
+    let pinned = flags.resolution.is_some();
+    // Between a failing and a passing resolution: the midpoint, a multiple of 8 (so the
+    // default --align stays 8).
+    let refine = |lo: &Candidate<VolumeSettings>, hi: &Candidate<VolumeSettings>| {
+        let (Resolution::Longest(a), Resolution::Longest(b)) =
+            (lo.settings.resolution, hi.settings.resolution)
+        else {
+            return None;
+        };
+        let m = (a + b) / 2 / 8 * 8;
+        (!pinned && m > a && m < b).then(|| {
+            let settings = VolumeSettings {
+                resolution: Resolution::Longest(m),
+                ..hi.settings
+            };
+            Candidate {
+                label: format!(
+                    "{}, refined (--res {m} --supersample {})",
+                    hi.preset.map_or("", Preset::name),
+                    settings.supersample
+                ),
+                preset: hi.preset,
+                settings,
+            }
+        })
+    };
+    let mut judge = Judge::new(scene, target);
+    let mut measure = |c: &Candidate<VolumeSettings>| {
+        let mut o = opts.clone();
+        o.resolution = c.settings.resolution;
+        o.supersample = c.settings.supersample;
+        o.align = args
+            .align
+            .unwrap_or_else(|| default_align(&o.resolution, &args.bounds));
+        let baked = bake_once(scene, &mut o, args, compression, ctx, input, source.clone())?;
+        let error = judge
+            .volume_error(&baked.asset)
+            .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;
+        if !ctx.quiet {
+            eprintln!("--target-error: {} → RMSE {error:.4}", c.label);
+        }
+        Ok::<_, CliError>(((baked, o), error))
+    };
+    let found = search(ladder, target, &refine, &mut measure).map_err(|e| match e {
+        SearchError::Target(t) => CliError::new(Code::from(&t), format!("--target-error: {t}")),
+        SearchError::Bake(e) => e,
+    })?;
+    let summary = TargetSummary::new(target, &found);
+    let (baked, chosen) = found.asset;
+    Ok((baked, chosen, summary))
+}
+
+/// The dense bake: [`voxelize`] (retried without normals when `--normals auto` and the
+/// estimate refuses them), `--normals auto` judged at [`AUTO_NORMALS_LEVEL`], and the asset.
+/// Returns the asset, the bake's statistics, the grid's dims and MIP count and the normal
+/// coherence `--normals auto` judged.
+#[allow(clippy::type_complexity)]
+pub(crate) fn bake_dense(
+    scene: &billow::scene::Scene,
+    opts: &mut VoxelizeOptions,
+    normals: NormalsArg,
+    report: &dyn Fn(Stage, f32),
+    input: &str,
+    source: billow_format::SourceInfo,
+) -> Result<
+    (
+        billow_format::VolumeAsset,
+        billow::voxelize::VoxelizeStats,
+        [u32; 3],
+        u32,
+        Option<f32>,
+    ),
+    CliError,
+> {
+    use billow::voxelize::toksvig::{
+        normal_coherence, AUTO_NORMALS_LEVEL, AUTO_NORMALS_MIN_COHERENCE,
+    };
+    let mut volume = voxelize(scene, opts, report)
+        .or_else(|e| match e {
+            // auto: normals are an option, not a requirement; without them the bake may fit.
+            billow::voxelize::VoxelizeError::TooMuchMemory { .. }
+                if normals == NormalsArg::Auto =>
+            {
+                opts.normals = false;
+                voxelize(scene, opts, report)
+            }
+            e => Err(e),
+        })
+        .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;
+    // auto: keep the normals only where one normal per voxel describes the surface.
+    let mut coherence = None;
+    if normals == NormalsArg::Auto {
+        if let Some(n) = volume.normals.as_ref() {
+            let l = AUTO_NORMALS_LEVEL.min(volume.levels.len().saturating_sub(1));
+            let k = volume
+                .levels
+                .get(l)
+                .zip(n.get(l))
+                .and_then(|(c, n)| normal_coherence(c, n));
+            coherence = k;
+            if k.is_none_or(|k| k < AUTO_NORMALS_MIN_COHERENCE) {
+                volume.normals = None;
+                opts.normals = false;
+            }
+        }
+    }
+    let (stats, dims, mips) = (volume.stats, volume.dims(), volume.mip_count());
+    let mut extra = BTreeMap::new();
+    if let Some(k) = coherence {
+        extra.insert("normal_coherence".to_string(), format!("{k:.3}"));
+    }
+    let params = bake_params(&volume, opts, &extra);
+    let asset = volume.into_asset(&tool_version(), Some(source), params);
+    Ok((asset, stats, dims, mips, coherence))
+}
+
+/// `voxelize --prune`: the volume brick-sparse ([`voxelize_sparse`]), pruned by
+/// [`prune_sparse`] with `billow emptyspace`'s defaults; with an expression or custom
+/// combine (whose pyramids are dense anyway), the dense volume pruned by [`prune`]. Returns
+/// the pruned asset, the bake's statistics, the grid's dims and MIP count, the normal
+/// coherence `--normals auto` judged, and the prune's statistics.
+#[allow(clippy::type_complexity)]
+fn bake_pruned(
+    scene: &billow::scene::Scene,
+    opts: &mut VoxelizeOptions,
+    normals: NormalsArg,
+    compression: Compression,
+    report: &dyn Fn(Stage, f32),
+    input: &str,
+    source: billow_format::SourceInfo,
+) -> Result<
+    (
+        billow_format::VolumeAsset,
+        billow::voxelize::VoxelizeStats,
+        [u32; 3],
+        u32,
+        Option<f32>,
+        EmptySpaceStats,
+    ),
+    CliError,
+> {
+    use billow::voxelize::toksvig::{AUTO_NORMALS_LEVEL, AUTO_NORMALS_MIN_COHERENCE};
+    use billow::voxelize::VoxelizeError;
+    let err = |e: VoxelizeError| CliError::new(Code::from(&e), format!("{input}: {e}"));
+    let perr = |e: billow::emptyspace::EmptySpaceError| {
+        CliError::new(Code::from(&e), format!("{input}: {e}"))
+    };
+    let es = EmptySpaceOptions {
+        bc_blocks: compression == Compression::Bc,
+        ..EmptySpaceOptions::default()
+    };
+    let keep = |k: Option<f32>| !k.is_none_or(|k| k < AUTO_NORMALS_MIN_COHERENCE);
+    if !matches!(opts.combine, CombineFn::Preset(_)) {
+        // Expressions and custom functions keep dense pyramids: prune the dense volume.
+        let (asset, stats, dims, mips, coherence) =
+            bake_dense(scene, opts, normals, report, input, source)?;
+        let p = prune(&asset, &es).map_err(perr)?;
+        return Ok((p.asset, stats, dims, mips, coherence, p.stats));
+    }
+    let mut volume = voxelize_sparse(scene, opts, report)
+        .or_else(|e| match e {
+            VoxelizeError::TooMuchMemory { .. } if normals == NormalsArg::Auto => {
+                opts.normals = false;
+                voxelize_sparse(scene, opts, report)
+            }
+            e => Err(e),
+        })
+        .map_err(err)?;
+    let mut coherence = None;
+    if normals == NormalsArg::Auto && volume.has_normals() {
+        let l = AUTO_NORMALS_LEVEL.min(volume.levels.len().saturating_sub(1));
+        let k = volume.normal_coherence(l);
+        coherence = k;
+        if !keep(k) {
+            volume.drop_normals();
+            opts.normals = false;
+        }
+    }
+    let (stats, dims, mips) = (volume.stats, volume.dims(), volume.mip_count());
+    let mut extra = BTreeMap::new();
+    if let Some(k) = coherence {
+        extra.insert("normal_coherence".to_string(), format!("{k:.3}"));
+    }
+    let params = bake_params_for(&volume.grid, opts, &extra);
+    let shell = volume.asset_shell(&tool_version(), Some(source), params);
+    let p = prune_sparse(&shell, volume.levels, &es).map_err(perr)?;
+    Ok((p.asset, stats, dims, mips, coherence, p.stats))
+}
