@@ -570,14 +570,10 @@ fn main() {
         vols.push(run("spot cow 128³", &load(&cow), 128, quick, false));
     } else {
         // Loud on stderr; a run that must be complete (CI, BILLOW_REQUIRE=all) fails.
-        let required = std::env::var_os("CI").is_some()
-            || std::env::var("BILLOW_REQUIRE").is_ok_and(|v| v == "all");
-        assert!(
-            !required,
-            "spot cow: {} not found (required under CI / BILLOW_REQUIRE=all)",
-            cow.display()
+        billow::test_support::skip(
+            "emptyspace_sweep: spot cow",
+            &format!("{} not found", cow.display()),
         );
-        eprintln!("SKIP: spot cow: {} not found", cow.display());
     }
     let total = start.elapsed().as_secs_f64();
     std::fs::write(&sweep_path, sweep_md(&vols, quick, total)).expect("write sweep");

@@ -707,7 +707,7 @@ mod tests {
     #[ignore = "measurement; needs BILLOW_MEASURE_VOLUME"]
     fn measure_exact_zero_constraint() {
         let Ok(p) = std::env::var("BILLOW_MEASURE_VOLUME") else {
-            crate::test_skip(
+            crate::test_support::skip(
                 "measure_exact_zero_constraint",
                 "BILLOW_MEASURE_VOLUME unset",
             );

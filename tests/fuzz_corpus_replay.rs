@@ -6,15 +6,6 @@
 //! return, `Ok` or `Err`, within [`LIMIT`]: a panic or a timeout fails the test with the
 //! file's name; a stack overflow or an abort kills the test binary, which fails it too.
 
-/// The repository root: this test belongs to the CLI package (bin/billow), which links the
-/// viewer the harness also fuzzes.
-fn repo_root() -> std::path::PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../..")
-        .canonicalize()
-        .expect("the repository root")
-}
-
 #[path = "../fuzz/harness.rs"]
 mod harness;
 
@@ -64,7 +55,7 @@ fn replay(target: &'static str) {
         harness::TARGETS.contains(&target),
         "{target} is not in TARGETS"
     );
-    let root = repo_root().join("fuzz");
+    let root = billow::test_support::repo().join("fuzz");
     let corpus = files(&root.join("corpus").join(target));
     assert!(
         !corpus.is_empty(),
@@ -125,7 +116,7 @@ fn every_target_is_replayed() {
             "no replay test for the fuzz target {t}"
         );
     }
-    let targets = repo_root().join("fuzz/fuzz_targets");
+    let targets = billow::test_support::repo().join("fuzz/fuzz_targets");
     let mut on_disk: Vec<String> = files(&targets)
         .iter()
         .filter_map(|p| Some(p.file_stem()?.to_string_lossy().into_owned()))

@@ -618,7 +618,13 @@ fn main() {
         });
     }
     let spot_path = root.join("../shared/assets/spot_cow/spot.obj");
-    if spot_path.is_file() {
+    if !spot_path.is_file() {
+        // Loud on stderr; a run that must be complete (CI, BILLOW_REQUIRE=all) fails.
+        billow::test_support::skip(
+            "pareto_sweep: Spot presets",
+            &format!("{} not found", spot_path.display()),
+        );
+    } else {
         let spot = import(&spot_path, &ImportOptions::default()).expect("import Spot");
         let sv = volume_bakes(&spot, size, &tgrid, &[1.0], "spot").expect("Spot volumes");
         for (p, pt) in Preset::LADDER

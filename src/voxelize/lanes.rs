@@ -148,7 +148,7 @@ mod tests {
             check::<64, true>();
             return;
         }
-        crate::test_skip(
+        crate::test_support::skip(
             "masks_match_scalar_comparisons (AVX2 lanes)",
             "no AVX2 on this CPU; only the scalar lanes checked",
         );

@@ -519,7 +519,7 @@ mod tests {
     #[test]
     fn simd_and_baseline_rows_agree_bit_for_bit() {
         if !simd_available() {
-            crate::test_skip(
+            crate::test_support::skip(
                 "simd_and_baseline_rows_agree_bit_for_bit",
                 "no AVX2/BMI1/BMI2/LZCNT/POPCNT on this CPU",
             );

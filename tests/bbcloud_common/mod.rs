@@ -8,13 +8,7 @@ use glam::{Vec2, Vec3, Vec4};
 
 /// The bundled oak, from the library's package or the CLI's (bin/billow).
 pub fn oak_path() -> std::path::PathBuf {
-    let m = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    let root = if m.ends_with("bin/billow") {
-        m.join("../..")
-    } else {
-        m.to_path_buf()
-    };
-    root.join("fixtures/oak/eztree_oak_medium.gltf")
+    billow::test_support::repo().join("fixtures/oak/eztree_oak_medium.gltf")
 }
 
 pub fn oak() -> Scene {

@@ -16,46 +16,21 @@ pub fn bin() -> PathBuf {
     }
 }
 
-/// The repository root (the library's package; the CLI package is bin/billow).
+/// The repository root, from the library's package or the CLI's (bin/billow).
 pub fn repo() -> PathBuf {
-    let m = Path::new(env!("CARGO_MANIFEST_DIR"));
-    if m.ends_with("bin/billow") {
-        m.join("../..").canonicalize().expect("the repository root")
-    } else {
-        m.to_path_buf()
-    }
+    billow::test_support::repo()
 }
 
-/// A test that cannot run says so on stderr (`SKIP: <test>: <reason>`, written to the
-/// process's stderr so it shows even though the harness captures `eprintln!`), and fails
-/// instead under CI (`CI` set) or `BILLOW_REQUIRE=all`, where every resource it needs
-/// must be there.
+/// A test that cannot run: `SKIP` on stderr, or a failure under CI / `BILLOW_REQUIRE=all`
+/// ([`billow::test_support::skip`], the one rule).
 pub fn skip(test: &str, reason: &str) {
-    skip_unless_required(test, None, reason)
+    billow::test_support::skip(test, reason)
 }
 
-/// [`skip`] for a test that needs an external `tool` which a machine may lack for good
-/// (e.g. Khronos' `ktx`, which Debian does not package): it may still skip under
-/// `CI` / `BILLOW_REQUIRE=all` when the tool is named in `BILLOW_OPTIONAL` (a comma
-/// list, e.g. `BILLOW_OPTIONAL=ktx`), and says so on stderr all the same.
+/// [`skip`] for a test that needs an external `tool` a machine may lack for good (waived by
+/// `BILLOW_OPTIONAL`, [`billow::test_support::skip_tool`]).
 pub fn skip_tool(test: &str, tool: &str, reason: &str) {
-    skip_unless_required(test, Some(tool), reason)
-}
-
-fn skip_unless_required(test: &str, tool: Option<&str>, reason: &str) {
-    let waived = tool.is_some_and(|t| {
-        std::env::var("BILLOW_OPTIONAL").is_ok_and(|v| v.split(',').any(|x| x.trim() == t))
-    });
-    let required = !waived
-        && (std::env::var_os("CI").is_some()
-            || std::env::var("BILLOW_REQUIRE").is_ok_and(|v| v == "all"));
-    assert!(
-        !required,
-        "{test}: {reason} (required under CI / BILLOW_REQUIRE=all)"
-    );
-    // Straight to the process's stderr: the test harness captures `eprintln!`.
-    use std::io::Write;
-    let _ = writeln!(std::io::stderr(), "SKIP: {test}: {reason}");
+    billow::test_support::skip_tool(test, tool, reason)
 }
 
 /// `../shared/assets`, or `None` (after [`skip`]) when absent.

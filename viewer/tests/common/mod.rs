@@ -7,19 +7,11 @@ use std::path::PathBuf;
 use billow_format::{full_mip_count, mip_dims, ColourSpace, Header, Prism, VolumeAsset};
 use billow_view::Gpu;
 
-/// A test that cannot run says so on stderr (`SKIP: <test>: <reason>`, written to the
-/// process's stderr so the harness does not capture it), and fails instead under CI (`CI`
-/// set) or `BILLOW_REQUIRE=all`, where every resource it needs must be there. The same
-/// contract as `tests/common::skip` of the `billow` package.
+/// A test that cannot run says so on stderr (`SKIP: <test>: <reason>`), and fails instead
+/// under CI (`CI` set) or `BILLOW_REQUIRE=all`: [`billow::test_support::skip`], the one
+/// rule every billow test and report generator follows.
 pub fn skip(test: &str, reason: &str) {
-    let required = std::env::var_os("CI").is_some()
-        || std::env::var("BILLOW_REQUIRE").is_ok_and(|v| v == "all");
-    assert!(
-        !required,
-        "{test}: {reason} (required under CI / BILLOW_REQUIRE=all)"
-    );
-    use std::io::Write;
-    let _ = writeln!(std::io::stderr(), "SKIP: {test}: {reason}");
+    billow::test_support::skip(test, reason)
 }
 
 /// The headless device, or `None` after [`skip`] when no adapter exists (under CI or
