@@ -213,9 +213,12 @@ fn strip(
             }
             for (pi, perm) in perms.iter().enumerate() {
                 let (size, soft) = oriented(&slots[i], *perm);
-                let shifts = match pt.from {
-                    Some((a, s)) if even(a, s.min(soft[2 * a]).min(pt.pos[a])) > 0 => {
-                        let o = even(a, s.min(soft[2 * a]).min(pt.pos[a]));
+                // How far the slot may move back into the face's soft layers.
+                let back = pt
+                    .from
+                    .map(|(a, s)| (a, even(a, s.min(soft[2 * a]).min(pt.pos[a]))));
+                let shifts = match back {
+                    Some((a, o)) if o > 0 => {
                         let mut q = pt.pos;
                         q[a] -= o;
                         [Some(pt.pos), Some(q)]
