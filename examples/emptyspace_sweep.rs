@@ -560,7 +560,7 @@ fn main() {
     let shared = std::env::var_os("BILLOW_SHARED").map_or(repo.join("../shared"), PathBuf::from);
     let cow = shared.join("assets/spot_cow/spot.obj");
     let start = Instant::now();
-    let load = |p: &Path| import(p, &ImportOptions::default()).expect("import");
+    let load = |p: &Path| import(p, &ImportOptions::default()).expect("import").scene;
     let oak_scene = load(&oak);
     let mut vols = vec![run("oak 128³", &oak_scene, 128, quick, true)];
     if !quick {

@@ -37,7 +37,7 @@ fn main() -> ExitCode {
         return ExitCode::from(2);
     };
     let scene = match import(Path::new(mesh), &ImportOptions { strict: false }) {
-        Ok(s) => s,
+        Ok(s) => s.scene,
         Err(e) => {
             eprintln!("voxelize_warm: {e}");
             return ExitCode::FAILURE;

@@ -1,12 +1,13 @@
-//! A summary of an imported [`Scene`]: what `billow inspect` shows an artist as a first
-//! sanity check (and prints as JSON with `--json`).
+//! A summary of an imported scene and its import report ([`Imported`]): what `billow
+//! inspect` shows an artist as a first sanity check (and prints as JSON with `--json`).
 
 use std::fmt;
 use std::path::Path;
 
 use serde::Serialize;
 
-use crate::scene::{AlphaMode, Scene};
+use crate::import::Imported;
+use crate::scene::AlphaMode;
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct InspectReport {
@@ -19,7 +20,8 @@ pub struct InspectReport {
     /// `None` when the scene has no triangles.
     pub bounds: Option<BoundsSummary>,
     pub warnings: Vec<String>,
-    /// The files read beside the mesh file ([`Scene::files`]), as the import resolved them.
+    /// The files read beside the mesh file ([`crate::import::ImportReport::files`]), as the
+    /// import resolved them.
     pub files: Vec<String>,
 }
 
@@ -58,7 +60,8 @@ pub struct BoundsSummary {
     pub size: [f32; 3],
 }
 
-pub fn inspect(scene: &Scene, path: &Path) -> InspectReport {
+pub fn inspect(imported: &Imported, path: &Path) -> InspectReport {
+    let Imported { scene, report } = imported;
     let materials = scene
         .materials
         .iter()
@@ -78,8 +81,8 @@ pub fn inspect(scene: &Scene, path: &Path) -> InspectReport {
             }
         })
         .collect();
-    let textures = scene
-        .texture_report
+    let textures = report
+        .textures
         .iter()
         .map(|r| {
             // A combined OBJ texture is named "<map_Kd> (alpha: <map_d>)".
@@ -107,7 +110,7 @@ pub fn inspect(scene: &Scene, path: &Path) -> InspectReport {
     InspectReport {
         file: path.display().to_string(),
         triangles: scene.triangles.len(),
-        dropped_triangles: scene.dropped_triangles,
+        dropped_triangles: report.dropped_triangles,
         meshes: scene
             .meshes
             .iter()
@@ -119,8 +122,8 @@ pub fn inspect(scene: &Scene, path: &Path) -> InspectReport {
         materials,
         textures,
         bounds,
-        warnings: scene.warnings.iter().map(|w| w.message.clone()).collect(),
-        files: scene
+        warnings: report.messages(),
+        files: report
             .files
             .iter()
             .map(|p| p.display().to_string())

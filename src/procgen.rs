@@ -14,7 +14,9 @@
 //!   (`make bench`, docs/benchmarks.md): an icosphere canopy core and leaf quads, one
 //!   opaque single-sided material with a 512² bark/leaf atlas, written as an indexed OBJ.
 //!
-//! Everything is deterministic for a given seed (see [`crate::rng`]).
+//! Everything is deterministic for a given seed (see [`crate::rng`]). The shapes are built
+//! with [`SceneBuilder`], the importers' builder, so they drop degenerate triangles by the
+//! same rule.
 
 use std::f32::consts::TAU;
 use std::io::Write;
@@ -23,83 +25,7 @@ use std::path::Path;
 use glam::{Vec2, Vec3, Vec4};
 
 use crate::rng::Pcg32;
-use crate::scene::{Aabb, AlphaMode, Material, MeshInfo, Scene, Texture, Triangle, Vertex, Wrap};
-
-/// Accumulates triangles into a [`Scene`].
-pub struct SceneBuilder {
-    scene: Scene,
-}
-
-impl SceneBuilder {
-    pub fn new() -> Self {
-        SceneBuilder {
-            scene: Scene {
-                triangles: Vec::new(),
-                materials: Vec::new(),
-                textures: Vec::new(),
-                meshes: Vec::new(),
-                texture_report: Vec::new(),
-                warnings: Vec::new(),
-                dropped_triangles: 0,
-                bounds: Aabb::EMPTY,
-                files: Vec::new(),
-            },
-        }
-    }
-
-    pub fn material(&mut self, m: Material) -> u32 {
-        self.scene.materials.push(m);
-        (self.scene.materials.len() - 1) as u32
-    }
-
-    pub fn mesh(&mut self, name: &str) -> u32 {
-        self.scene.meshes.push(MeshInfo {
-            name: name.into(),
-            triangles: 0,
-        });
-        (self.scene.meshes.len() - 1) as u32
-    }
-
-    /// Adds a triangle (counter-clockwise front face); zero-area ones are dropped and counted.
-    pub fn triangle(&mut self, v: [Vertex; 3], material: u32, mesh: u32) {
-        let t = Triangle { v, material, mesh };
-        let area = t.area();
-        if area.is_nan() || area <= 0.0 {
-            self.scene.dropped_triangles += 1;
-            return;
-        }
-        for p in &v {
-            self.scene.bounds.grow(p.position);
-        }
-        self.scene.meshes[mesh as usize].triangles += 1;
-        self.scene.triangles.push(t);
-    }
-
-    /// Adds the quad a-b-c-d (counter-clockwise) as two triangles with flat normal.
-    pub fn quad(&mut self, p: [Vec3; 4], color: Vec4, material: u32, mesh: u32) {
-        let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
-        // glTF convention (origin top-left): a bottom-left, b bottom-right, c top-right.
-        let uv = [
-            Vec2::new(0.0, 1.0),
-            Vec2::ONE,
-            Vec2::new(1.0, 0.0),
-            Vec2::ZERO,
-        ];
-        let v = |i: usize| vertex(p[i], n, uv[i], color);
-        self.triangle([v(0), v(1), v(2)], material, mesh);
-        self.triangle([v(0), v(2), v(3)], material, mesh);
-    }
-
-    pub fn finish(self) -> Scene {
-        self.scene
-    }
-}
-
-impl Default for SceneBuilder {
-    fn default() -> Self {
-        Self::new()
-    }
-}
+use crate::scene::{AlphaMode, Material, Scene, SceneBuilder, Texture, Vertex, Wrap};
 
 fn vertex(position: Vec3, normal: Vec3, uv: Vec2, color: Vec4) -> Vertex {
     Vertex {
@@ -366,7 +292,7 @@ pub fn leaf_texture(size: u32) -> Texture {
 pub fn leafy_tree(leaves: u32, branches: u32, seed: u64) -> Scene {
     let mut rng = Pcg32::seeded(seed, 11);
     let mut sb = SceneBuilder::new();
-    sb.scene.textures.push(leaf_texture(64));
+    sb.texture(leaf_texture(64));
     let bark = sb.material(opaque("bark", Vec3::new(0.28, 0.18, 0.10), false));
     let leaf = sb.material(Material {
         name: "leaf".into(),
@@ -708,9 +634,8 @@ mod tests {
     #[test]
     fn truss_beams_are_thin_and_closed() {
         let s = truss(10.0, 3.0, 6, 0.01);
-        // 4 legs + 4 horizontals + 8 diagonals per level, 12 triangles per beam.
+        // 4 legs + 4 horizontals + 8 diagonals per level, 12 triangles per beam: none dropped.
         assert_eq!(s.triangles.len(), 6 * 16 * 12);
-        assert_eq!(s.dropped_triangles, 0);
         assert!((s.bounds.size().y - 10.0).abs() < 0.02);
     }
 

@@ -59,7 +59,7 @@ fn edge_luma(img: &[Vec4]) -> (f64, usize) {
 fn oak_leaf_edges_do_not_darken_in_mips() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("fixtures/oak/eztree_oak_medium.gltf");
-    let scene = import(&path, &ImportOptions::default()).unwrap();
+    let scene = import(&path, &ImportOptions::default()).unwrap().scene;
     let opts = BbcloudOptions {
         samples: 100,
         seed: 2,

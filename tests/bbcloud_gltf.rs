@@ -97,7 +97,9 @@ fn is_cloud(scene: &Scene, t: &billow::scene::Triangle) -> bool {
 
 #[test]
 fn glb_is_valid_gltf_and_renders_like_the_source() {
-    let source = import(&oak_path(), &ImportOptions::default()).expect("oak");
+    let source = import(&oak_path(), &ImportOptions::default())
+        .expect("oak")
+        .scene;
     let asset = bake_oak(&source, 2);
     let dir = tempfile::tempdir().unwrap();
     let glb = dir.path().join("oak.glb");
@@ -144,7 +146,9 @@ fn glb_is_valid_gltf_and_renders_like_the_source() {
     }
 
     // 2. billow's own importer: the default scene is LOD 0 + trunk.
-    let cloud = import(&glb, &ImportOptions { strict: true }).expect("billow import");
+    let cloud = import(&glb, &ImportOptions { strict: true })
+        .expect("billow import")
+        .scene;
     let n_cloud = cloud
         .triangles
         .iter()
@@ -228,7 +232,9 @@ fn pictures_for_the_docs() {
     };
     let out = PathBuf::from(out);
     std::fs::create_dir_all(&out).unwrap();
-    let source = import(&oak_path(), &ImportOptions::default()).expect("oak");
+    let source = import(&oak_path(), &ImportOptions::default())
+        .expect("oak")
+        .scene;
     let opts = BbcloudOptions {
         lods: 3,
         shading: Shading {
@@ -249,7 +255,7 @@ fn pictures_for_the_docs() {
         .map(|&d| Camera::framed(&source.bounds, d, 0.6, 320, 320, 1.0))
         .collect();
     let reference = render_all(&source, &cams);
-    let cloud = import(&glb, &ImportOptions::default()).unwrap();
+    let cloud = import(&glb, &ImportOptions::default()).unwrap().scene;
     let lod0 = render_all(&cloud, &cams);
     for (i, name) in ["front", "diagonal"].iter().enumerate() {
         write_comparisons_png(
@@ -287,7 +293,7 @@ fn pictures_for_the_docs() {
         }
         let p = dir.path().join(format!("lod{l}.glb"));
         write_cloud_glb(&one, &p, &GltfOptions::default()).unwrap();
-        let s = import(&p, &ImportOptions::default()).unwrap();
+        let s = import(&p, &ImportOptions::default()).unwrap().scene;
         lods.push(render_all(&s, &cams[..1]).remove(0));
     }
     let refs: Vec<&ImageF32> = lods.iter().collect();

@@ -35,7 +35,9 @@ fn oak() -> String {
 }
 
 fn bake(combine: CombineFn, res: u32) -> VolumeAsset {
-    let scene = import(Path::new(&oak()), &ImportOptions::default()).unwrap();
+    let scene = import(Path::new(&oak()), &ImportOptions::default())
+        .unwrap()
+        .scene;
     let opts = VoxelizeOptions {
         resolution: Resolution::Longest(res),
         combine,

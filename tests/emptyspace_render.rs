@@ -34,7 +34,7 @@ const PX: u32 = 48;
 fn oak() -> VolumeAsset {
     let path =
         PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/oak/eztree_oak_medium.gltf");
-    let scene = import(&path, &ImportOptions::default()).unwrap();
+    let scene = import(&path, &ImportOptions::default()).unwrap().scene;
     let opts = VoxelizeOptions {
         resolution: Resolution::Longest(80),
         align: 8,

@@ -6,8 +6,7 @@ use std::collections::BTreeMap;
 use billow::eval::lighting::Lighting;
 use billow::eval::reference::ReferenceRenderer;
 use billow::eval::suite::{reference_lighting, spec, EvalOptions, Evaluator, PreparedAsset};
-use billow::procgen::SceneBuilder;
-use billow::scene::{Material, Scene};
+use billow::scene::{Material, Scene, SceneBuilder};
 use billow::voxelize::{
     bake_params, voxelize, AoRays, Bake, CombineFn, GridSpec, Preset, Resolution, VoxelizeOptions,
 };

@@ -8,8 +8,7 @@
 
 use billow::camera::Camera;
 use billow::eval::reference::{raster_1spp, render_reference, Sampling};
-use billow::procgen::SceneBuilder;
-use billow::scene::{AlphaMode, Material, Scene, Texture, Vertex, Wrap};
+use billow::scene::{AlphaMode, Material, Scene, SceneBuilder, Texture, Vertex, Wrap};
 use glam::{Vec2, Vec3, Vec4};
 
 const FOV: f32 = std::f32::consts::FRAC_PI_4;

@@ -7,8 +7,7 @@ use billow::eval::metrics::compare;
 use billow::eval::reference::{ReferenceRenderer, Sampling};
 use billow::eval::slicer::{render_volume, SlicerParams, Spacing};
 use billow::eval::volume_sampler::MipFilter;
-use billow::procgen::SceneBuilder;
-use billow::scene::{Aabb, AlphaMode, Material, Scene, Vertex};
+use billow::scene::{Aabb, AlphaMode, Material, Scene, SceneBuilder, Vertex};
 use billow_format::{full_mip_count, mip_dims, ColourSpace, Header, Prism, VolumeAsset};
 use glam::{Vec2, Vec3, Vec4};
 

@@ -135,7 +135,7 @@ fn every_target_is_replayed() {
 /// default materials and a warning (an error with `strict`), as for any unreadable MTL.
 #[test]
 fn short_mtl_colour_line_is_a_warning() {
-    use billow::import::{import, ImportErrorKind, ImportOptions};
+    use billow::import::{import, ImportErrorKind, ImportOptions, Imported};
     let dir = tempfile::tempdir().expect("temp dir");
     let obj = dir.path().join("tri.obj");
     std::fs::write(
@@ -149,22 +149,24 @@ fn short_mtl_colour_line_is_a_warning() {
             format!("newmtl a\n{colour} 1 0.5\n"),
         )
         .expect("write tri.mtl");
-        let scene = import(&obj, &ImportOptions::default())
+        let Imported { scene, report } = import(&obj, &ImportOptions::default())
             .unwrap_or_else(|e| panic!("{colour}: import refused: {e}"));
         assert_eq!(scene.triangles.len(), 1, "{colour}");
         assert!(
-            scene
+            report
                 .warnings
                 .iter()
                 .any(|w| w.message.contains("tri.mtl") && w.message.contains("not loaded")),
             "{colour}: no warning about the MTL: {:?}",
-            scene.warnings
+            report.warnings
         );
         let strict = import(&obj, &ImportOptions { strict: true }).expect_err("strict");
         assert_eq!(strict.kind(), ImportErrorKind::Strict, "{colour}: {strict}");
     }
     // Three values are still read.
     std::fs::write(dir.path().join("tri.mtl"), "newmtl a\nKd 1 0.5 0.25\n").expect("write");
-    let scene = import(&obj, &ImportOptions { strict: true }).expect("a valid MTL");
-    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let report = import(&obj, &ImportOptions { strict: true })
+        .expect("a valid MTL")
+        .report;
+    assert!(report.warnings.is_empty(), "{:?}", report.warnings);
 }

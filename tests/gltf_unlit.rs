@@ -104,7 +104,9 @@ fn write_scene_gltf(dir: &Path) -> PathBuf {
 #[test]
 fn import_reads_khr_materials_unlit() {
     let dir = tempfile::tempdir().unwrap();
-    let s = import(&write_scene_gltf(dir.path()), &ImportOptions::default()).unwrap();
+    let s = import(&write_scene_gltf(dir.path()), &ImportOptions::default())
+        .unwrap()
+        .scene;
     let flags: Vec<(&str, bool)> = s
         .materials
         .iter()
@@ -116,14 +118,16 @@ fn import_reads_khr_materials_unlit() {
         &repo().join("fixtures/scenes/wall.obj"),
         &ImportOptions::default(),
     )
-    .unwrap();
+    .unwrap()
+    .scene;
     assert!(!obj.materials.is_empty());
     assert!(obj.materials.iter().all(|m| !m.unlit));
     let oak = import(
         &repo().join("fixtures/oak/eztree_oak_medium.gltf"),
         &ImportOptions::default(),
     )
-    .unwrap();
+    .unwrap()
+    .scene;
     assert!(oak.materials.iter().all(|m| !m.unlit));
 }
 

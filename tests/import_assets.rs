@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 mod common;
 
-use billow::import::{import, ImportErrorKind, ImportOptions};
+use billow::import::{import, ImportErrorKind, ImportOptions, Imported};
 use billow::inspect::inspect;
 use billow::scene::{AlphaMode, Scene};
 
@@ -18,7 +18,7 @@ fn oak(file: &str) -> PathBuf {
     common::repo().join("fixtures/oak").join(file)
 }
 
-fn ok(p: &Path) -> Scene {
+fn ok(p: &Path) -> Imported {
     import(p, &ImportOptions::default()).unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -32,20 +32,22 @@ fn err(p: &Path) -> billow::import::ImportError {
     e
 }
 
-fn check_oak(s: &Scene) {
-    assert_eq!(s.triangles.len(), 13_806);
-    assert_eq!(s.dropped_triangles, 0);
-    assert_eq!(s.materials.len(), 2);
+fn check_oak(s: &Imported) {
+    assert_eq!(s.scene.triangles.len(), 13_806);
+    assert_eq!(s.report.dropped_triangles, 0);
+    assert_eq!(s.scene.materials.len(), 2);
     let leaf = s
+        .scene
         .materials
         .iter()
         .find(|m| m.name == "leaves")
         .expect("leaf material");
     assert_eq!(leaf.alpha_mode, AlphaMode::Mask { cutoff: 0.5 });
     assert!(leaf.double_sided);
-    let t = &s.textures[leaf.base_color_texture.expect("leaf texture") as usize];
+    let t = &s.scene.textures[leaf.base_color_texture.expect("leaf texture") as usize];
     assert_eq!((t.width, t.height), (1024, 1024));
     let bark = s
+        .scene
         .materials
         .iter()
         .find(|m| m.name == "bark")
@@ -53,22 +55,23 @@ fn check_oak(s: &Scene) {
     assert_eq!(bark.alpha_mode, AlphaMode::Opaque);
     assert!(bark.base_color_texture.is_some());
     // A ~65 m tall oak standing on y = 0.
-    let (min, size) = (s.bounds.min, s.bounds.size());
+    let (min, size) = (s.scene.bounds.min, s.scene.bounds.size());
     assert!(min.y.abs() < 1e-3, "{min}");
     assert!(
         (60.0..70.0).contains(&size.y) && (45.0..60.0).contains(&size.x),
         "{size}"
     );
     let leaves: usize = s
+        .scene
         .meshes
         .iter()
         .filter(|m| m.name == "leaves")
         .map(|m| m.triangles)
         .sum();
     assert_eq!(leaves, 10_640);
-    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    assert!(s.report.warnings.is_empty(), "{:?}", s.report.warnings);
     // Every UV lands in the image (glTF convention; OBJ v flipped on import) and normals are unit.
-    for t in &s.triangles {
+    for t in &s.scene.triangles {
         for v in &t.v {
             assert!((v.normal.length() - 1.0).abs() < 1e-3);
         }
@@ -111,7 +114,7 @@ fn oak_obj_matches_gltf() {
         uv.dedup();
         uv
     };
-    assert_eq!(leaf_uv(&s), leaf_uv(&g));
+    assert_eq!(leaf_uv(&s.scene), leaf_uv(&g.scene));
 }
 
 #[test]
@@ -132,8 +135,8 @@ fn bunny_degenerate_faces_are_dropped() {
     let s = ok(&p);
     // 40 appended faces: 20 with a repeated index and 10 collinear are zero-area
     // (dropped); 10 duplicates of existing faces have area and are kept.
-    assert_eq!(s.dropped_triangles, 30);
-    assert_eq!(s.triangles.len(), 6_598 + 10);
+    assert_eq!(s.report.dropped_triangles, 30);
+    assert_eq!(s.scene.triangles.len(), 6_598 + 10);
 }
 
 #[test]
@@ -144,9 +147,14 @@ fn oak_missing_leaf_texture_warns_or_fails_strict() {
         return;
     };
     let s = ok(&p);
-    assert_eq!(s.triangles.len(), 13_806);
-    assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
-    let leaf = s.materials.iter().find(|m| m.name == "leaves").unwrap();
+    assert_eq!(s.scene.triangles.len(), 13_806);
+    assert_eq!(s.report.warnings.len(), 1, "{:?}", s.report.warnings);
+    let leaf = s
+        .scene
+        .materials
+        .iter()
+        .find(|m| m.name == "leaves")
+        .unwrap();
     assert_eq!(leaf.base_color_texture, None);
     let r = inspect(&s, &p);
     let missing: Vec<_> = r.textures.iter().filter(|t| !t.found).collect();
@@ -163,11 +171,11 @@ fn oak_zero_area_leaves_are_counted() {
         return;
     };
     let s = ok(&p);
-    assert_eq!(s.dropped_triangles, 1_520);
-    assert_eq!(s.triangles.len(), 13_806 - 1_520);
+    assert_eq!(s.report.dropped_triangles, 1_520);
+    assert_eq!(s.scene.triangles.len(), 13_806 - 1_520);
     // Parent-relative image URIs ("../../eztree_oak_medium/...") resolve.
-    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
-    assert!(s.texture_report.iter().all(|t| t.found));
+    assert!(s.report.warnings.is_empty(), "{:?}", s.report.warnings);
+    assert!(s.report.textures.iter().all(|t| t.found));
 }
 
 #[test]
@@ -191,11 +199,17 @@ fn lantern_missing_base_color_warns() {
         return;
     };
     let s = ok(&p);
-    assert_eq!(s.triangles.len(), 5_394);
-    assert_eq!(s.meshes.len(), 3);
-    assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
-    assert!(s.warnings[0].message.contains("Lantern_baseColor.png"));
-    assert!(s.materials.iter().all(|m| m.base_color_texture.is_none()));
+    assert_eq!(s.scene.triangles.len(), 5_394);
+    assert_eq!(s.scene.meshes.len(), 3);
+    assert_eq!(s.report.warnings.len(), 1, "{:?}", s.report.warnings);
+    assert!(s.report.warnings[0]
+        .message
+        .contains("Lantern_baseColor.png"));
+    assert!(s
+        .scene
+        .materials
+        .iter()
+        .all(|m| m.base_color_texture.is_none()));
 }
 
 #[test]
@@ -207,8 +221,8 @@ fn tobj_invalid_index_and_lines() {
     assert_eq!(e.kind(), ImportErrorKind::Invalid);
     assert!(e.to_string().contains("out of range"), "{e}");
     let s = ok(&asset("tobj_obj_testfiles/obj/lines.obj").unwrap());
-    assert_eq!(s.triangles.len(), 0);
-    assert!(s.bounds.is_empty());
+    assert_eq!(s.scene.triangles.len(), 0);
+    assert!(s.scene.bounds.is_empty());
 }
 
 #[test]
@@ -217,18 +231,20 @@ fn cornell_box_warns_for_missing_textures() {
         return;
     };
     let s = ok(&p);
-    assert_eq!(s.triangles.len(), 36);
-    assert_eq!(s.meshes.len(), 8);
+    assert_eq!(s.scene.triangles.len(), 36);
+    assert_eq!(s.scene.meshes.len(), 8);
     assert!(
-        s.warnings
+        s.report
+            .warnings
             .iter()
             .any(|w| w.message.contains("this diffuse texture has spaces.jpg")),
         "{:?}",
-        s.warnings
+        s.report.warnings
     );
-    assert!(s.texture_report.iter().all(|t| !t.found));
+    assert!(s.report.textures.iter().all(|t| !t.found));
     assert!(s
-        .texture_report
+        .report
+        .textures
         .iter()
         .any(|t| t.name == "this diffuse texture has spaces.jpg"));
     assert!(import(&p, &ImportOptions { strict: true }).is_err());
@@ -245,7 +261,7 @@ fn validator_samples() {
     // invalid_elements_float.gltf holds NaN/Inf in an accessor that no mesh uses: nothing
     // to import, so it imports as an empty scene.
     let s = ok(&asset(&format!("{base}accessor_data/invalid_elements_float.gltf")).unwrap());
-    assert_eq!(s.triangles.len(), 0);
+    assert_eq!(s.scene.triangles.len(), 0);
     for f in ["node/node_loop.gltf", "node/node_loop_scene.gltf"] {
         assert_eq!(
             err(&asset(&format!("{base}{f}")).unwrap()).kind(),
@@ -253,5 +269,5 @@ fn validator_samples() {
         );
     }
     let s = ok(&asset("eztree_flowers/flower_blue.glb").unwrap());
-    assert_eq!(s.triangles.len() + s.dropped_triangles, 788);
+    assert_eq!(s.scene.triangles.len() + s.report.dropped_triangles, 788);
 }

@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use billow::import::{import, ImportErrorKind, ImportOptions};
+use billow::import::{import, ImportErrorKind, ImportOptions, Imported};
 use glam::Vec3;
 
 /// One triangle (0,0,0) (1,0,0) (0,1,0), normals +Z, in a file whose name has a space.
@@ -79,11 +79,11 @@ fn node_hierarchy_transforms_and_mirroring() {
         r#", "scene": 0, "scenes": [{"nodes": [0, 2]}]"#,
         3,
     );
-    let scene = import(&p, &ImportOptions::default()).unwrap();
+    let Imported { scene, report } = import(&p, &ImportOptions::default()).unwrap();
     assert_eq!(scene.triangles.len(), 2);
     // Points primitive skipped with a warning.
-    assert_eq!(scene.warnings.len(), 1, "{:?}", scene.warnings);
-    assert!(scene.warnings[0].message.contains("skipped"));
+    assert_eq!(report.warnings.len(), 1, "{:?}", report.warnings);
+    assert!(report.warnings[0].message.contains("skipped"));
 
     // World = T(10,0,0) · Rz(90°) · S(2) · T(1,0,0) · S(1,2,1):
     // p ↦ (10 − 4·p.y, 2·(p.x + 1), 2·p.z).
@@ -127,7 +127,7 @@ fn no_scene_uses_all_root_nodes() {
     let dir = tempfile::tempdir().unwrap();
     write_bin(dir.path());
     let p = write_gltf(dir.path(), "roots.gltf", &hierarchy_nodes(), "", 3);
-    let scene = import(&p, &ImportOptions::default()).unwrap();
+    let scene = import(&p, &ImportOptions::default()).unwrap().scene;
     assert_eq!(scene.triangles.len(), 2);
 }
 

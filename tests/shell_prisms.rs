@@ -2,8 +2,8 @@
 
 use std::collections::{BTreeMap, HashMap};
 
-use billow::procgen::{torus, SceneBuilder};
-use billow::scene::{Material, Scene, Triangle, Vertex};
+use billow::procgen::torus;
+use billow::scene::{Material, Scene, SceneBuilder, Triangle, Vertex};
 use billow::shell::{shell, shell_asset, shell_prisms, ShellError};
 use billow_format::{Bounds, ColourSpace, Header, Prism, VolumeAsset};
 use glam::{Mat3, Vec2, Vec3, Vec4};

@@ -3,8 +3,7 @@
 
 use std::collections::BTreeMap;
 
-use billow::procgen::SceneBuilder;
-use billow::scene::{Aabb, AlphaMode, Material, Scene, Texture, Wrap};
+use billow::scene::{Aabb, AlphaMode, Material, Scene, SceneBuilder, Texture, Wrap};
 use billow::voxelize::{
     bake_params, slice_stack, voxelize, Bake, Dir, Resolution, VoxelizeOptions,
 };

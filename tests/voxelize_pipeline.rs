@@ -2,8 +2,8 @@
 
 use std::sync::Arc;
 
-use billow::procgen::{truss, SceneBuilder};
-use billow::scene::{Aabb, AlphaMode, Material, Scene};
+use billow::procgen::truss;
+use billow::scene::{Aabb, AlphaMode, Material, Scene, SceneBuilder};
 use billow::voxelize::{voxelize, CombineFn, Expr, Preset, Resolution, Volume, VoxelizeOptions};
 use glam::{Vec3, Vec4};
 

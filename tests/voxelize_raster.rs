@@ -1,7 +1,6 @@
 //! Slice rasterization, binning, alpha modes, faces, resolution parsing and grid fitting.
 
-use billow::procgen::SceneBuilder;
-use billow::scene::{Aabb, AlphaMode, Material, Scene};
+use billow::scene::{Aabb, AlphaMode, Material, Scene, SceneBuilder};
 use billow::voxelize::{
     fit_grid, grid_for, slice_stack, voxelize, Dir, Resolution, ResolutionError, SliceStack,
     VoxelizeError, VoxelizeOptions,

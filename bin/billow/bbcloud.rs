@@ -11,7 +11,7 @@ use billow::bbcloud::{
 use billow::compress::{compress_cloud, Compression};
 use billow::export::gltf::cloud_glb_bytes_with;
 use billow::export::{GltfAlpha, GltfOptions};
-use billow::import::{import, ImportOptions};
+use billow::import::{import, ImportOptions, Imported};
 use billow::presets::target::{search, Candidate, Judge, SearchError, TargetOptions};
 use billow::presets::{resolve_cloud, CloudFlags, CloudSettings, Preset, Source};
 use billow::provenance::{source_info_all, tool_version};
@@ -371,22 +371,26 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         );
     }
     let input = args.input.display().to_string();
-    let scene = import(
+    let Imported { scene, report } = import(
         &args.input,
         &ImportOptions {
             strict: args.strict,
         },
     )
     .map_err(|e| CliError::new(Code::from(&e), &e))?;
-    refuse_clobbering_read(&args.input, &scene.files, &outputs)?;
-    for w in &scene.warnings {
+    refuse_clobbering_read(&args.input, &report.files, &outputs)?;
+    for w in &report.warnings {
         warn(ctx, &format!("{input}: {}", w.message));
     }
     depfile::check(
         args.depfile.as_deref(),
-        &scene.files.iter().map(PathBuf::as_path).collect::<Vec<_>>(),
+        &report
+            .files
+            .iter()
+            .map(PathBuf::as_path)
+            .collect::<Vec<_>>(),
     )?;
-    let source = source_info_all(&args.input, &scene.files)
+    let source = source_info_all(&args.input, &report.files)
         .map_err(|e| CliError::new(Code::InputIo, format!("{input}: cannot read: {e}")))?;
     let seconds_import = start.elapsed().as_secs_f64();
 
@@ -497,7 +501,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         let mut targets = vec![args.output.as_path()];
         targets.extend(args.gltf.as_deref());
         targets.extend(atlas_paths.iter().map(PathBuf::as_path));
-        let text = depfile::render(&targets, &args.input, &scene.files)?;
+        let text = depfile::render(&targets, &args.input, &report.files)?;
         stage.stage(d, text.as_bytes()).map_err(|e| out_err(d, e))?;
     }
     stage.commit_or_fail()?;
@@ -541,7 +545,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         gltf: args.gltf.as_ref().map(|p| p.display().to_string()),
         atlas_files,
         seconds_total: start.elapsed().as_secs_f64(),
-        warnings: scene.warnings.iter().map(|w| w.message.clone()).collect(),
+        warnings: report.messages(),
     };
     if let (Some(t), false) = (&summary.target, ctx.quiet) {
         eprintln!("{}", t.line());

@@ -25,12 +25,12 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let opts = ImportOptions {
         strict: args.strict,
     };
-    let scene = import(&args.mesh, &opts).map_err(|e| CliError::new(Code::from(&e), &e))?;
-    let report = inspect(&scene, &args.mesh);
+    let imported = import(&args.mesh, &opts).map_err(|e| CliError::new(Code::from(&e), &e))?;
+    let report = inspect(&imported, &args.mesh);
     if args.json {
         print_json(&report)?;
     } else {
-        for w in &scene.warnings {
+        for w in &imported.report.warnings {
             warn(ctx, &format!("{}: {}", args.mesh.display(), w.message));
         }
         outln!("{report}");

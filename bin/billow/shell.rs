@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use billow::compress::{compress_volume, Compression};
-use billow::import::{import, ImportOptions};
+use billow::import::{import, ImportOptions, Imported};
 use billow::shell::{shell, shell_asset, with_surface_normals};
 use billow_format::VolumeAsset;
 use glam::Vec2;
@@ -83,23 +83,26 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             format!("--tiles '{}': expected two numbers U,V", args.tiles),
         ));
     };
-    let surface = import(
+    let Imported {
+        scene: surface,
+        report,
+    } = import(
         &args.surface,
         &ImportOptions {
             strict: args.strict,
         },
     )
     .map_err(|e| CliError::new(Code::from(&e), &e))?;
-    refuse_clobbering_read(&args.surface, &surface.files, &outputs)?;
+    refuse_clobbering_read(&args.surface, &report.files, &outputs)?;
     depfile::check(
         args.depfile.as_deref(),
-        &surface
+        &report
             .files
             .iter()
             .map(PathBuf::as_path)
             .collect::<Vec<_>>(),
     )?;
-    for w in &surface.warnings {
+    for w in &report.warnings {
         warn(ctx, &format!("{}: {}", args.surface.display(), w.message));
     }
     let (volume, volume_blocks) = VolumeAsset::read_with_blocks(&args.volume)
@@ -145,7 +148,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         .stage(&args.output, &bytes)
         .map_err(|e| out_err(&args.output, e))?;
     if let Some(d) = &args.depfile {
-        let mut read = surface.files.clone();
+        let mut read = report.files.clone();
         read.push(args.volume.clone());
         let text = depfile::render(&[&args.output], &args.surface, &read)?;
         stage.stage(d, text.as_bytes()).map_err(|e| out_err(d, e))?;

@@ -153,8 +153,8 @@ pub fn load_content(scene: &SceneFile, read: &mut Vec<PathBuf>) -> Result<Conten
         let s = import(&m.path, &ImportOptions::default())
             .map_err(|e| CliError::new(Code::from(&e), &e))?;
         read.push(m.path.clone());
-        read.extend(s.files.iter().cloned());
-        c.meshes.push(mesh_data(&s, &m.transform));
+        read.extend(s.report.files);
+        c.meshes.push(mesh_data(&s.scene, &m.transform));
     }
     if let Some(g) = &scene.ground {
         let h = 0.5 * g.size;

@@ -9,7 +9,7 @@ use billow::export::ktx2::ZSTD_LEVELS;
 use billow::export::{
     check_slices, ktx2_bytes_with, slice_bytes, slice_file_name, SliceFormat, Supercompression,
 };
-use billow::import::{import, ImportOptions};
+use billow::import::{import, ImportOptions, Imported};
 use billow::presets::target::{Found, TargetOptions, Trial};
 use billow::presets::{resolve_volume, Preset, Source, VolumeFlags};
 use billow::provenance::{source_info, with_companions};
@@ -519,19 +519,23 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         );
         (scene, source.join().expect("checksum thread panicked"))
     });
-    let scene = scene.map_err(|e| CliError::new(Code::from(&e), &e))?;
-    refuse_clobbering_read(&args.input, &scene.files, &outputs)?;
-    for w in &scene.warnings {
+    let Imported { scene, report } = scene.map_err(|e| CliError::new(Code::from(&e), &e))?;
+    refuse_clobbering_read(&args.input, &report.files, &outputs)?;
+    for w in &report.warnings {
         warn(ctx, &format!("{input}: {}", w.message));
     }
     let source = source
-        .and_then(|s| with_companions(&args.input, s, &scene.files))
+        .and_then(|s| with_companions(&args.input, s, &report.files))
         .map_err(|e| CliError::new(Code::InputIo, format!("{input}: cannot read: {e}")))?;
     depfile::check(
         args.depfile.as_deref(),
-        &scene.files.iter().map(PathBuf::as_path).collect::<Vec<_>>(),
+        &report
+            .files
+            .iter()
+            .map(PathBuf::as_path)
+            .collect::<Vec<_>>(),
     )?;
-    let mut warnings: Vec<String> = scene.warnings.iter().map(|w| w.message.clone()).collect();
+    let mut warnings: Vec<String> = report.messages();
     if let Some(b) = opts.bounds {
         let m = scene.bounds;
         if !scene.triangles.is_empty() && (b.max.cmplt(m.min).any() || b.min.cmpgt(m.max).any()) {
@@ -613,7 +617,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         let mut targets = vec![args.output.as_path()];
         targets.extend(args.ktx2.as_deref());
         targets.extend(written.iter().map(PathBuf::as_path));
-        let text = depfile::render(&targets, &args.input, &scene.files)?;
+        let text = depfile::render(&targets, &args.input, &report.files)?;
         stage.stage(d, text.as_bytes()).map_err(|e| out_err(d, e))?;
     }
     stage.commit_or_fail()?;

@@ -114,7 +114,9 @@ fn configs() -> Vec<(&'static str, String, BbcloudOptions)> {
 /// Bakes, renders and compares everything for the mesh at `path` (the oak).
 pub(crate) fn run(path: &Path, shown: &str, quick: bool) -> Result<CloudReport, String> {
     let start = Instant::now();
-    let scene = import(path, &ImportOptions::default()).map_err(|e| e.to_string())?;
+    let scene = import(path, &ImportOptions::default())
+        .map_err(|e| e.to_string())?
+        .scene;
     let size = if quick { 64 } else { 128 };
     let lighting = Lighting::for_cloud(&billow::bbcloud::params(&BbcloudOptions::default()))?;
     let evaluator = Evaluator::new(

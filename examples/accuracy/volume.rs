@@ -143,7 +143,9 @@ pub(crate) fn run_mesh(
     quick: bool,
 ) -> Result<MeshReport, String> {
     eprintln!("{name}: importing {}", path.display());
-    let scene = import(path, &ImportOptions::default()).map_err(|e| e.to_string())?;
+    let scene = import(path, &ImportOptions::default())
+        .map_err(|e| e.to_string())?
+        .scene;
     let size = if quick { 64 } else { 128 };
     let views = view_set(if quick {
         ViewDirections::Axes

@@ -488,7 +488,8 @@ fn main() {
         &root.join("fixtures/oak/eztree_oak_medium.gltf"),
         &ImportOptions::default(),
     )
-    .expect("import the oak");
+    .expect("import the oak")
+    .scene;
     let tree = billow::procgen::leafy_tree(1500, 9, 1);
     let size = if quick { 64 } else { 128 };
 
@@ -625,7 +626,9 @@ fn main() {
             &format!("{} not found", spot_path.display()),
         );
     } else {
-        let spot = import(&spot_path, &ImportOptions::default()).expect("import Spot");
+        let spot = import(&spot_path, &ImportOptions::default())
+            .expect("import Spot")
+            .scene;
         let sv = volume_bakes(&spot, size, &tgrid, &[1.0], "spot").expect("Spot volumes");
         for (p, pt) in Preset::LADDER
             .iter()

@@ -206,11 +206,7 @@ pub fn trunk_scene(asset: &CloudAsset) -> Scene {
         materials,
         textures,
         meshes: Vec::new(),
-        texture_report: Vec::new(),
-        warnings: Vec::new(),
-        dropped_triangles: 0,
         bounds,
-        files: Vec::new(),
     }
 }
 

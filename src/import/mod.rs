@@ -1,9 +1,11 @@
-//! Mesh import: glTF 2.0 (`.gltf`/`.glb`) and OBJ+MTL into one in-memory [`Scene`].
+//! Mesh import: glTF 2.0 (`.gltf`/`.glb`) and OBJ+MTL into one in-memory [`Scene`] and
+//! the [`ImportReport`] beside it ([`Imported`]).
 //!
 //! Every importer validates its input before trusting it (lengths against buffer sizes,
 //! index ranges, finite positions) and reports a non-fatal problem — a missing texture,
 //! a skipped point/line primitive, a missing MTL — as a [`Warning`] in
-//! [`Scene::warnings`]. With [`ImportOptions::strict`] the first warning becomes an error.
+//! [`ImportReport::warnings`]. With [`ImportOptions::strict`] the first warning becomes an
+//! error.
 //!
 //! Library code never prints: all problems come back as [`ImportError`] or [`Warning`].
 
@@ -11,6 +13,9 @@ mod accessor;
 mod gltf;
 mod images;
 mod obj;
+mod report;
+
+pub use report::{ImportReport, TextureReport, Warning};
 
 use std::collections::HashSet;
 use std::fmt;
@@ -19,7 +24,7 @@ use std::sync::Mutex;
 
 use glam::Vec3;
 
-use crate::scene::{Aabb, MeshInfo, Scene, Triangle, Warning};
+use crate::scene::{Scene, SceneBuilder};
 
 /// Upper bound on the number of triangles one import may produce. A hostile file can
 /// instance one mesh many times; this keeps that from exhausting memory (each triangle
@@ -144,9 +149,16 @@ impl ImportError {
     }
 }
 
-/// Imports `path` into a [`Scene`], dispatching on the (case-insensitive) extension:
-/// `.gltf`, `.glb`, `.obj`.
-pub fn import(path: &Path, opts: &ImportOptions) -> Result<Scene, ImportError> {
+/// What an import returns: the geometry, and what the import noticed on the way.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Imported {
+    pub scene: Scene,
+    pub report: ImportReport,
+}
+
+/// Imports `path` into a [`Scene`] and its [`ImportReport`], dispatching on the
+/// (case-insensitive) extension: `.gltf`, `.glb`, `.obj`.
+pub fn import(path: &Path, opts: &ImportOptions) -> Result<Imported, ImportError> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
@@ -158,6 +170,7 @@ pub fn import(path: &Path, opts: &ImportOptions) -> Result<Scene, ImportError> {
         opts: *opts,
         warnings: Vec::new(),
         seen: HashSet::new(),
+        textures: Vec::new(),
         files: Mutex::new(Vec::new()),
     };
     let builder = match ext.as_str() {
@@ -176,9 +189,16 @@ pub fn import(path: &Path, opts: &ImportOptions) -> Result<Scene, ImportError> {
             )))
         }
     };
-    let mut scene = builder.finish(ctx.warnings);
-    scene.files = ctx.files.into_inner().unwrap_or_else(|e| e.into_inner());
-    Ok(scene)
+    let report = ImportReport {
+        warnings: ctx.warnings,
+        textures: ctx.textures,
+        dropped_triangles: builder.dropped(),
+        files: ctx.files.into_inner().unwrap_or_else(|e| e.into_inner()),
+    };
+    Ok(Imported {
+        scene: builder.finish(),
+        report,
+    })
 }
 
 /// Per-import context: the file name for messages, options and collected warnings.
@@ -187,11 +207,23 @@ pub(crate) struct Ctx {
     pub opts: ImportOptions,
     pub warnings: Vec<Warning>,
     seen: HashSet<String>,
-    /// The files read besides the mesh file ([`Scene::files`]).
+    /// Every texture referenced ([`ImportReport::textures`]).
+    textures: Vec<TextureReport>,
+    /// The files read besides the mesh file ([`ImportReport::files`]).
     files: Mutex<Vec<PathBuf>>,
 }
 
 impl Ctx {
+    /// Notes that texture `name` was referenced and whether it loaded (the first
+    /// reference of a name is the one reported).
+    pub fn texture(&mut self, name: &str, found: bool) {
+        if !self.textures.iter().any(|t| t.name == name) {
+            self.textures.push(TextureReport {
+                name: name.to_owned(),
+                found,
+            });
+        }
+    }
     /// Notes that `path` was read (once per path).
     pub fn read_from(&self, path: &Path) {
         let mut files = self.files.lock().unwrap_or_else(|e| e.into_inner());
@@ -258,73 +290,16 @@ fn one_line(message: impl fmt::Display) -> String {
     }
 }
 
-/// Accumulates triangles, dropping zero-area ones, and tracks bounds and mesh counts.
-#[derive(Default)]
-pub(crate) struct SceneBuilder {
-    pub scene: Option<Scene>,
-}
-
-impl SceneBuilder {
-    pub fn new() -> Self {
-        SceneBuilder {
-            scene: Some(Scene {
-                triangles: Vec::new(),
-                materials: Vec::new(),
-                textures: Vec::new(),
-                meshes: Vec::new(),
-                texture_report: Vec::new(),
-                warnings: Vec::new(),
-                dropped_triangles: 0,
-                bounds: Aabb::EMPTY,
-                files: Vec::new(),
-            }),
-        }
+/// Reserves room for `n` more triangles in `b`, or fails when the import would then hold
+/// more than [`MAX_TRIANGLES`] (kept and dropped alike).
+pub(crate) fn reserve(b: &mut SceneBuilder, n: usize, ctx: &Ctx) -> Result<(), ImportError> {
+    if b.offered().saturating_add(n) > MAX_TRIANGLES {
+        return Err(ctx.invalid(format!(
+            "more than {MAX_TRIANGLES} triangles after instancing; refusing to expand"
+        )));
     }
-    pub fn scene(&mut self) -> &mut Scene {
-        self.scene.as_mut().expect("builder already finished")
-    }
-    /// Adds a mesh entry and returns its index.
-    pub fn add_mesh(&mut self, name: String) -> u32 {
-        let s = self.scene();
-        s.meshes.push(MeshInfo { name, triangles: 0 });
-        (s.meshes.len() - 1) as u32
-    }
-    /// Adds a triangle unless its area is zero or not finite (then it is counted as dropped).
-    /// The caller has already checked that positions are finite.
-    pub fn push(&mut self, t: Triangle) {
-        let s = self.scene();
-        let area = t.area();
-        if !(area > 0.0 && area.is_finite()) {
-            s.dropped_triangles += 1;
-            return;
-        }
-        for v in &t.v {
-            s.bounds.grow(v.position);
-        }
-        s.meshes[t.mesh as usize].triangles += 1;
-        s.triangles.push(t);
-    }
-    /// Fails when adding `n` more triangles would exceed [`MAX_TRIANGLES`].
-    pub fn reserve(&mut self, n: usize, ctx: &Ctx) -> Result<(), ImportError> {
-        let s = self.scene();
-        let total = s
-            .triangles
-            .len()
-            .saturating_add(s.dropped_triangles)
-            .saturating_add(n);
-        if total > MAX_TRIANGLES {
-            return Err(ctx.invalid(format!(
-                "more than {MAX_TRIANGLES} triangles after instancing; refusing to expand"
-            )));
-        }
-        s.triangles.reserve(n);
-        Ok(())
-    }
-    fn finish(mut self, warnings: Vec<Warning>) -> Scene {
-        let mut s = self.scene.take().expect("builder already finished");
-        s.warnings = warnings;
-        s
-    }
+    b.reserve(n);
+    Ok(())
 }
 
 /// Unit normal of the counter-clockwise triangle (a, b, c), or +Z when degenerate.

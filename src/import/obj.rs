@@ -23,8 +23,8 @@ use std::path::{Path, PathBuf};
 
 use glam::{Vec2, Vec3, Vec4};
 
-use super::{face_normal, images, resolve_relative, Ctx, ImportError, SceneBuilder};
-use crate::scene::{AlphaMode, Material, Texture, TextureReport, Triangle, Vertex};
+use super::{face_normal, images, reserve, resolve_relative, Ctx, ImportError};
+use crate::scene::{AlphaMode, Material, SceneBuilder, Texture, Triangle, Vertex};
 
 pub(super) fn load(path: &Path, ctx: &mut Ctx) -> Result<SceneBuilder, ImportError> {
     let raw = super::read_input(path).map_err(|e| ctx.io(path, e))?;
@@ -123,22 +123,16 @@ pub(super) fn load(path: &Path, ctx: &mut Ctx) -> Result<SceneBuilder, ImportErr
                         .cloned()
                         .unwrap_or_else(|| dir.clone());
                     let mat = convert_material(&materials[i], &dir, &mut b, &mut tex_cache, ctx)?;
-                    let s = b.scene();
-                    s.materials.push(mat);
-                    let idx = (s.materials.len() - 1) as u32;
+                    let idx = b.material(mat);
                     mat_map.insert(i, idx);
                     idx
                 }
             },
-            None => *default_material.get_or_insert_with(|| {
-                let s = b.scene();
-                s.materials.push(Material::default());
-                (s.materials.len() - 1) as u32
-            }),
+            None => *default_material.get_or_insert_with(|| b.material(Material::default())),
         };
-        let mesh_id = b.add_mesh(name);
+        let mesh_id = b.mesh(name);
         let ntri = m.indices.len() / 3;
-        b.reserve(ntri, ctx)?;
+        reserve(&mut b, ntri, ctx)?;
         let pos = |i: usize| {
             Vec3::new(
                 m.positions[3 * i],
@@ -237,12 +231,12 @@ fn convert_material(
         None => {
             let label = format!("material '{}'", m.name);
             let color = match (&kd_name, &kd_path) {
-                (Some(n), Some(p)) => load_texture(n, p, &label, "map_Kd", b, ctx)?,
+                (Some(n), Some(p)) => load_texture(n, p, &label, "map_Kd", ctx)?,
                 _ => None,
             };
             let alpha = match (&d_name, &d_path) {
                 (Some(n), Some(p)) if d_path != kd_path => {
-                    load_texture(n, p, &label, "map_d", b, ctx)?
+                    load_texture(n, p, &label, "map_d", ctx)?
                 }
                 (Some(_), _) => color.clone(),
                 _ => None,
@@ -263,11 +257,7 @@ fn convert_material(
                 }
                 (None, None) => None,
             };
-            let idx = combined.map(|t| {
-                let s = b.scene();
-                s.textures.push(t);
-                (s.textures.len() - 1) as u32
-            });
+            let idx = combined.map(|t| b.texture(t));
             cache.insert(key, idx);
             idx
         }
@@ -298,20 +288,13 @@ fn load_texture(
     path: &Path,
     label: &str,
     slot: &str,
-    b: &mut SceneBuilder,
     ctx: &mut Ctx,
 ) -> Result<Option<Texture>, ImportError> {
     let r = super::read_input(path)
         .inspect(|_| ctx.read_from(path))
         .map_err(|e| format!("{}: {e}", path.display()))
         .and_then(|bytes| images::decode(&bytes, name, None));
-    let s = b.scene();
-    if !s.texture_report.iter().any(|t| t.name == name) {
-        s.texture_report.push(TextureReport {
-            name: name.to_owned(),
-            found: r.is_ok(),
-        });
-    }
+    ctx.texture(name, r.is_ok());
     match r {
         Ok(t) => Ok(Some(t)),
         Err(e) => {

@@ -448,8 +448,7 @@ mod tests {
     use glam::{Vec2, Vec3, Vec4};
 
     use super::*;
-    use crate::procgen::SceneBuilder;
-    use crate::scene::{AlphaMode, Material, Texture, Vertex, Wrap};
+    use crate::scene::{AlphaMode, Material, SceneBuilder, Texture, Vertex, Wrap};
     use crate::voxelize::grid::{fit_grid, Resolution};
 
     /// Random small and large triangles in every orientation, with a textured cut-out

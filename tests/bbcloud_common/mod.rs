@@ -12,7 +12,9 @@ pub fn oak_path() -> std::path::PathBuf {
 }
 
 pub fn oak() -> Scene {
-    billow::import::import(&oak_path(), &Default::default()).expect("oak")
+    billow::import::import(&oak_path(), &Default::default())
+        .expect("oak")
+        .scene
 }
 
 /// The oak's leaf triangles as search elements, and the foliage's bounding-sphere radius.
@@ -54,11 +56,7 @@ pub fn scene_of(triangles: Vec<Triangle>, materials: Vec<Material>) -> Scene {
         materials,
         textures: vec![],
         meshes: vec![],
-        texture_report: vec![],
-        warnings: vec![],
-        dropped_triangles: 0,
         bounds,
-        files: vec![],
     }
 }
 
@@ -132,10 +130,6 @@ pub fn leafy_scene(leaves: usize) -> Scene {
         ],
         textures: vec![],
         meshes: vec![],
-        texture_report: vec![],
-        warnings: vec![],
-        dropped_triangles: 0,
         bounds,
-        files: vec![],
     }
 }

@@ -69,7 +69,9 @@ fn content(scene: &SceneFile) -> Content {
         });
     }
     for m in &scene.meshes {
-        let s = import(&m.path, &ImportOptions::default()).expect("mesh");
+        let s = import(&m.path, &ImportOptions::default())
+            .expect("mesh")
+            .scene;
         let t = &m.transform;
         let mat = t.matrix();
         let nmat = Mat4::from_quat(Quat::from_rotation_y(t.rotate_y_deg.to_radians()));

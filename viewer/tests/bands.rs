@@ -51,7 +51,7 @@ fn pruned_volumes_with_lod_bands_draw_like_the_cpu_and_like_the_source() {
     };
     let path =
         PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../fixtures/oak/eztree_oak_medium.gltf");
-    let scene = import(&path, &ImportOptions::default()).unwrap();
+    let scene = import(&path, &ImportOptions::default()).unwrap().scene;
     let opts = VoxelizeOptions {
         resolution: Resolution::Longest(80),
         align: 8,

@@ -166,7 +166,7 @@ fn compressed_clouds_draw_the_same_from_blocks_and_decoded() {
     };
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../fixtures/oak/eztree_oak_medium.gltf");
-    let scene = import(&path, &ImportOptions::default()).expect("oak");
+    let scene = import(&path, &ImportOptions::default()).expect("oak").scene;
     let opts = BbcloudOptions {
         samples: 30,
         lods: 1,

@@ -426,7 +426,7 @@ fn the_oak_baked_unlit_with_normal_maps_is_lit_by_the_viewer() {
     let name = "the_oak_baked_unlit_with_normal_maps_is_lit_by_the_viewer";
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../fixtures/oak/eztree_oak_medium.gltf");
-    let scene = import(&path, &ImportOptions::default()).expect("oak");
+    let scene = import(&path, &ImportOptions::default()).expect("oak").scene;
     let opts = |unlit: bool| BbcloudOptions {
         samples: 30,
         lods: 1,

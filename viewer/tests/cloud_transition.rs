@@ -73,7 +73,7 @@ fn a_cloud_mid_transition_morphs_instead_of_popping() {
     };
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../fixtures/oak/eztree_oak_medium.gltf");
-    let scene = import(&path, &ImportOptions::default()).expect("oak");
+    let scene = import(&path, &ImportOptions::default()).expect("oak").scene;
     let opts = BbcloudOptions {
         samples: 60,
         lods: 2,

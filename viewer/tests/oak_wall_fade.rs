@@ -46,7 +46,8 @@ fn oak(res: u32) -> VolumeAsset {
         &repo().join("fixtures/oak/eztree_oak_medium.gltf"),
         &ImportOptions::default(),
     )
-    .expect("import the oak");
+    .expect("import the oak")
+    .scene;
     let opts = VoxelizeOptions {
         resolution: Resolution::Longest(res),
         combine: CombineFn::Preset(Preset::Opaque),

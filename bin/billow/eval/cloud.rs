@@ -9,7 +9,7 @@ use billow::eval::suite::{
     mean_errors, means_by_distance, view_file_stem, DistanceMeans, EvalOptions, Evaluator,
     MeanErrors, ViewResult, EVAL_FOV_Y,
 };
-use billow::scene::Scene;
+use billow::import::Imported;
 use billow_format::{CloudAsset, Container};
 use serde::Serialize;
 
@@ -61,12 +61,13 @@ struct CloudSummary {
 pub(super) fn run(
     args: &Args,
     ctx: &Ctx,
-    scene: &Scene,
+    source: &Imported,
     container: Container,
     start: Instant,
     import_s: f64,
     t: Instant,
 ) -> Result<(), CliError> {
+    let scene = &source.scene;
     let (width, height) = parse_size(&args.size)?;
     let per_axis = spp_per_axis(args.spp)?;
     let views = parse_views(&args.views, &parse_distances(&args.distances)?)?;
@@ -122,7 +123,7 @@ pub(super) fn run(
     let renderer = CloudRenderer::new(&prepared, lighting)
         .map_err(|e| CliError::new(Code::from(&e), format!("{asset_shown}: {e}")))?;
     let mut stage = create_out(args)?;
-    let mismatch = source_note(ctx, args, scene, asset.header.source.as_ref());
+    let mismatch = source_note(ctx, args, source, asset.header.source.as_ref());
 
     let bar = progress(ctx, (views.len() * lods.len()) as u64, "eval");
     let mut per_lod: Vec<Vec<ViewResult>> = vec![Vec::new(); lods.len()];

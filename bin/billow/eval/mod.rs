@@ -15,7 +15,7 @@ use billow::eval::suite::{
     mean_errors, means_by_distance, reference_lighting, view_file_stem, DistanceMeans, EvalOptions,
     Evaluator, MeanErrors, PreparedAsset, ViewResult, EVAL_FOV_Y,
 };
-use billow::import::{import, ImportOptions};
+use billow::import::{import, ImportOptions, Imported};
 use billow_format::{read_file, AssetKind, Container, VolumeAsset};
 use serde::Serialize;
 
@@ -275,18 +275,18 @@ pub fn read_asset(path: &Path) -> Result<Container, CliError> {
 }
 
 /// The source mesh, imported (warnings printed).
-pub(crate) fn import_source(args: &Args, ctx: &Ctx) -> Result<billow::scene::Scene, CliError> {
-    let scene = import(
+pub(crate) fn import_source(args: &Args, ctx: &Ctx) -> Result<Imported, CliError> {
+    let imported = import(
         &args.source,
         &ImportOptions {
             strict: args.strict,
         },
     )
     .map_err(|e| CliError::new(Code::from(&e), &e))?;
-    for w in &scene.warnings {
+    for w in &imported.report.warnings {
         warn(ctx, &format!("{}: {}", args.source.display(), w.message));
     }
-    Ok(scene)
+    Ok(imported)
 }
 
 /// The `--out` folder's files, staged: written as the views are rendered, renamed into
@@ -341,11 +341,11 @@ pub(crate) fn finish_out(
 pub(crate) fn source_note(
     ctx: &Ctx,
     args: &Args,
-    scene: &billow::scene::Scene,
+    source: &Imported,
     recorded: Option<&billow_format::SourceInfo>,
 ) -> Option<String> {
     let recorded = recorded?;
-    let actual = billow::provenance::source_info_all(&args.source, &scene.files).ok()?;
+    let actual = billow::provenance::source_info_all(&args.source, &source.report.files).ok()?;
     if actual.sha256 == recorded.sha256 {
         return None;
     }
@@ -417,28 +417,29 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     if let Some(dir) = &args.out {
         refuse_file_as_folder("--out", dir)?;
     }
-    let scene = import_source(&args, ctx)?;
+    let source = import_source(&args, ctx)?;
     let import_s = start.elapsed().as_secs_f64();
     let t = Instant::now();
     let container = read_asset(&args.asset)?;
     if container.header.kind == AssetKind::Cloud {
-        return cloud::run(&args, ctx, &scene, container, start, import_s, t);
+        return cloud::run(&args, ctx, &source, container, start, import_s, t);
     }
     if args.lod.is_some() {
         return Err(bad("--lod", "applies to billboard-cloud assets only"));
     }
-    run_volume(&args, ctx, &scene, container, start, import_s, t)
+    run_volume(&args, ctx, &source, container, start, import_s, t)
 }
 
 fn run_volume(
     args: &Args,
     ctx: &Ctx,
-    scene: &billow::scene::Scene,
+    source: &Imported,
     container: Container,
     start: Instant,
     import_s: f64,
     t: Instant,
 ) -> Result<(), CliError> {
+    let scene = &source.scene;
     let (width, height) = parse_size(&args.size)?;
     let per_axis = spp_per_axis(args.spp)?;
     let views = parse_views(&args.views, &parse_distances(&args.distances)?)?;
@@ -484,7 +485,7 @@ fn run_volume(
     let evaluator = Evaluator::new(scene, options)
         .map_err(|e| CliError::new(Code::InvalidInput, format!("{source_shown}: {e}")))?;
     let mut stage = create_out(args)?;
-    let mismatch = source_note(ctx, args, scene, asset.header.source.as_ref());
+    let mismatch = source_note(ctx, args, source, asset.header.source.as_ref());
 
     let bar = progress(ctx, views.len() as u64, "eval");
     let mut results = Vec::with_capacity(views.len());

@@ -6,7 +6,7 @@ use json::validation::Checked;
 
 use super::{name_or, Importer, MatInfo};
 use crate::import::{images, percent_decode, resolve_relative, Ctx, ImportError};
-use crate::scene::{AlphaMode, Material, Texture, TextureReport, Wrap};
+use crate::scene::{AlphaMode, Material, Texture, Wrap};
 
 impl Importer<'_> {
     pub(super) fn material(
@@ -18,9 +18,7 @@ impl Importer<'_> {
             let index = match self.default_material {
                 Some(i) => i,
                 None => {
-                    let s = self.b.scene();
-                    s.materials.push(Material::default());
-                    let i = (s.materials.len() - 1) as u32;
+                    let i = self.b.material(Material::default());
                     self.default_material = Some(i);
                     i
                 }
@@ -81,8 +79,7 @@ impl Importer<'_> {
             }
             texture = self.texture(ti.index.value(), &label, ctx)?;
         }
-        let s = self.b.scene();
-        s.materials.push(Material {
+        info.index = self.b.material(Material {
             name: m.name.clone().unwrap_or_else(|| format!("material {mi}")),
             base_color_factor: factor,
             base_color_texture: texture,
@@ -90,7 +87,6 @@ impl Importer<'_> {
             double_sided: m.double_sided,
             unlit: m.extensions.as_ref().is_some_and(|e| e.unlit.is_some()),
         });
-        info.index = (s.materials.len() - 1) as u32;
         self.materials.insert(mi, info);
         Ok(info)
     }
@@ -157,22 +153,15 @@ impl Importer<'_> {
                 Err("image has neither uri nor bufferView".into())
             }
         })();
-        let s = self.b.scene();
         let (result, error) = match loaded {
             Ok(mut tex) => {
                 tex.wrap_u = wrap_u;
                 tex.wrap_v = wrap_v;
-                s.textures.push(tex);
-                (Some((s.textures.len() - 1) as u32), None)
+                (Some(self.b.texture(tex)), None)
             }
             Err(e) => (None, Some(e)),
         };
-        if !s.texture_report.iter().any(|r| r.name == name) {
-            s.texture_report.push(TextureReport {
-                name: name.clone(),
-                found: result.is_some(),
-            });
-        }
+        ctx.texture(&name, result.is_some());
         self.images.insert((ii, wrap_u as u8, wrap_v as u8), result);
         if let Some(e) = error {
             ctx.warn(format!(

@@ -8,8 +8,8 @@
 //! Scene selection: the default `scene` if set, else every root node; a file with
 //! meshes but no nodes at all imports each mesh untransformed. The hierarchy must be a
 //! tree (a cycle, or a node with two parents, is an error rather than a hang or an
-//! exponential expansion). Only the base colour texture is loaded (texture_report lists
-//! only base colour images); `KHR_texture_transform` on it is baked into the vertex
+//! exponential expansion). Only the base colour texture is loaded (the report's textures
+//! are only base colour images); `KHR_texture_transform` on it is baked into the vertex
 //! UVs, and its `texCoord` picks which `TEXCOORD_n` becomes the vertex UV.
 
 use std::collections::HashMap;
@@ -22,8 +22,8 @@ use json::mesh::{Mode, Semantic};
 use json::validation::Checked;
 
 use super::accessor::{Accessors, Buffers};
-use super::{face_normal, Ctx, ImportError, SceneBuilder};
-use crate::scene::{Triangle, Vertex};
+use super::{face_normal, reserve, Ctx, ImportError};
+use crate::scene::{SceneBuilder, Triangle, Vertex};
 use glb::{split_glb, GlbError};
 
 mod glb;
@@ -327,12 +327,12 @@ impl Importer<'_> {
                 } else {
                     base
                 };
-                let id = self.b.add_mesh(name);
+                let id = self.b.mesh(name);
                 self.meshes.insert((mi, pi), id);
                 id
             }
         };
-        self.b.reserve(tris.len(), ctx)?;
+        reserve(&mut self.b, tris.len(), ctx)?;
         let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
         let flip = world.determinant() < 0.0;
         for t in tris {
