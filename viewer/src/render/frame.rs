@@ -203,7 +203,7 @@ impl Renderer {
         self.particles.targets.borrow()
     }
 
-    /// 2–3. Opaque meshes and clouds with depth write (cleared first): `binds` are the
+    /// Passes 2–3: opaque meshes and clouds with depth write (cleared first): `binds` are the
     /// mesh and cloud passes' frame bind groups and the clouds' instances.
     fn opaque_pass(
         &self,
@@ -248,7 +248,7 @@ impl Renderer {
         }
     }
 
-    /// 4. The volumes' slices (`plan`) and the cell wireframe, over the opaque image.
+    /// Pass 4: the volumes' slices (`plan`) and the cell wireframe, over the opaque image.
     /// The slices read the opaque depth (they fade at it), so it is attached read-only
     /// from here on. No pass without either.
     fn volume_pass(
@@ -298,7 +298,7 @@ impl Renderer {
         }
     }
 
-    /// 5. The particle layer over the scene image (`targets`), composited into the
+    /// Pass 5: the particle layer over the scene image (`targets`), composited into the
     /// target.
     fn particle_pass(
         &self,
