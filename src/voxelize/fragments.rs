@@ -14,10 +14,12 @@ use glam::{Vec2, Vec3, Vec4};
 
 use super::grid::GridSpec;
 use super::lanes::{at_least, negative};
-use super::slices::{RowOut, TriSetup, Vox, SUB};
+use super::slices::{RowOut, TriSetup, SUB};
 use super::Dir;
-use crate::scene::{AlphaMode, Scene};
+use crate::scene::{AlphaMode, Material, Scene};
 use crate::shade::Shader;
+
+mod voxels;
 
 /// A fragment: one triangle in one voxel, covering the samples of `mask`.
 struct Frag {
@@ -150,63 +152,145 @@ const fn full_mask<const K: usize>() -> u64 {
 /// they are done once for the two directions; each fragment remembers which of them see
 /// it (single-sided triangles: one; double-sided: both, the normal flipped for one), and
 /// only the per-voxel compositing runs once per direction, in its own depth order.
+///
+/// The stages, in order: [`triangle_row`] (coverage, [`slice_groups`], [`alpha_test`],
+/// [`fragment`]) per triangle, then [`Scratch::shade`], [`Scratch::sort_by_voxel`] and
+/// [`Scratch::composite`].
 #[inline(always)]
 fn raster_row<const K: usize, const AVX: bool>(
     ctx: &RowCtx<'_>,
     j: usize,
     scratch: &mut Scratch,
 ) -> [RowOut; 2] {
-    let RowCtx {
-        scene,
-        shader,
-        grid,
-        dir,
-        normals,
-        sides,
-        setups,
-        bins,
-    } = *ctx;
-    let tris = &bins[j];
-    let k = K as i64;
-    let fk = 2 * k * SUB;
-    let kk = K * K;
-    let full = full_mask::<K>();
-    let depth_n = grid.dims[dir.axis()];
-    let depth_f = depth_n as f64;
-    let width = grid.dims[dir.image_axes()[0]] as usize;
-    let Scratch {
-        frags,
-        normals: frag_n,
-        start,
-        by_slice,
-        order,
-        voxel,
-    } = scratch;
-    frags.clear();
-    frag_n.clear();
-    let km1 = k - 1;
+    let depth_n = ctx.grid.dims[ctx.dir.axis()];
+    let width = ctx.grid.dims[ctx.dir.image_axes()[0]] as usize;
+    scratch.frags.clear();
+    scratch.normals.clear();
+    let mut smp = Samples {
+        off: [[0i64; 64]; 3],
+        tx: [0f64; 64],
+        ty: [0f64; 64],
+        ts: [0f64; 64],
+        have_t: false,
+    };
+    // Kept apart from `smp`: its growth is a call that would otherwise see (and make the
+    // compiler reload) the sample tables.
     let mut groups: Vec<(u32, u64)> = Vec::with_capacity(64);
-    // Sample (si, sj) of bit b.
-    let si = |b: usize| (b % K) as i64;
-    let sj = |b: usize| (b / K) as i64;
-    let mut off = [[0i64; 64]; 3];
-    let (mut tx, mut ty) = ([0f64; 64], [0f64; 64]);
-    let mut ts = [0f64; 64];
-    for &ti in tris {
-        let s = &setups[ti as usize];
+    for &ti in &ctx.bins[j] {
+        let s = &ctx.setups[ti as usize];
+        triangle_row::<K, AVX>(ctx, j, depth_n, s, &mut smp, &mut groups, scratch);
+    }
+    let (count, seen) = scratch.shade(ctx.shader, depth_n);
+    scratch.sort_by_voxel(count, depth_n, width);
+    scratch.composite::<K>(ctx.sides, ctx.normals, seen, width)
+}
+
+/// The per-sample tables of the triangle being rasterized, kept from one triangle to the
+/// next of a row (not zeroed again).
+struct Samples {
+    /// Per edge, the offsets `si·ex + sj·ey` of its function at the samples.
+    off: [[i64; 64]; 3],
+    /// Per sample, its depth offset along u and along v from sample (0, 0).
+    tx: [f64; 64],
+    ty: [f64; 64],
+    /// Per sample, its depth in the current pixel.
+    ts: [f64; 64],
+    /// Whether `tx` and `ty` hold the current triangle's offsets yet (made when a pixel
+    /// first needs them).
+    have_t: bool,
+}
+
+/// One triangle's constants over a row of `K × K`-sample pixels.
+struct TriRow<'a> {
+    s: &'a TriSetup,
+    m: &'a Material,
+    /// The `Mask` alpha cutoff, if the material has one.
+    cutoff: Option<f32>,
+    /// Texture coordinates and vertex colours of the slots.
+    uvs: [Vec2; 3],
+    cols: [Vec4; 3],
+    inv_area: f64,
+    /// Edge i runs from vertex i+1 to vertex i+2; its step per sample along u and v.
+    ex: [i64; 3],
+    ey: [i64; 3],
+    /// Depth differences of vertices 1 and 2 from vertex 0.
+    dt1: f64,
+    dt2: f64,
+    /// Depth step per sample along u and v (exactly 0 for a constant-depth triangle).
+    dtx: f64,
+    dty: f64,
+    /// The largest and the least sample offset of each edge function over a pixel: the
+    /// whole pixel is outside an edge when even its best sample is, inside all three
+    /// when even its worst sample is.
+    hi: [i64; 3],
+    lo: [i64; 3],
+}
+
+impl<'a> TriRow<'a> {
+    #[inline(always)]
+    fn new<const K: usize>(shader: &'a Shader<'_>, s: &'a TriSetup) -> Self {
+        let km1 = K as i64 - 1;
         let m = shader.material(s.material);
         let cutoff = match m.alpha_mode {
             AlphaMode::Mask { cutoff } => Some(cutoff),
             _ => None,
         };
         let inv_area = 1.0 / s.area as f64;
-        let (uvs, cols_v) = (s.uv, s.col);
-        // Edge i runs from vertex i+1 to vertex i+2; its step per sample along u and v.
         let ex: [i64; 3] =
             [0, 1, 2].map(|i| -(s.p[(i + 2) % 3][1] - s.p[(i + 1) % 3][1]) * 2 * SUB);
         let ey: [i64; 3] = [0, 1, 2].map(|i| (s.p[(i + 2) % 3][0] - s.p[(i + 1) % 3][0]) * 2 * SUB);
-        // Sample offsets of the edge functions, `si·ex + sj·ey` (exact integers).
-        for (o, (x, y)) in off.iter_mut().zip(ex.iter().zip(&ey)) {
+        let (dt1, dt2) = (s.t[1] - s.t[0], s.t[2] - s.t[0]);
+        TriRow {
+            s,
+            m,
+            cutoff,
+            uvs: s.uv,
+            cols: s.col,
+            inv_area,
+            ex,
+            ey,
+            dt1,
+            dt2,
+            dtx: (ex[1] as f64 * dt1 + ex[2] as f64 * dt2) * inv_area,
+            dty: (ey[1] as f64 * dt1 + ey[2] as f64 * dt2) * inv_area,
+            hi: [0, 1, 2].map(|q| km1 * (ex[q].max(0) + ey[q].max(0))),
+            lo: [0, 1, 2].map(|q| km1 * (ex[q].min(0) + ey[q].min(0))),
+        }
+    }
+
+    /// Barycentrics (b1, b2) of a point whose biased edge values are e1, e2.
+    #[inline(always)]
+    fn bary(&self, e1: i64, e2: i64) -> (f64, f64) {
+        let b1 = (e1 + self.s.bias[1]) as f64 * self.inv_area;
+        let b2 = (e2 + self.s.bias[2]) as f64 * self.inv_area;
+        (b1, b2)
+    }
+
+    /// Depth at barycentrics (b1, b2); written so a constant-depth triangle gives exactly
+    /// its depth.
+    #[inline(always)]
+    fn depth(&self, b1: f64, b2: f64) -> f64 {
+        self.s.t[0] + b1 * self.dt1 + b2 * self.dt2
+    }
+
+    /// The f32 barycentric weights, texture coordinates and vertex colour at (b1, b2).
+    #[inline(always)]
+    fn attributes(&self, b1: f64, b2: f64) -> ([f32; 3], Vec2, Vec4) {
+        let (uvs, cols_v) = (&self.uvs, &self.cols);
+        let (b1, b2) = (b1 as f32, b2 as f32);
+        let b0 = 1.0 - b1 - b2;
+        (
+            [b0, b1, b2],
+            uvs[0] * b0 + uvs[1] * b1 + uvs[2] * b2,
+            cols_v[0] * b0 + cols_v[1] * b1 + cols_v[2] * b2,
+        )
+    }
+
+    /// Fills `off` with the sample offsets of the edge functions, `si·ex + sj·ey` (exact
+    /// integers).
+    #[inline(always)]
+    fn edge_offsets<const K: usize>(&self, off: &mut [[i64; 64]; 3]) {
+        for (o, (x, y)) in off.iter_mut().zip(self.ex.iter().zip(&self.ey)) {
             let along: [i64; 8] = std::array::from_fn(|c| c as i64 * x);
             for r in 0..K {
                 let base = r as i64 * y;
@@ -215,345 +299,264 @@ fn raster_row<const K: usize, const AVX: bool>(
                 }
             }
         }
-        let (dt1, dt2) = (s.t[1] - s.t[0], s.t[2] - s.t[0]);
-        // Barycentrics (b1, b2) and depth of a point whose biased edge values are e1, e2.
-        let bary = |e1: i64, e2: i64| {
-            let b1 = (e1 + s.bias[1]) as f64 * inv_area;
-            let b2 = (e2 + s.bias[2]) as f64 * inv_area;
-            (b1, b2)
-        };
-        // Written so a constant-depth triangle gives exactly its depth.
-        let depth = |b1: f64, b2: f64| s.t[0] + b1 * dt1 + b2 * dt2;
-        // Depth step per sample along u and v (exactly 0 for a constant-depth triangle).
-        let dtx = (ex[1] as f64 * dt1 + ex[2] as f64 * dt2) * inv_area;
-        let dty = (ey[1] as f64 * dt1 + ey[2] as f64 * dt2) * inv_area;
-        // Per-sample depth offsets, computed when a pixel first needs them.
-        let mut have_t = false;
-        // The whole pixel is outside an edge when even its best sample is; inside all
-        // three when even its worst sample is.
-        let hi: [i64; 3] = [0, 1, 2].map(|q| km1 * (ex[q].max(0) + ey[q].max(0)));
-        let lo: [i64; 3] = [0, 1, 2].map(|q| km1 * (ex[q].min(0) + ey[q].min(0)));
-        let sy = j as i64 * fk + SUB;
-        let i0 = s.cols[0] as usize;
-        let sp0 = [i0 as i64 * fk + SUB, sy];
-        // Edge values at sample (0, 0) of the pixel, biased by the tie rule; a pixel step
-        // is K sample steps.
-        let mut e00 = [
-            cross2(s.p[1], s.p[2], sp0) - s.bias[0],
-            cross2(s.p[2], s.p[0], sp0) - s.bias[1],
-            cross2(s.p[0], s.p[1], sp0) - s.bias[2],
-        ];
-        let step = ex.map(|x| x * k);
-        for i in i0..=s.cols[1] as usize {
-            let e = e00;
-            for q in 0..3 {
-                e00[q] += step[q];
-            }
-            if e[0] + hi[0] < 0 || e[1] + hi[1] < 0 || e[2] + hi[2] < 0 {
-                continue;
-            }
-            let all_in = e[0] + lo[0] >= 0 && e[1] + lo[1] >= 0 && e[2] + lo[2] >= 0;
-            let mask = if all_in {
-                full
-            } else {
-                coverage::<K, AVX>(e, &off, lo)
-            };
-            if mask == 0 {
-                continue;
-            }
-            // Depth is linear over the pixel's samples: extremes at the corners.
-            let t00 = {
-                let (b1, b2) = bary(e[1], e[2]);
-                depth(b1, b2)
-            };
-            let tmin = t00 + (km1 as f64) * (dtx.min(0.0) + dty.min(0.0));
-            let tmax = t00 + (km1 as f64) * (dtx.max(0.0) + dty.max(0.0));
-            let slice_of = |t: f64| (t as u32).min(depth_n - 1);
-            // (slice, samples) groups.
-            groups.clear();
-            if tmin >= 0.0 && tmax <= depth_f && slice_of(tmin) == slice_of(tmax) {
-                groups.push((slice_of(tmin), mask));
-            } else if tmax >= 0.0 && tmin <= depth_f {
-                if !have_t {
-                    for b in 0..kk {
-                        tx[b] = si(b) as f64 * dtx;
-                        ty[b] = sj(b) as f64 * dty;
-                    }
-                    have_t = true;
-                }
-                // A sample at depth t (0 ≤ t ≤ depth_n) lies in slice s when it is at least
-                // s and less than s + 1, except that depth_n itself is in the last slice:
-                // comparisons with whole numbers, so exactly `slice_of(t)`.
-                for b in 0..K * K {
-                    ts[b] = t00 + tx[b] + ty[b];
-                }
-                // Every sample's depth lies within `delta` of the corners' range (their
-                // rounding errors are below 1e-15 of these magnitudes), so only the
-                // planes inside [lo, hi] need comparing.
-                let delta = 1e-9 * (1.0 + t00.abs() + km1 as f64 * (dtx.abs() + dty.abs()));
-                let (lo, hi) = (tmin - delta, tmax + delta);
-                let ge = |p: u32| {
-                    let pf = p as f64;
-                    if p == 0 || pf <= lo {
-                        u64::MAX
-                    } else if p >= depth_n || pf > hi {
-                        0
-                    } else {
-                        at_least::<AVX, false>(kk, &ts, pf)
-                    }
-                };
-                let mut want = mask;
-                if lo < 0.0 {
-                    want &= at_least::<AVX, false>(kk, &ts, 0.0);
-                }
-                if hi > depth_f {
-                    want &= !at_least::<AVX, true>(kk, &ts, depth_f);
-                }
-                let (s_lo, s_hi) = (slice_of(lo.max(0.0)), slice_of(hi.min(depth_f)));
-                let mut below = ge(s_lo);
-                let mut got = 0u64;
-                for sl in s_lo..=s_hi {
-                    let next = ge(sl + 1);
-                    let g = want & below & !next;
-                    if g != 0 {
-                        groups.push((sl, g));
-                        got |= g;
-                    }
-                    below = next;
-                }
-                if got != want {
-                    // A sample rounded past a corner's slice: group them one by one.
-                    groups.clear();
-                    let mut rest = want;
-                    while rest != 0 {
-                        let b = rest.trailing_zeros() as usize;
-                        let first = slice_of(ts[b]);
-                        let mut g = 0u64;
-                        let mut bits = rest;
-                        while bits != 0 {
-                            let c = bits.trailing_zeros() as usize;
-                            bits &= bits - 1;
-                            if slice_of(ts[c]) == first {
-                                g |= 1 << c;
-                            }
-                        }
-                        groups.push((first, g));
-                        rest &= !g;
-                    }
-                }
-            }
-            for &(slice, gmask) in &groups {
-                let mut gmask = gmask;
-                // Edge values of sample `b` (bit index).
-                let e_at = |b: u32, q: usize| e[q] + off[q][b as usize];
-                if let Some(cutoff) = cutoff {
-                    let mut bits = gmask;
-                    while bits != 0 {
-                        let b = bits.trailing_zeros();
-                        bits &= bits - 1;
-                        let (b1, b2) = bary(e_at(b, 1), e_at(b, 2));
-                        let (b1, b2) = (b1 as f32, b2 as f32);
-                        let b0 = 1.0 - b1 - b2;
-                        let uv = uvs[0] * b0 + uvs[1] * b1 + uvs[2] * b2;
-                        let va = cols_v[0].w * b0 + cols_v[1].w * b1 + cols_v[2].w * b2;
-                        if !shader.mask_pass(m, cutoff, uv, va) {
-                            gmask &= !(1 << b);
-                        }
-                    }
-                    if gmask == 0 {
-                        continue;
-                    }
-                }
-                // Shading point: the centroid of the group's samples (inside the triangle).
-                let (n, ssi, ssj) = mask_sums::<K>(gmask);
-                let sum = |q: usize| n * (e[q] + s.bias[q]) + ssi * ex[q] + ssj * ey[q];
-                let inv = inv_area / n as f64;
-                let (mut b1, mut b2) = (sum(1) as f64 * inv, sum(2) as f64 * inv);
-                let mut t = depth(b1, b2);
-                let at = |b1: f64, b2: f64| {
-                    let (b1, b2) = (b1 as f32, b2 as f32);
-                    let b0 = 1.0 - b1 - b2;
-                    (
-                        [b0, b1, b2],
-                        uvs[0] * b0 + uvs[1] * b1 + uvs[2] * b2,
-                        cols_v[0] * b0 + cols_v[1] * b1 + cols_v[2] * b2,
-                    )
-                };
-                let (mut bw, mut uv, mut col) = at(b1, b2);
-                if let Some(cutoff) = cutoff {
-                    // A cut-out between the samples: shade at the first sample that passed.
-                    if !shader.mask_pass(m, cutoff, uv, col.w) {
-                        let b = gmask.trailing_zeros();
-                        (b1, b2) = bary(e_at(b, 1), e_at(b, 2));
-                        t = depth(b1, b2);
-                        (bw, uv, col) = at(b1, b2);
-                    }
-                }
-                if normals {
-                    frag_n.push(shading_normal(scene, s, bw));
-                }
-                let dk = depth_key(t as f32, false) as u64;
-                frags.push(Frag {
-                    key: (slice as u64) << 32 | dk,
-                    mask: gmask,
-                    tri: s.tri,
-                    material: s.material,
-                    rgba: col,
-                    uv,
-                    u: i as u32,
-                    vis: s.vis,
-                });
-            }
+    }
+}
+
+/// The slice a depth `0 ≤ t ≤ depth_n` falls in (`depth_n` itself: the last one).
+#[inline(always)]
+fn slice_of(t: f64, depth_n: u32) -> u32 {
+    (t as u32).min(depth_n - 1)
+}
+
+/// Coverage, slice groups (into `groups`, per pixel) and fragments of triangle `s` over
+/// the pixels of row `j` it spans, appended to `scratch.frags` (and its shading normals,
+/// when asked for).
+#[inline(always)]
+fn triangle_row<const K: usize, const AVX: bool>(
+    ctx: &RowCtx<'_>,
+    j: usize,
+    depth_n: u32,
+    s: &TriSetup,
+    smp: &mut Samples,
+    groups: &mut Vec<(u32, u64)>,
+    scratch: &mut Scratch,
+) {
+    let t = TriRow::new::<K>(ctx.shader, s);
+    t.edge_offsets::<K>(&mut smp.off);
+    smp.have_t = false;
+    let k = K as i64;
+    let fk = 2 * k * SUB;
+    let i0 = s.cols[0] as usize;
+    let sp0 = [i0 as i64 * fk + SUB, j as i64 * fk + SUB];
+    // Edge values at sample (0, 0) of the pixel, biased by the tie rule; a pixel step
+    // is K sample steps.
+    let mut e00 = [
+        cross2(s.p[1], s.p[2], sp0) - s.bias[0],
+        cross2(s.p[2], s.p[0], sp0) - s.bias[1],
+        cross2(s.p[0], s.p[1], sp0) - s.bias[2],
+    ];
+    let step = t.ex.map(|x| x * k);
+    let (hi, lo) = (t.hi, t.lo);
+    for i in i0..=s.cols[1] as usize {
+        let e = e00;
+        for q in 0..3 {
+            e00[q] += step[q];
         }
-    }
-    // Shading, batched per row; the survivors are counted per slice and per direction.
-    let mut count = 0u64;
-    let mut seen = [0u64; 2];
-    start.clear();
-    start.resize(depth_n as usize + 1, 0);
-    for f in frags.iter_mut() {
-        match shader.shade_tested(shader.material(f.material), f.uv, f.rgba) {
-            Some(c) => {
-                f.rgba = c;
-                start[(f.key >> 32) as usize + 1] += 1;
-                count += 1;
-                seen[0] += (f.vis & 1) as u64;
-                seen[1] += (f.vis >> 1) as u64;
-            }
-            None => f.mask = 0,
+        if e[0] + hi[0] < 0 || e[1] + hi[1] < 0 || e[2] + hi[2] < 0 {
+            continue;
         }
-    }
-    // Grouped by (column, slice) with two stable counting sorts (by slice, then by
-    // column), in generation order within a voxel.
-    for z in 0..depth_n as usize {
-        start[z + 1] += start[z];
-    }
-    by_slice.clear();
-    by_slice.resize(count as usize, 0);
-    for (i, f) in frags.iter().enumerate() {
-        if f.mask != 0 {
-            let p = &mut start[(f.key >> 32) as usize];
-            by_slice[*p as usize] = i as u32;
-            *p += 1;
-        }
-    }
-    start.clear();
-    start.resize(width + 1, 0);
-    for &i in by_slice.iter() {
-        start[frags[i as usize].u as usize + 1] += 1;
-    }
-    for u in 0..width {
-        start[u + 1] += start[u];
-    }
-    order.clear();
-    order.resize(count as usize, (0, 0, 0));
-    {
-        let mut fill = start[..width].to_vec();
-        for &i in by_slice.iter() {
-            let f = &frags[i as usize];
-            let p = &mut fill[f.u as usize];
-            order[*p as usize] = (f.key, f.tri, i);
-            *p += 1;
-        }
-    }
-    let inv_samples = 1.0 / kk as f32;
-    // A direction has at most as many voxels as fragments: sized once, no regrowing.
-    let mut out: [RowOut; 2] = [0, 1].map(|side| {
-        let n = seen[side];
-        let n_nrm = if normals { n as usize } else { 0 };
-        (Vec::with_capacity(n as usize), Vec::with_capacity(n_nrm), n)
-    });
-    let mut transmit = [1.0f32; 64];
-    let nrm_of = |i: u32, side: usize| {
-        if !normals {
-            Vec3::ZERO
-        } else if side == 0 {
-            frag_n[i as usize]
+        let all_in = e[0] + lo[0] >= 0 && e[1] + lo[1] >= 0 && e[2] + lo[2] >= 0;
+        let mask = if all_in {
+            full_mask::<K>()
         } else {
-            // The − direction sees the other face: the shading normal flipped (exactly).
-            -frag_n[i as usize]
+            coverage::<K, AVX>(e, &smp.off, lo)
+        };
+        if mask == 0 {
+            continue;
+        }
+        slice_groups::<K, AVX>(&t, e, mask, depth_n, smp, groups);
+        for &(slice, gmask) in groups.iter() {
+            let Some((f, bw)) = fragment::<K>(ctx.shader, &t, e, &smp.off, slice, gmask, i) else {
+                continue;
+            };
+            if ctx.normals {
+                scratch.normals.push(shading_normal(ctx.scene, s, bw));
+            }
+            scratch.frags.push(f);
+        }
+    }
+}
+
+/// Fills `groups` with the `(slice, samples)` groups of the covered samples `mask` of
+/// the pixel whose edge values at sample (0, 0) are `e`.
+#[inline(always)]
+fn slice_groups<const K: usize, const AVX: bool>(
+    t: &TriRow<'_>,
+    e: [i64; 3],
+    mask: u64,
+    depth_n: u32,
+    smp: &mut Samples,
+    groups: &mut Vec<(u32, u64)>,
+) {
+    let km1 = K as i64 - 1;
+    let depth_f = depth_n as f64;
+    // Depth is linear over the pixel's samples: extremes at the corners.
+    let t00 = {
+        let (b1, b2) = t.bary(e[1], e[2]);
+        t.depth(b1, b2)
+    };
+    let tmin = t00 + (km1 as f64) * (t.dtx.min(0.0) + t.dty.min(0.0));
+    let tmax = t00 + (km1 as f64) * (t.dtx.max(0.0) + t.dty.max(0.0));
+    groups.clear();
+    if tmin >= 0.0 && tmax <= depth_f && slice_of(tmin, depth_n) == slice_of(tmax, depth_n) {
+        groups.push((slice_of(tmin, depth_n), mask));
+    } else if tmax >= 0.0 && tmin <= depth_f {
+        if !smp.have_t {
+            for b in 0..K * K {
+                smp.tx[b] = (b % K) as i64 as f64 * t.dtx;
+                smp.ty[b] = (b / K) as i64 as f64 * t.dty;
+            }
+            smp.have_t = true;
+        }
+        for b in 0..K * K {
+            smp.ts[b] = t00 + smp.tx[b] + smp.ty[b];
+        }
+        // Every sample's depth lies within `delta` of the corners' range (their
+        // rounding errors are below 1e-15 of these magnitudes), so only the
+        // planes inside [lo, hi] need comparing.
+        let delta = 1e-9 * (1.0 + t00.abs() + km1 as f64 * (t.dtx.abs() + t.dty.abs()));
+        let (lo, hi) = (tmin - delta, tmax + delta);
+        split_at_planes::<K, AVX>(&smp.ts, mask, lo, hi, depth_n, groups);
+    }
+}
+
+/// The samples of `mask` (depths `ts`, all within `[lo, hi]`) grouped by slice into
+/// `groups`. A sample at depth t (0 ≤ t ≤ depth_n) lies in slice s when it is
+/// at least s and less than s + 1, except that depth_n itself is in the last slice:
+/// comparisons with whole numbers, so exactly `slice_of(t)`.
+#[inline(always)]
+fn split_at_planes<const K: usize, const AVX: bool>(
+    ts: &[f64; 64],
+    mask: u64,
+    lo: f64,
+    hi: f64,
+    depth_n: u32,
+    groups: &mut Vec<(u32, u64)>,
+) {
+    let kk = K * K;
+    let depth_f = depth_n as f64;
+    let ge = |p: u32| {
+        let pf = p as f64;
+        if p == 0 || pf <= lo {
+            u64::MAX
+        } else if p >= depth_n || pf > hi {
+            0
+        } else {
+            at_least::<AVX, false>(kk, ts, pf)
         }
     };
-    for u in 0..width {
-        let col = &order[start[u] as usize..start[u + 1] as usize];
-        let mut g = 0;
-        while g < col.len() {
-            let slice = (col[g].0 >> 32) as u32;
-            let mut end = g + 1;
-            while end < col.len() && (col[end].0 >> 32) as u32 == slice {
-                end += 1;
-            }
-            for (side, (vox, vox_n, _)) in out.iter_mut().enumerate() {
-                let bit = 1u8 << side;
-                if sides & bit == 0 {
-                    continue;
-                }
-                // A fragment alone in its voxel (the common case): no compositing.
-                let single = |i: u32| {
-                    let f = &frags[i as usize];
-                    let w = f.mask.count_ones() as f32;
-                    (f.rgba * w, nrm_of(i, side) * (f.rgba.w * w))
-                };
-                let (c, nsum) = if end == g + 1 {
-                    if frags[col[g].2 as usize].vis & bit == 0 {
-                        continue;
-                    }
-                    single(col[g].2)
-                } else {
-                    // The voxel's fragments seen from this side, by (depth front to back,
-                    // triangle): the + camera sees high depths first.
-                    voxel.clear();
-                    voxel.extend(
-                        col[g..end]
-                            .iter()
-                            .filter(|e| frags[e.2 as usize].vis & bit != 0)
-                            .map(|&(key, tri, i)| {
-                                let key = if side == 0 { key ^ 0xffff_ffff } else { key };
-                                (key, tri, i)
-                            }),
-                    );
-                    match voxel.len() {
-                        0 => continue,
-                        1 => single(voxel[0].2),
-                        _ => {
-                            sort_small(voxel);
-                            // Per-sample front-to-back compositing (ties in depth: lower
-                            // triangle first).
-                            let (mut c, mut nsum) = (Vec4::ZERO, Vec3::ZERO);
-                            transmit[..kk].fill(1.0);
-                            for &(_, _, i) in voxel.iter() {
-                                let f = &frags[i as usize];
-                                let mut w = 0.0f32;
-                                let keep = 1.0 - f.rgba.w;
-                                let mut bits = f.mask;
-                                while bits != 0 {
-                                    let b = bits.trailing_zeros() as usize;
-                                    bits &= bits - 1;
-                                    w += transmit[b];
-                                    transmit[b] *= keep;
-                                }
-                                c += f.rgba * w;
-                                nsum += nrm_of(i, side) * (f.rgba.w * w);
-                            }
-                            (c, nsum)
-                        }
-                    }
-                };
-                if c.w > 0.0 {
-                    vox.push(Vox {
-                        u: u as u16,
-                        s: slice as u16,
-                        rgba: (c * inv_samples).to_array(),
-                    });
-                    if normals {
-                        vox_n.push((nsum * inv_samples).to_array());
-                    }
+    let mut want = mask;
+    if lo < 0.0 {
+        want &= at_least::<AVX, false>(kk, ts, 0.0);
+    }
+    if hi > depth_f {
+        want &= !at_least::<AVX, true>(kk, ts, depth_f);
+    }
+    let (s_lo, s_hi) = (
+        slice_of(lo.max(0.0), depth_n),
+        slice_of(hi.min(depth_f), depth_n),
+    );
+    let mut below = ge(s_lo);
+    let mut got = 0u64;
+    for sl in s_lo..=s_hi {
+        let next = ge(sl + 1);
+        let g = want & below & !next;
+        if g != 0 {
+            groups.push((sl, g));
+            got |= g;
+        }
+        below = next;
+    }
+    if got != want {
+        // A sample rounded past a corner's slice: group them one by one.
+        groups.clear();
+        let mut rest = want;
+        while rest != 0 {
+            let b = rest.trailing_zeros() as usize;
+            let first = slice_of(ts[b], depth_n);
+            let mut g = 0u64;
+            let mut bits = rest;
+            while bits != 0 {
+                let c = bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                if slice_of(ts[c], depth_n) == first {
+                    g |= 1 << c;
                 }
             }
-            g = end;
+            groups.push((first, g));
+            rest &= !g;
         }
     }
-    out
+}
+
+/// The samples of `gmask` that pass the `Mask` alpha test at `cutoff` (alpha channel
+/// only, per sample); `e` and `off` as in [`fragment`].
+#[inline(always)]
+fn alpha_test(
+    shader: &Shader<'_>,
+    t: &TriRow<'_>,
+    cutoff: f32,
+    e: [i64; 3],
+    off: &[[i64; 64]; 3],
+    gmask: u64,
+) -> u64 {
+    let (uvs, cols_v) = (&t.uvs, &t.cols);
+    let mut gmask = gmask;
+    let mut bits = gmask;
+    while bits != 0 {
+        let b = bits.trailing_zeros();
+        bits &= bits - 1;
+        let (b1, b2) = t.bary(e[1] + off[1][b as usize], e[2] + off[2][b as usize]);
+        let (b1, b2) = (b1 as f32, b2 as f32);
+        let b0 = 1.0 - b1 - b2;
+        let uv = uvs[0] * b0 + uvs[1] * b1 + uvs[2] * b2;
+        let va = cols_v[0].w * b0 + cols_v[1].w * b1 + cols_v[2].w * b2;
+        if !shader.mask_pass(t.m, cutoff, uv, va) {
+            gmask &= !(1 << b);
+        }
+    }
+    gmask
+}
+
+/// The fragment of the samples `gmask` in `slice` of pixel column `i` (edge values `e` at
+/// its sample (0, 0), sample offsets `off`), with the barycentric weights of its shading
+/// point, or `None` when the alpha test leaves no sample.
+#[inline(always)]
+fn fragment<const K: usize>(
+    shader: &Shader<'_>,
+    t: &TriRow<'_>,
+    e: [i64; 3],
+    off: &[[i64; 64]; 3],
+    slice: u32,
+    gmask: u64,
+    i: usize,
+) -> Option<(Frag, [f32; 3])> {
+    let s = t.s;
+    let mut gmask = gmask;
+    if let Some(cutoff) = t.cutoff {
+        gmask = alpha_test(shader, t, cutoff, e, off, gmask);
+        if gmask == 0 {
+            return None;
+        }
+    }
+    // Shading point: the centroid of the group's samples (inside the triangle).
+    let (n, ssi, ssj) = mask_sums::<K>(gmask);
+    let sum = |q: usize| n * (e[q] + s.bias[q]) + ssi * t.ex[q] + ssj * t.ey[q];
+    let inv = t.inv_area / n as f64;
+    let (mut b1, mut b2) = (sum(1) as f64 * inv, sum(2) as f64 * inv);
+    let mut depth = t.depth(b1, b2);
+    let (mut bw, mut uv, mut col) = t.attributes(b1, b2);
+    if let Some(cutoff) = t.cutoff {
+        // A cut-out between the samples: shade at the first sample that passed.
+        if !shader.mask_pass(t.m, cutoff, uv, col.w) {
+            let b = gmask.trailing_zeros() as usize;
+            (b1, b2) = t.bary(e[1] + off[1][b], e[2] + off[2][b]);
+            depth = t.depth(b1, b2);
+            (bw, uv, col) = t.attributes(b1, b2);
+        }
+    }
+    let dk = depth_key(depth as f32, false) as u64;
+    let f = Frag {
+        key: (slice as u64) << 32 | dk,
+        mask: gmask,
+        tri: s.tri,
+        material: s.material,
+        rgba: col,
+        uv,
+        u: i as u32,
+        vis: s.vis,
+    };
+    Some((f, bw))
 }
 
 /// What every row of one axis's two slice stacks reads.
@@ -640,26 +643,6 @@ pub(crate) fn row_fn(k: usize, simd: bool) -> RowFn {
     }
     let _ = simd;
     pick!(row_base)
-}
-
-/// Sorts a voxel's `(key, triangle, index)` entries (few, usually): insertion sort for
-/// short runs, the standard sort otherwise. Keys and triangles are never both equal.
-#[inline]
-fn sort_small(v: &mut [(u64, u32, u32)]) {
-    if v.len() > 24 {
-        v.sort_unstable();
-        return;
-    }
-    for i in 1..v.len() {
-        let x = v[i];
-        let key = (x.0, x.1);
-        let mut p = i;
-        while p > 0 && (v[p - 1].0, v[p - 1].1) > key {
-            v[p] = v[p - 1];
-            p -= 1;
-        }
-        v[p] = x;
-    }
 }
 
 /// The unit shading normal at barycentrics `bw` (interpolated vertex normals, the face

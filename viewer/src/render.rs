@@ -12,18 +12,23 @@
 
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use std::cell::{OnceCell, RefCell};
+
 use billow_format::{Prism, VolumeAsset};
 use glam::{Mat4, Vec3};
 
-use crate::cloud_pass::{CloudFrame, CloudPass, GpuCloud, View};
-use crate::mesh_pass::{GpuMesh, MeshData, MeshFrame, MeshPass};
-use crate::shadow::{self, ShadowMap, SHADOW_MAP_SIZE};
+use crate::cloud_pass::{CloudPass, GpuCloud};
+use crate::mesh_pass::{GpuMesh, MeshData, MeshPass};
+use crate::particle_pass::{LayerTargets, ParticleLayerDesc, ParticlePass};
+use crate::particles::ParticleSystemDesc;
+use crate::shadow::{self, ShadowMap};
 use crate::target::{RgbaImage, Target};
 use crate::volume_pass::{GpuVolume, VolumePass};
-use crate::volume_plan::{self, PlanBuffers, VolumePlan};
+use crate::volume_plan::{self, PlanBuffers};
 use crate::{Gpu, SliceParams, ViewCamera, ViewError};
 
 mod clouds;
+mod frame;
 
 /// Vertices per cell × slice instance: a fan of 3 triangles covers the ≤ 5-gon.
 pub const VERTICES_PER_INSTANCE: u32 = 9;
@@ -98,21 +103,12 @@ struct CloudEntry {
 pub struct Renderer {
     pub gpu: Gpu,
     pub params: SliceParams,
-    volume_pass: Option<VolumePass>,
-    volumes: Vec<VolumeEntry>,
-    batches: Vec<wgpu::BindGroup>,
+    volumes: Volumes,
     mesh_pass: Option<MeshPass>,
     meshes: Vec<GpuMesh>,
     cloud_pass: Option<CloudPass>,
     clouds: Vec<CloudEntry>,
-    receiver_layout: wgpu::BindGroupLayout,
-    /// 1×1 stand-in bound where no shadow map is read.
-    no_shadow: ShadowMap,
-    /// Shadows on ([`Renderer::set_shadows`]); the map is made by the first frame that
-    /// has something to cast (a scene with shadows on and nothing to cast never makes
-    /// its 2048² atlas).
-    shadows_on: bool,
-    shadow_map: std::cell::OnceCell<ShadowMap>,
+    shadows: Shadows,
     /// Light direction (towards the light) and ambient term.
     pub light_dir: Vec3,
     pub ambient: f32,
@@ -128,44 +124,66 @@ pub struct Renderer {
     /// Volume textures bound at once (clamped to the device's limit when the volume
     /// pass is built, on the first volume added); tests lower it to exercise batches.
     pub texture_batch: usize,
-    particle_pass: Option<crate::particle_pass::ParticlePass>,
-    particles: Vec<crate::particles::ParticleSystemDesc>,
-    particle_layer: crate::particle_pass::ParticleLayerDesc,
-    /// The particle layer's targets, for the last frame size (made on first use).
-    layer_targets: std::cell::RefCell<Option<crate::particle_pass::LayerTargets>>,
+    particles: Particles,
     /// Textures uploaded as BC7 blocks so far (volumes, atlases, normal maps); the others
     /// of compressed assets were decoded on load ([`Gpu::block_upload`]).
     pub block_textures: u32,
-    /// The volume plans' buffers, kept from frame to frame: the camera's, the light's
-    /// (made on first use).
-    plan_buffers: [std::cell::RefCell<Option<PlanBuffers>>; 2],
 }
 
-/// Which view a volume plan is for (its [`PlanBuffers`]).
-#[derive(Clone, Copy)]
-enum PlanView {
-    Camera = 0,
-    Light = 1,
+/// The volume assets and what drawing them keeps: the pass (built with the first
+/// volume), the texture batches' bind groups and the plans' buffers.
+#[derive(Default)]
+struct Volumes {
+    pass: Option<VolumePass>,
+    entries: Vec<VolumeEntry>,
+    /// The volume textures' bind groups, [`Renderer::texture_batch`] textures each.
+    batches: Vec<wgpu::BindGroup>,
+    /// The volume plans' buffers, kept from frame to frame: the camera's, the light's
+    /// (made on first use).
+    plan_buffers: [RefCell<Option<PlanBuffers>>; 2],
+}
+
+/// The shadow state: what receivers bind, and the map when shadows are on.
+struct Shadows {
+    receiver_layout: wgpu::BindGroupLayout,
+    /// 1×1 stand-in bound where no shadow map is read.
+    none: ShadowMap,
+    /// Shadows on ([`Renderer::set_shadows`]); the map is made by the first frame that
+    /// has something to cast (a scene with shadows on and nothing to cast never makes
+    /// its 2048² atlas).
+    on: bool,
+    map: OnceCell<ShadowMap>,
+}
+
+/// The particle systems (spherical billboards), how their layer is made, its pass (only
+/// when a system needs one) and its targets.
+#[derive(Default)]
+struct Particles {
+    pass: Option<ParticlePass>,
+    systems: Vec<ParticleSystemDesc>,
+    layer: ParticleLayerDesc,
+    /// The layer's targets, for the last frame size (made on first use).
+    targets: RefCell<Option<LayerTargets>>,
 }
 
 impl Renderer {
     pub fn new(gpu: Gpu) -> Renderer {
         let receiver_layout = shadow::receiver_layout(&gpu.device);
-        let no_shadow = ShadowMap::new(&gpu, &receiver_layout, 1);
+        let none = ShadowMap::new(&gpu, &receiver_layout, 1);
         Renderer {
             gpu,
             params: SliceParams::default(),
-            volume_pass: None,
-            volumes: Vec::new(),
-            batches: Vec::new(),
+            volumes: Volumes::default(),
             mesh_pass: None,
             meshes: Vec::new(),
             cloud_pass: None,
             clouds: Vec::new(),
-            receiver_layout,
-            no_shadow,
-            shadows_on: false,
-            shadow_map: std::cell::OnceCell::new(),
+            shadows: Shadows {
+                receiver_layout,
+                none,
+                on: false,
+                map: OnceCell::new(),
+            },
             light_dir: Vec3::new(0.3, 1.0, 0.5).normalize(),
             ambient: 0.3,
             lod_distance_override: None,
@@ -173,12 +191,8 @@ impl Renderer {
             lines: None,
             time: 0.0,
             texture_batch: crate::volume_pass::MAX_TEXTURES_PER_BATCH,
-            particle_pass: None,
-            particles: Vec::new(),
-            particle_layer: Default::default(),
-            layer_targets: std::cell::RefCell::new(None),
+            particles: Particles::default(),
             block_textures: 0,
-            plan_buffers: Default::default(),
         }
     }
 
@@ -186,8 +200,8 @@ impl Renderer {
     /// LUTs, noise, targets and passes they need are built now, and only those.
     pub fn set_particles(
         &mut self,
-        systems: Vec<crate::particles::ParticleSystemDesc>,
-        layer: crate::particle_pass::ParticleLayerDesc,
+        systems: Vec<ParticleSystemDesc>,
+        layer: ParticleLayerDesc,
     ) -> Result<(), ViewError> {
         for (i, s) in systems.iter().enumerate() {
             s.validate()
@@ -197,12 +211,12 @@ impl Renderer {
             .validate()
             .map_err(|e| ViewError::InvalidParam(format!("particle_layer.{e}")))?;
         let needs = crate::particle_pass::ParticleNeeds::of(&systems, &layer);
-        self.particle_pass = needs
-            .any
-            .then(|| crate::particle_pass::ParticlePass::new(&self.gpu, needs));
-        self.particles = systems;
-        self.particle_layer = layer;
-        *self.layer_targets.borrow_mut() = None;
+        self.particles = Particles {
+            pass: needs.any.then(|| ParticlePass::new(&self.gpu, needs)),
+            systems,
+            layer,
+            targets: RefCell::new(None),
+        };
         Ok(())
     }
 
@@ -216,7 +230,7 @@ impl Renderer {
     }
 
     pub fn shadows(&self) -> bool {
-        self.shadows_on
+        self.shadows.on
     }
 
     /// What this renderer built (pipelines, bakes, the shadow map) and which passes its
@@ -236,13 +250,13 @@ impl Renderer {
     /// Whether frames change with [`Renderer::time`] (particles, animated volume cells):
     /// a window showing nothing else redraws only on input.
     pub fn animated(&self) -> bool {
-        self.particle_pass.is_some() || self.volumes.iter().any(|v| v.animation.is_some())
+        self.particles.pass.is_some() || self.volumes.entries.iter().any(|v| v.animation.is_some())
     }
 
     /// World-space end points of every cell edge of every volume instance.
     fn cell_edges(&self) -> Vec<Vec3> {
         let mut pts = Vec::new();
-        for v in &self.volumes {
+        for v in &self.volumes.entries {
             for m in &v.instances {
                 for c in v.bands.iter().flat_map(|b| &b.cells) {
                     for (a, b) in crate::lines::PRISM_EDGES {
@@ -258,9 +272,9 @@ impl Renderer {
     /// Turns shadows on (the map is made by the first frame with something to cast) or
     /// off (the map dropped).
     pub fn set_shadows(&mut self, on: bool) {
-        self.shadows_on = on;
+        self.shadows.on = on;
         if !on {
-            self.shadow_map = std::cell::OnceCell::new();
+            self.shadows.map = OnceCell::new();
         }
     }
 
@@ -297,12 +311,12 @@ impl Renderer {
         if let Some(a) = &animation {
             a.validate().map_err(ViewError::InvalidParam)?;
         }
-        let pass = self.volume_pass.get_or_insert_with(|| {
-            VolumePass::new(&self.gpu, &self.receiver_layout, self.texture_batch)
+        let pass = self.volumes.pass.get_or_insert_with(|| {
+            VolumePass::new(&self.gpu, &self.shadows.receiver_layout, self.texture_batch)
         });
         let textures = pass.upload_with(&self.gpu, asset, blocks)?;
         self.block_textures += textures.iter().filter(|t| t.blocks).count() as u32;
-        let first_texture: usize = self.volumes.iter().map(|v| v.bands.len()).sum();
+        let first_texture: usize = self.volumes.entries.iter().map(|v| v.bands.len()).sum();
         let b = &asset.header.bounds;
         let bounds = (Vec3::from(b.min), Vec3::from(b.max));
         let mut bands = Vec::new();
@@ -330,14 +344,15 @@ impl Renderer {
         }
         let last = bands.last().expect("a base texture");
         let max_lod = last.first_level + last.gpu.levels - 1;
-        self.volumes.push(VolumeEntry {
+        self.volumes.entries.push(VolumeEntry {
             bands,
             instances,
             max_lod,
             bounds,
             animation,
         });
-        self.batches = volume_plan::batch_bind_groups(pass, &self.gpu, &self.volumes);
+        self.volumes.batches =
+            volume_plan::batch_bind_groups(pass, &self.gpu, &self.volumes.entries);
         Ok(())
     }
 
@@ -345,7 +360,7 @@ impl Renderer {
     pub fn add_mesh(&mut self, mesh: &MeshData) -> Result<(), ViewError> {
         let pass = self
             .mesh_pass
-            .get_or_insert_with(|| MeshPass::new(&self.gpu, &self.receiver_layout));
+            .get_or_insert_with(|| MeshPass::new(&self.gpu, &self.shadows.receiver_layout));
         let m = pass.upload(&self.gpu, mesh)?;
         self.meshes.push(m);
         Ok(())
@@ -362,11 +377,12 @@ impl Renderer {
         crate::content::pass_list(crate::content::Needs {
             meshes: !self.meshes.is_empty(),
             clouds: !self.clouds.is_empty(),
-            volumes: !self.volumes.is_empty(),
-            shadows: self.shadows_on,
-            animated: self.volumes.iter().any(|v| v.animation.is_some()),
+            volumes: !self.volumes.entries.is_empty(),
+            shadows: self.shadows.on,
+            animated: self.volumes.entries.iter().any(|v| v.animation.is_some()),
             particles: self
-                .particle_pass
+                .particles
+                .pass
                 .as_ref()
                 .map_or(Default::default(), |p| p.needs),
         })
@@ -377,7 +393,7 @@ impl Renderer {
     pub fn content_bounds(&self) -> (Vec3, Vec3) {
         let mut lo = Vec3::splat(f32::INFINITY);
         let mut hi = Vec3::splat(f32::NEG_INFINITY);
-        for v in &self.volumes {
+        for v in &self.volumes.entries {
             for m in &v.instances {
                 for c in v.bands.iter().flat_map(|b| &b.cells) {
                     for p in &c.pos {
@@ -406,318 +422,12 @@ impl Renderer {
         (lo, hi)
     }
 
-    /// Renders one frame into `target` (submitted, not waited for).
-    pub fn render(&self, target: &Target, camera: &ViewCamera) -> Result<FrameStats, ViewError> {
-        camera.validate()?;
-        self.params.validate()?;
-        if camera.width != target.width || camera.height != target.height {
-            return Err(ViewError::InvalidParam(format!(
-                "camera is {}x{} but the target is {}x{}",
-                camera.width, camera.height, target.width, target.height
-            )));
-        }
-        let mut stats = FrameStats::default();
-        self.gpu.note_frame_start();
-        let device = &self.gpu.device;
-        let levels = self.cloud_levels(camera);
-        stats.cloud_lods = levels.iter().map(|l| (l.level, l.morph)).collect();
-        stats.cloud_dissolves = levels.iter().map(|l| l.dissolve).collect();
-        let cloud_draws = self.cloud_draws(&levels);
-        // The instance data serves the shadow and the main pass (it does not depend on
-        // the view): written once, before anything is encoded.
-        let cloud_frame = self
-            .cloud_pass
-            .as_ref()
-            .map(|p| p.frame(&self.gpu, &cloud_draws));
-        if let Some(cf) = &cloud_frame {
-            stats.cloud_quads = cf.quads;
-            stats.cloud_bytes_uploaded = cf.bytes_uploaded;
-        }
-        let mut enc = device.create_command_encoder(&Default::default());
-
-        // 1. Shadow map.
-        let shadow = match self.shadows_on && self.has_casters() {
-            true => {
-                let map = self.shadow_map.get_or_init(|| {
-                    self.gpu.note_built("texture:shadow-map");
-                    ShadowMap::new(&self.gpu, &self.receiver_layout, SHADOW_MAP_SIZE)
-                });
-                let cs = shadow::cascades(self.light_dir, camera, self.content_bounds(), map.size);
-                self.gpu
-                    .queue
-                    .write_buffer(&map.cascades, 0, bytemuck::bytes_of(&cs.uniform));
-                // One submission per cascade: the light's uniforms and volume plan are
-                // written again for each (writes land before the next submission).
-                for (k, light) in cs.cameras.iter().enumerate() {
-                    let mut senc = device.create_command_encoder(&Default::default());
-                    self.shadow_pass(&mut senc, map, k, light, cloud_frame.as_ref(), &mut stats)?;
-                    self.gpu.queue.submit([senc.finish()]);
-                }
-                Some((map, cs.base))
-            }
-            false => None,
-        };
-        let receiver = shadow.map_or(&self.no_shadow.bind_group, |(m, _)| &m.bind_group);
-        let world_to_shadow = shadow.map(|(_, l)| {
-            (
-                l.projection() * l.view,
-                shadow::depth_bias(&l),
-                shadow::view_to_shadow(camera, &l),
-            )
-        });
-
-        // 2–4. Meshes, clouds, volumes.
-        let plan = self.plan(
-            PlanView::Camera,
-            camera,
-            self.params,
-            world_to_shadow.map(|w| (w.2, w.1)),
-            None,
-        )?;
-        if let Some(p) = &plan {
-            p.fill_stats(&mut stats);
-        }
-        let mesh_frame = MeshFrame {
-            view_proj: (camera.projection() * camera.view).to_cols_array_2d(),
-            world_to_shadow: world_to_shadow
-                .map_or(Mat4::IDENTITY, |w| w.0)
-                .to_cols_array_2d(),
-            light: {
-                let l = self.light_dir.normalize_or(Vec3::Y);
-                [l.x, l.y, l.z, self.ambient.clamp(0.0, 1.0)]
-            },
-            flags: [
-                f32::from(u8::from(shadow.is_some())),
-                0.0,
-                world_to_shadow.map_or(0.0, |w| w.1),
-                0.0,
-            ],
-        };
-        let mesh_bind = self
-            .mesh_pass
-            .as_ref()
-            .map(|p| p.frame_bind_group(&self.gpu, View::Camera, &mesh_frame));
-        let cloud_bind = self.cloud_pass.as_ref().map(|p| {
-            stats.cloud_bytes_uploaded += std::mem::size_of::<MeshFrame>();
-            p.frame_bind_group(&self.gpu, View::Camera, &mesh_frame)
-        });
-        // With particles the opaque + volume image goes to the layer's scene target and
-        // the composite writes the frame.
-        if let Some(pp) = &self.particle_pass {
-            let mut lt = self.layer_targets.borrow_mut();
-            let div = self.particle_layer.resolution.divisor();
-            if lt
-                .as_ref()
-                .is_none_or(|t| t.size != (target.width, target.height))
-            {
-                *lt = Some(pp.targets(&self.gpu, target.width, target.height, div));
-            }
-        }
-        let layer_targets = self.layer_targets.borrow();
-        let scene_view = match (&self.particle_pass, layer_targets.as_ref()) {
-            (Some(_), Some(t)) => &t.scene,
-            _ => &target.color_view,
-        };
-        {
-            let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("frame"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: scene_view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: Some(depth_attachment(&target.depth_view)),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            if let (Some(pass), Some(bind)) = (&self.mesh_pass, mesh_bind) {
-                if !self.meshes.is_empty() {
-                    self.gpu.note_pass("mesh");
-                }
-                for m in &self.meshes {
-                    stats.mesh_triangles += m.triangles as usize;
-                    stats.draw_calls += pass.draw(&mut rp, bind, receiver, m, false);
-                }
-            }
-            if let (Some(pass), Some(bind), Some(cf)) = (&self.cloud_pass, cloud_bind, &cloud_frame)
-            {
-                self.gpu.note_pass("cloud");
-                stats.draw_calls += pass.draw(&mut rp, bind, receiver, cf, false);
-            }
-        }
-        if plan.is_some() || self.lines.is_some() {
-            // The slices read the opaque depth (they fade at it), so it is attached
-            // read-only from here on.
-            let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("frame volumes"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: scene_view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Load,
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &target.depth_view,
-                    depth_ops: None,
-                    stencil_ops: None,
-                }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            if let (Some(pass), Some(plan)) = (&self.volume_pass, &plan) {
-                let depth = target
-                    .scene_depth
-                    .get_or_init(|| pass.depth_bind_group(&self.gpu, &target.depth_view));
-                rp.set_bind_group(3, depth, &[]);
-                self.gpu.note_pass("volume");
-                stats.draw_calls += plan.draw(&mut rp, &pass.pipeline, &self.batches, receiver);
-            }
-            if let Some(lines) = &self.lines {
-                let vp = camera.projection() * camera.view;
-                let pts = self.cell_edges();
-                stats.draw_calls += lines.draw(&self.gpu, &mut rp, vp, &pts, [1.0, 0.85, 0.1, 1.0]);
-            }
-        }
-        if let (Some(pp), Some(t)) = (&self.particle_pass, layer_targets.as_ref()) {
-            let (n, draws) = pp.render(
-                &self.gpu,
-                &mut enc,
-                &self.particles,
-                &self.particle_layer,
-                camera,
-                (self.light_dir, self.ambient),
-                self.time,
-                &target.depth_view,
-                t,
-                &target.color_view,
-            );
-            stats.particles = n;
-            stats.draw_calls += draws;
-        }
-        self.gpu.queue.submit([enc.finish()]);
-        Ok(stats)
-    }
-
-    /// Cascade `k` of the light's depth atlas (its tile; cascade 0 clears the atlas):
-    /// meshes, clouds (at the levels the viewer shows), volumes sliced from the light with
-    /// [`shadow::SHADOW_SPACING_BIAS`]× the spacing.
-    fn shadow_pass(
-        &self,
-        enc: &mut wgpu::CommandEncoder,
-        map: &ShadowMap,
-        k: usize,
-        light: &ViewCamera,
-        clouds: Option<&CloudFrame<'_>>,
-        stats: &mut FrameStats,
-    ) -> Result<(), ViewError> {
-        let mut params = self.params;
-        params.spacing = params.spacing.scaled(shadow::SHADOW_SPACING_BIAS);
-        let plan = self.plan(
-            PlanView::Light,
-            light,
-            params,
-            None,
-            Some(shadow::SHADOW_ALPHA_CUTOFF),
-        )?;
-        stats.shadow_slices += plan.as_ref().map_or(0, |p| p.slice_count());
-        let frame = MeshFrame {
-            view_proj: (light.projection() * light.view).to_cols_array_2d(),
-            world_to_shadow: Mat4::IDENTITY.to_cols_array_2d(),
-            light: [0.0, 1.0, 0.0, 1.0],
-            flags: [0.0; 4],
-        };
-        let none = &self.no_shadow.bind_group;
-        let mut depth = depth_attachment(&map.view);
-        if k > 0 {
-            depth.depth_ops = Some(wgpu::Operations {
-                load: wgpu::LoadOp::Load,
-                store: wgpu::StoreOp::Store,
-            });
-        }
-        self.gpu.note_pass("shadow");
-        let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("shadow"),
-            color_attachments: &[],
-            depth_stencil_attachment: Some(depth),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        let (x, y, side) = shadow::tile_rect(k, map.size);
-        rp.set_viewport(x as f32, y as f32, side as f32, side as f32, 0.0, 1.0);
-        rp.set_scissor_rect(x, y, side, side);
-        if let Some(pass) = &self.mesh_pass {
-            let bind = pass.frame_bind_group(&self.gpu, View::Light, &frame);
-            for m in &self.meshes {
-                pass.draw(&mut rp, bind, none, m, true);
-            }
-        }
-        if let (Some(pass), Some(cf)) = (&self.cloud_pass, clouds) {
-            let bind = pass.frame_bind_group(&self.gpu, View::Light, &frame);
-            stats.cloud_bytes_uploaded += std::mem::size_of::<MeshFrame>();
-            pass.draw(&mut rp, bind, none, cf, true);
-        }
-        if let (Some(pass), Some(plan)) = (&self.volume_pass, &plan) {
-            plan.draw(&mut rp, &pass.shadow_pipeline, &self.batches, none);
-        }
-        Ok(())
-    }
-
-    /// The volume plan for `camera` (cells in camera space, slices, slabs, draws),
-    /// written into `view`'s buffers.
-    fn plan(
-        &self,
-        view: PlanView,
-        camera: &ViewCamera,
-        params: SliceParams,
-        shadow: Option<(Mat4, f32)>,
-        shadow_cutoff: Option<f32>,
-    ) -> Result<Option<VolumePlan>, ViewError> {
-        let Some(pass) = &self.volume_pass else {
-            return Ok(None);
-        };
-        let mut bufs = self.plan_buffers[view as usize].borrow_mut();
-        let bufs = bufs.get_or_insert_with(|| PlanBuffers::new(&self.gpu));
-        volume_plan::plan(
-            &self.gpu,
-            pass,
-            bufs,
-            &self.volumes,
-            camera,
-            params,
-            (self.light_dir, self.ambient),
-            shadow,
-            shadow_cutoff,
-            self.time,
-        )
-    }
-
     /// Renders into a new target and reads it back.
     pub fn render_image(&self, camera: &ViewCamera) -> Result<(RgbaImage, FrameStats), ViewError> {
         camera.validate()?;
         let target = Target::new(&self.gpu, camera.width, camera.height);
         let stats = self.render(&target, camera)?;
         Ok((self.read(&target)?, stats))
-    }
-}
-
-fn depth_attachment(view: &wgpu::TextureView) -> wgpu::RenderPassDepthStencilAttachment<'_> {
-    wgpu::RenderPassDepthStencilAttachment {
-        view,
-        depth_ops: Some(wgpu::Operations {
-            load: wgpu::LoadOp::Clear(1.0),
-            store: wgpu::StoreOp::Store,
-        }),
-        stencil_ops: None,
     }
 }
 

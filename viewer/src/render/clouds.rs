@@ -40,7 +40,7 @@ impl Renderer {
         check_transforms(&instances)?;
         let pass = self
             .cloud_pass
-            .get_or_insert_with(|| CloudPass::new(&self.gpu, &self.receiver_layout));
+            .get_or_insert_with(|| CloudPass::new(&self.gpu, &self.shadows.receiver_layout));
         let gpu = pass.upload_with(&self.gpu, asset, blocks)?;
         self.block_textures += gpu.block_textures;
         let levels = gpu.level_count();
