@@ -236,3 +236,33 @@ fn quick_headline_numbers_match_the_committed_docs() {
          {diff}If the change is intended, regenerate with: {REGENERATE}"
     );
 }
+
+/// docs/accuracy.md keeps every section the issues ask it to show: `make accuracy`
+/// regenerates the sweeps around blocks that other generators (or hand measurements)
+/// wrote, and once dropped one (the compressed-texture costs of issue 23) on regenerating.
+#[test]
+fn the_accuracy_report_keeps_its_kept_sections() {
+    let text = std::fs::read_to_string(repo().join("docs/accuracy.md")).expect("docs/accuracy.md");
+    for name in [
+        "emptyspace-sweep",
+        "particle-layer",
+        "compressed-textures",
+        "pareto",
+    ] {
+        let (b, e) = (
+            format!("<!-- {name}:begin -->"),
+            format!("<!-- {name}:end -->"),
+        );
+        let start = text
+            .find(&b)
+            .unwrap_or_else(|| panic!("docs/accuracy.md lost its {name} section ({b})"));
+        let end = text[start..]
+            .find(&e)
+            .unwrap_or_else(|| panic!("docs/accuracy.md: {b} without {e}"));
+        let body = &text[start + b.len()..start + end];
+        assert!(
+            body.lines().filter(|l| l.starts_with('|')).count() >= 3,
+            "docs/accuracy.md: the {name} section has no table"
+        );
+    }
+}

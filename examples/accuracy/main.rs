@@ -15,12 +15,13 @@
 //! Then the oak as a billboard cloud ([`cloud`]): ε, N and texel density swept against
 //! bake time and texture bytes, and a 4-level LOD chain's error against distance.
 //!
-//! Text between `<!-- emptyspace-sweep:begin -->` and `<!-- emptyspace-sweep:end -->` in
-//! the existing report (written by another sweep), and likewise between the
-//! `particle-layer` and `pareto` markers, is kept as it is; the markers are written when
-//! absent.
+//! Every block between `<!-- NAME:begin -->` and `<!-- NAME:end -->` in the existing report
+//! is kept as it is, whatever its name (`emptyspace-sweep`, `particle-layer`, `pareto`:
+//! written by other generators; `compressed-textures`: measured by hand); the markers of
+//! the other generators' blocks are written when absent.
 
 mod cloud;
+mod instr;
 mod plot;
 mod report;
 mod volume;
@@ -29,6 +30,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 fn main() {
+    instr::child_main();
     let mut out = PathBuf::from("docs/accuracy.md");
     let mut quick = false;
     for a in std::env::args().skip(1) {
@@ -91,9 +93,7 @@ fn main() {
             .expect("write plot");
         extra.push_str(&cloud::section(c));
     }
-    extra.push_str(&kept_block(&out, ES_BEGIN, ES_END));
-    extra.push_str(&kept_block(&out, PL_BEGIN, PL_END));
-    extra.push_str(&kept_block(&out, PA_BEGIN, PA_END));
+    extra.push_str(&kept_blocks(&out));
     // Relative paths in the report assume the plots sit next to it in `accuracy/`.
     let text = report::report(
         &reports,
@@ -111,26 +111,45 @@ fn main() {
     );
 }
 
-const ES_BEGIN: &str = "<!-- emptyspace-sweep:begin -->";
-const ES_END: &str = "<!-- emptyspace-sweep:end -->";
-
-const PL_BEGIN: &str = "<!-- particle-layer:begin -->";
-const PL_END: &str = "<!-- particle-layer:end -->";
-
-/// Written by `examples/pareto_sweep.rs` (`make accuracy-pareto`).
-const PA_BEGIN: &str = "<!-- pareto:begin -->";
-const PA_END: &str = "<!-- pareto:end -->";
-
-/// The block between `begin` and `end` of the existing report at `path` (written by
-/// another generator: the emptyspace sweep, the particle-layer bench), markers included,
-/// kept byte for byte; empty markers when the report or the markers are absent.
-fn kept_block(path: &Path, begin: &str, end: &str) -> String {
+/// The blocks between `<!-- NAME:begin -->` and `<!-- NAME:end -->` of the existing report
+/// at `path`, markers included, kept byte for byte in their order: sections another
+/// generator writes (the empty-space sweep, the particle-layer bench, `make
+/// accuracy-pareto`) or that were measured by hand (compressed textures). Every such block
+/// is kept, whatever its name, so that regenerating the report never drops one; where a
+/// known block is absent (a first run) its empty markers are written for its generator.
+fn kept_blocks(path: &Path) -> String {
     let old = std::fs::read_to_string(path).unwrap_or_default();
-    let kept = old.find(begin).and_then(|b| {
-        old[b..]
-            .find(end)
-            .map(|e| old[b..b + e + end.len()].to_string())
-    });
-    let block = kept.unwrap_or_else(|| format!("{begin}\n{end}"));
-    format!("{block}\n\n")
+    let mut out = String::new();
+    let mut names = Vec::new();
+    let mut rest = old.as_str();
+    while let Some(b) = rest.find("<!-- ") {
+        let tail = &rest[b..];
+        let Some(name) = tail[5..]
+            .find(":begin -->")
+            .map(|e| &tail[5..5 + e])
+            .filter(|n| !n.contains(char::is_whitespace))
+        else {
+            rest = &tail[5..];
+            continue;
+        };
+        let end = format!("<!-- {name}:end -->");
+        let Some(e) = tail.find(&end) else {
+            rest = &tail[5..];
+            continue;
+        };
+        out.push_str(&tail[..e + end.len()]);
+        out.push_str("\n\n");
+        names.push(name.to_string());
+        rest = &tail[e + end.len()..];
+    }
+    for name in KNOWN_BLOCKS {
+        if !names.iter().any(|n| n == name) {
+            out.push_str(&format!("<!-- {name}:begin -->\n<!-- {name}:end -->\n\n"));
+        }
+    }
+    out
 }
+
+/// Blocks written by other generators: the empty-space sweep (`examples/emptyspace_sweep.rs`),
+/// the particle-layer bench, `examples/pareto_sweep` (`make accuracy-pareto`).
+const KNOWN_BLOCKS: [&str; 3] = ["emptyspace-sweep", "particle-layer", "pareto"];

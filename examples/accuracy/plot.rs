@@ -23,7 +23,9 @@ pub(crate) fn esc(s: &str) -> String {
 }
 
 pub(crate) fn nice_label(v: f64) -> String {
-    if v >= 1e6 {
+    if v >= 1e9 {
+        format!("{:.0}G", v / 1e9)
+    } else if v >= 1e6 {
         format!("{:.0}M", v / 1e6)
     } else if v >= 1e3 {
         format!("{:.0}k", v / 1e3)
@@ -36,20 +38,31 @@ pub(crate) fn nice_label(v: f64) -> String {
     }
 }
 
-/// Three panels (error against bake time, asset bytes, render time), log x, linear y.
+/// Three panels (error against bake cost, asset bytes, render cost), log x, linear y.
+/// The costs are load-independent counts — bake instructions (wall seconds where they
+/// could not be counted) and fragments shaded per view — not times of a shared machine.
 pub(crate) fn plot(mesh: &MeshReport) -> String {
-    let panels = [
+    let counted = mesh.rows.iter().all(|r| r.bake_instr.is_some());
+    let bake = if counted {
+        Panel {
+            x_label: "bake instructions (callgrind, one thread)",
+            x: |r| r.bake_instr.unwrap_or(0) as f64,
+        }
+    } else {
         Panel {
             x_label: "bake time (s)",
             x: |r| r.bake_s,
-        },
+        }
+    };
+    let panels = [
+        bake,
         Panel {
             x_label: "asset size (bytes)",
             x: |r| r.bytes as f64,
         },
         Panel {
-            x_label: "render time per view (s, CPU slicer, best of 3)",
-            x: |r| r.render_s,
+            x_label: "fragments shaded per view (CPU slicer)",
+            x: |r| r.fragments,
         },
     ];
     let (pw, ph) = (380.0, 300.0);

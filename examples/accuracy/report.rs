@@ -37,17 +37,20 @@ pub(crate) fn table(m: &MeshReport) -> String {
     };
     let _ = writeln!(
         s,
-        "| sweep | setting | bake s | asset MiB | render ms/view | slices/view | fragments/view | RMSE | PSNR dB | SSIM | FLIP | RMSE 1× / 4× / 16× | coverage 1× / 4× / 16× |"
+        "| sweep | setting | bake s | bake G instr. | asset MiB | render ms/view | slices/view | fragments/view | RMSE | PSNR dB | SSIM | FLIP | RMSE 1× / 4× / 16× | coverage 1× / 4× / 16× |"
     );
     let _ = writeln!(
         s,
-        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|"
+        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|"
     );
     for r in &m.rows {
+        let instr = r
+            .bake_instr
+            .map_or_else(|| "–".to_string(), |n| format!("{:.2}", n as f64 * 1e-9));
         let (a, b, c) = (dist(r, 1.0), dist(r, 4.0), dist(r, 16.0));
         let _ = writeln!(
             s,
-            "| {} | {} | {:.2} | {:.2} | {:.1} | {:.0} | {:.0} | {:.4} | {:.2} | {:.3} | {:.4} | {:.4} / {:.4} / {:.4} | {:+.0}% / {:+.0}% / {:+.0}% |",
+            "| {} | {} | {:.2} | {instr} | {:.2} | {:.1} | {:.0} | {:.0} | {:.4} | {:.2} | {:.3} | {:.4} | {:.4} / {:.4} / {:.4} | {:+.0}% / {:+.0}% / {:+.0}% |",
             r.config.family,
             r.config.label,
             r.bake_s,
@@ -77,7 +80,7 @@ pub(crate) fn table(m: &MeshReport) -> String {
     let (a, b, c) = (rd(1.0), rd(4.0), rd(16.0));
     let _ = writeln!(
         s,
-        "| mesh, 1 spp | no anti-aliasing | – | – | – | – | – | {:.4} | {:.2} | {:.3} | {:.4} | {:.4} / {:.4} / {:.4} | {:+.0}% / {:+.0}% / {:+.0}% |",
+        "| mesh, 1 spp | no anti-aliasing | – | – | – | – | – | – | {:.4} | {:.2} | {:.3} | {:.4} | {:.4} / {:.4} / {:.4} | {:+.0}% / {:+.0}% / {:+.0}% |",
         m.raster.rmse,
         m.raster.psnr,
         m.raster.ssim_luma,
@@ -183,7 +186,9 @@ pub(crate) fn report(
          finer than a voxel). Each sweep varies one setting from the baseline.\n\
          - **Uniform** spacing is one level-0 voxel at every depth, so it always samples MIP \
          level 0 (what a slicer without distance-dependent MIP selection does).\n\
-         - **Costs**: bake = `voxelize` wall time, one run (release build, import excluded); \
+         - **Costs**: bake = `voxelize` wall time, one run (release build, import excluded), \
+         and its instructions (G = 10⁹; callgrind, one thread, import excluded: \
+         `examples/accuracy/instr.rs`; unlike the time, the same on a loaded machine); \
          asset = the `.billow` file size; render = CPU slicer wall time per view, the best of \
          three runs (a proxy for the GPU's fill cost; fragments = volume samples shaded per \
          view, the machine-independent measure). The machine is shared, so times of a few \

@@ -95,6 +95,9 @@ pub(crate) fn configs(quick: bool) -> Vec<Config> {
 pub(crate) struct Row {
     pub(crate) config: Config,
     pub(crate) bake_s: f64,
+    /// Instructions of the bake, import excluded, one thread ([`crate::instr`]); `None`
+    /// where callgrind could not count (and with `--quick`).
+    pub(crate) bake_instr: Option<u64>,
     pub(crate) bytes: u64,
     /// Mean slicer seconds per view.
     pub(crate) render_s: f64,
@@ -223,6 +226,7 @@ pub(crate) fn run_mesh(
         let n = results.len().max(1) as f64;
         let row = Row {
             bake_s: *bake_s,
+            bake_instr: None,
             bytes: *bytes,
             render_s: render_s / n,
             slices: results.iter().map(|r| r.slices as f64).sum::<f64>() / n,
@@ -240,6 +244,18 @@ pub(crate) fn run_mesh(
         );
         rows.push(row);
     }
+    if !quick && crate::instr::available() {
+        let keys: Vec<crate::instr::Key> = cache
+            .keys()
+            .map(|&(res, ss, c)| (res, ss, preset(c)))
+            .collect();
+        eprintln!("{name}: counting the instructions of {} bakes", keys.len());
+        let counts = crate::instr::bake_counts(path, &keys);
+        for r in &mut rows {
+            let key = (r.config.res, r.config.ss, r.config.combine);
+            r.bake_instr = keys.iter().position(|k| *k == key).and_then(|i| counts[i]);
+        }
+    }
     Ok(MeshReport {
         name: name.to_string(),
         path: shown.to_string(),
@@ -249,4 +265,11 @@ pub(crate) fn run_mesh(
         raster_by_distance,
         rows,
     })
+}
+
+pub(crate) fn preset(name: &str) -> Preset {
+    [Preset::Mean, Preset::Max, Preset::Min, Preset::Opaque]
+        .into_iter()
+        .find(|p| p.name() == name)
+        .expect("a combine preset's name")
 }
