@@ -485,7 +485,7 @@ mod tests {
                 let g = grid(dims, &on);
                 let bits = Bits::new(&g);
                 for _ in 0..40 {
-                    let c = |a: usize| {
+                    let mut c = |a: usize| {
                         let (u, v) = (
                             r.below(dims[a] as u32) as usize,
                             r.below(dims[a] as u32) as usize,

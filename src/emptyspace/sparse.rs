@@ -331,7 +331,7 @@ pub fn from_dense(
                             for y in by * BRICK..((by + 1) * BRICK).min(d[1]) {
                                 for x in bx * BRICK..((bx + 1) * BRICK).min(d[0]) {
                                     let o = 4 * (x + d[0] * (y + d[1] * z));
-                                    let i = local([x, y, z]);
+                                    let i = 4 * local([x, y, z]);
                                     c[i..i + 4].copy_from_slice(&levels[l][o..o + 4]);
                                     if let Some(nr) = normals {
                                         n[i..i + 4].copy_from_slice(&nr[l][o..o + 4]);
