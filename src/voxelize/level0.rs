@@ -185,7 +185,7 @@ impl Level0 {
                         run
                     }
                 };
-                p.merge(run, width, &fold);
+                p.merge(run, width, fold);
             });
     }
 
