@@ -103,6 +103,18 @@ fn prune_equals_voxelize_then_emptyspace_byte_for_byte() {
         &["--res", "48", "--normals", "on", "--combine", "min"],
         "1",
     );
+    // The presets whose level-0 normal sums share the colour's alpha sum (opaque) or keep
+    // their own (max), with normals.
+    same_bytes(
+        dir.path(),
+        &["--res", "48", "--normals", "on", "--combine", "opaque"],
+        "2",
+    );
+    same_bytes(
+        dir.path(),
+        &["--res", "40", "--normals", "on", "--combine", "max"],
+        "2",
+    );
     // Odd sides: emptyspace keeps the volume whole.
     let v = same_bytes(dir.path(), &["--res", "40x24x33"], "2");
     assert_eq!(v["prune"]["kept_whole"], true);

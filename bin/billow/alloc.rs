@@ -64,3 +64,15 @@ unsafe impl GlobalAlloc for Allocator {
         p
     }
 }
+
+/// Hands the memory the allocator holds free back to the system. glibc keeps the freed
+/// blocks of its heaps for reuse, so after a stage that freed a lot in small blocks (the
+/// level-0 accumulator of `voxelize --prune`, a few MB per z plane) the next stage's large
+/// allocations would come on top of them.
+pub fn release_free_memory() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: `malloc_trim` only returns free pages of the allocator's own heaps.
+    unsafe {
+        libc::malloc_trim(0);
+    }
+}

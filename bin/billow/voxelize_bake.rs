@@ -307,6 +307,8 @@ fn bake_pruned(
     }
     let params = bake_params_for(&volume.grid, opts, &extra);
     let shell = volume.asset_shell(&tool_version(), Some(source), params);
+    // The bake freed its working set (dropped normals too): the prune's atlases come after.
+    crate::alloc::release_free_memory();
     let p = prune_sparse(&shell, volume.levels, &es).map_err(perr)?;
     Ok((p.asset, stats, dims, mips, coherence, p.stats))
 }

@@ -180,7 +180,9 @@ pub fn tight(grid: &impl Needed, b: &BlockBox) -> Option<BlockBox> {
     out
 }
 
-/// Per slab along `axis`: the tight bounds of the needed blocks in that slab of `b`.
+/// Per slab along `axis`: the tight bounds of the needed blocks in that slab of `b`
+/// (block by block; [`Bits::slab_bounds`] computes the same from the bits).
+#[cfg(test)]
 fn slab_bounds(grid: &impl Needed, b: &BlockBox, axis: usize) -> Vec<Option<BlockBox>> {
     let mut slabs = vec![None; b.hi[axis] - b.lo[axis]];
     for z in b.lo[2]..b.hi[2] {
@@ -203,20 +205,180 @@ fn slab_bounds(grid: &impl Needed, b: &BlockBox, axis: usize) -> Vec<Option<Bloc
     slabs
 }
 
+/// The needed blocks as bits: row `(y, z)` is `words` words, bit `x % 64` of word `x / 64`
+/// for block `x`. A node's slab bounds then cost a word per 64 blocks of each row.
+struct Bits {
+    dims: [usize; 3],
+    words: usize,
+    bits: Vec<u64>,
+}
+
+/// The bits of `[x0, x1)` in word `k`.
+#[inline]
+fn range_mask(k: usize, x0: usize, x1: usize) -> u64 {
+    let (lo, hi) = (64 * k, 64 * k + 64);
+    let a = x0.max(lo) - lo;
+    let b = x1.min(hi) - lo;
+    let upto = |n: usize| if n >= 64 { u64::MAX } else { (1u64 << n) - 1 };
+    upto(b) & !upto(a)
+}
+
+/// Grows the range `r` (inclusive) to hold `v`.
+#[inline]
+fn grow(r: &mut Option<(usize, usize)>, v: usize) {
+    *r = Some(r.map_or((v, v), |(lo, hi)| (lo.min(v), hi.max(v))));
+}
+
+impl Bits {
+    fn new(grid: &impl Needed) -> Self {
+        let dims = grid.dims();
+        let words = dims[0].div_ceil(64);
+        let mut bits = vec![0u64; words * dims[1] * dims[2]];
+        for z in 0..dims[2] {
+            for y in 0..dims[1] {
+                let row = &mut bits[words * (y + dims[1] * z)..][..words];
+                for x in 0..dims[0] {
+                    if grid.needed([x, y, z]) {
+                        row[x / 64] |= 1 << (x % 64);
+                    }
+                }
+            }
+        }
+        Bits { dims, words, bits }
+    }
+
+    #[inline]
+    fn row(&self, y: usize, z: usize) -> &[u64] {
+        &self.bits[self.words * (y + self.dims[1] * z)..][..self.words]
+    }
+
+    /// Every block of `b` is needed.
+    fn full(&self, b: &BlockBox) -> bool {
+        let (k0, k1) = (b.lo[0] / 64, (b.hi[0] - 1) / 64 + 1);
+        (b.lo[2]..b.hi[2]).all(|z| {
+            (b.lo[1]..b.hi[1]).all(|y| {
+                let row = self.row(y, z);
+                (k0..k1).all(|k| {
+                    let m = range_mask(k, b.lo[0], b.hi[0]);
+                    row[k] & m == m
+                })
+            })
+        })
+    }
+
+    /// Per axis, per slab of `b` along it: the tight bounds of the needed blocks in that
+    /// slab (what [`slab_bounds`] finds block by block), from one pass over the rows.
+    fn slab_bounds(&self, b: &BlockBox) -> [Vec<Option<BlockBox>>; 3] {
+        let n = b.size();
+        let (k0, k1) = (b.lo[0] / 64, (b.hi[0] - 1) / 64 + 1);
+        let nw = k1 - k0;
+        // Per y (per z) of the node: the OR of its rows over z (over y), and the range of
+        // z (of y) whose row holds a needed block.
+        let mut col_y = vec![0u64; n[1] * nw];
+        let mut col_z = vec![0u64; n[2] * nw];
+        let mut z_of_y = vec![None; n[1]];
+        let mut y_of_z = vec![None; n[2]];
+        for z in b.lo[2]..b.hi[2] {
+            let zz = z - b.lo[2];
+            for y in b.lo[1]..b.hi[1] {
+                let yy = y - b.lo[1];
+                let row = self.row(y, z);
+                let mut any = false;
+                for k in k0..k1 {
+                    let w = row[k] & range_mask(k, b.lo[0], b.hi[0]);
+                    if w != 0 {
+                        any = true;
+                        col_y[yy * nw + k - k0] |= w;
+                        col_z[zz * nw + k - k0] |= w;
+                    }
+                }
+                if any {
+                    grow(&mut z_of_y[yy], z);
+                    grow(&mut y_of_z[zz], y);
+                }
+            }
+        }
+        // The x range of the bits of `cols`.
+        let x_range = |cols: &[u64]| -> Option<(usize, usize)> {
+            let first = cols.iter().position(|&w| w != 0)?;
+            let last = cols.iter().rposition(|&w| w != 0)?;
+            Some((
+                64 * (k0 + first) + cols[first].trailing_zeros() as usize,
+                64 * (k0 + last) + 63 - cols[last].leading_zeros() as usize,
+            ))
+        };
+        // Per x of the node: the range of the rows (of `cols`, `count` of them, from
+        // `base`) that hold it.
+        let per_x = |cols: &[u64], count: usize, base: usize| -> Vec<Option<(usize, usize)>> {
+            let mut r = vec![None; n[0]];
+            for i in 0..count {
+                for (k, &w) in cols[i * nw..(i + 1) * nw].iter().enumerate() {
+                    let mut bits = w;
+                    while bits != 0 {
+                        let x = 64 * (k0 + k) + bits.trailing_zeros() as usize;
+                        bits &= bits - 1;
+                        grow(&mut r[x - b.lo[0]], base + i);
+                    }
+                }
+            }
+            r
+        };
+        let ys = per_x(&col_y, n[1], b.lo[1]);
+        let zs = per_x(&col_z, n[2], b.lo[2]);
+        let sx = (0..n[0])
+            .map(|i| {
+                let x = b.lo[0] + i;
+                let ((y0, y1), (z0, z1)) = (ys[i]?, zs[i]?);
+                Some(BlockBox {
+                    lo: [x, y0, z0],
+                    hi: [x + 1, y1 + 1, z1 + 1],
+                })
+            })
+            .collect();
+        let sy = (0..n[1])
+            .map(|i| {
+                let y = b.lo[1] + i;
+                let (x0, x1) = x_range(&col_y[i * nw..(i + 1) * nw])?;
+                let (z0, z1) = z_of_y[i]?;
+                Some(BlockBox {
+                    lo: [x0, y, z0],
+                    hi: [x1 + 1, y + 1, z1 + 1],
+                })
+            })
+            .collect();
+        let sz = (0..n[2])
+            .map(|i| {
+                let z = b.lo[2] + i;
+                let (x0, x1) = x_range(&col_z[i * nw..(i + 1) * nw])?;
+                let (y0, y1) = y_of_z[i]?;
+                Some(BlockBox {
+                    lo: [x0, y0, z],
+                    hi: [x1 + 1, y1 + 1, z + 1],
+                })
+            })
+            .collect();
+        [sx, sy, sz]
+    }
+}
+
 /// The best split of a (tight) node: `(cost, left, right)`.
 fn best_split(
     grid: &impl Needed,
+    bits: &Bits,
     b: &BlockBox,
     p: &KdParams,
 ) -> Option<(f64, Option<BlockBox>, Option<BlockBox>)> {
     let cost = |x: &Option<BlockBox>| x.as_ref().map_or(0.0, |x| box_cost(grid, x, p));
     let mut best: Option<(f64, Option<BlockBox>, Option<BlockBox>)> = None;
-    for axis in 0..3 {
+    if (0..3).all(|axis| b.hi[axis] - b.lo[axis] < 2 * p.min_box) {
+        return None;
+    }
+    let all = bits.slab_bounds(b);
+    for (axis, slabs) in all.iter().enumerate() {
         let n = b.hi[axis] - b.lo[axis];
         if n < 2 * p.min_box {
             continue;
         }
-        let slabs = slab_bounds(grid, b, axis);
         let mut prefix = vec![None; n + 1];
         for k in 0..n {
             prefix[k + 1] = union(prefix[k], slabs[k]);
@@ -235,24 +397,24 @@ fn best_split(
     best
 }
 
-/// Every block of `b` is needed.
-fn full(grid: &impl Needed, b: &BlockBox) -> bool {
-    (b.lo[2]..b.hi[2])
-        .all(|z| (b.lo[1]..b.hi[1]).all(|y| (b.lo[0]..b.hi[0]).all(|x| grid.needed([x, y, z]))))
-}
-
 /// Grows the subtree of the (tight) node `b`, prunes it, and returns its cost and leaves.
-fn recurse(grid: &impl Needed, b: BlockBox, depth: u32, p: &KdParams) -> (f64, Vec<BlockBox>) {
+fn recurse(
+    grid: &impl Needed,
+    bits: &Bits,
+    b: BlockBox,
+    depth: u32,
+    p: &KdParams,
+) -> (f64, Vec<BlockBox>) {
     let leaf = box_cost(grid, &b, p);
-    if depth >= p.max_depth || full(grid, &b) {
+    if depth >= p.max_depth || bits.full(&b) {
         return (leaf, vec![b]);
     }
-    let Some((_, l, r)) = best_split(grid, &b, p) else {
+    let Some((_, l, r)) = best_split(grid, bits, &b, p) else {
         return (leaf, vec![b]);
     };
     let (mut cost, mut leaves) = (0.0, Vec::new());
     for child in [l, r].into_iter().flatten() {
-        let (c, mut v) = recurse(grid, child, depth + 1, p);
+        let (c, mut v) = recurse(grid, bits, child, depth + 1, p);
         cost += c;
         leaves.append(&mut v);
     }
@@ -269,7 +431,8 @@ pub fn subdivide(grid: &impl Needed, p: &KdParams) -> Vec<BlockBox> {
     let root = BlockBox { lo: [0; 3], hi: d };
     let mut out = Vec::new();
     if let Some(t) = tight(grid, &root) {
-        out = recurse(grid, t, 0, p).1;
+        let bits = Bits::new(grid);
+        out = recurse(grid, &bits, t, 0, p).1;
     }
     out
 }
@@ -300,6 +463,50 @@ mod tests {
             max_depth: 16,
             min_gain: 0.0,
             pair_align: false,
+        }
+    }
+
+    #[test]
+    fn slab_bounds_from_bits_equal_the_block_by_block_ones() {
+        let mut r = crate::rng::Pcg32::seeded(5, 11);
+        for dims in [[70, 9, 7], [130, 5, 6], [64, 3, 4], [3, 8, 5], [200, 2, 3]] {
+            for density in [0.02f32, 0.3, 0.97] {
+                let n: usize = dims.iter().product();
+                let on: Vec<[usize; 3]> = (0..n)
+                    .filter(|_| r.next_f32() < density)
+                    .map(|i| {
+                        [
+                            i % dims[0],
+                            (i / dims[0]) % dims[1],
+                            i / (dims[0] * dims[1]),
+                        ]
+                    })
+                    .collect();
+                let g = grid(dims, &on);
+                let bits = Bits::new(&g);
+                for _ in 0..40 {
+                    let mut c = |a: usize| {
+                        let (u, v) = (
+                            r.below(dims[a] as u32) as usize,
+                            r.below(dims[a] as u32) as usize,
+                        );
+                        (u.min(v), u.max(v) + 1)
+                    };
+                    let (x, y, z) = (c(0), c(1), c(2));
+                    let b = BlockBox {
+                        lo: [x.0, y.0, z.0],
+                        hi: [x.1, y.1, z.1],
+                    };
+                    let fast = bits.slab_bounds(&b);
+                    for (axis, slabs) in fast.iter().enumerate() {
+                        assert_eq!(slabs, &slab_bounds(&g, &b, axis), "{dims:?} {b:?} {axis}");
+                    }
+                    let full = (b.lo[2]..b.hi[2]).all(|z| {
+                        (b.lo[1]..b.hi[1]).all(|y| (b.lo[0]..b.hi[0]).all(|x| g.needed([x, y, z])))
+                    });
+                    assert_eq!(bits.full(&b), full, "{dims:?} {b:?}");
+                }
+            }
         }
     }
 

@@ -1,6 +1,6 @@
 //! A brick-sparse source for empty-space removal: the MIP levels of a volume held as
 //! [`BRICK`]³ bricks of RGBA8 colour (and snorm8 normals), only the bricks that hold a
-//! non-zero byte allocated. `voxelize --prune` hands its working set over in this form
+//! non-zero byte allocated, and in them only the texels that do. `voxelize --prune` hands its working set over in this form
 //! ([`super::prune_sparse`]), so the dense volume is never materialised; a tier reads it
 //! through [`TierTexels`] and comes out byte for byte as from the dense levels (an absent
 //! brick reads as the zeros the dense level holds there).
@@ -12,7 +12,14 @@ pub const BRICK: usize = 8;
 const B3: usize = BRICK * BRICK * BRICK;
 const EMPTY: u32 = u32::MAX;
 
-/// One MIP level, brick-sparse (see the module docs).
+/// Which texels of a brick are stored: bit `i % 64` of word `i / 64` for the texel at
+/// index `i` inside the brick (x fastest).
+pub type BrickMask = [u64; B3 / 64];
+
+/// One MIP level, brick-sparse (see the module docs). Inside an allocated brick only the
+/// texels with a non-zero byte are stored, packed in the brick's texel order (a mask per
+/// brick says which): at 1024³ the bench tree's level 0 has 665,052 bricks holding
+/// 63.1 M such texels (18.5 %), 0.55 GB packed with normals against 2.7 GB as whole bricks.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SparseLevel {
     /// Level size in texels.
@@ -23,28 +30,42 @@ pub struct SparseLevel {
     slot: Vec<u32>,
     /// Per slot, its brick.
     bricks: Vec<u32>,
-    /// `4 · BRICK³` bytes per slot, x fastest inside the brick; texels outside `dims` zero.
-    colour: Vec<u8>,
-    normals: Option<Vec<u8>>,
+    /// Per slot, its stored texels.
+    mask: Vec<BrickMask>,
+    /// Per slot, the index of its first stored texel in `colour` (and `normals`).
+    first: Vec<usize>,
+    /// The stored texels' colour bytes, slot after slot.
+    colour: Vec<[u8; 4]>,
+    normals: Option<Vec<[u8; 4]>>,
 }
 
-/// A texel's byte offset inside its brick.
+/// A texel's index inside its brick.
 #[inline]
 fn local(p: [usize; 3]) -> usize {
-    4 * ((p[0] % BRICK) + BRICK * ((p[1] % BRICK) + BRICK * (p[2] % BRICK)))
+    (p[0] % BRICK) + BRICK * ((p[1] % BRICK) + BRICK * (p[2] % BRICK))
+}
+
+/// Stored texels of `m` before texel `i` (`i` itself not counted).
+#[inline]
+fn rank(m: &BrickMask, i: usize) -> usize {
+    let (w, b) = (i / 64, i % 64);
+    m[..w]
+        .iter()
+        .map(|x| x.count_ones() as usize)
+        .sum::<usize>()
+        + (m[w] & ((1u64 << b) - 1)).count_ones() as usize
 }
 
 impl SparseLevel {
     /// A level of `dims` whose slot `i` is brick `bricks[i]` (x-fastest brick index, all
-    /// distinct), with `4 · BRICK³` bytes per slot of colour (and normals). Bytes of
-    /// texels outside `dims` must be zero.
+    /// distinct), with `4 · BRICK³` bytes per slot of colour (and normals), x fastest
+    /// inside the brick. Bytes of texels outside `dims` must be zero.
     pub fn from_bricks(
         dims: [usize; 3],
         bricks: Vec<u32>,
         colour: Vec<u8>,
         normals: Option<Vec<u8>>,
     ) -> SparseLevel {
-        let nb = dims.map(|d| d.div_ceil(BRICK));
         assert_eq!(
             colour.len(),
             bricks.len() * 4 * B3,
@@ -53,16 +74,68 @@ impl SparseLevel {
         if let Some(n) = &normals {
             assert_eq!(n.len(), colour.len(), "normal bytes per brick");
         }
+        let texel = |bytes: &[u8], i: usize| -> [u8; 4] {
+            [
+                bytes[4 * i],
+                bytes[4 * i + 1],
+                bytes[4 * i + 2],
+                bytes[4 * i + 3],
+            ]
+        };
+        let mut mask = vec![[0u64; B3 / 64]; bricks.len()];
+        let (mut c, mut n) = (Vec::new(), normals.as_ref().map(|_| Vec::new()));
+        for (s, m) in mask.iter_mut().enumerate() {
+            for i in 0..B3 {
+                let at = s * B3 + i;
+                let t = texel(&colour, at);
+                let tn = normals.as_deref().map_or([0; 4], |nb| texel(nb, at));
+                if t != [0; 4] || tn != [0; 4] {
+                    m[i / 64] |= 1 << (i % 64);
+                    c.push(t);
+                    if let Some(n) = n.as_mut() {
+                        n.push(tn);
+                    }
+                }
+            }
+        }
+        Self::from_packed(dims, bricks, mask, c, n)
+    }
+
+    /// A level of `dims` whose slot `i` is brick `bricks[i]` (all distinct), storing the
+    /// texels of `mask[i]` ([`BrickMask`]); `colour` (and `normals`) hold the stored
+    /// texels, slot after slot, in each brick's texel order. Stored texels must lie inside
+    /// `dims`.
+    pub fn from_packed(
+        dims: [usize; 3],
+        bricks: Vec<u32>,
+        mask: Vec<BrickMask>,
+        colour: Vec<[u8; 4]>,
+        normals: Option<Vec<[u8; 4]>>,
+    ) -> SparseLevel {
+        let nb = dims.map(|d| d.div_ceil(BRICK));
+        assert_eq!(mask.len(), bricks.len(), "one mask per brick");
         let mut slot = vec![EMPTY; nb.iter().product()];
         for (s, &b) in bricks.iter().enumerate() {
             assert_eq!(slot[b as usize], EMPTY, "brick {b} given twice");
             slot[b as usize] = s as u32;
+        }
+        let mut first = Vec::with_capacity(mask.len());
+        let mut total = 0usize;
+        for m in &mask {
+            first.push(total);
+            total += m.iter().map(|w| w.count_ones() as usize).sum::<usize>();
+        }
+        assert_eq!(colour.len(), total, "one colour per stored texel");
+        if let Some(n) = &normals {
+            assert_eq!(n.len(), total, "one normal per stored texel");
         }
         SparseLevel {
             dims,
             nb,
             slot,
             bricks,
+            mask,
+            first,
             colour,
             normals,
         }
@@ -77,11 +150,17 @@ impl SparseLevel {
         self.bricks.len()
     }
 
-    /// Bytes held (colour and normals of the allocated bricks, and the brick table).
+    /// Texels stored.
+    pub fn texel_count(&self) -> usize {
+        self.colour.len()
+    }
+
+    /// Bytes held (the stored texels' colour and normals, the masks and the brick table).
     pub fn heap_bytes(&self) -> u64 {
-        (self.colour.len() + self.normals.as_ref().map_or(0, Vec::len) + 8 * self.bricks.len())
-            as u64
-            + 4 * self.slot.len() as u64
+        let per_slot = 4 + std::mem::size_of::<BrickMask>() + std::mem::size_of::<usize>();
+        (4 * (self.colour.len() + self.normals.as_ref().map_or(0, Vec::len))
+            + per_slot * self.bricks.len()
+            + 4 * self.slot.len()) as u64
     }
 
     /// Bytes of the level stored densely (colour, and normals when present).
@@ -97,11 +176,11 @@ impl SparseLevel {
 
     /// Whether every byte is zero.
     pub fn is_zero(&self) -> bool {
-        self.colour.iter().all(|&b| b == 0)
+        self.colour.iter().all(|&b| b == [0; 4])
             && self
                 .normals
                 .as_ref()
-                .is_none_or(|n| n.iter().all(|&b| b == 0))
+                .is_none_or(|n| n.iter().all(|&b| b == [0; 4]))
     }
 
     #[inline]
@@ -113,7 +192,7 @@ impl SparseLevel {
         ]
     }
 
-    /// Colour (or normal) bytes at `p` (inside `dims`); zero in an absent brick.
+    /// Colour (or normal) bytes at `p` (inside `dims`); zero where no texel is stored.
     #[inline]
     pub fn get(&self, normals: bool, p: [usize; 3]) -> [u8; 4] {
         let bc = p.map(|v| v / BRICK);
@@ -129,25 +208,31 @@ impl SparseLevel {
         } else {
             &self.colour
         };
-        let o = s as usize * 4 * B3 + local(p);
-        [bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]
+        let (m, i) = (&self.mask[s as usize], local(p));
+        if m[i / 64] >> (i % 64) & 1 == 0 {
+            return [0; 4];
+        }
+        bytes[self.first[s as usize] + rank(m, i)]
     }
 
-    /// Calls `f(p, colour)` for every texel of every allocated brick inside `dims`.
+    /// Calls `f(p, colour)` for every stored texel, brick after brick (in slot order),
+    /// x fastest inside a brick; texels not stored are zero.
     pub fn for_each_texel(&self, f: &mut dyn FnMut([usize; 3], [u8; 4])) {
         for (s, &b) in self.bricks.iter().enumerate() {
-            let bc = self.brick_coords(b as usize);
-            let hi = [0, 1, 2].map(|a| ((bc[a] + 1) * BRICK).min(self.dims[a]));
-            let brick = &self.colour[s * 4 * B3..(s + 1) * 4 * B3];
-            for z in bc[2] * BRICK..hi[2] {
-                for y in bc[1] * BRICK..hi[1] {
-                    for x in bc[0] * BRICK..hi[0] {
-                        let o = local([x, y, z]);
-                        f(
-                            [x, y, z],
-                            [brick[o], brick[o + 1], brick[o + 2], brick[o + 3]],
-                        );
-                    }
+            let o = self.brick_coords(b as usize).map(|c| c * BRICK);
+            let mut k = self.first[s];
+            for (w, &word) in self.mask[s].iter().enumerate() {
+                let mut bits = word;
+                while bits != 0 {
+                    let i = 64 * w + bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    let p = [
+                        o[0] + i % BRICK,
+                        o[1] + (i / BRICK) % BRICK,
+                        o[2] + i / (BRICK * BRICK),
+                    ];
+                    f(p, self.colour[k]);
+                    k += 1;
                 }
             }
         }
@@ -159,11 +244,11 @@ impl SparseLevel {
         if threshold == 0 {
             return;
         }
-        for i in 0..self.colour.len() / 4 {
-            if self.colour[4 * i + 3] <= threshold {
-                self.colour[4 * i..4 * i + 4].fill(0);
+        for (i, c) in self.colour.iter_mut().enumerate() {
+            if c[3] <= threshold {
+                *c = [0; 4];
                 if let Some(n) = self.normals.as_mut() {
-                    n[4 * i..4 * i + 4].fill(0);
+                    n[i] = [0; 4];
                 }
             }
         }
@@ -173,18 +258,24 @@ impl SparseLevel {
     pub fn to_dense(&self) -> (Vec<u8>, Option<Vec<u8>>) {
         let n: usize = self.dims.iter().product();
         let d = self.dims;
-        let scatter = |src: &[u8]| {
+        let scatter = |src: &[[u8; 4]]| {
             let mut out = vec![0u8; 4 * n];
             for (s, &b) in self.bricks.iter().enumerate() {
-                let bc = self.brick_coords(b as usize);
-                let hi = [0, 1, 2].map(|a| ((bc[a] + 1) * BRICK).min(d[a]));
-                for z in bc[2] * BRICK..hi[2] {
-                    for y in bc[1] * BRICK..hi[1] {
-                        let x0 = bc[0] * BRICK;
-                        let len = 4 * (hi[0] - x0);
-                        let o = 4 * (x0 + d[0] * (y + d[1] * z));
-                        let i = s * 4 * B3 + local([x0, y, z]);
-                        out[o..o + len].copy_from_slice(&src[i..i + len]);
+                let o = self.brick_coords(b as usize).map(|c| c * BRICK);
+                let mut k = self.first[s];
+                for (w, &word) in self.mask[s].iter().enumerate() {
+                    let mut bits = word;
+                    while bits != 0 {
+                        let i = 64 * w + bits.trailing_zeros() as usize;
+                        bits &= bits - 1;
+                        let (x, y, z) = (
+                            o[0] + i % BRICK,
+                            o[1] + (i / BRICK) % BRICK,
+                            o[2] + i / (BRICK * BRICK),
+                        );
+                        let at = 4 * (x + d[0] * (y + d[1] * z));
+                        out[at..at + 4].copy_from_slice(&src[k]);
+                        k += 1;
                     }
                 }
             }
@@ -240,7 +331,7 @@ pub fn from_dense(
                             for y in by * BRICK..((by + 1) * BRICK).min(d[1]) {
                                 for x in bx * BRICK..((bx + 1) * BRICK).min(d[0]) {
                                     let o = 4 * (x + d[0] * (y + d[1] * z));
-                                    let i = local([x, y, z]);
+                                    let i = 4 * local([x, y, z]);
                                     c[i..i + 4].copy_from_slice(&levels[l][o..o + 4]);
                                     if let Some(nr) = normals {
                                         n[i..i + 4].copy_from_slice(&nr[l][o..o + 4]);

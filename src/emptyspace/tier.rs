@@ -117,6 +117,8 @@ pub fn build_tier<S: TierTexels>(src: &S, world: (Vec3, Vec3), p: &TierParams) -
             (lo, Slot { size, soft })
         })
         .collect();
+    // The occupancy grids are not read again: freed before the atlas is filled.
+    drop((needed, data));
     let plain: Vec<Slot> = slots.iter().map(|s| s.1).collect();
     let packing = pack(&plain, p.max_side, p.kd.pair_align)?;
     // An empty tier still needs a valid two-level texture.

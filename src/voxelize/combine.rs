@@ -21,7 +21,8 @@
 //! the fixed order above, so results do not depend on scheduling; level 0 is combined at
 //! the end from the six directions' sparse level 0, one z plane at a time
 //! ([`combine_level0`], same order, same arithmetic), so it never needs a full-size
-//! accumulator. Expressions and custom functions need all six values at once, so the six
+//! accumulator; `voxelize --prune` folds level 0 too, direction by direction, into a
+//! sparse accumulator over the voxels seen ([`super::level0`]), and frees each stack. Expressions and custom functions need all six values at once, so the six
 //! pyramids are kept, in f16 (8 bytes per voxel per direction).
 
 use std::fmt;
@@ -31,13 +32,12 @@ use std::sync::Arc;
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
-use super::bricks::{for_each_voxel, local, BrickAccum, Bricked, B, B3};
+use super::bricks::{for_each_voxel, local, BrickAccum, Bricked, B3};
 use super::expr::{Expr, ExprError};
 use super::mip::{Disjoint, Grid3, Texel};
 use super::quantize::encode_normal;
 use super::slices::DirSlices;
 use super::toksvig::average_normal;
-use crate::emptyspace::sparse::SparseLevel;
 
 /// A voxel combination function. `s` is premultiplied RGBA in the order
 /// `+X, −X, +Y, −Y, +Z, −Z`. The result is clamped by [`clamp_premultiplied`].
@@ -90,6 +90,22 @@ impl Combine for Preset {
             }
         }
     }
+}
+
+/// The value of a preset's accumulated floats `a` (see [`Accum`]) before clamping; `None`
+/// where nothing is written: no direction saw the voxel (or, for `min`, not all six did).
+#[inline]
+pub(crate) fn finished_value(preset: Preset, a: &[f32]) -> Option<Vec4> {
+    if a[..4] == [0.0; 4] {
+        return None;
+    }
+    Some(match preset {
+        Preset::Mean => Vec4::from_slice(a) / 6.0,
+        Preset::Max => Vec4::from_slice(a),
+        Preset::Min if a[4] < 6.0 => return None,
+        Preset::Min => Vec4::from_slice(a),
+        Preset::Opaque => opaque_colour(Vec3::from_slice(a), a[3], a[4]),
+    })
 }
 
 fn opaque_colour(rgb_sum: Vec3, alpha_sum: f32, alpha_max: f32) -> Vec4 {
@@ -274,15 +290,8 @@ impl Accum {
             .for_each(|(brick, &b)| {
                 for_each_voxel(acc.coords(b as usize), dims, |p| {
                     let a = &brick[local(p) * w..local(p) * w + w];
-                    if a[..4] == [0.0; 4] {
+                    let Some(v) = finished_value(preset, a) else {
                         return;
-                    }
-                    let v = match preset {
-                        Preset::Mean => Vec4::from_slice(a) / 6.0,
-                        Preset::Max => Vec4::from_slice(a),
-                        Preset::Min if a[4] < 6.0 => return,
-                        Preset::Min => Vec4::from_slice(a),
-                        Preset::Opaque => opaque_colour(Vec3::from_slice(a), a[3], a[4]),
                     };
                     let i = p[0] + dims[0] * (p[1] + dims[1] * p[2]);
                     // SAFETY: every voxel lies in one brick, and each brick is one task.
@@ -310,15 +319,8 @@ impl Accum {
             .for_each(|((o, brick), &b)| {
                 for_each_voxel(acc.coords(b as usize), dims, |p| {
                     let a = &brick[local(p) * w..local(p) * w + w];
-                    if a[..4] == [0.0; 4] {
+                    let Some(v) = finished_value(preset, a) else {
                         return;
-                    }
-                    let v = match preset {
-                        Preset::Mean => Vec4::from_slice(a) / 6.0,
-                        Preset::Max => Vec4::from_slice(a),
-                        Preset::Min if a[4] < 6.0 => return,
-                        Preset::Min => Vec4::from_slice(a),
-                        Preset::Opaque => opaque_colour(Vec3::from_slice(a), a[3], a[4]),
                     };
                     o[4 * local(p)..4 * local(p) + 4]
                         .copy_from_slice(&enc.rgba8(clamp_premultiplied(v)));
@@ -390,87 +392,6 @@ pub(crate) fn combine_level0(
         (out, out_n)
     });
     (out, out_n, count)
-}
-
-/// [`combine_level0`] kept brick-sparse ([`SparseLevel`], 8³ bricks of RGBA8 and snorm8
-/// normals): the planes are combined one brick layer (8 planes) at a time into a slab,
-/// and only the bricks with a non-zero byte are kept, so level 0 is never dense. The same
-/// bytes as [`combine_level0`] where bricks are, zeros elsewhere (what it holds there).
-pub(crate) fn combine_level0_sparse(
-    preset: Preset,
-    dirs: &[DirSlices],
-    normals: bool,
-) -> (SparseLevel, u64) {
-    let dims = dirs[0].dims;
-    let plane = dims[0] * dims[1];
-    let nb = dims.map(|d| d.div_ceil(B));
-    level0_planes(preset, dirs, normals, |init, work| {
-        type Part = (Vec<u32>, Vec<u8>, Vec<u8>);
-        let parts: Vec<Part> = (0..nb[2])
-            .into_par_iter()
-            .map_init(init, |bufs, bz| {
-                let z0 = bz * B;
-                let nz = (dims[2] - z0).min(B);
-                let mut slab = vec![0u8; plane * nz * 4];
-                let mut slab_n = vec![0u8; plane * nz * 4 * normals as usize];
-                if normals {
-                    for (dz, (o, on)) in slab
-                        .chunks_mut(plane * 4)
-                        .zip(slab_n.chunks_mut(plane * 4))
-                        .enumerate()
-                    {
-                        work(bufs, z0 + dz, o, Some(on));
-                    }
-                } else {
-                    for (dz, o) in slab.chunks_mut(plane * 4).enumerate() {
-                        work(bufs, z0 + dz, o, None);
-                    }
-                }
-                let (mut bricks, mut colour, mut nrm) = (Vec::new(), Vec::new(), Vec::new());
-                let mut bc = vec![0u8; 4 * B3];
-                let mut bn = vec![0u8; 4 * B3 * normals as usize];
-                for by in 0..nb[1] {
-                    for bx in 0..nb[0] {
-                        bc.fill(0);
-                        bn.fill(0);
-                        let mut any = false;
-                        let (x0, x1) = (bx * B, ((bx + 1) * B).min(dims[0]));
-                        for dz in 0..nz {
-                            for y in by * B..((by + 1) * B).min(dims[1]) {
-                                let o = 4 * (x0 + dims[0] * (y + dims[1] * dz));
-                                let len = 4 * (x1 - x0);
-                                let i = 4 * local([x0, y, dz]);
-                                let row = &slab[o..o + len];
-                                any |= row.iter().any(|&v| v != 0);
-                                bc[i..i + len].copy_from_slice(row);
-                                if normals {
-                                    let row = &slab_n[o..o + len];
-                                    any |= row.iter().any(|&v| v != 0);
-                                    bn[i..i + len].copy_from_slice(row);
-                                }
-                            }
-                        }
-                        if any {
-                            bricks.push((bx + nb[0] * (by + nb[1] * bz)) as u32);
-                            colour.extend_from_slice(&bc);
-                            nrm.extend_from_slice(&bn);
-                        }
-                    }
-                }
-                (bricks, colour, nrm)
-            })
-            .collect();
-        let total: usize = parts.iter().map(|p| p.0.len()).sum();
-        let mut bricks = Vec::with_capacity(total);
-        let mut colour = Vec::with_capacity(total * 4 * B3);
-        let mut nrm = Vec::with_capacity(total * 4 * B3 * normals as usize);
-        for (b, c, n) in parts {
-            bricks.extend_from_slice(&b);
-            colour.extend_from_slice(&c);
-            nrm.extend_from_slice(&n);
-        }
-        SparseLevel::from_bricks(dims, bricks, colour, normals.then_some(nrm))
-    })
 }
 
 /// Per thread, the plane accumulators of [`level0_planes`] (left zeroed after each plane)

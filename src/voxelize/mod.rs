@@ -13,7 +13,9 @@
 //! 3. [`combine`]: fold every coarser level into the combined volume as it is built
 //!    (streamed for the presets; expressions and custom functions keep the six pyramids in
 //!    f16 and combine at the end); with a preset, level 0 is combined at the end from the
-//!    six sparse stacks, one z plane at a time; normals, when asked for, are filtered with
+//!    six sparse stacks, one z plane at a time, or, for [`voxelize_sparse`] (`--prune`),
+//!    folded direction by direction into one sparse accumulator ([`level0`]) so that each
+//!    stack is freed once its pyramid is built; normals, when asked for, are filtered with
 //!    [`toksvig`] and summed the same way;
 //! 4. [`quantize`]: RGBA8 `SrgbPremultiplied`, normals snorm8.
 //!
@@ -24,7 +26,12 @@
 //! pyramid is at most `8/7 N`): the six sparse level-0 stacks (20 bytes per non-empty voxel,
 //! 32 with normals), one direction's brick-sparse f32 levels 1 and 2 while its pyramid is
 //! built, the streamed brick-sparse accumulators of the levels above 0 (16 or 20 bytes per
-//! voxel of an allocated brick, plus 8 for normals), and the RGBA8 (+ snorm8) output. No level-0 grid is ever dense with a preset.
+//! voxel of an allocated brick, plus 8 for normals), and the RGBA8 (+ snorm8) output. No
+//! level-0 grid is ever dense with a preset. [`voxelize_sparse`] holds instead of the six
+//! stacks the level-0 accumulator (per voxel seen by any direction: 4 bytes of index, 16
+//! or 20 of colour, 12 more with normals for `mean` and `opaque`, 16 for `max` and `min`)
+//! beside at most the two stacks of one rasterization pass, and keeps its output packed
+//! (only the texels with a non-zero byte of each brick, [`SparseLevel`]).
 //! Expressions and custom functions keep six f16 pyramids (48 bytes per voxel of every
 //! level): 7.5 GiB at 512³, 9.3 GiB with normals (over an 8 GiB budget: use a preset for
 //! normals at 512³, or raise the limit).
@@ -43,6 +50,7 @@ pub mod expr;
 mod fragments;
 pub mod grid;
 mod lanes;
+mod level0;
 pub mod mip;
 pub mod quantize;
 mod slices;
@@ -633,6 +641,8 @@ fn voxelize_as(
                 .normals
                 .then(|| toksvig::NormalAccum::new(&dims, false));
             let mut zero = Vec::with_capacity(6);
+            // `--prune`: level 0 folded direction by direction, each stack then freed.
+            let mut level0 = sparse.then(|| level0::Level0::new(*p, dims[0], opts.normals));
             for &pass in &passes {
                 let stacks = raster(&mut bufs, ctx, pass, &mut times, baker.as_mut(), progress);
                 for s in stacks {
@@ -649,16 +659,23 @@ fn voxelize_as(
                             fold_secs += t.elapsed().as_secs_f64();
                         }
                     });
-                    zero.push(s);
+                    match level0.as_mut() {
+                        Some(l0) => {
+                            let t = Instant::now();
+                            l0.fold(&s);
+                            drop(s);
+                            fold_secs += t.elapsed().as_secs_f64();
+                        }
+                        None => zero.push(s),
+                    }
                     times.combine += fold_secs;
                     progress(Stage::Mip, (dir.index() + 1) as f32 / 6.0);
                 }
             }
             drop(std::mem::take(&mut bufs)); // before the level-0 combine's peak
             let t = Instant::now();
-            if sparse {
-                let (level0, count) = combine::combine_level0_sparse(*p, &zero, opts.normals);
-                drop(zero);
+            if let Some(l0) = level0 {
+                let (level0, count) = l0.finish_sparse();
                 progress(Stage::Combine, 1.0);
                 let mut out = vec![level0];
                 for (l, &d) in dims.iter().enumerate().skip(1) {
