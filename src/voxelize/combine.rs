@@ -423,34 +423,9 @@ fn level0_planes<R>(
     // Per direction, per z plane: (index in the plane, index in `vox`) of its voxels.
     // Directions whose image rows are z planes need no table (their row z is the plane).
     // (start of each plane's run, (index in the plane, index in `vox`)).
-    type Table = (Vec<usize>, Vec<(u32, u32)>);
     let by_plane: Vec<Option<Table>> = dirs
         .par_iter()
-        .map(|s| {
-            if s.dir.image_axes()[1] == 2 {
-                return None;
-            }
-            // The view axis is z: bucket the voxels by slice (a counting sort).
-            let mut start = vec![0usize; dims[2] + 1];
-            for v in &s.vox {
-                start[v.s as usize + 1] += 1;
-            }
-            for z in 0..dims[2] {
-                start[z + 1] += start[z];
-            }
-            let mut fill = start.clone();
-            let mut list = vec![(0u32, 0u32); s.vox.len()];
-            for j in 0..s.row_count() {
-                let (row, first) = s.row(j);
-                for (k, v) in row.iter().enumerate() {
-                    let z = v.s as usize;
-                    let i = s.index(j, v) - z * plane;
-                    list[fill[z]] = (i as u32, (first + k) as u32);
-                    fill[z] += 1;
-                }
-            }
-            Some((start, list))
-        })
+        .map(|s| (s.dir.image_axes()[1] != 2).then(|| plane_table(s, dims)))
         .collect();
     let enc = super::quantize::Encoder::get();
     let init = || -> Level0Bufs {
@@ -533,4 +508,31 @@ fn level0_planes<R>(
         };
     let r = drive(&init, &work);
     (r, non_empty.into_inner())
+}
+
+/// A direction's voxels bucketed by z plane (a counting sort), in row order, so each
+/// plane's keys increase: (start of each plane's run, (index in the plane, index in
+/// `vox`)). For directions whose image rows are not z planes (view axis z).
+pub(super) type Table = (Vec<usize>, Vec<(u32, u32)>);
+
+pub(super) fn plane_table(s: &DirSlices, dims: [usize; 3]) -> Table {
+    let plane = dims[0] * dims[1];
+    let mut start = vec![0usize; dims[2] + 1];
+    for v in &s.vox {
+        start[v.s as usize + 1] += 1;
+    }
+    for z in 0..dims[2] {
+        start[z + 1] += start[z];
+    }
+    let mut fill = start.clone();
+    let mut list = vec![(0u32, 0u32); s.vox.len()];
+    for j in 0..s.row_count() {
+        let (row, first) = s.row(j);
+        for (k, v) in row.iter().enumerate() {
+            let z = v.s as usize;
+            list[fill[z]] = ((s.index(j, v) - z * plane) as u32, (first + k) as u32);
+            fill[z] += 1;
+        }
+    }
+    (start, list)
 }

@@ -17,7 +17,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::bricks::{local, B, B3};
-use super::combine::{clamp_premultiplied, finished_value, Accum, Preset};
+use super::combine::{clamp_premultiplied, finished_value, plane_table, Accum, Preset};
 use super::quantize::{encode_normal, Encoder};
 use super::slices::DirSlices;
 use super::toksvig::average_normal;
@@ -130,26 +130,7 @@ impl Level0 {
         let width = w + nw;
         // Directions whose image rows are not z planes (view axis z): their voxels bucketed
         // by slice (a counting sort), in row order, so each plane's keys increase.
-        let table = (s.dir.image_axes()[1] != 2).then(|| {
-            let mut start = vec![0usize; dims[2] + 1];
-            for v in &s.vox {
-                start[v.s as usize + 1] += 1;
-            }
-            for z in 0..dims[2] {
-                start[z + 1] += start[z];
-            }
-            let mut fill = start.clone();
-            let mut list = vec![(0u32, 0u32); s.vox.len()];
-            for j in 0..s.row_count() {
-                let (row, first) = s.row(j);
-                for (k, v) in row.iter().enumerate() {
-                    let z = v.s as usize;
-                    list[fill[z]] = ((s.index(j, v) - z * plane) as u32, (first + k) as u32);
-                    fill[z] += 1;
-                }
-            }
-            (start, list)
-        });
+        let table = (s.dir.image_axes()[1] != 2).then(|| plane_table(s, dims));
         // Rows of the y directions are sorted by (x, y), not by the key x + X·y.
         let resort = s.dir.axis() == 1;
         let nrm = s.nrm.as_deref();
