@@ -218,6 +218,12 @@ impl SparseLevel {
     /// Calls `f(p, colour)` for every stored texel, brick after brick (in slot order),
     /// x fastest inside a brick; texels not stored are zero.
     pub fn for_each_texel(&self, f: &mut dyn FnMut([usize; 3], [u8; 4])) {
+        self.for_each_stored(|p, k| f(p, self.colour[k]));
+    }
+
+    /// Calls `f(p, k)` for every stored texel in [`Self::for_each_texel`]'s order, `k`
+    /// its index in `colour` (and `normals`).
+    fn for_each_stored(&self, mut f: impl FnMut([usize; 3], usize)) {
         for (s, &b) in self.bricks.iter().enumerate() {
             let o = self.brick_coords(b as usize).map(|c| c * BRICK);
             let mut k = self.first[s];
@@ -231,7 +237,7 @@ impl SparseLevel {
                         o[1] + (i / BRICK) % BRICK,
                         o[2] + i / (BRICK * BRICK),
                     ];
-                    f(p, self.colour[k]);
+                    f(p, k);
                     k += 1;
                 }
             }
@@ -260,25 +266,10 @@ impl SparseLevel {
         let d = self.dims;
         let scatter = |src: &[[u8; 4]]| {
             let mut out = vec![0u8; 4 * n];
-            for (s, &b) in self.bricks.iter().enumerate() {
-                let o = self.brick_coords(b as usize).map(|c| c * BRICK);
-                let mut k = self.first[s];
-                for (w, &word) in self.mask[s].iter().enumerate() {
-                    let mut bits = word;
-                    while bits != 0 {
-                        let i = 64 * w + bits.trailing_zeros() as usize;
-                        bits &= bits - 1;
-                        let (x, y, z) = (
-                            o[0] + i % BRICK,
-                            o[1] + (i / BRICK) % BRICK,
-                            o[2] + i / (BRICK * BRICK),
-                        );
-                        let at = 4 * (x + d[0] * (y + d[1] * z));
-                        out[at..at + 4].copy_from_slice(&src[k]);
-                        k += 1;
-                    }
-                }
-            }
+            self.for_each_stored(|[x, y, z], k| {
+                let at = 4 * (x + d[0] * (y + d[1] * z));
+                out[at..at + 4].copy_from_slice(&src[k]);
+            });
             out
         };
         (scatter(&self.colour), self.normals.as_deref().map(scatter))
