@@ -295,6 +295,14 @@ pub fn zero_anchored_block(tile: &[u8; 64]) -> [u8; 16] {
         (c7, c7.map(|c| c << 1 | 1))
     };
     let choose = |e: [u32; 4]| -> ([usize; 16], u64) {
+        // The 16 colours of the line from zero to `e`, each channel non-decreasing in the
+        // index k. Past the first entry whose channels are all at or above the texel's
+        // (`hi`, found by bisection) the error only grows, and below an entry whose
+        // channels are all at or below it the error only grows too (strictly, once the
+        // entry below differs). So the scan runs down from `hi` to there and keeps the
+        // smallest k of least error: the same choice as trying all 16.
+        let pal: [[i64; 4]; 16] =
+            std::array::from_fn(|k| std::array::from_fn(|c| i64::from((W4[k] * e[c] + 32) >> 6)));
         let mut idx = [0usize; 16];
         let mut total = 0u64;
         for (i, slot) in idx.iter_mut().enumerate() {
@@ -302,17 +310,26 @@ pub fn zero_anchored_block(tile: &[u8; 64]) -> [u8; 16] {
             if t == [0; 4] {
                 continue;
             }
-            let mut best = (u64::MAX, 0);
-            for (k, &w) in W4.iter().enumerate() {
-                let err: u64 = (0..4)
-                    .map(|c| {
-                        let v = (w * e[c] + 32) >> 6;
-                        let d = i64::from(v) - i64::from(t[c]);
-                        (d * d) as u64
-                    })
-                    .sum();
-                if err < best.0 {
-                    best = (err, k);
+            let t = t.map(i64::from);
+            let err = |p: &[i64; 4]| -> u64 {
+                (0..4).map(|c| ((p[c] - t[c]) * (p[c] - t[c])) as u64).sum()
+            };
+            let (mut lo, mut hi) = (0usize, 15usize);
+            while lo < hi {
+                let mid = (lo + hi) / 2;
+                if (0..4).all(|c| pal[mid][c] >= t[c]) {
+                    hi = mid;
+                } else {
+                    lo = mid + 1;
+                }
+            }
+            let mut best = (err(&pal[hi]), hi);
+            let mut k = hi;
+            while k > 0 && !((0..4).all(|c| pal[k][c] <= t[c]) && pal[k - 1] != pal[k]) {
+                k -= 1;
+                let e = err(&pal[k]);
+                if e <= best.0 {
+                    best = (e, k);
                 }
             }
             *slot = best.1;
