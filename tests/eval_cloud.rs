@@ -252,10 +252,10 @@ fn shoelace(p: &[(f32, f32)]) -> f64 {
 /// the square turns towards the eye. Centre sampling too (every ray of the centre column
 /// runs in the plane edge-on).
 ///
-/// Not seen failing on a broken build: with the plane hit's zero-denominator guard and
-/// the sampler's NaN-lod guard both removed the output is unchanged — the hit's own
-/// `t.is_finite()` and the `RangeInclusive::contains` tests reject the 0/0 NaN, and
-/// `f32::max` drops a NaN derivative, so no NaN lod reaches the sampler.
+/// With the plane hit's guards removed this test still passes: the range tests and the
+/// alpha test reject the 0/0 NaN too. What breaks with them is the guard's own unit test,
+/// `eval::cloud_render::tests::an_edge_on_or_non_finite_ray_misses_the_plane` (seen
+/// failing without either guard); this one checks the whole render.
 #[test]
 fn an_edge_on_billboard_is_finite_and_covers_no_more_than_its_projection() {
     let asset = cloud(atlas(8, 4, |_| RED), atlas(8, 4, |_| BLUE), None);

@@ -552,3 +552,63 @@ impl<'a> CloudRenderer<'a> {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The unit square z = 0 (as `PreparedCloud::new` builds its quad).
+    fn unit_square() -> Quad {
+        Quad {
+            normal: Vec3::Z,
+            r: 0.0,
+            c0: Vec3::ZERO,
+            du: Vec3::X,
+            dv: Vec3::Y,
+            sides: [(0, [0.0, 0.0, 1.0, 1.0]); 2],
+        }
+    }
+
+    /// Issue 25, item 5, where the edge-on billboard is decided: a ray in the plane of
+    /// the billboard (0/0), parallel beside it (x/0), at a subnormal or overflowing slope
+    /// (t past f32::MAX), or with a NaN or ∞ component meets the quad nowhere: `None`,
+    /// so the callers' range tests never see a NaN or ∞. A grazing ray still hits, at
+    /// the right point. Seen failing with either guard removed: without `t.is_finite()` the
+    /// subnormal slope gives t = ∞ and s = NaN; without the denominator's, the ray along −∞
+    /// gives t = 0 and s = NaN.
+    #[test]
+    fn an_edge_on_or_non_finite_ray_misses_the_plane() {
+        let q = unit_square();
+        let cases = [
+            // In the plane, through the square: 0/0.
+            (Vec3::new(-3.0, 0.5, 0.0), Vec3::X),
+            // Parallel, beside the plane: 1/0.
+            (Vec3::new(-3.0, 0.5, 1.0), Vec3::X),
+            // Slopes whose t overflows f32: subnormal and tiny normal denominators.
+            (Vec3::new(-3.0, 0.5, 1.0), Vec3::new(1.0, 0.0, -1e-40)),
+            (Vec3::new(-3.0, 0.5, 1e30), Vec3::new(1.0, 0.0, -1e-10)),
+            // Non-finite directions and origins.
+            (Vec3::new(-3.0, 0.5, 1.0), Vec3::new(f32::NAN, 0.0, -1.0)),
+            (
+                Vec3::new(-3.0, 0.5, 1.0),
+                Vec3::new(0.0, 0.0, f32::NEG_INFINITY),
+            ),
+            (
+                Vec3::new(f32::INFINITY, 0.5, 1.0),
+                Vec3::new(0.0, 0.0, -1.0),
+            ),
+        ];
+        for (origin, dir) in cases {
+            let hit = CloudRenderer::plane_hit(&q, origin, dir);
+            assert!(
+                hit.is_none(),
+                "ray {origin} + t·{dir} meets the plane nowhere, got {hit:?}"
+            );
+        }
+        // Grazing but not parallel: 1e-6 rad below the plane's horizon from 1e-6 above.
+        let (st, t) =
+            CloudRenderer::plane_hit(&q, Vec3::new(-0.5, 0.5, 1e-6), Vec3::new(1.0, 0.0, -1e-6))
+                .expect("a grazing ray meets the plane");
+        assert!((t - 1.0).abs() < 1e-5 && (st - Vec2::new(0.5, 0.5)).abs().max_element() < 1e-5);
+    }
+}
