@@ -32,11 +32,16 @@ pub(crate) struct CloudRow {
     family: &'static str,
     label: String,
     bake_s: f64,
+    /// Instructions of the bake, import excluded, one thread ([`crate::instr`]); `None`
+    /// where callgrind could not count (and with `--quick`).
+    bake_instr: Option<u64>,
     /// LOD 0's atlases, all MIP levels.
     texture_bytes: u64,
     billboards: usize,
     density: f32,
     render_s: f64,
+    /// Billboard fragments shaded per view (mean; load-independent render cost).
+    fragments: f64,
     mean: MeanErrors,
     by_distance: Vec<(f32, MeanErrors)>,
 }
@@ -73,6 +78,29 @@ fn by_distance(results: &[ViewResult], factors: &[f32]) -> Vec<(f32, MeanErrors)
             (f, mean_errors(e))
         })
         .collect()
+}
+
+/// The counting child's words for a bake of `o` (`cloud ε N DENSITY|budget`): the knobs
+/// [`configs`] turns, read back by [`count_child`].
+fn words(o: &BbcloudOptions) -> Vec<String> {
+    vec![
+        "cloud".into(),
+        o.epsilon.to_string(),
+        o.samples.to_string(),
+        o.texel_density
+            .map_or_else(|| "budget".to_string(), |d| d.to_string()),
+    ]
+}
+
+/// A counting child's bake ([`words`], [`crate::instr`]).
+pub(crate) fn count_child(scene: &billow::scene::Scene, words: &[String]) {
+    let opts = BbcloudOptions {
+        epsilon: words[0].parse().expect("ε"),
+        samples: words[1].parse().expect("N"),
+        texel_density: (words[2] != "budget").then(|| words[2].parse().expect("a density")),
+        ..BbcloudOptions::default()
+    };
+    bake(scene, &opts, "billow accuracy", None, &|_, _| {}).expect("bake");
 }
 
 fn configs() -> Vec<(&'static str, String, BbcloudOptions)> {
@@ -112,7 +140,12 @@ fn configs() -> Vec<(&'static str, String, BbcloudOptions)> {
 }
 
 /// Bakes, renders and compares everything for the mesh at `path` (the oak).
-pub(crate) fn run(path: &Path, shown: &str, quick: bool) -> Result<CloudReport, String> {
+pub(crate) fn run(
+    path: &Path,
+    shown: &str,
+    quick: bool,
+    count: bool,
+) -> Result<CloudReport, String> {
     let start = Instant::now();
     let scene = import(path, &ImportOptions::default())
         .map_err(|e| e.to_string())?
@@ -159,9 +192,9 @@ pub(crate) fn run(path: &Path, shown: &str, quick: bool) -> Result<CloudReport, 
         Ok::<_, String>((results, bytes, prepared.texel_density(lod)))
     };
     let mut rows = Vec::new();
-    let mut cache: BTreeMap<String, (CloudAsset, f64)> = BTreeMap::new();
+    let mut cache: BTreeMap<Vec<String>, (CloudAsset, f64)> = BTreeMap::new();
     for (family, label, opts) in configs() {
-        let key = format!("{} {} {:?}", opts.epsilon, opts.samples, opts.texel_density);
+        let key = words(&opts);
         if !cache.contains_key(&key) {
             eprintln!("cloud: baking {label}");
             let t = Instant::now();
@@ -175,10 +208,13 @@ pub(crate) fn run(path: &Path, shown: &str, quick: bool) -> Result<CloudReport, 
             family,
             label,
             bake_s: *bake_s,
+            bake_instr: None,
             texture_bytes,
             billboards: asset.levels[0].billboard_count as usize,
             density,
             render_s: results.iter().map(|r| r.seconds.asset).sum::<f64>() / results.len() as f64,
+            fragments: results.iter().map(|r| r.fragments as f64).sum::<f64>()
+                / results.len() as f64,
             mean: mean_errors(results.iter().map(|r| &r.asset)),
             by_distance: by_distance(&results, &[1.0, 4.0, 16.0]),
         };
@@ -187,6 +223,15 @@ pub(crate) fn run(path: &Path, shown: &str, quick: bool) -> Result<CloudReport, 
             row.label, row.mean.rmse, row.billboards
         );
         rows.push(row);
+    }
+    if count {
+        let jobs: Vec<Vec<String>> = cache.keys().cloned().collect();
+        eprintln!("cloud: counting the instructions of {} bakes", jobs.len());
+        let counts = crate::instr::bake_counts(&path.display().to_string(), &jobs);
+        for (row, (_, _, opts)) in rows.iter_mut().zip(configs()) {
+            let key = words(&opts);
+            row.bake_instr = jobs.iter().position(|j| *j == key).and_then(|i| counts[i]);
+        }
     }
     eprintln!("cloud: baking the {CHAIN_LODS}-level chain");
     let opts = BbcloudOptions {
@@ -257,12 +302,23 @@ pub(crate) fn plots(r: &CloudReport) -> (String, String) {
         log_y: false,
         series: series(x),
     };
+    let counted = r.rows.iter().all(|row| row.bake_instr.is_some());
+    let bake = if counted {
+        chart("bake instructions (callgrind, one thread)", |r| {
+            r.bake_instr.unwrap_or(0) as f64
+        })
+    } else {
+        chart("bake time (s)", |r| r.bake_s)
+    };
     let sweep = charts_svg(
         "Oak billboard cloud (LOD 0): mean RMSE against cost — * = default",
         &[
-            chart("bake time (s)", |r| r.bake_s),
+            bake,
             chart("texture bytes (LOD 0 atlases with MIPs)", |r| {
                 r.texture_bytes as f64
+            }),
+            chart("fragments shaded per view (CPU cloud renderer)", |r| {
+                r.fragments
             }),
         ],
     );
@@ -332,21 +388,27 @@ pub(crate) fn section(r: &CloudReport) -> String {
          docs/eval.md) against the ambient + diffuse reference, {} views ({}×{}, the 6 axis \
          directions at 1×, 4× and 16×, 16 spp). One setting varies at a time from the default \
          (ε = 0.04 radii, N = 500, texel density from the 2048² atlas budget); LOD 0 only. \
-         Bake = wall time of one bake (release, import excluded); texture bytes = LOD 0's \
-         atlases with their MIP chains; render = CPU cloud renderer per view. \
+         Bake = wall time of one bake (release, import excluded) and its instructions \
+         (G = 10⁹; callgrind, one thread, import excluded: `examples/common/instr.rs`; \
+         unlike the time, the same on a loaded machine); texture bytes = LOD 0's atlases \
+         with their MIP chains; fragments = billboard samples shaded per view (the CPU \
+         renderer's load-independent cost); render = CPU cloud renderer per view. \
          The whole cloud part took {:.0} s (reference {:.1} s).\n",
         r.views, r.size, r.size, r.total_s, r.reference_s
     );
     s.push_str("![Oak cloud accuracy against cost](accuracy/oak_cloud.svg)\n\n");
-    s.push_str("| sweep | setting | bake s | billboards | texels/unit | texture MiB | render s/view | RMSE | PSNR dB | SSIM | FLIP | RMSE 1× / 4× / 16× | coverage 1× / 4× / 16× |\n");
-    s.push_str("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|\n");
+    s.push_str("| sweep | setting | bake s | bake G instr. | billboards | texels/unit | texture MiB | fragments/view | render s/view | RMSE | PSNR dB | SSIM | FLIP | RMSE 1× / 4× / 16× | coverage 1× / 4× / 16× |\n");
+    s.push_str("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|\n");
     for row in &r.rows {
         let d = |i: usize| row.by_distance.get(i).map(|x| x.1).unwrap_or_default();
+        let instr = row
+            .bake_instr
+            .map_or_else(|| "–".to_string(), |n| format!("{:.2}", n as f64 * 1e-9));
         let _ = writeln!(
             s,
-            "| {} | {} | {:.2} | {} | {:.2} | {:.1} | {:.2} | {:.4} | {:.2} | {:.3} | {:.4} | {:.4} / {:.4} / {:.4} | {:+.0}% / {:+.0}% / {:+.0}% |",
+            "| {} | {} | {:.2} | {instr} | {} | {:.2} | {:.1} | {:.0} | {:.2} | {:.4} | {:.2} | {:.3} | {:.4} | {:.4} / {:.4} / {:.4} | {:+.0}% / {:+.0}% / {:+.0}% |",
             row.family, row.label, row.bake_s, row.billboards, row.density, mib(row.texture_bytes),
-            row.render_s, row.mean.rmse, row.mean.psnr, row.mean.ssim_luma, row.mean.flip,
+            row.fragments, row.render_s, row.mean.rmse, row.mean.psnr, row.mean.ssim_luma, row.mean.flip,
             d(0).rmse, d(1).rmse, d(2).rmse,
             100.0 * d(0).coverage_rel_diff, 100.0 * d(1).coverage_rel_diff, 100.0 * d(2).coverage_rel_diff
         );

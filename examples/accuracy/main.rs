@@ -21,6 +21,7 @@
 //! the other generators' blocks are written when absent.
 
 mod cloud;
+#[path = "../common/instr.rs"]
 mod instr;
 mod plot;
 mod report;
@@ -30,7 +31,11 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 fn main() {
-    instr::child_main();
+    instr::child_main(instr::imported, |scene, words| match words[0].as_str() {
+        "volume" => volume::count_child(scene, &words[1..]),
+        "cloud" => cloud::count_child(scene, &words[1..]),
+        w => panic!("unknown bake {w}"),
+    });
     let mut out = PathBuf::from("docs/accuracy.md");
     let mut quick = false;
     for a in std::env::args().skip(1) {
@@ -41,6 +46,8 @@ fn main() {
         }
     }
     let start = Instant::now();
+    // Bake instruction counts (callgrind): checked once; without valgrind one SKIP line.
+    let count = !quick && instr::available("accuracy: bake instruction counts");
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let shared = root.join("../shared/assets");
     let oak = "fixtures/oak/eztree_oak_medium.gltf";
@@ -62,7 +69,7 @@ fn main() {
     }
     let mut reports = Vec::new();
     for (name, path, shown) in &meshes {
-        match volume::run_mesh(name, path, shown, quick) {
+        match volume::run_mesh(name, path, shown, quick, count) {
             Ok(r) => reports.push(r),
             Err(e) => {
                 eprintln!("{name}: {e}");
@@ -70,7 +77,7 @@ fn main() {
             }
         }
     }
-    let cloud_section = match cloud::run(&root.join(oak), oak, quick) {
+    let cloud_section = match cloud::run(&root.join(oak), oak, quick, count) {
         Ok(c) => Some(c),
         Err(e) => {
             eprintln!("cloud: {e}");

@@ -188,7 +188,7 @@ pub(crate) fn report(
          level 0 (what a slicer without distance-dependent MIP selection does).\n\
          - **Costs**: bake = `voxelize` wall time, one run (release build, import excluded), \
          and its instructions (G = 10⁹; callgrind, one thread, import excluded: \
-         `examples/accuracy/instr.rs`; unlike the time, the same on a loaded machine); \
+         `examples/common/instr.rs`; unlike the time, the same on a loaded machine); \
          asset = the `.billow` file size; render = CPU slicer wall time per view, the best of \
          three runs (a proxy for the GPU's fill cost; fragments = volume samples shaded per \
          view, the machine-independent measure). The machine is shared, so times of a few \

@@ -144,6 +144,7 @@ pub(crate) fn run_mesh(
     path: &Path,
     shown: &str,
     quick: bool,
+    count: bool,
 ) -> Result<MeshReport, String> {
     eprintln!("{name}: importing {}", path.display());
     let scene = import(path, &ImportOptions::default())
@@ -244,13 +245,24 @@ pub(crate) fn run_mesh(
         );
         rows.push(row);
     }
-    if !quick && crate::instr::available() {
-        let keys: Vec<crate::instr::Key> = cache
+    if count {
+        let keys: Vec<(u32, u32, Preset)> = cache
             .keys()
             .map(|&(res, ss, c)| (res, ss, preset(c)))
             .collect();
         eprintln!("{name}: counting the instructions of {} bakes", keys.len());
-        let counts = crate::instr::bake_counts(path, &keys);
+        let jobs: Vec<Vec<String>> = keys
+            .iter()
+            .map(|&(res, ss, c)| {
+                vec![
+                    "volume".into(),
+                    res.to_string(),
+                    ss.to_string(),
+                    c.name().to_string(),
+                ]
+            })
+            .collect();
+        let counts = crate::instr::bake_counts(&path.display().to_string(), &jobs);
         for r in &mut rows {
             let key = (r.config.res, r.config.ss, r.config.combine);
             r.bake_instr = keys.iter().position(|k| *k == key).and_then(|i| counts[i]);
@@ -265,6 +277,12 @@ pub(crate) fn run_mesh(
         raster_by_distance,
         rows,
     })
+}
+
+/// A counting child's bake (`volume RES SS COMBINE`, [`crate::instr`]).
+pub(crate) fn count_child(scene: &billow::scene::Scene, words: &[String]) {
+    let num = |i: usize| words[i].parse::<u32>().expect("a number");
+    bake(scene, num(0), num(1), preset(&words[2])).expect("bake");
 }
 
 pub(crate) fn preset(name: &str) -> Preset {

@@ -40,7 +40,12 @@ use billow::presets::{pareto_front, Preset};
 use billow::scene::Scene;
 use billow::voxelize::{voxelize, CombineFn, Resolution, VoxelizeOptions};
 
+#[path = "../common/instr.rs"]
+mod instr;
+
 const BEGIN: &str = "<!-- pareto:begin -->";
+/// The generated tree's name for the counting child ([`instr`]).
+const TREE: &str = "procgen:leafy_tree(1500, 9, 1)";
 const END: &str = "<!-- pareto:end -->";
 const DISTANCES: [f32; 3] = [1.0, 4.0, 16.0];
 const COLOURS: [&str; 6] = [
@@ -56,6 +61,9 @@ struct Point {
     hollow: bool,
     label: String,
     bake_s: f64,
+    /// Instructions of the bake (compression included, import excluded, one thread;
+    /// [`instr`]); `None` where callgrind could not count.
+    bake_instr: Option<u64>,
     bytes: u64,
     /// Mean per view.
     fragments: f64,
@@ -118,13 +126,88 @@ struct VolumeBake {
     ss: u32,
     bc: bool,
     bake_s: f64,
+    bake_instr: Option<u64>,
     bytes: u64,
     /// (bias, fragments/view, render s/view, mean, by distance)
     at: Vec<(f32, f64, f64, MeanErrors, [f64; 3])>,
 }
 
+/// The counting child's words for a volume bake (`volume RES SS bc|none`).
+fn volume_words(res: u32, ss: u32, bc: bool) -> Vec<String> {
+    let c = if bc { "bc" } else { "none" };
+    vec!["volume".into(), res.to_string(), ss.to_string(), c.into()]
+}
+
+/// The counting child's words for a cloud bake (`cloud ε N ATLAS`).
+fn cloud_words(o: &BbcloudOptions) -> Vec<String> {
+    vec![
+        "cloud".into(),
+        o.epsilon.to_string(),
+        o.samples.to_string(),
+        o.atlas_size.to_string(),
+    ]
+}
+
+/// A counting child's bake: the volume or the cloud as the sweep bakes it (compressed as
+/// the words say), output dropped.
+fn count_child(scene: &Scene, words: &[String]) {
+    let num = |i: usize| words[i].parse::<u32>().expect("a number");
+    match words[0].as_str() {
+        "volume" => {
+            let volume =
+                voxelize(scene, &volume_options(num(1), num(2)), &|_, _| {}).expect("bake");
+            let mut asset = volume.into_asset("billow pareto", None, BTreeMap::new());
+            if words[3] == "bc" {
+                asset.header.set_compress("bc7");
+                compress_volume(&mut asset);
+            }
+        }
+        "cloud" => {
+            let opts = cloud_options(words[1].parse().expect("ε"), num(2), num(3));
+            let (mut asset, _) =
+                bake_cloud(scene, &opts, "billow pareto", None, &|_, _| {}).expect("bake");
+            asset.header.set_compress("bc7");
+            compress_cloud(&mut asset);
+        }
+        w => panic!("unknown bake {w}"),
+    }
+}
+
+/// The counting child's mesh: the bundled files, or the generated tree.
+fn load(mesh: &str) -> Scene {
+    if mesh == TREE {
+        billow::procgen::leafy_tree(1500, 9, 1)
+    } else {
+        instr::imported(mesh)
+    }
+}
+
+/// Counts the instructions of each bake (`words` of each) on `mesh` when `count`.
+fn counts(mesh: &str, count: bool, jobs: &[Vec<String>]) -> Vec<Option<u64>> {
+    if !count {
+        return vec![None; jobs.len()];
+    }
+    eprintln!(
+        "counting the instructions of {} bakes on {mesh}",
+        jobs.len()
+    );
+    instr::bake_counts(mesh, jobs)
+}
+
+fn cloud_options(epsilon: f32, samples: u32, atlas_size: u32) -> BbcloudOptions {
+    BbcloudOptions {
+        epsilon,
+        samples,
+        atlas_size,
+        ..BbcloudOptions::default()
+    }
+}
+
+/// The volume bakes of `grid` on `scene` (`mesh`: its name for the counting child),
+/// each raw and BC7, scored at each bias.
 fn volume_bakes(
     scene: &Scene,
+    (mesh, count): (&str, bool),
     size: u32,
     grid: &[(u32, u32)],
     biases: &[f32],
@@ -190,10 +273,18 @@ fn volume_bakes(
                 ss,
                 bc,
                 bake_s: bake_s + compress_s,
+                bake_instr: None,
                 bytes,
                 at,
             });
         }
+    }
+    let jobs: Vec<Vec<String>> = out
+        .iter()
+        .map(|b| volume_words(b.res, b.ss, b.bc))
+        .collect();
+    for (b, n) in out.iter_mut().zip(counts(mesh, count, &jobs)) {
+        b.bake_instr = n;
     }
     Ok(out)
 }
@@ -208,6 +299,7 @@ fn volume_points(bakes: &[VolumeBake]) -> Vec<Point> {
                 hollow: b.bc,
                 label: format!("{}³ ss{} {c} b{bias}", b.res, b.ss),
                 bake_s: b.bake_s,
+                bake_instr: b.bake_instr,
                 bytes: b.bytes,
                 fragments: fr,
                 render_s: rs,
@@ -230,6 +322,7 @@ fn volume_points(bakes: &[VolumeBake]) -> Vec<Point> {
 struct CloudBake {
     opts: BbcloudOptions,
     bake_s: f64,
+    bake_instr: Option<u64>,
     bytes: u64,
     billboards: u64,
     density: f32,
@@ -241,6 +334,7 @@ struct CloudBake {
 
 fn cloud_bakes(
     scene: &Scene,
+    (mesh, count): (&str, bool),
     size: u32,
     grid: &[(f32, u32, u32)],
     name: &str,
@@ -260,12 +354,7 @@ fn cloud_bakes(
     let refs = references(&evaluator)?;
     let mut out = Vec::new();
     for &(epsilon, samples, atlas_size) in grid {
-        let opts = BbcloudOptions {
-            epsilon,
-            samples,
-            atlas_size,
-            ..BbcloudOptions::default()
-        };
+        let opts = cloud_options(epsilon, samples, atlas_size);
         let t = Instant::now();
         let (mut asset, _) = bake_cloud(scene, &opts, "billow pareto", None, &|_, _| {})
             .map_err(|e| e.to_string())?;
@@ -294,12 +383,17 @@ fn cloud_bakes(
             density: prepared.texel_density(0),
             opts,
             bake_s,
+            bake_instr: None,
             bytes,
             fragments,
             render_s,
             mean,
             by_distance,
         });
+    }
+    let jobs: Vec<Vec<String>> = out.iter().map(|b| cloud_words(&b.opts)).collect();
+    for (b, n) in out.iter_mut().zip(counts(mesh, count, &jobs)) {
+        b.bake_instr = n;
     }
     Ok(out)
 }
@@ -315,6 +409,7 @@ fn cloud_points(bakes: &[CloudBake]) -> Vec<Point> {
                 b.opts.epsilon, b.opts.samples, b.opts.atlas_size
             ),
             bake_s: b.bake_s,
+            bake_instr: b.bake_instr,
             bytes: b.bytes,
             fragments: b.fragments,
             render_s: b.render_s,
@@ -339,11 +434,27 @@ use svg::svg;
 /// The panels: (axis label, cost).
 type Cost = (&'static str, fn(&Point) -> f64);
 
-const COSTS: [Cost; 3] = [
-    ("bake time (s, wall, one run)", |p| p.bake_s),
-    ("asset bytes", |p| p.bytes as f64),
-    ("fragments per view (render cost)", |p| p.fragments),
-];
+/// The panels' costs, all load-independent where callgrind counted every bake: bake
+/// instructions (else wall time), asset bytes and fragments shaded per view.
+fn costs(points: &[Point]) -> [Cost; 3] {
+    let bake: Cost = if points.iter().all(|p| p.bake_instr.is_some()) {
+        ("bake instructions (callgrind, one thread)", |p| {
+            p.bake_instr.unwrap_or(0) as f64
+        })
+    } else {
+        ("bake time (s, wall, one run)", |p| p.bake_s)
+    };
+    [
+        bake,
+        ("asset bytes", |p| p.bytes as f64),
+        ("fragments per view (render cost)", |p| p.fragments),
+    ]
+}
+
+/// Instructions in G (10⁹), or "–" where not counted.
+fn giga(n: Option<u64>) -> String {
+    n.map_or_else(|| "–".to_string(), |n| format!("{:.2}", n as f64 * 1e-9))
+}
 
 fn mib(b: u64) -> f64 {
     b as f64 / 1048576.0
@@ -352,7 +463,7 @@ fn mib(b: u64) -> f64 {
 /// Which panels' fronts a point is on: `t` bake time, `b` bytes, `f` fragments.
 fn fronts(points: &[Point]) -> Vec<String> {
     let mut on = vec![String::new(); points.len()];
-    for ((_, cost), tag) in COSTS.iter().zip(['t', 'b', 'f']) {
+    for ((_, cost), tag) in costs(points).iter().zip(['t', 'b', 'f']) {
         let pts: Vec<(f64, f64)> = points.iter().map(|p| (cost(p), p.mean.rmse)).collect();
         for i in pareto_front(&pts) {
             on[i].push(tag);
@@ -383,13 +494,13 @@ fn table(points: &[Point], head: &str, bake: Option<&[String]>) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "| {head} | bake s | MiB | fragments/view | render ms/view | RMSE | RMSE 1× / 4× / 16× | FLIP | front |{}",
+        "| {head} | bake s | bake G instr. | MiB | fragments/view | render ms/view | RMSE | RMSE 1× / 4× / 16× | FLIP | front |{}",
         if bake.is_some() { " front at bias 1 |" } else { "" }
     );
     let cols = head.matches('|').count() + 1;
     let _ = writeln!(
         s,
-        "|{}---:|---:|---:|---:|---:|---|---:|---|{}",
+        "|{}---:|---:|---:|---:|---:|---:|---|---:|---|{}",
         "---|".repeat(cols),
         if bake.is_some() { "---|" } else { "" }
     );
@@ -406,9 +517,10 @@ fn table(points: &[Point], head: &str, bake: Option<&[String]>) -> String {
         });
         let _ = writeln!(
             s,
-            "| {} | {:.2} | {:.2} | {:.0} | {:.1} | {:.4} | {:.4} / {:.4} / {:.4} | {:.4} | {} |{tail}",
+            "| {} | {:.2} | {} | {:.2} | {:.0} | {:.1} | {:.4} | {:.4} / {:.4} / {:.4} | {:.4} | {} |{tail}",
             p.extra.join(" | "),
             p.bake_s,
+            giga(p.bake_instr),
             mib(p.bytes),
             p.fragments,
             1000.0 * p.render_s,
@@ -435,12 +547,12 @@ struct PresetRow {
 
 fn preset_table(rows: &[PresetRow]) -> String {
     let mut s = String::from(
-        "| mesh | asset | preset | settings | RMSE (mean) | RMSE 1× | MiB | bake s | fragments/view | render ms/view | on the oak's fronts |\n|---|---|---|---|---:|---:|---:|---:|---:|---:|---|\n",
+        "| mesh | asset | preset | settings | RMSE (mean) | RMSE 1× | MiB | bake s | bake G instr. | fragments/view | render ms/view | on the oak's fronts |\n|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---|\n",
     );
     for r in rows {
         let _ = writeln!(
             s,
-            "| {} | {} | **{}** | {} | {:.4} | {:.4} | {:.2} | {:.2} | {:.0} | {:.1} | {} |",
+            "| {} | {} | **{}** | {} | {:.4} | {:.4} | {:.2} | {:.2} | {} | {:.0} | {:.1} | {} |",
             r.mesh,
             r.kind,
             r.preset,
@@ -449,6 +561,7 @@ fn preset_table(rows: &[PresetRow]) -> String {
             r.point.by_distance[0],
             mib(r.point.bytes),
             r.point.bake_s,
+            giga(r.point.bake_instr),
             r.point.fragments,
             1000.0 * r.point.render_s,
             if r.front.is_empty() {
@@ -470,6 +583,7 @@ fn volume_settings(p: Preset) -> (u32, u32) {
 }
 
 fn main() {
+    instr::child_main(load, count_child);
     let mut md = PathBuf::from("docs/accuracy/pareto.md");
     let mut accuracy = PathBuf::from("docs/accuracy.md");
     let mut quick = false;
@@ -484,13 +598,15 @@ fn main() {
     }
     let start = Instant::now();
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let oak = import(
-        &root.join("fixtures/oak/eztree_oak_medium.gltf"),
-        &ImportOptions::default(),
-    )
-    .expect("import the oak")
-    .scene;
-    let tree = billow::procgen::leafy_tree(1500, 9, 1);
+    // Bake instruction counts (callgrind): checked once; without valgrind one SKIP line,
+    // and the bake panels fall back to wall time.
+    let count = !quick && instr::available("pareto_sweep: bake instruction counts");
+    let oak_path = root.join("fixtures/oak/eztree_oak_medium.gltf");
+    let oak_id = oak_path.display().to_string();
+    let oak = import(&oak_path, &ImportOptions::default())
+        .expect("import the oak")
+        .scene;
+    let tree = load(TREE);
     let size = if quick { 64 } else { 128 };
 
     // Volumes: the combined grid on the oak.
@@ -509,7 +625,8 @@ fn main() {
     }
     let biases = [0.5, 1.0, 2.0];
     let t = Instant::now();
-    let vb = volume_bakes(&oak, size, &grid, &biases, "oak").expect("volume sweep");
+    let vb =
+        volume_bakes(&oak, (&oak_id, count), size, &grid, &biases, "oak").expect("volume sweep");
     let volume_s = t.elapsed().as_secs_f64();
     let vpoints = volume_points(&vb);
 
@@ -532,7 +649,7 @@ fn main() {
         cgrid.extend([(0.02, 500, 4096), (0.04, 500, 4096)]);
     }
     let t = Instant::now();
-    let cb = cloud_bakes(&oak, size, &cgrid, "oak").expect("cloud sweep");
+    let cb = cloud_bakes(&oak, (&oak_id, count), size, &cgrid, "oak").expect("cloud sweep");
     let cloud_s = t.elapsed().as_secs_f64();
     let cpoints = cloud_points(&cb);
 
@@ -581,7 +698,8 @@ fn main() {
         .map(|&p| volume_settings(p))
         .filter(|&(r, _)| !quick || r <= 64)
         .collect();
-    let tv = volume_bakes(&tree, size, &tgrid, &[1.0], "tree").expect("tree volumes");
+    let tv =
+        volume_bakes(&tree, (TREE, count), size, &tgrid, &[1.0], "tree").expect("tree volumes");
     for (p, pt) in Preset::LADDER
         .iter()
         .zip(volume_points(&tv).into_iter().filter(|q| q.hollow))
@@ -603,7 +721,7 @@ fn main() {
             (c.epsilon, c.samples, c.atlas_size)
         })
         .collect();
-    let tc = cloud_bakes(&tree, size, &cg, "tree").expect("tree clouds");
+    let tc = cloud_bakes(&tree, (TREE, count), size, &cg, "tree").expect("tree clouds");
     for (p, pt) in Preset::LADDER.iter().zip(cloud_points(&tc)) {
         let c = p.cloud();
         rows.push(PresetRow {
@@ -629,7 +747,15 @@ fn main() {
         let spot = import(&spot_path, &ImportOptions::default())
             .expect("import Spot")
             .scene;
-        let sv = volume_bakes(&spot, size, &tgrid, &[1.0], "spot").expect("Spot volumes");
+        let sv = volume_bakes(
+            &spot,
+            (&spot_path.display().to_string(), count),
+            size,
+            &tgrid,
+            &[1.0],
+            "spot",
+        )
+        .expect("Spot volumes");
         for (p, pt) in Preset::LADDER
             .iter()
             .zip(volume_points(&sv).into_iter().filter(|q| q.hollow))
@@ -668,10 +794,13 @@ fn main() {
          {tree_s:.0} s, {:.0} s in all. Errors: `billow eval`'s mean RMSE (premultiplied linear \
          RGBA, whole frame) over the 6 axis views at 1×, 4× and 16× the framed distance, \
          {size}×{size}, 16-spp reference. Costs: bake = wall time of one bake (compression \
-         included; the machine is shared, so read it as a rough ratio), bytes = the file \
+         included; the machine is shared, so read it as a rough ratio) and its \
+         instructions (G = 10⁹; callgrind, one thread, import excluded, \
+         `examples/common/instr.rs`: the same on a loaded machine; the plots' bake axis \
+         and the t fronts use them), bytes = the file \
          `billow` writes, fragments = samples shaded per view (load-independent render cost), \
          render = CPU renderer per view (the faster of two for volumes). The front column \
-         says on which panel's Pareto front a point lies: t = bake time, b = bytes, f = \
+         says on which panel's Pareto front a point lies: t = bake cost, b = bytes, f = \
          fragments; for volumes, *front at bias 1* says the same among the volumes drawn \
          at the default slice spacing with the same compression (the bake settings' own \
          fronts: the spacing is a view setting, which a preset does not choose).\n",

@@ -1,11 +1,11 @@
-//! The hand-written SVG plots of the Pareto sweep: one panel per cost (bake time, bytes,
-//! fragments) against the error, log axes, the front of each panel marked.
+//! The hand-written SVG plots of the Pareto sweep: one panel per cost (bake instructions
+//! or time, bytes, fragments) against the error, log axes, the front of each panel marked.
 
 use std::fmt::Write;
 
 use billow::presets::pareto_front;
 
-use super::{Point, COLOURS, COSTS};
+use super::{costs, Point, COLOURS};
 
 fn esc(s: &str) -> String {
     s.replace('&', "&amp;")
@@ -14,7 +14,9 @@ fn esc(s: &str) -> String {
 }
 
 fn tick_label(v: f64) -> String {
-    if v >= 1e6 {
+    if v >= 1e9 {
+        format!("{}G", v / 1e9)
+    } else if v >= 1e6 {
         format!("{}M", v / 1e6)
     } else if v >= 1e3 {
         format!("{}k", v / 1e3)
@@ -30,7 +32,8 @@ fn tick_label(v: f64) -> String {
 pub fn svg(title: &str, points: &[Point]) -> String {
     let (pw, ph) = (430.0, 330.0);
     let (ml, mr, mt, mb) = (60.0, 14.0, 44.0, 50.0);
-    let width = pw * COSTS.len() as f64;
+    let panels = costs(points);
+    let width = pw * panels.len() as f64;
     let groups: Vec<String> = {
         let mut g: Vec<String> = Vec::new();
         for p in points {
@@ -59,7 +62,7 @@ pub fn svg(title: &str, points: &[Point]) -> String {
         .fold(f64::INFINITY, f64::min)
         * 0.92;
     let all = points;
-    for (ci, (x_label, cost)) in COSTS.iter().enumerate() {
+    for (ci, (x_label, cost)) in panels.iter().enumerate() {
         // A log axis cannot show a zero cost (a cloud whose atlas starved: no fragments).
         let points: Vec<Point> = all.iter().filter(|p| cost(p) > 0.0).cloned().collect();
         let points = points.as_slice();
