@@ -210,7 +210,9 @@ bench: build
 	@mkdir -p $(BENCH_DIR)
 	$(CARGO) run --release --locked --example bench_tree -- $(BENCH_DIR)/tree.obj
 	cc -O3 -march=native -o $(BENCH_DIR)/raster_floor benches/raster_floor.c
+	cc -O3 -march=x86-64-v3 -o $(BENCH_DIR)/raster_floor_count benches/raster_floor.c
 	python3 benches/voxelize_bench.py --billow $(BILLOW) --floor $(BENCH_DIR)/raster_floor \
+		--count-floor $(BENCH_DIR)/raster_floor_count \
 		--mesh $(BENCH_DIR)/tree.obj --res "$(BENCH_RES)" --runs $(BENCH_RUNS) \
 		--callgrind-res "$(BENCH_COUNT_RES)" $(if $(VDB_TOOL),--vdb-tool $(VDB_TOOL)) \
 		$(if $(BENCH_BEFORE),--before $(BENCH_BEFORE)) \
