@@ -57,7 +57,7 @@ def med(xs):
     return statistics.median(xs) if xs else float("nan")
 
 
-STAGES = ["import", "rasterize", "bake", "mip", "combine", "quantize", "write", "total"]
+STAGES = ["import", "rasterize", "bake", "mip", "combine", "quantize", "compress", "write", "total"]
 
 
 def main():
