@@ -397,8 +397,8 @@ pub(crate) fn section(r: &CloudReport) -> String {
         r.views, r.size, r.size, r.total_s, r.reference_s
     );
     s.push_str("![Oak cloud accuracy against cost](accuracy/oak_cloud.svg)\n\n");
-    s.push_str("| sweep | setting | bake s | bake G instr. | billboards | texels/unit | texture MiB | fragments/view | render s/view | RMSE | PSNR dB | SSIM | FLIP | RMSE 1× / 4× / 16× | coverage 1× / 4× / 16× |\n");
-    s.push_str("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|\n");
+    s.push_str("| sweep | setting | bake s | bake G instr. | billboards | texels/unit | texture MiB | fragments/view | render s/view | RMSE | PSNR dB | SSIM | FLIP | RMSE 1× / 4× / 16× | covered RMSE 1× / 4× / 16× | coverage 1× / 4× / 16× |\n");
+    s.push_str("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|---|\n");
     for row in &r.rows {
         let d = |i: usize| row.by_distance.get(i).map(|x| x.1).unwrap_or_default();
         let instr = row
@@ -406,10 +406,11 @@ pub(crate) fn section(r: &CloudReport) -> String {
             .map_or_else(|| "–".to_string(), |n| format!("{:.2}", n as f64 * 1e-9));
         let _ = writeln!(
             s,
-            "| {} | {} | {:.2} | {instr} | {} | {:.2} | {:.1} | {:.0} | {:.2} | {:.4} | {:.2} | {:.3} | {:.4} | {:.4} / {:.4} / {:.4} | {:+.0}% / {:+.0}% / {:+.0}% |",
+            "| {} | {} | {:.2} | {instr} | {} | {:.2} | {:.1} | {:.0} | {:.2} | {:.4} | {:.2} | {:.3} | {:.4} | {:.4} / {:.4} / {:.4} | {:.4} / {:.4} / {:.4} | {:+.0}% / {:+.0}% / {:+.0}% |",
             row.family, row.label, row.bake_s, row.billboards, row.density, mib(row.texture_bytes),
             row.fragments, row.render_s, row.mean.rmse, row.mean.psnr, row.mean.ssim_luma, row.mean.flip,
             d(0).rmse, d(1).rmse, d(2).rmse,
+            d(0).rmse_covered, d(1).rmse_covered, d(2).rmse_covered,
             100.0 * d(0).coverage_rel_diff, 100.0 * d(1).coverage_rel_diff, 100.0 * d(2).coverage_rel_diff
         );
     }

@@ -37,11 +37,11 @@ pub(crate) fn table(m: &MeshReport) -> String {
     };
     let _ = writeln!(
         s,
-        "| sweep | setting | bake s | bake G instr. | asset MiB | render ms/view | slices/view | fragments/view | RMSE | PSNR dB | SSIM | FLIP | RMSE 1× / 4× / 16× | coverage 1× / 4× / 16× |"
+        "| sweep | setting | bake s | bake G instr. | asset MiB | render ms/view | slices/view | fragments/view | RMSE | PSNR dB | SSIM | FLIP | RMSE 1× / 4× / 16× | covered RMSE 1× / 4× / 16× | coverage 1× / 4× / 16× |"
     );
     let _ = writeln!(
         s,
-        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|"
+        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|---|"
     );
     for r in &m.rows {
         let instr = r
@@ -50,7 +50,7 @@ pub(crate) fn table(m: &MeshReport) -> String {
         let (a, b, c) = (dist(r, 1.0), dist(r, 4.0), dist(r, 16.0));
         let _ = writeln!(
             s,
-            "| {} | {} | {:.2} | {instr} | {:.2} | {:.1} | {:.0} | {:.0} | {:.4} | {:.2} | {:.3} | {:.4} | {:.4} / {:.4} / {:.4} | {:+.0}% / {:+.0}% / {:+.0}% |",
+            "| {} | {} | {:.2} | {instr} | {:.2} | {:.1} | {:.0} | {:.0} | {:.4} | {:.2} | {:.3} | {:.4} | {:.4} / {:.4} / {:.4} | {:.4} / {:.4} / {:.4} | {:+.0}% / {:+.0}% / {:+.0}% |",
             r.config.family,
             r.config.label,
             r.bake_s,
@@ -65,6 +65,9 @@ pub(crate) fn table(m: &MeshReport) -> String {
             a.rmse,
             b.rmse,
             c.rmse,
+            a.rmse_covered,
+            b.rmse_covered,
+            c.rmse_covered,
             100.0 * a.coverage_rel_diff,
             100.0 * b.coverage_rel_diff,
             100.0 * c.coverage_rel_diff,
@@ -178,7 +181,10 @@ pub(crate) fn report(
          16-spp ray-traced reference of the mesh, unlit, at 128×128 from all 14 directions of \
          the view set (6 axes, 8 diagonals) at 1×, 4× and 16× the framed distance (42 views; \
          45° field of view; at 16× the object is about 8 pixels wide). RMSE is on premultiplied \
-         linear RGBA over the whole image, averaged over the views; PSNR is that of the mean \
+         linear RGBA over the whole image, averaged over the views; *covered RMSE* is the same \
+         over the covered pixels only (the union of the reference's and the volume's coverage, \
+         α above half an 8-bit step), which the empty background does not dilute at a \
+         distance; PSNR is that of the mean \
          MSE; SSIM on luma; FLIP (LDR-ꟻLIP via `nv-flip`, over black, 0 = identical); coverage is the relative difference of the summed alpha (+ = the \
          volume is more opaque than the mesh).\n\
          - **Baseline**: 128³ (voxels along the longest axis), 4×4 coverage samples per voxel \
