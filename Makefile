@@ -151,7 +151,8 @@ accuracy-emptyspace:
 ## Combined sweeps and Pareto fronts (resolution x supersampling x compression x slice
 ## spacing; epsilon x N x atlas size) on the oak, and the preset table (oak, a generated
 ## tree); rewrites docs/accuracy/pareto.md, docs/accuracy/pareto_*.svg and the section of
-## docs/accuracy.md between the pareto markers (about 10 minutes on 2 cores, release).
+## docs/accuracy.md between the pareto markers (about 18 minutes on 2 cores, release, most of
+## it counting bake instructions under callgrind; without valgrind about 5, with wall times).
 accuracy-pareto:
 	$(CARGO) run --release --locked --example pareto_sweep -- --md docs/accuracy/pareto.md --accuracy docs/accuracy.md
 

@@ -832,13 +832,13 @@ fn main() {
          [accuracy/pareto.md](accuracy/pareto.md).\n\n\
          ![Oak volume Pareto fronts](accuracy/pareto_volume.svg)\n\n\
          ![Oak cloud Pareto fronts](accuracy/pareto_cloud.svg)\n\n\
-         What the fronts said in the run this text was written against (fixed text; the \
-         tables are the current run): BC7 costs almost no accuracy on a volume (oak 128³, \
-         4×4, bias 1: RMSE 0.0174 against 0.0171 raw) for 3 % of the bytes (0.21 against \
-         7.00 MiB: empty blocks are skipped), so every bytes front is BC7; 4×4 \
-         supersampling beat 1×1 and 2×2 at the next resolution up (64³ 4×4: 0.0181; 128³ \
-         1×1: 0.0230), so the presets keep 4×4 and step the resolution; the slice-spacing \
-         bias is the cheapest accuracy at render time (bias 0.5 at 128³: 0.0144 for twice \
+         What the fronts said in the run of 2026-12-04 (fixed text; the \
+         tables are the current run): BC7 costs little accuracy on a volume (oak 128³, \
+         4×4, bias 1: RMSE 0.0181 against 0.0171 raw, +6 %) for 3 % of the bytes (0.21 against \
+         7.00 MiB: empty blocks are skipped) and 13 % more bake instructions (1.87 G against 1.65 G), so every bytes front is BC7; 4×4 \
+         supersampling beat 1×1 and 2×2 at the next resolution up (64³ 4×4: 0.0187; 128³ \
+         1×1: 0.0227, BC7 both), so the presets keep 4×4 and step the resolution; the slice-spacing \
+         bias is the cheapest accuracy at render time (bias 0.5 at 128³: 0.0147 for twice \
          the fragments of bias 1), but it is the viewer's choice, not the bake's; a cloud's \
          error follows its texel density more than ε or N: at a 2048² atlas ε 0.02 (491 \
          billboards, 1.8 texels/unit) scored 0.0263, worse than ε 0.04 (128 billboards, \
