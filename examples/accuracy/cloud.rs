@@ -192,6 +192,8 @@ pub(crate) fn run(
         Ok::<_, String>((results, bytes, prepared.texel_density(lod)))
     };
     let mut rows = Vec::new();
+    // Each row's bake, in the counting child's words (the rows share the default's).
+    let mut row_keys = Vec::new();
     let mut cache: BTreeMap<Vec<String>, (CloudAsset, f64)> = BTreeMap::new();
     for (family, label, opts) in configs() {
         let key = words(&opts);
@@ -223,14 +225,14 @@ pub(crate) fn run(
             row.label, row.mean.rmse, row.billboards
         );
         rows.push(row);
+        row_keys.push(key);
     }
     if count {
         let jobs: Vec<Vec<String>> = cache.keys().cloned().collect();
         eprintln!("cloud: counting the instructions of {} bakes", jobs.len());
         let counts = crate::instr::bake_counts(&path.display().to_string(), &jobs);
-        for (row, (_, _, opts)) in rows.iter_mut().zip(configs()) {
-            let key = words(&opts);
-            row.bake_instr = jobs.iter().position(|j| *j == key).and_then(|i| counts[i]);
+        for (row, key) in rows.iter_mut().zip(&row_keys) {
+            row.bake_instr = jobs.iter().position(|j| j == key).and_then(|i| counts[i]);
         }
     }
     eprintln!("cloud: baking the {CHAIN_LODS}-level chain");
@@ -401,9 +403,7 @@ pub(crate) fn section(r: &CloudReport) -> String {
     s.push_str("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|---|\n");
     for row in &r.rows {
         let d = |i: usize| row.by_distance.get(i).map(|x| x.1).unwrap_or_default();
-        let instr = row
-            .bake_instr
-            .map_or_else(|| "–".to_string(), |n| format!("{:.2}", n as f64 * 1e-9));
+        let instr = crate::instr::giga(row.bake_instr);
         let _ = writeln!(
             s,
             "| {} | {} | {:.2} | {instr} | {} | {:.2} | {:.1} | {:.0} | {:.2} | {:.4} | {:.2} | {:.3} | {:.4} | {:.4} / {:.4} / {:.4} | {:.4} / {:.4} / {:.4} | {:+.0}% / {:+.0}% / {:+.0}% |",

@@ -44,9 +44,7 @@ pub(crate) fn table(m: &MeshReport) -> String {
         "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|---|"
     );
     for r in &m.rows {
-        let instr = r
-            .bake_instr
-            .map_or_else(|| "–".to_string(), |n| format!("{:.2}", n as f64 * 1e-9));
+        let instr = crate::instr::giga(r.bake_instr);
         let (a, b, c) = (dist(r, 1.0), dist(r, 4.0), dist(r, 16.0));
         let _ = writeln!(
             s,

@@ -83,6 +83,11 @@ pub(crate) fn available(what: &str) -> bool {
     ok
 }
 
+/// Instructions in G (10⁹) for a table, or "–" where they were not counted.
+pub(crate) fn giga(n: Option<u64>) -> String {
+    n.map_or_else(|| "–".to_string(), |n| format!("{:.2}", n as f64 * 1e-9))
+}
+
 /// Bake instructions (loading excluded) on `mesh` (a path, or a name the child's loader
 /// knows) of each job (the child's words for one bake), in the jobs' order.
 pub(crate) fn bake_counts(mesh: &str, jobs: &[Vec<String>]) -> Vec<Option<u64>> {
