@@ -9,7 +9,7 @@ For every resolution R, runs alternately (so all see the same machine load), RUN
 - `billow voxelize MESH --res R --json` with default options, with `--supersample 1`, and
   with `--normals off --compress none` (what the defaults add: the normals `auto` judges,
   BC7);
-- the same two with `--before BIN` (an older billow), when given: the "before" rows.
+- the same three with `--before BIN` (an older billow), when given: the "before" rows.
 It writes the medians of whole-process wall time, CPU time, peak RSS (`wait4`, the figure
 `/usr/bin/time -v` prints as "Maximum resident set size") and billow's per-stage seconds,
 and, with `--callgrind-res`, the instructions of one run of each program counted by

@@ -314,15 +314,8 @@ pub fn zero_anchored_block(tile: &[u8; 64]) -> [u8; 16] {
             let err = |p: &[i64; 4]| -> u64 {
                 (0..4).map(|c| ((p[c] - t[c]) * (p[c] - t[c])) as u64).sum()
             };
-            let (mut lo, mut hi) = (0usize, 15usize);
-            while lo < hi {
-                let mid = (lo + hi) / 2;
-                if (0..4).all(|c| pal[mid][c] >= t[c]) {
-                    hi = mid;
-                } else {
-                    lo = mid + 1;
-                }
-            }
+            // The first entry at or above the texel in every channel (the last if none is).
+            let hi = pal[..15].partition_point(|p| !(0..4).all(|c| p[c] >= t[c]));
             let mut best = (err(&pal[hi]), hi);
             let mut k = hi;
             while k > 0 && !((0..4).all(|c| pal[k][c] <= t[c]) && pal[k - 1] != pal[k]) {
