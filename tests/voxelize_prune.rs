@@ -147,3 +147,48 @@ fn prune_refuses_the_outputs_of_the_dense_volume() {
         assert!(!dir.path().join("x.billow").exists());
     }
 }
+
+/// The memory limit with `--prune`: its own estimate (in `--json`), normals dropped by
+/// `--normals auto` when only they pass the limit (a warning, and the same file as
+/// `--normals off`), and a refusal before any work, exit 8, below the estimate.
+#[test]
+fn prune_memory_limit_drops_optional_normals_then_refuses() {
+    let dir = tempfile::tempdir().unwrap();
+    let oak = oak();
+    let bake = |out: &str, extra: &[&str]| {
+        let mut args = vec![
+            "voxelize", &oak, "-o", out, "--res", "48", "--prune", "--json",
+        ];
+        args.extend_from_slice(extra);
+        billow(dir.path(), &args, "2")
+    };
+    let estimate = |r: &Run| -> (u64, serde_json::Value) {
+        ok(r, "voxelize --prune");
+        let j: serde_json::Value = serde_json::from_str(&r.stdout).expect("one JSON document");
+        (j["estimated_peak_memory_bytes"].as_u64().unwrap(), j)
+    };
+    let (off, _) = estimate(&bake("off.billow", &["--normals", "off"]));
+    let (on, _) = estimate(&bake("on.billow", &["--normals", "on"]));
+    assert!(off < on, "{off} {on}");
+    let gib = |b: u64| format!("{:.9}", b as f64 / (1u64 << 30) as f64);
+    let between = gib((off + on) / 2);
+    let (_, j) = estimate(&bake("auto.billow", &["--memory-limit", &between]));
+    assert_eq!(j["normals"], false, "{j}");
+    let w = j["warnings"].to_string();
+    assert!(
+        w.contains("without normals") && w.contains("--memory-limit"),
+        "{w}"
+    );
+    let read = |f: &str| std::fs::read(dir.path().join(f)).unwrap();
+    assert!(
+        read("auto.billow") == read("off.billow"),
+        "auto without normals differs from off"
+    );
+    let r = bake(
+        "below.billow",
+        &["--normals", "off", "--memory-limit", &gib(off / 2)],
+    );
+    assert_eq!(r.code, Some(8), "{}", r.stderr);
+    assert!(r.error_line().unwrap().contains("memory"), "{}", r.stderr);
+    assert!(!dir.path().join("below.billow").exists());
+}

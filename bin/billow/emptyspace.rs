@@ -101,6 +101,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         max_tiers: args.max_tiers,
         apron: true,
         bc_blocks: compression == Compression::Bc,
+        ..EmptySpaceOptions::default()
     };
     let mut pruned = prune(&asset, &options)
         .map_err(|e| CliError::new(Code::from(&e), format!("{shown}: {e}")))?;

@@ -181,7 +181,9 @@ impl From<&EvalError> for Code {
 impl From<&EmptySpaceError> for Code {
     fn from(e: &EmptySpaceError) -> Code {
         match e {
-            EmptySpaceError::InvalidParam(_) => Code::BadParameter,
+            EmptySpaceError::InvalidParam(_) | EmptySpaceError::TooMuchMemory { .. } => {
+                Code::BadParameter
+            }
             EmptySpaceError::Shell | EmptySpaceError::NotABox(_) => Code::Unsupported,
             EmptySpaceError::InvalidAsset(_)
             | EmptySpaceError::AlreadyPruned(_)

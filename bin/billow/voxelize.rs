@@ -278,6 +278,8 @@ struct Summary {
     /// With --prune: what the empty-space removal did (as `billow emptyspace --json`).
     #[serde(skip_serializing_if = "Option::is_none")]
     prune: Option<EmptySpaceStats>,
+    /// The estimate `--memory-limit` was checked against (docs/voxelize.md, "Memory").
+    estimated_peak_memory_bytes: u64,
     peak_memory_bytes: Option<u64>,
     seconds: Seconds,
     warnings: Vec<String>,
@@ -582,7 +584,9 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         coherence,
         pruned: pruned_stats,
         compress_s,
+        notes,
     } = baked;
+    warnings.extend(notes);
     let write_start = Instant::now();
     // All outputs go to temporary files first and are renamed into place together, -o last
     // (see staged.rs): a failure or a kill leaves the old outputs as they were.
@@ -650,6 +654,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         fragments: stats.fragments,
         bytes,
         prune: pruned_stats,
+        estimated_peak_memory_bytes: stats.estimated_peak_bytes,
         peak_memory_bytes: peak_rss_bytes(),
         seconds: Seconds {
             import: import_s,

@@ -31,6 +31,8 @@ pub(crate) struct Baked {
     pub(crate) coherence: Option<f32>,
     pub(crate) pruned: Option<EmptySpaceStats>,
     pub(crate) compress_s: f64,
+    /// Warnings the bake printed (also listed in `--json`).
+    pub(crate) notes: Vec<String>,
 }
 
 /// Bakes with `opts` (dense or `--prune`d) and compresses as `compression` says; the asset
@@ -50,25 +52,27 @@ pub(crate) fn bake_once(
             format!("{stage:?}").to_lowercase()
         });
     };
+    let notes = std::cell::RefCell::new(Vec::new());
+    let note = |m: &str| {
+        warn(ctx, &format!("{input}: {m}"));
+        notes.borrow_mut().push(m.to_string());
+    };
+    let hooks = Hooks {
+        report: &report,
+        note: &note,
+    };
     let mut pruned = None;
     let (mut asset, stats, dims, mip_count, coherence) = if args.prune {
-        let (asset, stats, dims, mips, coherence, ps) = bake_pruned(
-            scene,
-            opts,
-            args.normals,
-            compression,
-            &report,
-            input,
-            source,
-        )?;
+        let (asset, stats, dims, mips, coherence, ps) =
+            bake_pruned(scene, opts, args.normals, compression, hooks, input, source)?;
         bar.finish();
-        if let Some(note) = &ps.note {
-            warn(ctx, &format!("{input}: {note}"));
+        if let Some(n) = &ps.note {
+            note(n);
         }
         pruned = Some(ps);
         (asset, stats, dims, mips, coherence)
     } else {
-        let baked = bake_dense(scene, opts, args.normals, &report, input, source)?;
+        let baked = bake_dense(scene, opts, args.normals, hooks, input, source)?;
         bar.finish();
         baked
     };
@@ -86,7 +90,40 @@ pub(crate) fn bake_once(
         coherence,
         pruned,
         compress_s: compress_start.elapsed().as_secs_f64(),
+        notes: notes.into_inner(),
     })
+}
+
+/// Where a bake reports: progress by stage, and warnings.
+#[derive(Clone, Copy)]
+pub(crate) struct Hooks<'a> {
+    pub(crate) report: &'a dyn Fn(Stage, f32),
+    pub(crate) note: &'a dyn Fn(&str),
+}
+
+/// `bake(opts)`; with `--normals auto`, a bake refused for memory is retried without
+/// normals (they are an option, not a requirement), with a warning that says so.
+fn normals_optional<T>(
+    normals: NormalsArg,
+    opts: &mut VoxelizeOptions,
+    note: &dyn Fn(&str),
+    bake: impl Fn(&VoxelizeOptions) -> Result<T, billow::voxelize::VoxelizeError>,
+) -> Result<T, billow::voxelize::VoxelizeError> {
+    use billow::voxelize::VoxelizeError;
+    match bake(opts) {
+        Err(VoxelizeError::TooMuchMemory {
+            needed_gib,
+            limit_gib,
+            ..
+        }) if normals == NormalsArg::Auto && opts.normals => {
+            opts.normals = false;
+            note(&format!(
+                "--normals auto: baked without normals, which would need about {needed_gib:.1} GiB, more than --memory-limit {limit_gib:.1}; raise it to keep them"
+            ));
+            bake(opts)
+        }
+        r => r,
+    }
 }
 
 /// `--target-error`: the preset ladder (explicit --res / --supersample fixed), cheapest
@@ -183,7 +220,7 @@ pub(crate) fn bake_dense(
     scene: &billow::scene::Scene,
     opts: &mut VoxelizeOptions,
     normals: NormalsArg,
-    report: &dyn Fn(Stage, f32),
+    hooks: Hooks,
     input: &str,
     source: billow_format::SourceInfo,
 ) -> Result<
@@ -199,17 +236,8 @@ pub(crate) fn bake_dense(
     use billow::voxelize::toksvig::{
         normal_coherence, AUTO_NORMALS_LEVEL, AUTO_NORMALS_MIN_COHERENCE,
     };
-    let mut volume = voxelize(scene, opts, report)
-        .or_else(|e| match e {
-            // auto: normals are an option, not a requirement; without them the bake may fit.
-            billow::voxelize::VoxelizeError::TooMuchMemory { .. }
-                if normals == NormalsArg::Auto =>
-            {
-                opts.normals = false;
-                voxelize(scene, opts, report)
-            }
-            e => Err(e),
-        })
+    let Hooks { report, note } = hooks;
+    let mut volume = normals_optional(normals, opts, note, |o| voxelize(scene, o, report))
         .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;
     // auto: keep the normals only where one normal per voxel describes the surface.
     let mut coherence = None;
@@ -249,7 +277,7 @@ fn bake_pruned(
     opts: &mut VoxelizeOptions,
     normals: NormalsArg,
     compression: Compression,
-    report: &dyn Fn(Stage, f32),
+    hooks: Hooks,
     input: &str,
     source: billow_format::SourceInfo,
 ) -> Result<
@@ -271,24 +299,19 @@ fn bake_pruned(
     };
     let es = EmptySpaceOptions {
         bc_blocks: compression == Compression::Bc,
+        memory_limit: opts.memory_limit,
         ..EmptySpaceOptions::default()
     };
     let keep = |k: Option<f32>| !k.is_none_or(|k| k < AUTO_NORMALS_MIN_COHERENCE);
     if !matches!(opts.combine, CombineFn::Preset(_)) {
         // Expressions and custom functions keep dense pyramids: prune the dense volume.
         let (asset, stats, dims, mips, coherence) =
-            bake_dense(scene, opts, normals, report, input, source)?;
+            bake_dense(scene, opts, normals, hooks, input, source)?;
         let p = prune(&asset, &es).map_err(perr)?;
         return Ok((p.asset, stats, dims, mips, coherence, p.stats));
     }
-    let mut volume = voxelize_sparse(scene, opts, report)
-        .or_else(|e| match e {
-            VoxelizeError::TooMuchMemory { .. } if normals == NormalsArg::Auto => {
-                opts.normals = false;
-                voxelize_sparse(scene, opts, report)
-            }
-            e => Err(e),
-        })
+    let Hooks { report, note } = hooks;
+    let mut volume = normals_optional(normals, opts, note, |o| voxelize_sparse(scene, o, report))
         .map_err(err)?;
     let mut coherence = None;
     if normals == NormalsArg::Auto && volume.has_normals() {

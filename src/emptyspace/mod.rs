@@ -38,9 +38,9 @@ use glam::Vec3;
 use serde::Serialize;
 
 use self::kdtree::KdParams;
-use self::occupancy::{apply_threshold, TierSource};
+use self::occupancy::{apply_threshold, TierSource, TierTexels};
 use self::sparse::{SparseLevel, SparseTier};
-use self::tier::{build_tier, Tier, TierParams};
+use self::tier::{fill_tier, plan_tier, Tier, TierParams, TierPlan};
 
 /// Header `params` key that marks a pruned asset (its value records the parameters).
 pub const PARAM_KEY: &str = "emptyspace";
@@ -59,6 +59,12 @@ pub enum EmptySpaceError {
     HasBands,
     #[error("{0}")]
     InvalidParam(String),
+    #[error("the atlas of tier {tier} would bring the prune to about {needed_gib:.1} GiB of memory, more than the limit of {limit_gib:.1} GiB; lower the resolution or raise the memory limit")]
+    TooMuchMemory {
+        tier: u32,
+        needed_gib: f64,
+        limit_gib: f64,
+    },
 }
 
 /// Parameters of [`prune`].
@@ -84,6 +90,9 @@ pub struct EmptySpaceOptions {
     /// so each BC block of the atlas holds one source block (no block mixes two bricks,
     /// and aprons inside a source block cost no extra block).
     pub bc_blocks: bool,
+    /// Refuse (before allocating it) a tier atlas that would bring the source and the
+    /// atlases held to more than this (bytes). Default: no limit.
+    pub memory_limit: u64,
 }
 
 /// Default per-box cost, texels.
@@ -102,6 +111,7 @@ impl Default for EmptySpaceOptions {
             max_tiers: None,
             apron: true,
             bc_blocks: false,
+            memory_limit: u64::MAX,
         }
     }
 }
@@ -270,32 +280,54 @@ impl Source {
             }
         }
     }
-    fn build_tier(
-        &self,
-        k: usize,
-        n: [usize; 3],
-        world: (Vec3, Vec3),
-        p: &TierParams,
-    ) -> Option<Tier> {
+    /// Bytes held in memory for this source: a dense one is a copy of the caller's
+    /// asset, which is held too.
+    fn held_bytes(&self) -> u64 {
         match self {
-            Source::Dense { levels, normals } => {
-                let src = TierSource {
-                    n,
-                    colour: [&levels[k], &levels[k + 1]],
-                    normals: normals
-                        .as_ref()
-                        .map(|nr| [nr[k].as_slice(), nr[k + 1].as_slice()]),
-                };
-                build_tier(&src, world, p)
-            }
-            Source::Sparse(l) => build_tier(
-                &SparseTier {
-                    levels: [&l[k], &l[k + 1]],
-                },
-                world,
-                p,
-            ),
+            Source::Dense { .. } => 2 * self.bytes_from(0),
+            Source::Sparse(l) => l.iter().map(SparseLevel::heap_bytes).sum(),
         }
+    }
+    /// Runs `job` on the texels of tier `k` (levels `k`, `k + 1`; level `k` is `n`).
+    fn with_tier<J: TierJob>(&self, k: usize, n: [usize; 3], job: J) -> J::Out {
+        match self {
+            Source::Dense { levels, normals } => job.run(&TierSource {
+                n,
+                colour: [&levels[k], &levels[k + 1]],
+                normals: normals
+                    .as_ref()
+                    .map(|nr| [nr[k].as_slice(), nr[k + 1].as_slice()]),
+            }),
+            Source::Sparse(l) => job.run(&SparseTier {
+                levels: [&l[k], &l[k + 1]],
+            }),
+        }
+    }
+}
+
+/// Work on one tier's texels, whichever way the source stores them.
+trait TierJob {
+    type Out;
+    fn run<S: TierTexels>(self, src: &S) -> Self::Out;
+}
+
+/// Lays a tier out ([`plan_tier`]).
+struct Plan<'a>(&'a TierParams);
+
+impl TierJob for Plan<'_> {
+    type Out = Option<TierPlan>;
+    fn run<S: TierTexels>(self, src: &S) -> Option<TierPlan> {
+        plan_tier(src, self.0)
+    }
+}
+
+/// Fills a laid-out tier ([`fill_tier`]) whose world box is `.0`.
+struct Fill((Vec3, Vec3), TierPlan);
+
+impl TierJob for Fill {
+    type Out = Tier;
+    fn run<S: TierTexels>(self, src: &S) -> Tier {
+        fill_tier(src, self.0, self.1)
     }
 }
 
@@ -443,10 +475,21 @@ fn prune_source(
             }
             break;
         }
-        match src.build_tier(k as usize, n.map(|d| d as usize), world, &tier_params(k)) {
-            Some(t) => tiers.push(t),
-            None => break,
+        let n = n.map(|d| d as usize);
+        let Some(plan) = src.with_tier(k as usize, n, Plan(&tier_params(k))) else {
+            break;
+        };
+        // Refused before the atlas is allocated: the source, the tiers so far and this one.
+        let held = src.held_bytes() + tiers.iter().map(Tier::bytes).sum::<u64>();
+        if held + plan.bytes() > o.memory_limit {
+            let gib = |b: u64| b as f64 / (1u64 << 30) as f64;
+            return Err(EmptySpaceError::TooMuchMemory {
+                tier: k,
+                needed_gib: gib(held + plan.bytes()),
+                limit_gib: gib(o.memory_limit),
+            });
         }
+        tiers.push(src.with_tier(k as usize, n, Fill(world, plan)));
     }
     // The tail level K: the most tiers whose bytes are within 1 % of the fewest bytes
     // (coarse tiers cost next to nothing and cut the fragments of distant views), each

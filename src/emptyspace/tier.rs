@@ -84,11 +84,31 @@ pub fn box_cells(pmin: Vec3, pmax: Vec3, uvw: impl Fn([f32; 3]) -> [f32; 3]) -> 
     })
 }
 
-/// Builds the tier for `src` whose world box is `world` (`None` when the atlas would not
-/// fit `max_side`).
-pub fn build_tier<S: TierTexels>(src: &S, world: (Vec3, Vec3), p: &TierParams) -> Option<Tier> {
+/// A tier laid out but not yet filled: its boxes and where each goes in the atlas.
+pub struct TierPlan {
+    boxes: Vec<BlockBox>,
+    /// Each box's slot (box plus apron, blocks of the tier's level 0) and its placement.
+    bricks: Vec<Brick>,
+    /// Atlas level-0 size in texels, and in blocks (level 1).
+    dims: [usize; 3],
+    blocks: [usize; 3],
+    /// The source level's size (texels).
+    n: [usize; 3],
+    normals: bool,
+}
+
+impl TierPlan {
+    /// The atlas's bytes once filled (both levels, colour and normals).
+    pub fn bytes(&self) -> u64 {
+        let texels = |d: [usize; 3]| d.iter().map(|&v| v as u64).product::<u64>();
+        4 * (texels(self.dims) + texels(self.blocks)) * (1 + self.normals as u64)
+    }
+}
+
+/// The kd-tree boxes of `src` and their atlas layout (`None` when the atlas would not fit
+/// `max_side`), before any texel of the atlas is allocated.
+pub fn plan_tier<S: TierTexels>(src: &S, p: &TierParams) -> Option<TierPlan> {
     let n = src.n();
-    let n1 = n.map(|d| d / 2);
     let needed = tier_needed_blocks(src);
     let data = DataGrid::new(src);
     let boxes = subdivide(
@@ -123,7 +143,6 @@ pub fn build_tier<S: TierTexels>(src: &S, world: (Vec3, Vec3), p: &TierParams) -
     let packing = pack(&plain, p.max_side, p.kd.pair_align)?;
     // An empty tier still needs a valid two-level texture.
     let blocks = packing.dims.map(|d| d.max(1));
-    let dims = blocks.map(|d| 2 * d);
     let bricks: Vec<Brick> = slots
         .iter()
         .zip(&packing.placed)
@@ -134,6 +153,27 @@ pub fn build_tier<S: TierTexels>(src: &S, world: (Vec3, Vec3), p: &TierParams) -
             perm: pl.perm,
         })
         .collect();
+    Some(TierPlan {
+        boxes,
+        bricks,
+        dims: blocks.map(|d| 2 * d),
+        blocks,
+        n,
+        normals: src.has_normals(),
+    })
+}
+
+/// Fills the atlas of `plan` from `src` and makes its cells.
+pub fn fill_tier<S: TierTexels>(src: &S, world: (Vec3, Vec3), plan: TierPlan) -> Tier {
+    let TierPlan {
+        boxes,
+        bricks,
+        dims,
+        blocks,
+        n,
+        ..
+    } = plan;
+    let n1 = n.map(|d| d / 2);
     let fill = |normals: bool| -> Vec<Vec<u8>> {
         [(dims, n, 2), (blocks, n1, 1)]
             .iter()
@@ -151,7 +191,8 @@ pub fn build_tier<S: TierTexels>(src: &S, world: (Vec3, Vec3), p: &TierParams) -
     let (wlo, whi) = world;
     let ext = whi - wlo;
     let mut cells = Vec::with_capacity(2 * boxes.len());
-    for ((b, (slot_lo, _)), pl) in boxes.iter().zip(&slots).zip(&packing.placed) {
+    for (b, br) in boxes.iter().zip(&bricks) {
+        let (slot_lo, pl) = (br.src, br);
         let w = |a: usize, v: usize| wlo[a] + ext[a] * (2.0 * v as f64 / n[a] as f64) as f32;
         let pmin = Vec3::from_array([0, 1, 2].map(|a| w(a, b.lo[a])));
         let pmax = Vec3::from_array([0, 1, 2].map(|a| w(a, b.hi[a])));
@@ -160,7 +201,7 @@ pub fn build_tier<S: TierTexels>(src: &S, world: (Vec3, Vec3), p: &TierParams) -
             [0, 1, 2].map(|a| {
                 let src_axis = pl.perm[a];
                 let inset = (b.lo[src_axis] as i64 - slot_lo[src_axis]) as usize;
-                let start = 2 * (pl.origin[a] + inset);
+                let start = 2 * (pl.dst[a] + inset);
                 let v = start
                     + if t[src_axis] > 0.5 {
                         2 * s[src_axis]
@@ -172,12 +213,12 @@ pub fn build_tier<S: TierTexels>(src: &S, world: (Vec3, Vec3), p: &TierParams) -
         };
         cells.extend(box_cells(pmin, pmax, uvw));
     }
-    Some(Tier {
+    Tier {
         dims: dims.map(|d| d as u32),
         colour,
         normals,
         boxes,
         blocks: n1.iter().map(|&v| v as u64).product(),
         cells,
-    })
+    }
 }

@@ -324,12 +324,88 @@ pub fn estimate_peak_bytes_sparse(
     building.max(finishing) + (64 << 20)
 }
 
+/// Estimated peak memory of [`voxelize_sparse`] followed by
+/// [`crate::emptyspace::prune_sparse`] (`voxelize --prune`) when at most `sparse` level-0
+/// voxels are non-empty (from any direction: the bound is on the voxels the triangles
+/// meet), in bytes: the largest of three phases.
+/// - While the directions are processed: the level-0 accumulator (per voxel seen: 4 bytes
+///   of index, 16 or 20 of colour, 12 or 16 more with normals), the two stacks of one
+///   rasterization pass, one direction's levels 1 and 2 and the coarse accumulators.
+/// - While the levels are finished: the accumulators beside the packed output (per level
+///   at most `min(level voxels, sparse)` texels stored, 4 bytes each, 8 with normals,
+///   plus the brick tables), counted twice for level 0's parts before they are joined,
+///   and one coarse level's whole bricks before they are packed.
+/// - While it is pruned: the packed output, tier 0's occupancy grids and the atlases.
+///   The atlases cannot be known before the kd-tree has run, so they are counted as the
+///   dense output's size; a prune whose atlases pay off is smaller. The prune itself
+///   refuses an atlas that would pass the limit before allocating it
+///   ([`crate::emptyspace::EmptySpaceOptions::memory_limit`]).
+///
+/// At 1024³ on the bench tree this is well under the dense [`estimate_peak_bytes_sparse`]
+/// (docs/benchmarks.md lists both beside the measured peaks).
+pub fn estimate_peak_bytes_pruned(
+    dims: [u32; 3],
+    mip_count: u32,
+    preset: Preset,
+    normals: bool,
+    sparse: u64,
+) -> u64 {
+    let level = |l: u32| -> u64 {
+        grid::level_dims(dims, l)
+            .iter()
+            .map(|&d| d as u64)
+            .product()
+    };
+    let n = level(0);
+    let sparse = sparse.min(n);
+    let nrm = normals as u64;
+    let all: u64 = (0..mip_count).map(level).sum();
+    let coarse = all - n;
+    let wide = matches!(preset, Preset::Opaque | Preset::Min);
+    let w = if wide { 20 } else { 16 };
+    let w_nrm = if matches!(preset, Preset::Max | Preset::Min) {
+        16
+    } else {
+        12
+    };
+    let acc0 = sparse * (4 + w + w_nrm * nrm);
+    let vox = sparse * (20 + 12 * nrm);
+    // Two stacks: their voxels and per image row an 8-byte start.
+    let rows = n / dims.iter().copied().min().unwrap_or(1).max(1) as u64;
+    let stacks = 2 * (vox + 8 * rows);
+    let acc = w * coarse + 8 * coarse * nrm;
+    let level1 = n.div_ceil(8);
+    let pyr = (16 + 8 * nrm) * (level1 + level1.div_ceil(8));
+    let texel = 4 * (1 + nrm);
+    let b3 = bricks::B3 as u64;
+    // Per level: stored bricks, and the packed bytes (texels, brick tables, slot grid).
+    let stored = |l: u32| level(l).div_ceil(b3).min(sparse);
+    let packed: u64 = (0..mip_count)
+        .map(|l| {
+            let texels = level(l).min(sparse);
+            texel * texels + (4 + 64 + 8) * stored(l) + 4 * level(l).div_ceil(b3)
+        })
+        .sum();
+    // A coarse level's whole bricks before they are packed; level 0's parts (packed, per
+    // brick layer) before they are joined.
+    let whole = (1..mip_count)
+        .map(|l| texel * b3 * stored(l))
+        .max()
+        .unwrap_or(0);
+    let building = acc0 + stacks + pyr + acc;
+    let finishing = acc0 + acc + 2 * packed + whole;
+    let occupancy = 5 * n.div_ceil(8);
+    let pruning = packed + occupancy + texel * all;
+    building.max(finishing).max(pruning) + (64 << 20)
+}
+
 /// An upper bound on the non-empty level-0 voxels of one direction: a fragment lies in a
 /// voxel its triangle intersects, and a triangle intersects at most
-/// `3 (A + 2 (w_u + w_v) + 4)` voxels (in voxel units: seen along its dominant normal axis it touches at most
-/// `A + 2 (w_u + w_v) + 4` voxel columns — the area of its projection grown by a voxel on
-/// every side, `A` at most its area, `w` its extents — and spans at most 3 voxels in each,
-/// its depth changing by at most 2 across a column).
+/// `(A + 2 (w_u + w_v) + 4) (⌈L⌉ + 1)` voxels. In voxel units, seen along its dominant
+/// normal axis it touches at most `A + 2 (w_u + w_v) + 4` voxel columns (its projection,
+/// of area `A` and extents `w`, grown by a voxel on every side), and in each its depth
+/// changes by at most `L = (|n_u| + |n_v|) / |n_a| ≤ 2`, so it spans at most `⌈L⌉ + 1`
+/// voxels there (1 for a triangle facing the axis, 3 at the steepest).
 fn sparse_bound(scene: &Scene, grid: &GridSpec) -> u64 {
     let n = grid.voxel_count();
     let sum: f64 = scene
@@ -341,13 +417,19 @@ fn sparse_bound(scene: &Scene, grid: &GridSpec) -> u64 {
             if !p.iter().all(|q| q.is_finite()) {
                 return 0.0;
             }
-            let nrm = (p[1] - p[0]).cross(p[2] - p[0]);
-            let area = 0.5 * nrm.length();
-            let a = nrm.abs().max_position();
+            let nrm = (p[1] - p[0]).cross(p[2] - p[0]).abs();
+            let a = nrm.max_position();
             let (lo, hi) = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
             let w = hi - lo;
             let across = w[0] + w[1] + w[2] - w[a];
-            3.0 * (area + 2.0 * across + 4.0)
+            let area = 0.5 * nrm[a];
+            // Degenerate (zero-area) triangles: the steepest case.
+            let slope = if nrm[a] > 0.0 {
+                ((nrm[0] + nrm[1] + nrm[2] - nrm[a]) / nrm[a]).min(2.0)
+            } else {
+                2.0
+            };
+            (area + 2.0 * across + 4.0) * (slope.ceil() + 1.0)
         })
         .sum();
     if sum.is_finite() {
@@ -357,15 +439,28 @@ fn sparse_bound(scene: &Scene, grid: &GridSpec) -> u64 {
     }
 }
 
-/// [`estimate_peak_bytes_sparse`] for this scene, plus what the bake needs (AO: its cache
-/// and the BVH).
-fn estimate_bytes(scene: &Scene, opts: &VoxelizeOptions, grid: &GridSpec, mips: u32) -> u64 {
+/// [`estimate_peak_bytes_sparse`] (or, for the brick-sparse path, `sparse`,
+/// [`estimate_peak_bytes_pruned`]) for this scene, plus what the bake needs (AO: its
+/// cache and the BVH).
+fn estimate_bytes(
+    scene: &Scene,
+    opts: &VoxelizeOptions,
+    grid: &GridSpec,
+    mips: u32,
+    sparse: bool,
+) -> u64 {
     let bake = match opts.bake {
         Bake::None => 0,
         Bake::Ao { .. } => ao::AoBaker::estimate_bytes(grid.dims, scene.triangles.len()),
     };
-    let sparse = sparse_bound(scene, grid);
-    estimate_peak_bytes_sparse(grid.dims, mips, &opts.combine, opts.normals, sparse) + bake
+    let s = sparse_bound(scene, grid);
+    let peak = match opts.combine {
+        CombineFn::Preset(p) if sparse => {
+            estimate_peak_bytes_pruned(grid.dims, mips, p, opts.normals, s)
+        }
+        _ => estimate_peak_bytes_sparse(grid.dims, mips, &opts.combine, opts.normals, s),
+    };
+    peak + bake
 }
 
 /// The grid `voxelize` would use for this scene and these options.
@@ -395,7 +490,11 @@ fn unaligned_grid(scene: &Scene, opts: &VoxelizeOptions) -> Result<GridSpec, Vox
     }
 }
 
-fn check(scene: &Scene, opts: &VoxelizeOptions) -> Result<(GridSpec, u32), VoxelizeError> {
+fn check(
+    scene: &Scene,
+    opts: &VoxelizeOptions,
+    sparse: bool,
+) -> Result<(GridSpec, u32), VoxelizeError> {
     if !(1..=MAX_SUPERSAMPLE).contains(&opts.supersample) {
         return Err(VoxelizeError::InvalidOption(format!(
             "supersample must be 1..={MAX_SUPERSAMPLE}, got {}",
@@ -415,7 +514,7 @@ fn check(scene: &Scene, opts: &VoxelizeOptions) -> Result<(GridSpec, u32), Voxel
         }
     };
     opts.bake.validate().map_err(VoxelizeError::InvalidOption)?;
-    let need = estimate_bytes(scene, opts, &grid, mips);
+    let need = estimate_bytes(scene, opts, &grid, mips, sparse);
     if need > opts.memory_limit {
         let gib = |b: u64| b as f64 / (1u64 << 30) as f64;
         return Err(VoxelizeError::TooMuchMemory {
@@ -445,7 +544,7 @@ pub fn slice_stack(
     opts: &VoxelizeOptions,
     dir: Dir,
 ) -> Result<SliceStack, VoxelizeError> {
-    let (grid, _) = check(scene, opts)?;
+    let (grid, _) = check(scene, opts, false)?;
     let shader = shade::Shader::new(scene);
     let side = if dir.positive() { 1 } else { 2 };
     let mut s = slices::rasterize(
@@ -572,7 +671,7 @@ fn voxelize_as(
     sparse: bool,
 ) -> Result<(GridSpec, Output, VoxelizeStats), VoxelizeError> {
     let t_all = Instant::now();
-    let (grid, mips) = check(scene, opts)?;
+    let (grid, mips) = check(scene, opts, sparse)?;
     let shader = shade::Shader::new(scene);
     let dims: Vec<[usize; 3]> = (0..mips)
         .map(|l| grid.level_dims(l).map(|d| d as usize))
@@ -690,7 +789,7 @@ fn voxelize_as(
                     non_empty_voxels: count,
                     fragments,
                     triangles: scene.triangles.len(),
-                    estimated_peak_bytes: estimate_bytes(scene, opts, &grid, mips),
+                    estimated_peak_bytes: estimate_bytes(scene, opts, &grid, mips, true),
                     seconds: times,
                 };
                 return Ok((grid, Output::Sparse(out), stats));
@@ -763,8 +862,77 @@ fn voxelize_as(
         non_empty_voxels,
         fragments,
         triangles: scene.triangles.len(),
-        estimated_peak_bytes: estimate_bytes(scene, opts, &grid, mips),
+        estimated_peak_bytes: estimate_bytes(scene, opts, &grid, mips, false),
         seconds: times,
     };
     Ok((grid, Output::Dense(levels, normals), stats))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{Material, SceneBuilder, Vertex};
+    use glam::Vec2;
+    use proptest::prelude::*;
+
+    fn vertex(p: [f32; 3]) -> Vertex {
+        Vertex {
+            position: Vec3::from_array(p),
+            normal: Vec3::Z,
+            uv: Vec2::ZERO,
+            color: Vec4::ONE,
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(24))]
+
+        /// The memory estimates rest on [`sparse_bound`]: no direction's slice stack has
+        /// more non-empty voxels, whatever the triangles' slopes (axis-facing, steep,
+        /// degenerate) and the supersampling. Seen failing with the depth span taken as
+        /// `⌈L⌉` voxels instead of `⌈L⌉ + 1`.
+        #[test]
+        fn the_sparse_bound_bounds_every_direction(
+            at in prop::collection::vec(prop::array::uniform3(4.0f32..28.0), 1..12),
+            offsets in prop::collection::vec(prop::array::uniform3(prop::array::uniform3(-4.0f32..4.0)), 12),
+            flat in prop::collection::vec(0usize..4, 12),
+            k in 1u32..5,
+        ) {
+            let mut sb = SceneBuilder::new();
+            let m = sb.material(Material {
+                double_sided: true,
+                ..Material::default()
+            });
+            let mesh = sb.mesh("t");
+            for (i, c) in at.iter().enumerate() {
+                let mut t = offsets[i].map(|o| [0, 1, 2].map(|a| c[a] + o[a]));
+                // Some triangles face an axis exactly (flat[i] < 3: that axis).
+                if flat[i] < 3 {
+                    let (a, d) = (flat[i], t[0][flat[i]]);
+                    t[1][a] = d;
+                    t[2][a] = d;
+                }
+                sb.triangle(t.map(vertex), m, mesh);
+            }
+            let scene = sb.finish();
+            let opts = VoxelizeOptions {
+                resolution: Resolution::Exact([32; 3]),
+                bounds: Some(Aabb {
+                    min: Vec3::ZERO,
+                    max: Vec3::splat(32.0),
+                }),
+                supersample: k,
+                ..VoxelizeOptions::default()
+            };
+            let grid = grid_for(&scene, &opts).unwrap();
+            let bound = sparse_bound(&scene, &grid);
+            // Small triangles in a large grid: the bound is not just the grid.
+            prop_assert!(bound < grid.voxel_count());
+            for dir in Dir::ALL {
+                let s = slice_stack(&scene, &opts, dir).unwrap();
+                let n = s.rgba.iter().filter(|c| c.w > 0.0).count() as u64;
+                prop_assert!(n <= bound, "{dir:?}: {n} non-empty voxels, bound {bound}");
+            }
+        }
+    }
 }
