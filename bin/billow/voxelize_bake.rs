@@ -304,7 +304,7 @@ fn bake_pruned(
     };
     let keep = |k: Option<f32>| !k.is_none_or(|k| k < AUTO_NORMALS_MIN_COHERENCE);
     if !matches!(opts.combine, CombineFn::Preset(_)) {
-        // Expressions and custom functions keep dense pyramids: prune the dense volume.
+        // Expressions and custom functions give dense levels: prune the dense volume.
         let (asset, stats, dims, mips, coherence) =
             bake_dense(scene, opts, normals, hooks, input, source)?;
         let p = prune(&asset, &es).map_err(perr)?;

@@ -11,7 +11,9 @@
 
 use rayon::prelude::*;
 
-use super::mip::{Grid3, Texel};
+#[cfg(test)]
+use super::mip::Grid3;
+use super::mip::Texel;
 
 /// Brick side in voxels.
 pub const B: usize = 8;
@@ -129,7 +131,34 @@ impl<T: Texel> Bricked<T> {
             });
         out
     }
+    /// The bricks of a direction's sparse level 0 that hold one of its voxels, with the
+    /// values [`super::slices::DirSlices::to_dense`] stores (zeros elsewhere).
+    pub fn from_slices(s: &super::slices::DirSlices) -> Self {
+        let dims = s.dims;
+        let nb = dims.map(|d| d.div_ceil(B));
+        let at = |i: usize| {
+            [
+                i % dims[0],
+                (i / dims[0]) % dims[1],
+                i / (dims[0] * dims[1]),
+            ]
+        };
+        let brick = |p: [usize; 3]| p[0] / B + nb[0] * (p[1] / B + nb[1] * (p[2] / B));
+        let indices = s.indices();
+        let mut occupied = vec![false; nb.iter().product()];
+        for &i in &indices {
+            occupied[brick(at(i))] = true;
+        }
+        let mut out = Self::zeroed(Layout::from_flags(dims, &occupied));
+        for (&i, v) in indices.iter().zip(&s.vox) {
+            let p = at(i);
+            let slot = out.layout.slot[brick(p)] as usize;
+            out.data[slot * B3 + local(p)] = T::store(v.rgba);
+        }
+        out
+    }
     /// The dense grid (zeros where no brick is).
+    #[cfg(test)]
     pub fn to_dense(&self) -> Grid3<T> {
         let mut g = Grid3::<T>::new(self.layout.dims);
         let dims = g.dims;
@@ -311,6 +340,45 @@ mod tests {
             let d = downsample_bricks::<_, [f32; 4]>(&b, None, dir, None);
             assert_eq!(d.layout.bricks.len(), 1, "{dir:?}");
             assert_eq!(d.to_dense(), downsample(&g, dir));
+        }
+    }
+
+    #[test]
+    fn the_bricked_combine_equals_the_dense_one_byte_for_byte() {
+        use super::super::combine::{combine_level, combine_level_bricks, CombineFn};
+        // Some give zero for six zeros (only the held bricks differ from zero), some
+        // colour the empty space too (every voxel outside the bricks gets f(0)).
+        let fns = [
+            "expr:max(px, nx, py, ny, pz, nz)",
+            "expr:px + rgba(0.1, 0.05, 0.02, 0.1)",
+            "expr:mean(px, nx, py, ny, pz, nz) * 2 - 0.01",
+            "mean",
+        ];
+        for (k, dims) in [[16, 16, 16], [13, 8, 21], [5, 1, 9], [33, 17, 40]]
+            .into_iter()
+            .enumerate()
+        {
+            // Six directions with different holes: a seventh of the blobs each misses.
+            let dense: Vec<Grid3<[f16; 4]>> = (0..6)
+                .map(|d| {
+                    let (c, _) = volume(dims, 10 * k as u64 + d);
+                    let mut g = Grid3::<[f16; 4]>::new(dims);
+                    for (o, v) in g.data.iter_mut().zip(&c.data) {
+                        *o = <[f16; 4]>::store(*v);
+                    }
+                    g
+                })
+                .collect();
+            let bricked: Vec<Bricked<[f16; 4]>> = dense.iter().map(Bricked::from_dense).collect();
+            let dr: [&Grid3<[f16; 4]>; 6] = std::array::from_fn(|d| &dense[d]);
+            let br: [&Bricked<[f16; 4]>; 6] = std::array::from_fn(|d| &bricked[d]);
+            for f in fns {
+                let f: CombineFn = f.parse().unwrap();
+                assert!(
+                    combine_level_bricks(&f, br) == combine_level(&f, dr),
+                    "{f} at {dims:?}"
+                );
+            }
         }
     }
 }

@@ -23,7 +23,8 @@
 //! ([`combine_level0`], same order, same arithmetic), so it never needs a full-size
 //! accumulator; `voxelize --prune` folds level 0 too, direction by direction, into a
 //! sparse accumulator over the voxels seen ([`super::level0`]), and frees each stack. Expressions and custom functions need all six values at once, so the six
-//! pyramids are kept, in f16 (8 bytes per voxel per direction).
+//! pyramids are kept, brick-sparse in f16 (8 bytes per voxel per direction), and combined
+//! brick by brick ([`combine_level_bricks`]).
 
 use std::fmt;
 use std::str::FromStr;
@@ -32,7 +33,7 @@ use std::sync::Arc;
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
-use super::bricks::{for_each_voxel, local, BrickAccum, Bricked, B3};
+use super::bricks::{self, for_each_voxel, local, BrickAccum, Bricked, B3};
 use super::expr::{Expr, ExprError};
 use super::mip::{Disjoint, Grid3, Texel};
 use super::quantize::encode_normal;
@@ -342,6 +343,48 @@ pub(crate) fn combine_level<T: Texel>(f: &(dyn Combine + Sync), dirs: [&Grid3<T>
             o.copy_from_slice(&enc.rgba8(clamp_premultiplied(f.combine(&s))));
         }
     });
+    out
+}
+
+/// [`combine_level`] of six brick-sparse grids (one layout each): the same bytes, with
+/// `f` evaluated only in the bricks some direction holds. Everywhere else all six values
+/// are zero, so the voxel gets `f` of six zeros, computed once.
+pub(crate) fn combine_level_bricks<T: Texel>(
+    f: &(dyn Combine + Sync),
+    dirs: [&Bricked<T>; 6],
+) -> Vec<u8> {
+    let dims = dirs[0].dims();
+    let enc = super::quantize::Encoder::get();
+    let voxel = |s: [Vec4; 6]| enc.rgba8(clamp_premultiplied(f.combine(&s)));
+    let outside = voxel([Vec4::ZERO; 6]);
+    let n = dims.iter().product::<usize>();
+    let mut out = outside.repeat(n);
+    let l = &dirs[0].layout;
+    // Bricks held by any direction, by brick layer (z): each layer writes its own planes.
+    let held: Vec<bool> = (0..l.slot.len())
+        .map(|b| dirs.iter().any(|d| d.layout.slot[b] != bricks::EMPTY))
+        .collect();
+    let layer = l.nb[0] * l.nb[1];
+    let plane = 4 * dims[0] * dims[1];
+    out.par_chunks_mut(plane * bricks::B)
+        .enumerate()
+        .for_each(|(bz, o)| {
+            for b in (bz * layer..(bz + 1) * layer).filter(|&b| held[b]) {
+                for p in bricks::voxels_of(l.coords(b), dims) {
+                    let s = dirs.map(|d| {
+                        let slot = d.layout.slot[b];
+                        if slot == bricks::EMPTY {
+                            Vec4::ZERO
+                        } else {
+                            let i = slot as usize * bricks::B3 + bricks::local(p);
+                            Vec4::from_array(d.data[i].load())
+                        }
+                    });
+                    let i = 4 * (p[0] + dims[0] * (p[1] + dims[1] * (p[2] - bz * bricks::B)));
+                    o[i..i + 4].copy_from_slice(&voxel(s));
+                }
+            }
+        });
     out
 }
 

@@ -32,9 +32,11 @@
 //! or 20 of colour, 12 more with normals for `mean` and `opaque`, 16 for `max` and `min`)
 //! beside at most the two stacks of one rasterization pass, and keeps its output packed
 //! (only the texels with a non-zero byte of each brick, [`SparseLevel`]).
-//! Expressions and custom functions keep six f16 pyramids (48 bytes per voxel of every
-//! level): 7.5 GiB at 512³, 9.3 GiB with normals (over an 8 GiB budget: use a preset for
-//! normals at 512³, or raise the limit).
+//! Expressions and custom functions keep six brick-sparse f16 pyramids (8 bytes per voxel
+//! of every allocated brick, per direction) and evaluate the function only in bricks some
+//! direction holds (elsewhere all six values are zero: `f` of six zeros, computed once).
+//! The estimate still counts them dense (48 bytes per voxel of every level: 7.5 GiB at
+//! 512³, 9.3 GiB with normals), an upper bound: the bench tree at 512³ peaks at 3.2 GiB.
 //! AO adds 2 bytes per level-0 voxel and its BVH.
 //! [`estimate_peak_bytes_sparse`] computes this (bounding `S` by the triangles' bounding
 //! boxes) and [`voxelize`] refuses grids above [`VoxelizeOptions::memory_limit`] before
@@ -78,7 +80,7 @@ pub use sparse::{voxelize_sparse, SparseVolume};
 use crate::emptyspace::sparse::SparseLevel;
 use crate::scene::{Aabb, Scene};
 use crate::shade;
-use mip::{Grid3, Texel};
+use mip::Texel;
 
 /// A view direction: the camera on that side of the object, looking at it.
 /// `PosX` is the camera on the +X side looking towards −X.
@@ -314,7 +316,7 @@ pub fn estimate_peak_bytes_sparse(
             let kept = 6 * vox + 2 * 8 * sparse;
             (kept + acc + pyr, kept + acc + output)
         }
-        // Six f16 pyramids (level 0 dense) + the sparse level 0 of the two directions
+        // Six f16 pyramids (brick-sparse, counted dense) + the sparse level 0 of the two directions
         // of the axis being converted (a paired pass makes both at once).
         _ => {
             let nacc = 8 * all * normals as u64;
@@ -807,7 +809,8 @@ fn voxelize_as(
             out
         }
         f => {
-            let mut pyrs: Vec<Vec<Option<Grid3<[f16; 4]>>>> = Vec::with_capacity(6);
+            // Six brick-sparse f16 pyramids: only the bricks a direction's voxels reach.
+            let mut pyrs: Vec<Vec<Option<bricks::Bricked<[f16; 4]>>>> = Vec::with_capacity(6);
             for &pass in &passes {
                 let stacks = raster(&mut bufs, ctx, pass, &mut times, baker.as_mut(), progress);
                 for s in stacks {
@@ -820,13 +823,13 @@ fn voxelize_as(
                             if let Some(na) = nacc.as_mut() {
                                 na.fold_sparse(s);
                             }
-                            levels.push(Some(s.to_dense::<[f16; 4]>()));
+                            levels.push(Some(bricks::Bricked::from_slices(s)));
                         }
                         Level::Dense(c, n) => {
                             if let (Some(na), Some(n)) = (nacc.as_mut(), n.as_ref()) {
                                 na.fold(level, n, &c);
                             }
-                            levels.push(Some(c.to_dense()));
+                            levels.push(Some(c));
                         }
                     });
                     pyrs.push(levels);
@@ -837,14 +840,14 @@ fn voxelize_as(
             let t = Instant::now();
             let mut out = Vec::with_capacity(mips as usize);
             for l in 0..mips as usize {
-                let grids: Vec<Grid3<[f16; 4]>> = pyrs
+                let grids: Vec<bricks::Bricked<[f16; 4]>> = pyrs
                     .iter_mut()
                     .map(|p| p[l].take().expect("level stored"))
                     .collect();
                 let refs = [
                     &grids[0], &grids[1], &grids[2], &grids[3], &grids[4], &grids[5],
                 ];
-                out.push(combine::combine_level(f, refs));
+                out.push(combine::combine_level_bricks(f, refs));
                 progress(Stage::Combine, (l + 1) as f32 / mips as f32);
             }
             times.combine += t.elapsed().as_secs_f64();
