@@ -412,6 +412,11 @@ pub fn pack(slots: &[Slot], max_side: usize, pair_align: bool) -> Option<Packing
             dims: [0; 3],
         });
     }
+    search(slots, max_side, pair_align, true)
+}
+
+/// [`pack`] with or without the shortcuts of [`strip`] (the tests compare the two).
+fn search(slots: &[Slot], max_side: usize, pair_align: bool, shortcuts: bool) -> Option<Packing> {
     let (order, footprints) = plan(slots, max_side)?;
     // The footprints are independent: run them in parallel, pick the best in a fixed
     // order. A run that can no longer beat a finished one stops early; it would not have
@@ -420,14 +425,8 @@ pub fn pack(slots: &[Slot], max_side: usize, pair_align: bool) -> Option<Packing
     footprints
         .par_iter()
         .filter_map(|&f| {
-            let p = strip(
-                slots,
-                &order,
-                (f.0, f.1, max_side),
-                pair_align,
-                &bound,
-                true,
-            )?;
+            let fp = (f.0, f.1, max_side);
+            let p = strip(slots, &order, fp, pair_align, &bound, shortcuts)?;
             Some((rank(&p, f), p))
         })
         .min_by(|a, b| a.0.cmp(&b.0))
@@ -517,27 +516,6 @@ mod tests {
         assert_eq!(p.dims.iter().product::<usize>(), 9);
     }
 
-    /// The plain search: every footprint in full, no shortcut, the best by [`rank`].
-    fn pack_plain(slots: &[Slot], max_side: usize, pair_align: bool) -> Option<Packing> {
-        let (order, footprints) = plan(slots, max_side)?;
-        let never = AtomicUsize::new(usize::MAX);
-        footprints
-            .iter()
-            .filter_map(|&f| {
-                let p = strip(
-                    slots,
-                    &order,
-                    (f.0, f.1, max_side),
-                    pair_align,
-                    &never,
-                    false,
-                )?;
-                Some((rank(&p, f), p))
-            })
-            .min_by(|a, b| a.0.cmp(&b.0))
-            .map(|b| b.1)
-    }
-
     /// Slots like the kd-tree's: a box with a one-block apron of zero layers (soft 1–2
     /// per face, some faces with data to the edge), sizes even in x and y when aligned.
     fn slot_strategy(pair_align: bool) -> impl Strategy<Value = Slot> {
@@ -575,7 +553,7 @@ mod tests {
         ) {
             for (s, pa) in [(&slots, false), (&aligned, true)] {
                 let fast = pack(s, 64, pa);
-                prop_assert_eq!(&fast, &pack_plain(s, 64, pa));
+                prop_assert_eq!(&fast, &search(s, 64, pa, false));
                 if let Some(p) = fast {
                     check(s, &p);
                 }
