@@ -459,35 +459,43 @@ fn a_tier_atlas_over_the_memory_limit_is_refused_before_it_is_allocated() {
     let src = sparse([32, 32, 32]);
     let plain = prune(&src, &EmptySpaceOptions::default()).unwrap();
     assert!(!plain.stats.kept_whole, "{:?}", plain.stats);
-    // Held: the source and its thresholded copy, then each tier's atlas as it is made.
-    let source: u64 = src.levels.iter().map(|l| l.len() as u64).sum();
+    // Held: the source (colour and normals), a thresholded copy of it when there is a
+    // threshold, then each tier's atlas as it is made.
+    let bytes = |l: &[Vec<u8>]| l.iter().map(|l| l.len() as u64).sum::<u64>();
+    let source = bytes(&src.levels) + bytes(src.normals.as_deref().unwrap());
     let atlases: u64 = plain.stats.bands[..plain.stats.bands.len() - 1]
         .iter()
         .map(|b| b.texel_bytes)
         .sum();
-    let o = |memory_limit| EmptySpaceOptions {
+    let o = |threshold, memory_limit| EmptySpaceOptions {
+        threshold,
         memory_limit,
         ..Default::default()
     };
-    // The smallest limit that passes (bisection): it holds at least the source, its
-    // thresholded copy and the atlases kept, and gives the same asset; one byte less is
-    // refused with a clear error.
+    // The smallest limit that passes (bisection) holds at least the source and the
+    // atlases kept and gives the same asset; one byte less is refused with a clear error.
     let (mut lo, mut hi) = (0u64, 1u64 << 40);
     while hi - lo > 1 {
         let mid = lo + (hi - lo) / 2;
-        match prune(&src, &o(mid)) {
+        match prune(&src, &o(0, mid)) {
             Ok(_) => hi = mid,
             Err(EmptySpaceError::TooMuchMemory { .. }) => lo = mid,
             Err(e) => panic!("{e}"),
         }
     }
-    assert!(hi >= 2 * source + atlases, "{hi} < {source} + {atlases}");
-    assert_eq!(prune(&src, &o(hi)).unwrap().asset, plain.asset);
-    let e = prune(&src, &o(hi - 1)).unwrap_err();
+    assert!(hi >= source + atlases, "{hi} < {source} + {atlases}");
+    assert_eq!(prune(&src, &o(0, hi)).unwrap().asset, plain.asset);
+    let e = prune(&src, &o(0, hi - 1)).unwrap_err();
     assert!(e.to_string().contains("GiB of memory"), "{e}");
-    // Only the source fits: the first atlas is refused.
-    assert!(matches!(
-        prune(&src, &o(2 * source)).unwrap_err(),
-        EmptySpaceError::TooMuchMemory { tier: 0, .. }
-    ));
+    // Only the source fits: the first atlas is refused. With a threshold the copy counts.
+    let first = |t, limit| {
+        matches!(
+            prune(&src, &o(t, limit)),
+            Err(EmptySpaceError::TooMuchMemory { tier: 0, .. })
+        )
+    };
+    assert!(first(0, source));
+    assert!(!first(0, source + atlases));
+    assert!(first(40, source + atlases));
+    assert!(prune(&src, &o(40, 2 * source + hi)).is_ok());
 }

@@ -114,6 +114,9 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         .header
         .params
         .contains_key(billow_format::param::COMPRESS);
+    let gpu_bytes_before = asset.gpu_bytes(input_compressed);
+    // The source is not read again: freed before the output is encoded and written.
+    drop(asset);
     let compress = compression == Compression::Bc && (!pruned.stats.kept_whole || input_compressed);
     let blocks = compress.then(|| {
         let a = &mut pruned.asset;
@@ -127,13 +130,15 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             .params
             .remove(billow_format::param::COMPRESS);
     }
-    let bytes = pruned
-        .asset
-        .to_bytes_with(blocks.as_ref())
-        .map_err(|e| CliError::new(Code::Internal, e))?;
     let mut stage = Staged::new(&args.output);
-    stage
-        .stage(&args.output, &bytes)
+    // Streamed from the texel data (no file-sized copy in memory).
+    let file_bytes_after = pruned
+        .asset
+        .with_parts_with(blocks.as_ref(), |parts| {
+            let len = parts.iter().map(|p| p.len() as u64).sum::<u64>();
+            stage.stage_parts(&args.output, parts).map(|()| len)
+        })
+        .map_err(|e| CliError::new(Code::Internal, e))?
         .map_err(|e| out_err(&args.output, e))?;
     if let Some(d) = &args.depfile {
         let text = depfile::render(&[&args.output], &args.input, &[])?;
@@ -145,8 +150,8 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         output: args.output.display().to_string(),
         stats: pruned.stats,
         file_bytes_before,
-        file_bytes_after: bytes.len() as u64,
-        gpu_bytes_before: asset.gpu_bytes(input_compressed),
+        file_bytes_after,
+        gpu_bytes_before,
         gpu_bytes_after: pruned.asset.gpu_bytes(blocks.is_some()),
         seconds_total: start.elapsed().as_secs_f64(),
     };

@@ -31,6 +31,7 @@ pub mod sparse;
 pub mod synthetic;
 pub mod tier;
 
+use std::borrow::Cow;
 use std::time::Instant;
 
 use billow_format::{mip_dims, LodBand, Prism, VolumeAsset};
@@ -241,16 +242,17 @@ fn level_bytes(levels: &[Vec<u8>], normals: Option<&[Vec<u8>]>, from: usize) -> 
     n(levels) + normals.map_or(0, n)
 }
 
-/// The levels a prune reads: dense bytes (an asset's) or brick-sparse ([`prune_sparse`]).
-enum Source {
+/// The levels a prune reads: dense bytes (an asset's, borrowed, or a thresholded copy) or
+/// brick-sparse ([`prune_sparse`]).
+enum Source<'a> {
     Dense {
-        levels: Vec<Vec<u8>>,
-        normals: Option<Vec<Vec<u8>>>,
+        levels: Cow<'a, [Vec<u8>]>,
+        normals: Option<Cow<'a, [Vec<u8>]>>,
     },
     Sparse(Vec<SparseLevel>),
 }
 
-impl Source {
+impl Source<'_> {
     /// Texel bytes of levels `from..` (stored densely).
     fn bytes_from(&self, from: usize) -> u64 {
         match self {
@@ -280,11 +282,14 @@ impl Source {
             }
         }
     }
-    /// Bytes held in memory for this source: a dense one is a copy of the caller's
-    /// asset, which is held too.
+    /// Bytes held in memory for this source (a dense one is the caller's asset, which
+    /// is held in any case, plus its thresholded copy if there is one).
     fn held_bytes(&self) -> u64 {
         match self {
-            Source::Dense { .. } => 2 * self.bytes_from(0),
+            Source::Dense { levels, .. } => {
+                let copy = matches!(levels, Cow::Owned(_));
+                (1 + copy as u64) * self.bytes_from(0)
+            }
             Source::Sparse(l) => l.iter().map(SparseLevel::heap_bytes).sum(),
         }
     }
@@ -347,15 +352,15 @@ pub fn prune(asset: &VolumeAsset, o: &EmptySpaceOptions) -> Result<Pruned, Empty
         return Err(EmptySpaceError::HasBands);
     }
     check_options(o)?;
-    // The source as it will be kept: faint texels dropped.
-    let mut levels = asset.levels.clone();
-    let mut normals = asset.normals.clone();
-    for l in 0..levels.len() {
-        apply_threshold(
-            &mut levels[l],
-            normals.as_mut().map(|n| n[l].as_mut_slice()),
-            o.threshold,
-        );
+    // The source as it will be kept: faint texels dropped (in a copy; none without a
+    // threshold).
+    let mut levels = Cow::Borrowed(asset.levels.as_slice());
+    let mut normals = asset.normals.as_deref().map(Cow::Borrowed);
+    if o.threshold > 0 {
+        let mut n = normals.as_mut().map(|n| n.to_mut());
+        for (i, level) in levels.to_mut().iter_mut().enumerate() {
+            apply_threshold(level, n.as_mut().map(|n| n[i].as_mut_slice()), o.threshold);
+        }
     }
     prune_source(asset, Source::Dense { levels, normals }, o, start)
 }
