@@ -446,7 +446,15 @@ fn prune_source(
         note: None,
         seconds: 0.0,
     };
-    let mut out = asset.clone();
+    // The header and cells; every path below sets the texels (a clone of a dense
+    // asset's levels would double the memory).
+    let mut out = VolumeAsset {
+        header: asset.header.clone(),
+        levels: Vec::new(),
+        normals: asset.normals.as_ref().map(|_| Vec::new()),
+        bands: asset.bands.clone(),
+        cells: asset.cells.clone(),
+    };
     let all_zero = src.all_zero();
     let Some(world) = world.filter(|_| !all_zero) else {
         empty_asset(&mut out, o, dims0);
