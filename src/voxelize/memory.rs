@@ -23,6 +23,62 @@ pub fn estimate_peak_bytes(
     estimate_peak_bytes_sparse(dims, mip_count, combine, normals, n)
 }
 
+/// The sizes both estimates start from (bytes unless said otherwise).
+struct Sizes {
+    /// Level-0 voxels, and at most that many non-empty ones.
+    n: u64,
+    sparse: u64,
+    /// Voxels of all levels, and of the levels above 0.
+    all: u64,
+    coarse: u64,
+    /// One direction's sparse level 0 (voxel + weighted normal).
+    vox: u64,
+    /// One direction's levels 1 and 2 while its pyramid is built.
+    pyr: u64,
+    /// The dense RGBA8 (+ snorm8) output of every level.
+    output: u64,
+}
+
+fn sizes(dims: [u32; 3], mip_count: u32, normals: bool, sparse: u64) -> Sizes {
+    let nrm = normals as u64;
+    let level = |l: u32| level_voxels(dims, l);
+    let n = level(0);
+    let sparse = sparse.min(n);
+    let all: u64 = (0..mip_count).map(level).sum();
+    let level1 = n.div_ceil(8);
+    Sizes {
+        n,
+        sparse,
+        all,
+        coarse: all - n,
+        vox: sparse * (20 + 12 * nrm),
+        pyr: (16 + 8 * nrm) * (level1 + level1.div_ceil(8)),
+        output: 4 * all * (1 + nrm),
+    }
+}
+
+fn level_voxels(dims: [u32; 3], l: u32) -> u64 {
+    grid::level_dims(dims, l)
+        .iter()
+        .map(|&d| d as u64)
+        .product()
+}
+
+/// A preset accumulator's colour bytes per voxel: 4 floats (5 for `opaque` and `min`).
+fn colour_width(p: Preset) -> u64 {
+    if matches!(p, Preset::Opaque | Preset::Min) {
+        20
+    } else {
+        16
+    }
+}
+
+/// A preset's accumulators of the levels above 0: [`colour_width`] per voxel, plus 8
+/// bytes of normal sums.
+fn accumulator_bytes(p: Preset, coarse: u64, normals: bool) -> u64 {
+    colour_width(p) * coarse + 8 * coarse * normals as u64
+}
+
 /// [`estimate_peak_bytes`] when at most `sparse` level-0 voxels of each direction are
 /// non-empty: the larger of the two phases — while the directions are processed (the
 /// sparse level 0 of the directions done so far, one direction's level 1 and 2, the
@@ -35,39 +91,19 @@ pub fn estimate_peak_bytes_sparse(
     normals: bool,
     sparse: u64,
 ) -> u64 {
-    let n: u64 = dims.iter().map(|&d| d as u64).product();
-    let sparse = sparse.min(n);
-    let all: u64 = (0..mip_count)
-        .map(|l| {
-            grid::level_dims(dims, l)
-                .iter()
-                .map(|&d| d as u64)
-                .product::<u64>()
-        })
-        .sum();
-    let coarse = all - n;
-    let output = 4 * all * (1 + normals as u64);
-    // One direction's sparse level 0 (voxel + weighted normal) and its levels 1 and 2.
-    let vox = sparse * (20 + 12 * normals as u64);
-    let level1 = n.div_ceil(8);
+    let z = sizes(dims, mip_count, normals, sparse);
     let (building, finishing) = match combine {
         CombineFn::Preset(p) => {
-            let w = if matches!(p, Preset::Opaque | Preset::Min) {
-                20
-            } else {
-                16
-            };
-            let acc = w * coarse + 8 * coarse * normals as u64;
-            let pyr = (16 + 8 * normals as u64) * (level1 + level1.div_ceil(8));
+            let acc = accumulator_bytes(*p, z.coarse, normals);
             // All six sparse stacks are kept for level 0, plus its per-plane tables.
-            let kept = 6 * vox + 2 * 8 * sparse;
-            (kept + acc + pyr, kept + acc + output)
+            let kept = 6 * z.vox + 2 * 8 * z.sparse;
+            (kept + acc + z.pyr, kept + acc + z.output)
         }
-        // Six f16 pyramids (brick-sparse, counted dense) + the sparse level 0 of the two directions
-        // of the axis being converted (a paired pass makes both at once).
+        // Six f16 pyramids (brick-sparse, counted dense) + the sparse level 0 of the two
+        // directions of the axis being converted (a paired pass makes both at once).
         _ => {
-            let nacc = 8 * all * normals as u64;
-            (48 * all + 2 * vox + nacc, 48 * all + nacc + output)
+            let nacc = 8 * z.all * normals as u64;
+            (48 * z.all + 2 * z.vox + nacc, 48 * z.all + nacc + z.output)
         }
     };
     building.max(finishing) + (64 << 20)
@@ -99,52 +135,40 @@ pub fn estimate_peak_bytes_pruned(
     normals: bool,
     sparse: u64,
 ) -> u64 {
-    let level = |l: u32| -> u64 {
-        grid::level_dims(dims, l)
-            .iter()
-            .map(|&d| d as u64)
-            .product()
-    };
-    let n = level(0);
-    let sparse = sparse.min(n);
+    let z = sizes(dims, mip_count, normals, sparse);
     let nrm = normals as u64;
-    let all: u64 = (0..mip_count).map(level).sum();
-    let coarse = all - n;
-    let wide = matches!(preset, Preset::Opaque | Preset::Min);
-    let w = if wide { 20 } else { 16 };
+    let w = colour_width(preset);
     let w_nrm = if matches!(preset, Preset::Max | Preset::Min) {
         16
     } else {
         12
     };
-    let acc0 = sparse * (4 + w + w_nrm * nrm);
-    let vox = sparse * (20 + 12 * nrm);
+    let acc0 = z.sparse * (4 + w + w_nrm * nrm);
     // Two stacks: their voxels and per image row an 8-byte start.
-    let rows = n / dims.iter().copied().min().unwrap_or(1).max(1) as u64;
-    let stacks = 2 * (vox + 8 * rows);
-    let acc = w * coarse + 8 * coarse * nrm;
-    let level1 = n.div_ceil(8);
-    let pyr = (16 + 8 * nrm) * (level1 + level1.div_ceil(8));
+    let rows = z.n / dims.iter().copied().min().unwrap_or(1).max(1) as u64;
+    let stacks = 2 * (z.vox + 8 * rows);
+    let acc = accumulator_bytes(preset, z.coarse, normals);
     let texel = 4 * (1 + nrm);
     let b3 = bricks::B3 as u64;
+    let level = |l: u32| level_voxels(dims, l);
     // Per level: stored bricks, and the packed bytes (texels, brick tables, slot grid).
-    let stored = |l: u32| level(l).div_ceil(b3).min(sparse);
+    let stored = |l: u32| level(l).div_ceil(b3).min(z.sparse);
     let packed: u64 = (0..mip_count)
         .map(|l| {
-            let texels = level(l).min(sparse);
+            let texels = level(l).min(z.sparse);
             texel * texels + (4 + 64 + 8) * stored(l) + 4 * level(l).div_ceil(b3)
         })
         .sum();
-    // A coarse level's whole bricks before they are packed; level 0's parts (packed, per
-    // brick layer) before they are joined.
+    // A coarse level's whole bricks before they are packed.
     let whole = (1..mip_count)
         .map(|l| texel * b3 * stored(l))
         .max()
         .unwrap_or(0);
-    let building = acc0 + stacks + pyr + acc;
+    let building = acc0 + stacks + z.pyr + acc;
+    // Level 0's packed parts (per brick layer) are held twice while they are joined.
     let finishing = acc0 + acc + 2 * packed + whole;
-    let occupancy = 5 * n.div_ceil(8);
-    let pruning = packed + occupancy + texel * all;
+    let occupancy = 5 * z.n.div_ceil(8);
+    let pruning = packed + occupancy + z.output;
     building.max(finishing).max(pruning) + (64 << 20)
 }
 

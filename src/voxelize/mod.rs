@@ -292,11 +292,13 @@ fn unaligned_grid(scene: &Scene, opts: &VoxelizeOptions) -> Result<GridSpec, Vox
     }
 }
 
+/// The grid, the MIP count and the memory estimate of a bake, after checking the options
+/// and the estimate against the limit.
 fn check(
     scene: &Scene,
     opts: &VoxelizeOptions,
     sparse: bool,
-) -> Result<(GridSpec, u32), VoxelizeError> {
+) -> Result<(GridSpec, u32, u64), VoxelizeError> {
     if !(1..=MAX_SUPERSAMPLE).contains(&opts.supersample) {
         return Err(VoxelizeError::InvalidOption(format!(
             "supersample must be 1..={MAX_SUPERSAMPLE}, got {}",
@@ -326,7 +328,7 @@ fn check(
         });
     }
     shade::validate_scene(scene).map_err(VoxelizeError::InvalidScene)?;
-    Ok((grid, mips))
+    Ok((grid, mips, need))
 }
 
 /// One direction's level-0 slices, decoded to f32 (for inspection, tests and slice export).
@@ -346,7 +348,7 @@ pub fn slice_stack(
     opts: &VoxelizeOptions,
     dir: Dir,
 ) -> Result<SliceStack, VoxelizeError> {
-    let (grid, _) = check(scene, opts, false)?;
+    let (grid, ..) = check(scene, opts, false)?;
     let shader = shade::Shader::new(scene);
     let side = if dir.positive() { 1 } else { 2 };
     let mut s = slices::rasterize(
@@ -473,7 +475,7 @@ fn voxelize_as(
     sparse: bool,
 ) -> Result<(GridSpec, Output, VoxelizeStats), VoxelizeError> {
     let t_all = Instant::now();
-    let (grid, mips) = check(scene, opts, sparse)?;
+    let (grid, mips, estimated_peak_bytes) = check(scene, opts, sparse)?;
     let shader = shade::Shader::new(scene);
     let dims: Vec<[usize; 3]> = (0..mips)
         .map(|l| grid.level_dims(l).map(|d| d as usize))
@@ -591,7 +593,7 @@ fn voxelize_as(
                     non_empty_voxels: count,
                     fragments,
                     triangles: scene.triangles.len(),
-                    estimated_peak_bytes: estimate_bytes(scene, opts, &grid, mips, true),
+                    estimated_peak_bytes,
                     seconds: times,
                 };
                 return Ok((grid, Output::Sparse(out), stats));
@@ -665,7 +667,7 @@ fn voxelize_as(
         non_empty_voxels,
         fragments,
         triangles: scene.triangles.len(),
-        estimated_peak_bytes: estimate_bytes(scene, opts, &grid, mips, false),
+        estimated_peak_bytes,
         seconds: times,
     };
     Ok((grid, Output::Dense(levels, normals), stats))
