@@ -89,8 +89,7 @@ pub struct TierPlan {
     boxes: Vec<BlockBox>,
     /// Each box's slot (box plus apron, blocks of the tier's level 0) and its placement.
     bricks: Vec<Brick>,
-    /// Atlas level-0 size in texels, and in blocks (level 1).
-    dims: [usize; 3],
+    /// Atlas size in blocks: level 1's texels (level 0 has twice as many per axis).
     blocks: [usize; 3],
     /// The source level's size (texels).
     n: [usize; 3],
@@ -100,8 +99,9 @@ pub struct TierPlan {
 impl TierPlan {
     /// The atlas's bytes once filled (both levels, colour and normals).
     pub fn bytes(&self) -> u64 {
-        let texels = |d: [usize; 3]| d.iter().map(|&v| v as u64).product::<u64>();
-        4 * (texels(self.dims) + texels(self.blocks)) * (1 + self.normals as u64)
+        // Level 0 holds 8 texels per block, level 1 one.
+        let blocks = self.blocks.iter().map(|&v| v as u64).product::<u64>();
+        4 * 9 * blocks * (1 + self.normals as u64)
     }
 }
 
@@ -156,7 +156,6 @@ pub fn plan_tier<S: TierTexels>(src: &S, p: &TierParams) -> Option<TierPlan> {
     Some(TierPlan {
         boxes,
         bricks,
-        dims: blocks.map(|d| 2 * d),
         blocks,
         n,
         normals: src.has_normals(),
@@ -168,11 +167,11 @@ pub fn fill_tier<S: TierTexels>(src: &S, world: (Vec3, Vec3), plan: TierPlan) ->
     let TierPlan {
         boxes,
         bricks,
-        dims,
         blocks,
         n,
         ..
     } = plan;
+    let dims = blocks.map(|d| 2 * d);
     let n1 = n.map(|d| d / 2);
     let fill = |normals: bool| -> Vec<Vec<u8>> {
         [(dims, n, 2), (blocks, n1, 1)]
@@ -192,16 +191,15 @@ pub fn fill_tier<S: TierTexels>(src: &S, world: (Vec3, Vec3), plan: TierPlan) ->
     let ext = whi - wlo;
     let mut cells = Vec::with_capacity(2 * boxes.len());
     for (b, br) in boxes.iter().zip(&bricks) {
-        let (slot_lo, pl) = (br.src, br);
         let w = |a: usize, v: usize| wlo[a] + ext[a] * (2.0 * v as f64 / n[a] as f64) as f32;
         let pmin = Vec3::from_array([0, 1, 2].map(|a| w(a, b.lo[a])));
         let pmax = Vec3::from_array([0, 1, 2].map(|a| w(a, b.hi[a])));
         let s = b.size();
         let uvw = |t: [f32; 3]| {
             [0, 1, 2].map(|a| {
-                let src_axis = pl.perm[a];
-                let inset = (b.lo[src_axis] as i64 - slot_lo[src_axis]) as usize;
-                let start = 2 * (pl.dst[a] + inset);
+                let src_axis = br.perm[a];
+                let inset = (b.lo[src_axis] as i64 - br.src[src_axis]) as usize;
+                let start = 2 * (br.dst[a] + inset);
                 let v = start
                     + if t[src_axis] > 0.5 {
                         2 * s[src_axis]

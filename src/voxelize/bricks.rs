@@ -151,9 +151,11 @@ impl<T: Texel> Bricked<T> {
         }
         let mut out = Self::zeroed(Layout::from_flags(dims, &occupied));
         for (&i, v) in indices.iter().zip(&s.vox) {
-            let p = at(i);
-            let slot = out.layout.slot[brick(p)] as usize;
-            out.data[slot * B3 + local(p)] = T::store(v.rgba);
+            let o = out
+                .layout
+                .offset(at(i))
+                .expect("the voxel's brick is occupied");
+            out.data[o] = T::store(v.rgba);
         }
         out
     }

@@ -370,14 +370,12 @@ pub(crate) fn combine_level_bricks<T: Texel>(
         .enumerate()
         .for_each(|(bz, o)| {
             for b in (bz * layer..(bz + 1) * layer).filter(|&b| held[b]) {
+                let slots = dirs.map(|d| d.layout.slot[b]);
                 for p in bricks::voxels_of(l.coords(b), dims) {
-                    let s = dirs.map(|d| {
-                        let slot = d.layout.slot[b];
-                        if slot == bricks::EMPTY {
-                            Vec4::ZERO
-                        } else {
-                            let i = slot as usize * bricks::B3 + bricks::local(p);
-                            Vec4::from_array(d.data[i].load())
+                    let s = std::array::from_fn(|d| match slots[d] {
+                        bricks::EMPTY => Vec4::ZERO,
+                        slot => {
+                            Vec4::from_array(dirs[d].data[slot as usize * B3 + local(p)].load())
                         }
                     });
                     let i = 4 * (p[0] + dims[0] * (p[1] + dims[1] * (p[2] - bz * bricks::B)));
