@@ -57,7 +57,8 @@ def med(xs):
     return statistics.median(xs) if xs else float("nan")
 
 
-STAGES = ["import", "rasterize", "bake", "mip", "combine", "quantize", "compress", "write", "total"]
+# judge_normals: `--normals auto`'s coarse bake (0 for builds before it, which lack the key)
+STAGES = ["import", "judge_normals", "rasterize", "bake", "mip", "combine", "quantize", "compress", "write", "total"]
 
 
 def main():
@@ -126,7 +127,7 @@ def main():
                 # the per-run ratio against the floor of the same round
                 "ratio": med([x[0] / f[0] for x, f in zip(v, m["floor"])]),
                 "ratio_vdb": med([x[0] / f[0] for x, f in zip(v, m["vdb"])]) if m["vdb"] else None,
-                "stages": {s: med([x[3]["seconds"][s] for x in v]) for s in STAGES} if v[0][3] else None,
+                "stages": {s: med([x[3]["seconds"].get(s, 0.0) for x in v]) for s in STAGES} if v[0][3] else None,
                 "peak": max((x[3].get("peak_memory_bytes") or 0) for x in v) if v[0][3] else None,
             }
         rows.append(row)

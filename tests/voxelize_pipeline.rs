@@ -372,3 +372,61 @@ fn volume_converts_to_a_valid_asset_that_round_trips() {
     assert_eq!(back, asset);
     assert_eq!(back.levels, vol.levels);
 }
+
+/// `--normals auto` decides on a coarse bake (`toksvig::judge_normals`: level 0 of a bake
+/// at the size of level 2) instead of the full bake's level 2, which it stands in for:
+/// on a smooth solid (kept) and on thin double-sided leaves, beams and fur (dropped), at
+/// two sizes, the two coherences are within 0.1 and make the same decision. The fur tile
+/// is the closest to the threshold; judged at level 0 instead of 2 it would keep them.
+/// A one-level volume has no coarser level: it is judged on the bake itself.
+#[test]
+fn the_coarse_normals_judgement_agrees_with_the_full_bakes_level_2() {
+    use billow::procgen::{fur_tile, leafy_tree, torus};
+    use billow::voxelize::toksvig::{judge_normals, keeps, NormalsJudgement};
+    use billow::voxelize::voxelize_sparse;
+    let unit = Aabb {
+        min: Vec3::ZERO,
+        max: Vec3::ONE,
+    };
+    let cases = [
+        ("torus", torus(1.0, 0.4, 48, 24), None, true),
+        ("leafy tree", leafy_tree(300, 6, 3), None, false),
+        ("truss", truss(10.0, 3.0, 40, 0.005), None, false),
+        ("fur tile", fur_tile(400, 1), Some(unit), false),
+    ];
+    for (name, scene, bounds, kept) in &cases {
+        for res in [32, 64] {
+            let opts = VoxelizeOptions {
+                resolution: Resolution::Longest(res),
+                bounds: *bounds,
+                normals: true,
+                combine: CombineFn::Preset(Preset::Opaque),
+                ..Default::default()
+            };
+            let NormalsJudgement::Coarse(k) = judge_normals(scene, &opts).unwrap() else {
+                panic!("{name} {res}: judged on the bake");
+            };
+            let full = voxelize_sparse(scene, &opts, &|_, _| {})
+                .unwrap()
+                .normal_coherence(2);
+            let (k, f) = (k.unwrap(), full.unwrap());
+            assert!(
+                (k - f).abs() <= 0.1,
+                "{name} {res}: coarse {k}, level 2 {f}"
+            );
+            assert_eq!(keeps(Some(k)), *kept, "{name} {res}: coarse {k}");
+            assert_eq!(keeps(Some(f)), *kept, "{name} {res}: level 2 {f}");
+        }
+    }
+    let one = VoxelizeOptions {
+        resolution: Resolution::Longest(32),
+        mip_levels: Some(1),
+        normals: true,
+        ..Default::default()
+    };
+    let torus = &cases[0].1;
+    assert_eq!(
+        judge_normals(torus, &one).unwrap(),
+        NormalsJudgement::OnTheBake
+    );
+}

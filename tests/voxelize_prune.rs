@@ -149,15 +149,28 @@ fn prune_refuses_the_outputs_of_the_dense_volume() {
 }
 
 /// The memory limit with `--prune`: its own estimate (in `--json`), normals dropped by
-/// `--normals auto` when only they pass the limit (a warning, and the same file as
-/// `--normals off`), and a refusal before any work, exit 8, below the estimate.
+/// `--normals auto` when only they pass the limit (a warning, and the same volume as
+/// `--normals off`), and a refusal before any work, exit 8, below the estimate. On a
+/// torus, whose normals `auto` would keep (the oak's it drops before the bake, for their
+/// coherence).
 #[test]
 fn prune_memory_limit_drops_optional_normals_then_refuses() {
     let dir = tempfile::tempdir().unwrap();
-    let oak = oak();
+    billow::procgen::write_obj(
+        &billow::procgen::torus(1.0, 0.4, 48, 24),
+        &dir.path().join("torus.obj"),
+    )
+    .unwrap();
     let bake = |out: &str, extra: &[&str]| {
         let mut args = vec![
-            "voxelize", &oak, "-o", out, "--res", "48", "--prune", "--json",
+            "voxelize",
+            "torus.obj",
+            "-o",
+            out,
+            "--res",
+            "48",
+            "--prune",
+            "--json",
         ];
         args.extend_from_slice(extra);
         billow(dir.path(), &args, "2")
@@ -171,15 +184,23 @@ fn prune_memory_limit_drops_optional_normals_then_refuses() {
     let (on, _) = estimate(&bake("on.billow", &["--normals", "on"]));
     assert!(off < on, "{off} {on}");
     let gib = |b: u64| format!("{:.9}", b as f64 / (1u64 << 30) as f64);
+    let (_, j) = estimate(&bake("kept.billow", &[]));
+    assert_eq!(j["normals"], true, "{j}");
     let between = gib((off + on) / 2);
     let (_, j) = estimate(&bake("auto.billow", &["--memory-limit", &between]));
     assert_eq!(j["normals"], false, "{j}");
+    assert!(j["normal_coherence"].as_f64().unwrap() >= 0.8, "{j}");
     let w = j["warnings"].to_string();
     assert!(
         w.contains("without normals") && w.contains("--memory-limit"),
         "{w}"
     );
-    let read = |f: &str| std::fs::read(dir.path().join(f)).unwrap();
+    // The same file but for the coherence `auto` judged, which `off` does not record.
+    let read = |f: &str| {
+        let mut a = billow_format::VolumeAsset::read(&dir.path().join(f)).unwrap();
+        a.header.params.remove("normal_coherence");
+        a
+    };
     assert!(
         read("auto.billow") == read("off.billow"),
         "auto without normals differs from off"

@@ -155,6 +155,8 @@ pub struct Args {
 #[derive(Serialize)]
 struct Seconds {
     import: f64,
+    /// `--normals auto`'s judgement: a bake at the judged level's size.
+    judge_normals: f64,
     rasterize: f64,
     bake: f64,
     mip: f64,
@@ -583,6 +585,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         mip_count,
         coherence,
         pruned: pruned_stats,
+        judge_s,
         compress_s,
         notes,
     } = baked;
@@ -658,6 +661,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         peak_memory_bytes: peak_rss_bytes(),
         seconds: Seconds {
             import: import_s,
+            judge_normals: judge_s,
             rasterize: stats.seconds.rasterize,
             bake: stats.seconds.bake,
             mip: stats.seconds.mip,

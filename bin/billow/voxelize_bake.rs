@@ -10,6 +10,7 @@ use billow::emptyspace::{prune, prune_sparse, EmptySpaceOptions, EmptySpaceStats
 use billow::presets::target::{search, Candidate, Judge, SearchError, TargetOptions};
 use billow::presets::{resolve_volume, Preset, VolumeFlags, VolumeSettings};
 use billow::provenance::tool_version;
+use billow::voxelize::toksvig::{judge_normals, keeps, NormalsJudgement};
 use billow::voxelize::{
     bake_params, bake_params_for, voxelize, voxelize_sparse, CombineFn, Resolution, Stage,
     VoxelizeOptions,
@@ -30,6 +31,8 @@ pub(crate) struct Baked {
     pub(crate) mip_count: u32,
     pub(crate) coherence: Option<f32>,
     pub(crate) pruned: Option<EmptySpaceStats>,
+    /// `--normals auto`'s coarse bake.
+    pub(crate) judge_s: f64,
     pub(crate) compress_s: f64,
     /// Warnings the bake printed (also listed in `--json`).
     pub(crate) notes: Vec<String>,
@@ -61,10 +64,30 @@ pub(crate) fn bake_once(
         report: &report,
         note: &note,
     };
+    // `--normals auto` decides before the bake, on a coarse one (docs/voxelize.md, "Normals").
+    let judge_start = Instant::now();
+    // Judging alone past the memory limit: without normals, said once the bake is done.
+    let mut unjudged = None;
+    let auto = match args.normals {
+        NormalsArg::Auto => Some(match judge_normals(scene, opts) {
+            Err(billow::voxelize::VoxelizeError::TooMuchMemory { limit_gib, .. }) => {
+                unjudged = Some(format!(
+                    "--normals auto: baked without normals, since even judging them would need more than --memory-limit {limit_gib:.1}"
+                ));
+                NormalsJudgement::Coarse(None)
+            }
+            r => r.map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?,
+        }),
+        _ => None,
+    };
+    if let Some(NormalsJudgement::Coarse(k)) = auto {
+        opts.normals = keeps(k);
+    }
+    let judge_s = judge_start.elapsed().as_secs_f64();
     let mut pruned = None;
     let (mut asset, stats, dims, mip_count, coherence) = if args.prune {
         let (asset, stats, dims, mips, coherence, ps) =
-            bake_pruned(scene, opts, args.normals, compression, hooks, input, source)?;
+            bake_pruned(scene, opts, auto, compression, hooks, input, source)?;
         bar.finish();
         if let Some(n) = &ps.note {
             note(n);
@@ -72,10 +95,13 @@ pub(crate) fn bake_once(
         pruned = Some(ps);
         (asset, stats, dims, mips, coherence)
     } else {
-        let baked = bake_dense(scene, opts, args.normals, hooks, input, source)?;
+        let baked = bake_dense(scene, opts, auto, hooks, input, source)?;
         bar.finish();
         baked
     };
+    if let Some(n) = unjudged {
+        note(&n);
+    }
     let compress_start = Instant::now();
     let blocks = (compression == Compression::Bc).then(|| {
         asset.header.set_compress("bc7");
@@ -89,6 +115,7 @@ pub(crate) fn bake_once(
         mip_count,
         coherence,
         pruned,
+        judge_s,
         compress_s: compress_start.elapsed().as_secs_f64(),
         notes: notes.into_inner(),
     })
@@ -101,10 +128,18 @@ pub(crate) struct Hooks<'a> {
     pub(crate) note: &'a dyn Fn(&str),
 }
 
+/// The coherence a coarse `--normals auto` judgement found (the others are judged on the bake).
+fn judged(auto: Option<NormalsJudgement>) -> Option<f32> {
+    match auto {
+        Some(NormalsJudgement::Coarse(k)) => k,
+        _ => None,
+    }
+}
+
 /// `bake(opts)`; with `--normals auto`, a bake refused for memory is retried without
 /// normals (they are an option, not a requirement), with a warning that says so.
 fn normals_optional<T>(
-    normals: NormalsArg,
+    auto: bool,
     opts: &mut VoxelizeOptions,
     note: &dyn Fn(&str),
     bake: impl Fn(&VoxelizeOptions) -> Result<T, billow::voxelize::VoxelizeError>,
@@ -115,7 +150,7 @@ fn normals_optional<T>(
             needed_gib,
             limit_gib,
             ..
-        }) if normals == NormalsArg::Auto && opts.normals => {
+        }) if auto && opts.normals => {
             opts.normals = false;
             note(&format!(
                 "--normals auto: baked without normals, which would need about {needed_gib:.1} GiB, more than --memory-limit {limit_gib:.1}; raise it to keep them"
@@ -212,14 +247,15 @@ pub(crate) fn bake_to_target(
 }
 
 /// The dense bake: [`voxelize`] (retried without normals when `--normals auto` and the
-/// estimate refuses them), `--normals auto` judged at [`AUTO_NORMALS_LEVEL`], and the asset.
+/// estimate refuses them) and the asset; `auto`: `--normals auto`'s judgement, made on the
+/// bake itself at [`AUTO_NORMALS_LEVEL`] when it is [`NormalsJudgement::OnTheBake`].
 /// Returns the asset, the bake's statistics, the grid's dims and MIP count and the normal
 /// coherence `--normals auto` judged.
 #[allow(clippy::type_complexity)]
 pub(crate) fn bake_dense(
     scene: &billow::scene::Scene,
     opts: &mut VoxelizeOptions,
-    normals: NormalsArg,
+    auto: Option<NormalsJudgement>,
     hooks: Hooks,
     input: &str,
     source: billow_format::SourceInfo,
@@ -233,15 +269,13 @@ pub(crate) fn bake_dense(
     ),
     CliError,
 > {
-    use billow::voxelize::toksvig::{
-        normal_coherence, AUTO_NORMALS_LEVEL, AUTO_NORMALS_MIN_COHERENCE,
-    };
+    use billow::voxelize::toksvig::{normal_coherence, AUTO_NORMALS_LEVEL};
     let Hooks { report, note } = hooks;
-    let mut volume = normals_optional(normals, opts, note, |o| voxelize(scene, o, report))
+    let mut volume = normals_optional(auto.is_some(), opts, note, |o| voxelize(scene, o, report))
         .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;
     // auto: keep the normals only where one normal per voxel describes the surface.
-    let mut coherence = None;
-    if normals == NormalsArg::Auto {
+    let mut coherence = judged(auto);
+    if auto == Some(NormalsJudgement::OnTheBake) {
         if let Some(n) = volume.normals.as_ref() {
             let l = AUTO_NORMALS_LEVEL.min(volume.levels.len().saturating_sub(1));
             let k = volume
@@ -250,7 +284,7 @@ pub(crate) fn bake_dense(
                 .zip(n.get(l))
                 .and_then(|(c, n)| normal_coherence(c, n));
             coherence = k;
-            if k.is_none_or(|k| k < AUTO_NORMALS_MIN_COHERENCE) {
+            if !keeps(k) {
                 volume.normals = None;
                 opts.normals = false;
             }
@@ -275,7 +309,7 @@ pub(crate) fn bake_dense(
 fn bake_pruned(
     scene: &billow::scene::Scene,
     opts: &mut VoxelizeOptions,
-    normals: NormalsArg,
+    auto: Option<NormalsJudgement>,
     compression: Compression,
     hooks: Hooks,
     input: &str,
@@ -291,7 +325,7 @@ fn bake_pruned(
     ),
     CliError,
 > {
-    use billow::voxelize::toksvig::{AUTO_NORMALS_LEVEL, AUTO_NORMALS_MIN_COHERENCE};
+    use billow::voxelize::toksvig::AUTO_NORMALS_LEVEL;
     use billow::voxelize::VoxelizeError;
     let err = |e: VoxelizeError| CliError::new(Code::from(&e), format!("{input}: {e}"));
     let perr = |e: billow::emptyspace::EmptySpaceError| {
@@ -302,23 +336,24 @@ fn bake_pruned(
         memory_limit: opts.memory_limit,
         ..EmptySpaceOptions::default()
     };
-    let keep = |k: Option<f32>| !k.is_none_or(|k| k < AUTO_NORMALS_MIN_COHERENCE);
     if !matches!(opts.combine, CombineFn::Preset(_)) {
         // Expressions and custom functions give dense levels: prune the dense volume.
         let (asset, stats, dims, mips, coherence) =
-            bake_dense(scene, opts, normals, hooks, input, source)?;
+            bake_dense(scene, opts, auto, hooks, input, source)?;
         let p = prune(&asset, &es).map_err(perr)?;
         return Ok((p.asset, stats, dims, mips, coherence, p.stats));
     }
     let Hooks { report, note } = hooks;
-    let mut volume = normals_optional(normals, opts, note, |o| voxelize_sparse(scene, o, report))
-        .map_err(err)?;
-    let mut coherence = None;
-    if normals == NormalsArg::Auto && volume.has_normals() {
+    let mut volume = normals_optional(auto.is_some(), opts, note, |o| {
+        voxelize_sparse(scene, o, report)
+    })
+    .map_err(err)?;
+    let mut coherence = judged(auto);
+    if auto == Some(NormalsJudgement::OnTheBake) && volume.has_normals() {
         let l = AUTO_NORMALS_LEVEL.min(volume.levels.len().saturating_sub(1));
         let k = volume.normal_coherence(l);
         coherence = k;
-        if !keep(k) {
+        if !keeps(k) {
             volume.drop_normals();
             opts.normals = false;
         }

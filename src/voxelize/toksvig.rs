@@ -84,6 +84,66 @@ pub const AUTO_NORMALS_MIN_COHERENCE: f32 = 0.8;
 /// distance where level 0 is magnified).
 pub const AUTO_NORMALS_LEVEL: usize = 2;
 
+/// How `--normals auto` decides, before the bake ([`judge_normals`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum NormalsJudgement {
+    /// The level judged is the bake's level 0 (a volume of one level, or a grid too small
+    /// for a coarser one): bake with normals and judge on the bake itself.
+    OnTheBake,
+    /// The coherence of a bake at the judged level's resolution (`None`: it saw nothing).
+    Coarse(Option<f32>),
+}
+
+/// Whether a coherence keeps the normals (at least [`AUTO_NORMALS_MIN_COHERENCE`]; an
+/// empty level does not).
+pub fn keeps(coherence: Option<f32>) -> bool {
+    coherence.is_some_and(|k| k >= AUTO_NORMALS_MIN_COHERENCE)
+}
+
+/// `--normals auto`'s judgement without baking the normals at full resolution: the
+/// [`normal_coherence`] of level 0 of a bake, with normals, over the same box at the size
+/// of the bake's level [`AUTO_NORMALS_LEVEL`] (clamped to its last level), with the same
+/// samples per voxel and combine, one MIP level, no baked lighting (which changes colour,
+/// not alpha or normals). At 512³ that bake is 128³, 1/64 of the voxels.
+///
+/// Its coherence is not the full bake's level-2 value, which composites 4 level-0 slices
+/// per texel through two MIP steps; the coarse voxel composites its fragments per sample
+/// instead. On the meshes of docs/voxelize.md, "Normals", the two are within 0.07 and
+/// make the same decisions.
+pub fn judge_normals(
+    scene: &crate::scene::Scene,
+    opts: &super::VoxelizeOptions,
+) -> Result<NormalsJudgement, super::VoxelizeError> {
+    let grid = super::grid_for(scene, opts)?;
+    let mips = opts.mip_levels.unwrap_or_else(|| grid.full_mip_count());
+    let level = AUTO_NORMALS_LEVEL.min(mips.saturating_sub(1) as usize) as u32;
+    let coarse = grid.level_dims(level);
+    if level == 0 || coarse == grid.dims {
+        return Ok(NormalsJudgement::OnTheBake);
+    }
+    let o = super::VoxelizeOptions {
+        resolution: super::Resolution::Exact(coarse),
+        bounds: Some(grid.bounds()),
+        align: 1,
+        mip_levels: Some(1),
+        normals: true,
+        bake: super::Bake::None,
+        ..opts.clone()
+    };
+    let quiet = |_: super::Stage, _: f32| {};
+    let k = if matches!(o.combine, super::CombineFn::Preset(_)) {
+        super::voxelize_sparse(scene, &o, &quiet)?.normal_coherence(0)
+    } else {
+        let v = super::voxelize(scene, &o, &quiet)?;
+        let n = v.normals.as_ref().and_then(|n| n.first());
+        v.levels
+            .first()
+            .zip(n)
+            .and_then(|(c, n)| normal_coherence(c, n))
+    };
+    Ok(NormalsJudgement::Coarse(k))
+}
+
 /// How much one normal per texel says about a volume's surface at one MIP level: the
 /// opacity-weighted mean length of the level's Toksvig normals, `Σ α·|n̄| / Σ α` (`rgba`:
 /// RGBA8 texels, alpha last; `normals`: snorm8 texels, SPEC §8.4, same order). Near 1 for a
