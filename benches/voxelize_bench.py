@@ -166,9 +166,10 @@ def main():
         "  user reaches for to turn a mesh into a sparse volume.",
         "- **billow** is `billow voxelize MESH -o OUT --res R --json` (release build), with default",
         "  options (4×4 coverage samples per voxel column, combine `opaque`, full MIP chain,",
-        "  `--normals auto`: Toksvig normals baked and kept only where coherent, BC7 output), with",
-        "  `--supersample 1` (one sample per column, what the floor does), and with `--normals off",
-        "  --compress none` (what the defaults cost on top: normals baked and judged, BC7 encoding)"
+        "  `--normals auto`: Toksvig normals kept only where coherent, judged on a bake at level 2's",
+        "  size first, BC7 output), with `--supersample 1` (one sample per column, what the floor",
+        "  does), and with `--normals off --compress none` (what the defaults cost on top: the",
+        "  normals' judgement, and their bake where kept; BC7 encoding)"
         + (f"; *{a.before_label}* is an older binary measured in the same alternating runs." if a.before else "."),
         f"- Every program runs alternately, {a.runs} times per resolution; tables show **medians**",
         "  of whole-process wall time, and the ratios are medians of the per-round ratios.",
