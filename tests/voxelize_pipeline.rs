@@ -374,59 +374,77 @@ fn volume_converts_to_a_valid_asset_that_round_trips() {
 }
 
 /// `--normals auto` decides on a coarse bake (`toksvig::judge_normals`: level 0 of a bake
-/// at the size of level 2) instead of the full bake's level 2, which it stands in for:
-/// on a smooth solid (kept) and on thin double-sided leaves, beams and fur (dropped), at
-/// two sizes, the two coherences are within 0.1 and make the same decision. The fur tile
-/// is the closest to the threshold; judged at level 0 instead of 2 it would keep them.
-/// A one-level volume has no coarser level: it is judged on the bake itself.
+/// at the size of level 2) instead of the full bake's level 2, which it stands in for. On
+/// a smooth solid (kept), thin double-sided leaves and beams (dropped) and a fur tile
+/// (dropped at 64³, kept at 128³: the case nearest the threshold), each written as OBJ and
+/// imported as the CLI does, at two sizes and with 1 and 4 samples per column, the two
+/// coherences are within 0.07 and make the same decision. With one sample per coarse
+/// voxel (instead of as many per texel area as level 2 averages) the leafy tree at 64³
+/// `--supersample 1` read 0.21 against 0.09 here, and the 200k-triangle bench tree at 512³
+/// 0.87 against 0.73, which kept its normals. A one-level volume has no coarser level: it is
+/// judged on the bake itself.
 #[test]
 fn the_coarse_normals_judgement_agrees_with_the_full_bakes_level_2() {
-    use billow::procgen::{fur_tile, leafy_tree, torus};
+    use billow::import::{import, ImportOptions};
+    use billow::procgen::{fur_tile, leafy_tree, torus, write_obj};
     use billow::voxelize::toksvig::{judge_normals, keeps, NormalsJudgement};
     use billow::voxelize::voxelize_sparse;
+    let dir = tempfile::tempdir().unwrap();
     let unit = Aabb {
         min: Vec3::ZERO,
         max: Vec3::ONE,
     };
     let cases = [
-        ("torus", torus(1.0, 0.4, 48, 24), None, true),
-        ("leafy tree", leafy_tree(300, 6, 3), None, false),
-        ("truss", truss(10.0, 3.0, 40, 0.005), None, false),
-        ("fur tile", fur_tile(400, 1), Some(unit), false),
-    ];
-    for (name, scene, bounds, kept) in &cases {
-        for res in [32, 64] {
+        ("torus", torus(1.0, 0.4, 48, 24), None),
+        ("leafy tree", leafy_tree(300, 6, 3), None),
+        ("truss", truss(10.0, 3.0, 40, 0.005), None),
+        ("fur tile", fur_tile(400, 1), Some(unit)),
+    ]
+    .map(|(name, scene, bounds)| {
+        let path = dir.path().join(format!("{name}.obj"));
+        write_obj(&scene, &path).unwrap();
+        let scene = import(&path, &ImportOptions { strict: false })
+            .unwrap()
+            .scene;
+        (name, scene, bounds)
+    });
+    let mut fur = Vec::new();
+    for (name, scene, bounds) in &cases {
+        for (res, k) in [(64, 4), (64, 1), (128, 4)] {
             let opts = VoxelizeOptions {
                 resolution: Resolution::Longest(res),
+                supersample: k,
                 bounds: *bounds,
                 normals: true,
                 combine: CombineFn::Preset(Preset::Opaque),
                 ..Default::default()
             };
-            let NormalsJudgement::Coarse(k) = judge_normals(scene, &opts).unwrap() else {
-                panic!("{name} {res}: judged on the bake");
+            let NormalsJudgement::Coarse(c) = judge_normals(scene, &opts).unwrap() else {
+                panic!("{name} {res} K{k}: judged on the bake");
             };
             let full = voxelize_sparse(scene, &opts, &|_, _| {})
                 .unwrap()
                 .normal_coherence(2);
-            let (k, f) = (k.unwrap(), full.unwrap());
-            assert!(
-                (k - f).abs() <= 0.1,
-                "{name} {res}: coarse {k}, level 2 {f}"
-            );
-            assert_eq!(keeps(Some(k)), *kept, "{name} {res}: coarse {k}");
-            assert_eq!(keeps(Some(f)), *kept, "{name} {res}: level 2 {f}");
+            let (c, f) = (c.unwrap(), full.unwrap());
+            let at = format!("{name} {res} K{k}: coarse {c}, level 2 {f}");
+            assert!((c - f).abs() <= 0.07, "{at}");
+            assert_eq!(keeps(Some(c)), keeps(Some(f)), "{at}");
+            match *name {
+                "torus" => assert!(keeps(Some(c)), "{at}"),
+                "fur tile" => fur.push((res, keeps(Some(c)))),
+                _ => assert!(!keeps(Some(c)), "{at}"),
+            }
         }
     }
+    assert_eq!(fur, [(64, false), (64, false), (128, true)]);
     let one = VoxelizeOptions {
         resolution: Resolution::Longest(32),
         mip_levels: Some(1),
         normals: true,
         ..Default::default()
     };
-    let torus = &cases[0].1;
     assert_eq!(
-        judge_normals(torus, &one).unwrap(),
+        judge_normals(&cases[0].1, &one).unwrap(),
         NormalsJudgement::OnTheBake
     );
 }

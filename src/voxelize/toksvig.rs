@@ -103,12 +103,13 @@ pub fn keeps(coherence: Option<f32>) -> bool {
 /// `--normals auto`'s judgement without baking the normals at full resolution: the
 /// [`normal_coherence`] of level 0 of a bake, with normals, over the same box at the size
 /// of the bake's level [`AUTO_NORMALS_LEVEL`] (clamped to its last level), with the same
-/// samples per voxel and combine, one MIP level, no baked lighting (which changes colour,
-/// not alpha or normals). At 512³ that bake is 128³, 1/64 of the voxels.
+/// combine, one MIP level, no baked lighting (which changes colour, not alpha or normals),
+/// and as many samples per texel area as that level averages (K·2^level per axis, at most
+/// [`super::MAX_SUPERSAMPLE`]). At 512³ that bake is 128³, 1/64 of the voxels.
 ///
 /// Its coherence is not the full bake's level-2 value, which composites 4 level-0 slices
 /// per texel through two MIP steps; the coarse voxel composites its fragments per sample
-/// instead. On the meshes of docs/voxelize.md, "Normals", the two are within 0.07 and
+/// instead. On the meshes of docs/voxelize.md, "Normals", the two are within 0.05 and
 /// make the same decisions.
 pub fn judge_normals(
     scene: &crate::scene::Scene,
@@ -123,6 +124,9 @@ pub fn judge_normals(
     }
     let o = super::VoxelizeOptions {
         resolution: super::Resolution::Exact(coarse),
+        // The samples per texel area of the level judged (capped): one sample per coarse
+        // voxel would see one normal where level 2 averages 16 of the bake's samples.
+        supersample: (opts.supersample << level).min(super::MAX_SUPERSAMPLE),
         bounds: Some(grid.bounds()),
         align: 1,
         mip_levels: Some(1),
