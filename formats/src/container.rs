@@ -1,5 +1,6 @@
 //! The binary container: preamble, chunks, END. See `SPEC.md` for every byte.
 
+use std::borrow::Cow;
 use std::io::Write;
 use std::path::Path;
 
@@ -306,12 +307,13 @@ fn u64_at(b: &[u8], o: usize) -> u64 {
     u64::from_le_bytes(b[o..o + 8].try_into().expect("8 bytes"))
 }
 
-/// A chunk located by the parser; `data` borrows from the file.
+/// A chunk located by the parser; `data` borrows from the file's bytes in memory, or was
+/// read from the file ([`Source`]).
 pub(crate) struct RawChunk<'a> {
     pub tag: [u8; 4],
     pub elem: ElemType,
     pub offset: u64,
-    pub data: &'a [u8],
+    pub data: Cow<'a, [u8]>,
     pub crc_stored: u32,
     pub crc_computed: u32,
 }
@@ -325,12 +327,68 @@ pub(crate) struct Parsed<'a> {
     pub chunks: Vec<RawChunk<'a>>,
 }
 
+/// Where [`parse`] reads a file: its bytes in memory (borrowed), or an open file read a
+/// piece at a time ([`FileSource`]: the payloads are read straight into the chunks'
+/// buffers, so reading a file never holds it twice).
+pub(crate) trait Source {
+    /// The file's length in bytes.
+    fn len(&self) -> usize;
+    /// The `len` bytes at `off` (`off + len ≤ self.len()`, checked by the caller).
+    fn get(&self, off: usize, len: usize) -> Result<Cow<'_, [u8]>, FormatError>;
+}
+
+impl Source for [u8] {
+    fn len(&self) -> usize {
+        <[u8]>::len(self)
+    }
+    fn get(&self, off: usize, len: usize) -> Result<Cow<'_, [u8]>, FormatError> {
+        Ok(Cow::Borrowed(&self[off..off + len]))
+    }
+}
+
+/// A regular file of a known length ([`open_regular`]), read with positioned reads.
+pub(crate) struct FileSource<'p> {
+    file: std::fs::File,
+    len: usize,
+    path: &'p Path,
+}
+
+impl Source for FileSource<'_> {
+    fn len(&self) -> usize {
+        self.len
+    }
+    fn get(&self, off: usize, len: usize) -> Result<Cow<'_, [u8]>, FormatError> {
+        let mut buf = vec![0u8; len];
+        read_exact_at(&self.file, &mut buf, off as u64).map_err(|source| FormatError::Io {
+            path: self.path.to_path_buf(),
+            source,
+        })?;
+        Ok(Cow::Owned(buf))
+    }
+}
+
+#[cfg(unix)]
+fn read_exact_at(file: &std::fs::File, buf: &mut [u8], off: u64) -> std::io::Result<()> {
+    std::os::unix::fs::FileExt::read_exact_at(file, buf, off)
+}
+
+#[cfg(not(unix))]
+fn read_exact_at(file: &std::fs::File, buf: &mut [u8], off: u64) -> std::io::Result<()> {
+    use std::io::{Read, Seek, SeekFrom};
+    let mut f = file;
+    f.seek(SeekFrom::Start(off))?;
+    f.read_exact(buf)
+}
+
 /// Walk the file structure. With `strict`, a chunk checksum mismatch is an
 /// error; otherwise it is only recorded (for `inspect_bytes`). Every length is
 /// checked against the file size before it is used; nothing is allocated
-/// except the chunk list, whose length is bounded by `bytes.len() / 24`.
-pub(crate) fn parse(bytes: &[u8], strict: bool) -> Result<Parsed<'_>, FormatError> {
-    let n = bytes.len();
+/// except the chunk list, whose length is bounded by `bytes.len() / 24`, and, for a
+/// file, the payloads read (each once its length is known to fit the file).
+pub(crate) fn parse<S: Source + ?Sized>(src: &S, strict: bool) -> Result<Parsed<'_>, FormatError> {
+    let n = src.len();
+    let pre_bytes = src.get(0, n.min(PREAMBLE_LEN))?;
+    let bytes: &[u8] = &pre_bytes;
     let magic_len = n.min(MAGIC.len());
     if bytes[..magic_len] != MAGIC[..magic_len] {
         return Err(FormatError::BadMagic {
@@ -402,7 +460,8 @@ pub(crate) fn parse(bytes: &[u8], strict: bool) -> Result<Parsed<'_>, FormatErro
                 n - off
             )));
         }
-        let h = &bytes[off..off + CHUNK_HEADER_LEN];
+        let h_bytes = src.get(off, CHUNK_HEADER_LEN)?;
+        let h: &[u8] = &h_bytes;
         let tag: [u8; 4] = h[0..4].try_into().expect("4 bytes");
         let at = off as u64;
         let err = move |problem: String| {
@@ -431,8 +490,8 @@ pub(crate) fn parse(bytes: &[u8], strict: bool) -> Result<Parsed<'_>, FormatErro
                 pad8(len)
             ));
         }
-        let data = &bytes[payload_at..payload_at + len];
-        let crc_computed = crc(&[&h[..20], data]);
+        let data = src.get(payload_at, len)?;
+        let crc_computed = crc(&[&h[..20], &data]);
         if crc_stored != crc_computed && strict {
             return err(format!(
                 "checksum mismatch (stored 0x{crc_stored:08x}, computed 0x{crc_computed:08x})"
@@ -456,7 +515,11 @@ pub(crate) fn parse(bytes: &[u8], strict: bool) -> Result<Parsed<'_>, FormatErro
                 elem.size()
             ));
         }
-        if bytes[payload_at + len..end].iter().any(|&b| b != 0) {
+        if src
+            .get(payload_at + len, end - payload_at - len)?
+            .iter()
+            .any(|&b| b != 0)
+        {
             return err("padding bytes after the payload are not zero".into());
         }
         if (index == 0) != (tag == TAG_HEAD) {
@@ -497,7 +560,7 @@ pub(crate) fn parse(bytes: &[u8], strict: bool) -> Result<Parsed<'_>, FormatErro
 
 /// Parse the RON text of a HEAD chunk and check it against the preamble kind.
 pub(crate) fn decode_header(raw: &RawChunk<'_>, kind: AssetKind) -> Result<Header, FormatError> {
-    let text = std::str::from_utf8(raw.data).map_err(|e| {
+    let text = std::str::from_utf8(&raw.data).map_err(|e| {
         FormatError::Header(format!("HEAD at offset {} is not UTF-8: {e}", raw.offset))
     })?;
     let header = Header::from_ron(text)?;
@@ -515,16 +578,21 @@ pub(crate) fn decode_header(raw: &RawChunk<'_>, kind: AssetKind) -> Result<Heade
 /// Unknown chunks are kept in [`Container::chunks`]; skipping them is up to
 /// the typed layer.
 pub fn from_bytes(bytes: &[u8]) -> Result<Container, FormatError> {
-    let parsed = parse(bytes, true)?;
-    let (head, rest) = parsed.chunks.split_first().expect("parse guarantees HEAD");
-    let header = decode_header(head, parsed.kind)?;
-    let body = &rest[..rest.len() - 1]; // drop END
-    let chunks = body
-        .iter()
+    from_source(bytes)
+}
+
+/// [`from_bytes`] of a [`Source`]: a payload read from a file moves into its chunk.
+fn from_source<S: Source + ?Sized>(src: &S) -> Result<Container, FormatError> {
+    let parsed = parse(src, true)?;
+    let mut raw = parsed.chunks.into_iter();
+    let head = raw.next().expect("parse guarantees HEAD");
+    let header = decode_header(&head, parsed.kind)?;
+    let chunks = raw
+        .filter(|r| r.tag != TAG_END)
         .map(|r| Chunk {
             tag: r.tag,
             elem: r.elem,
-            data: r.data.to_vec(),
+            data: r.data.into_owned(),
         })
         .collect();
     Ok(Container { header, chunks })
@@ -591,7 +659,35 @@ pub const MAX_ASSET_BYTES: u64 = 16 << 30;
 /// device such as `/dev/zero`, checked before opening) of at most [`MAX_ASSET_BYTES`],
 /// with a reader bounded by that limit. Errors are [`FormatError::Io`].
 pub fn read_regular(path: &Path) -> Result<Vec<u8>, FormatError> {
-    use std::io::{Error, ErrorKind, Read};
+    use std::io::Read;
+    let (file, len) = open_regular(path)?;
+    let mut bytes = Vec::with_capacity(len as usize);
+    file.take(MAX_ASSET_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|source| FormatError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    if bytes.len() as u64 > MAX_ASSET_BYTES {
+        return Err(too_large(path, bytes.len() as u64));
+    }
+    Ok(bytes)
+}
+
+fn too_large(path: &Path, n: u64) -> FormatError {
+    FormatError::Io {
+        path: path.to_path_buf(),
+        source: std::io::Error::new(
+            std::io::ErrorKind::FileTooLarge,
+            format!("{n} bytes or more, over the asset size limit of {MAX_ASSET_BYTES} bytes"),
+        ),
+    }
+}
+
+/// The checks of [`read_regular`] (a regular file, checked before and after opening, of
+/// at most [`MAX_ASSET_BYTES`]): the open file and its length.
+fn open_regular(path: &Path) -> Result<(std::fs::File, u64), FormatError> {
+    use std::io::{Error, ErrorKind};
     let io = |source: Error| FormatError::Io {
         path: path.to_path_buf(),
         source,
@@ -600,12 +696,6 @@ pub fn read_regular(path: &Path) -> Result<Vec<u8>, FormatError> {
         io(Error::new(
             ErrorKind::InvalidInput,
             "not a regular file (a device, FIFO, socket or folder); billow reads regular files only",
-        ))
-    };
-    let too_large = |n: u64| {
-        io(Error::new(
-            ErrorKind::FileTooLarge,
-            format!("{n} bytes or more, over the asset size limit of {MAX_ASSET_BYTES} bytes"),
         ))
     };
     if !std::fs::metadata(path).map_err(io)?.is_file() {
@@ -617,20 +707,21 @@ pub fn read_regular(path: &Path) -> Result<Vec<u8>, FormatError> {
         return Err(not_regular());
     }
     if meta.len() > MAX_ASSET_BYTES {
-        return Err(too_large(meta.len()));
+        return Err(too_large(path, meta.len()));
     }
-    let mut bytes = Vec::with_capacity(meta.len() as usize);
-    file.take(MAX_ASSET_BYTES + 1)
-        .read_to_end(&mut bytes)
-        .map_err(io)?;
-    if bytes.len() as u64 > MAX_ASSET_BYTES {
-        return Err(too_large(bytes.len() as u64));
-    }
-    Ok(bytes)
+    Ok((file, meta.len()))
 }
 
-/// Read and decode an asset file. Errors carry the path: `"<path>: <problem>"`.
+/// Read and decode an asset file (the checks of [`read_regular`], then [`from_bytes`]'s).
+/// Each chunk's payload is read straight into its buffer, so the peak is the file's size
+/// once, not the file plus its decoded chunks. Errors carry the path: `"<path>:
+/// <problem>"`.
 pub fn read_file(path: &Path) -> Result<Container, FormatError> {
-    let bytes = read_regular(path)?;
-    from_bytes(&bytes).map_err(|e| e.in_file(path))
+    let (file, len) = open_regular(path)?;
+    let src = FileSource {
+        file,
+        len: len as usize,
+        path,
+    };
+    from_source(&src).map_err(|e| e.in_file(path))
 }

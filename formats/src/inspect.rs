@@ -75,7 +75,7 @@ pub fn inspect_bytes(bytes: &[u8]) -> Result<Report, FormatError> {
         kind: parsed.kind,
         file_len: bytes.len() as u64,
         header,
-        header_ron: String::from_utf8_lossy(head.data).into_owned(),
+        header_ron: String::from_utf8_lossy(&head.data).into_owned(),
         chunks,
     })
 }

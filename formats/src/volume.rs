@@ -541,14 +541,13 @@ impl VolumeAsset {
 
     /// [`VolumeAsset::read`] that also returns the BC7 blocks of a compressed file.
     pub fn read_with_blocks(path: &Path) -> Result<(Self, Option<VolumeBlocks>), FormatError> {
-        let bytes = crate::container::read_regular(path)?;
-        Self::from_bytes_with_blocks(&bytes).map_err(|e| e.in_file(path))
+        Self::from_container_with_blocks(crate::container::read_file(path)?)
+            .map_err(|e| e.in_file(path))
     }
 
-    /// Read a volume asset file. Errors carry the path.
+    /// Read a volume asset file (streamed, [`crate::read_file`]). Errors carry the path.
     pub fn read(path: &Path) -> Result<Self, FormatError> {
-        let bytes = crate::container::read_regular(path)?;
-        Self::from_bytes(&bytes).map_err(|e| e.in_file(path))
+        Self::from_container(crate::container::read_file(path)?).map_err(|e| e.in_file(path))
     }
 
     /// The bytes of [`VolumeAsset::to_bytes`] as a list of slices (their concatenation is

@@ -281,3 +281,39 @@ fn structural_rules() {
     c[5].2[0..4].copy_from_slice(&f32::NAN.to_le_bytes());
     check(&c, "non-finite");
 }
+
+/// Reading a file streams it ([`read_file`]: payloads read straight into their chunks,
+/// so the file is never held twice); it decides exactly as [`from_bytes`] on the file's
+/// bytes, with the same message after the path: every strict prefix, every byte flipped,
+/// and the intact file (the same container).
+#[test]
+fn reading_a_file_decides_as_decoding_its_bytes() {
+    let f = fixture_bytes();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("x.billow");
+    let check = |bytes: &[u8], what: &str| {
+        std::fs::write(&path, bytes).unwrap();
+        let (file, mem) = (read_file(&path), from_bytes(bytes));
+        match (file, mem) {
+            (Ok(a), Ok(b)) => assert!(a == b, "{what}: different containers"),
+            (Err(a), Err(b)) => {
+                let want = format!("{}: {b}", path.display());
+                assert_eq!(a.to_string(), want, "{what}");
+            }
+            (a, b) => panic!("{what}: file {:?}, bytes {:?}", a.is_ok(), b.is_ok()),
+        }
+        let typed = VolumeAsset::read(&path).map_err(|e| e.to_string());
+        let want = VolumeAsset::from_bytes(bytes).map_err(|e| format!("{}: {e}", path.display()));
+        assert!(typed == want, "{what}: {typed:?} against {want:?}");
+    };
+    check(&f, "intact");
+    for len in 0..f.len() {
+        check(&f[..len], &format!("prefix {len}"));
+    }
+    let mut g = f.clone();
+    for i in 0..f.len() {
+        g[i] = f[i] ^ 0x80;
+        check(&g, &format!("flip at {i}"));
+        g[i] = f[i];
+    }
+}

@@ -523,8 +523,7 @@ impl CloudAsset {
 
     /// [`CloudAsset::read`] that also returns the BC7 blocks of a compressed file.
     pub fn read_with_blocks(path: &Path) -> Result<(Self, Option<CloudBlocks>), CloudError> {
-        let bytes = crate::container::read_regular(path)?;
-        Self::from_bytes_with_blocks(&bytes).map_err(|e| match e {
+        Self::from_container_with_blocks(crate::container::read_file(path)?).map_err(|e| match e {
             CloudError::Format(f) => CloudError::Format(f.in_file(path)),
             CloudError::Invalid(m) => CloudError::Invalid(format!("{}: {m}", path.display())),
         })
@@ -532,8 +531,7 @@ impl CloudAsset {
 
     /// Read a cloud asset file.
     pub fn read(path: &Path) -> Result<Self, CloudError> {
-        let bytes = crate::container::read_regular(path)?;
-        Self::from_bytes(&bytes).map_err(|e| match e {
+        Self::from_container(crate::container::read_file(path)?).map_err(|e| match e {
             CloudError::Format(f) => CloudError::Format(f.in_file(path)),
             CloudError::Invalid(m) => CloudError::Invalid(format!("{}: {m}", path.display())),
         })
