@@ -22,7 +22,6 @@ use billow_format::{
 };
 use block_compression::{encode::compress_rgba8, BC7Settings, CompressionVariant};
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicU64, Ordering};
 
 /// What the bakers write texels as (`--compress`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -100,11 +99,6 @@ fn encode_tile(tile: &[u8; 64], kind: Kind) -> [u8; 16] {
 pub fn encode_bc7(texels: &[u8], dims: [u32; 3], omit: u8) -> Vec<u8> {
     encode_bc7_with(texels, dims, omit, false, false)
 }
-
-/// Blocks whose fast encoding left an empty texel non-zero and that the zero-texel repair
-/// ([`repair_zero_texels`]) re-encoded, since the process started: a count for
-/// docs/accuracy.md, never part of any output.
-pub static REPAIRED_BLOCKS: AtomicU64 = AtomicU64::new(0);
 
 /// [`encode_bc7`]; `opaque_fast`: encode tiles of alpha 255 with the opaque profile
 /// ([`Kind::Alpha`]); `keep_zero`: texels that are all zero bytes (empty space) decode to
@@ -198,22 +192,6 @@ fn encode_keep_zero(tile: &[u8; 64]) -> [u8; 16] {
     }
 }
 
-/// The exact-zero constraint: if a texel of `tile` that is all zero bytes does not decode
-/// from `block` to all zero bytes (BC7 interpolates, so the encoder leaves faint colour
-/// and alpha in the empty texels of a block that is partly full), `block` is replaced by
-/// [`zero_anchored_block`], which keeps every empty texel empty by construction. Returns
-/// whether it was replaced. (The slower profiles that do keep them zero cost 6× (`alpha
-/// very fast`) to 15× (`alpha basic`) the default's time for no measurable change of the
-/// rendered error: docs/accuracy.md.)
-pub fn repair_zero_texels(tile: &[u8; 64], block: &mut [u8; 16]) -> bool {
-    if !tile.chunks_exact(4).any(|t| t == [0; 4]) || keeps_zero(tile, block).is_some() {
-        return false;
-    }
-    *block = zero_anchored_block(tile);
-    REPAIRED_BLOCKS.fetch_add(1, Ordering::Relaxed);
-    true
-}
-
 /// A volume normal tile (unsigned bytes, w = 0x80 as every normal's unused w is 0): the
 /// kernel's "opaque ultra fast" block of its xyz (3 channels, mode 6: the same xyz error
 /// as "alpha ultra fast", about 3× faster), its alpha endpoints then set to 0x80's 7 bits,
@@ -261,7 +239,8 @@ fn keeps_value(tile: &[u8; 64], block: &[u8; 16], v: [u8; 4]) -> bool {
 }
 
 /// The squared error of `block` against `tile`, or `None` if an empty texel of `tile`
-/// does not decode to zero.
+/// does not decode to zero (the tests' check of [`zero_anchored_block`]).
+#[cfg(test)]
 fn keeps_zero(tile: &[u8; 64], block: &[u8; 16]) -> Option<u64> {
     let dec = decode_bc7_block(block);
     let mut sse = 0u64;
@@ -407,7 +386,7 @@ fn round_trip(
 
 /// Compresses one MIP chain of a volume texture (colour, and normals when present) and
 /// replaces its texels with the decoded blocks. Colour keeps its empty texels exactly
-/// empty (`keep_zero`, [`repair_zero_texels`]).
+/// empty (`keep_zero`, [`encode_keep_zero`]).
 fn compress_chain(
     dims: [u32; 3],
     levels: &mut [Vec<u8>],
@@ -591,11 +570,11 @@ mod tests {
                 assert!(s.iter().zip(d).all(|(a, b)| a.abs_diff(*b) <= 3), "{d:?}");
             }
         }
-        // A tile that leaks without the repair (found by a search over tiles of a few
+        // A tile that leaks under the kernel alone (found by a search over tiles of a few
         // bright opaque texels among empty ones): "alpha ultra fast" decodes its 13 empty
         // texels as (0, 8, 0, 0); the anchored block, which keeps them empty, is poor
         // (one line through zero cannot fit three hues) but is what the volume encoder
-        // takes (`encode_keep_zero`) and what the repair puts in the kernel's place.
+        // takes (`encode_keep_zero`).
         let mut tile = [0u8; 64];
         for (i, t) in [
             (4, [39, 66, 16, 255]),
@@ -612,9 +591,7 @@ mod tests {
         assert_eq!(leaks, 13, "the pattern leaks unrepaired: {leaked:?}");
         let anchored = keeps_zero(&tile, &zero_anchored_block(&tile)).unwrap();
         assert!(anchored > 64, "{anchored}");
-        let mut repaired = fast;
-        assert!(repair_zero_texels(&tile, &mut repaired));
-        assert_eq!(repaired, zero_anchored_block(&tile));
+        let anchored_block = zero_anchored_block(&tile);
         // The encoder with the constraint, on a level of that tile beside an empty one and
         // a full one: every empty texel of the level stays empty, the others stay close.
         let dims = [12u32, 4, 1];
@@ -644,8 +621,8 @@ mod tests {
         }
         assert_eq!(
             &blocks[16..32],
-            &repaired[..],
-            "the level's block is the repaired one"
+            &anchored_block[..],
+            "the level's block is the zero-anchored one"
         );
     }
 
@@ -716,7 +693,6 @@ mod tests {
         let a = VolumeAsset::read(std::path::Path::new(&p)).unwrap();
         let dims = a.level_dims(0);
         for keep in [false, true] {
-            let before = REPAIRED_BLOCKS.load(Ordering::Relaxed);
             let (mut sq, mut n, mut leaks, mut bytes) = (0f64, 0u64, 0u64, 0usize);
             for (i, l) in a.levels.iter().enumerate() {
                 let d = mip_dims(dims, i as u32);
@@ -736,9 +712,8 @@ mod tests {
                     }
                 }
             }
-            let rep = REPAIRED_BLOCKS.load(Ordering::Relaxed) - before;
             eprintln!(
-                "keep_zero={keep}: {bytes} bytes, leaking empty texels {leaks}, repaired blocks {rep}, RMSE over non-empty texel bytes {:.4}",
+                "keep_zero={keep}: {bytes} bytes, leaking empty texels {leaks}, RMSE over non-empty texel bytes {:.4}",
                 (sq / n as f64).sqrt()
             );
         }
