@@ -373,21 +373,24 @@ fn volume_converts_to_a_valid_asset_that_round_trips() {
     assert_eq!(back.levels, vol.levels);
 }
 
-/// `--normals auto` decides on a coarse bake (`toksvig::judge_normals`: level 0 of a bake
-/// at the size of level 2) instead of the full bake's level 2, which it stands in for. On
+/// `--normals auto` decides large grids on a coarse bake (`toksvig::judge_normals`, from
+/// 256³; `coarse_normal_coherence`: level 0 of a bake at the size of level 2) instead of
+/// the full bake's level 2, which it stands in for. On
 /// a smooth solid (kept), thin double-sided leaves and beams (dropped) and a fur tile
 /// (dropped at 64³, kept at 128³: the case nearest the threshold), each written as OBJ and
 /// imported as the CLI does, at two sizes and with 1 and 4 samples per column, the two
 /// coherences are within 0.07 and make the same decision. With one sample per coarse
 /// voxel (instead of as many per texel area as level 2 averages) the leafy tree at 64³
 /// `--supersample 1` read 0.21 against 0.09 here, and the 200k-triangle bench tree at 512³
-/// 0.87 against 0.73, which kept its normals. A one-level volume has no coarser level: it is
-/// judged on the bake itself.
+/// 0.87 against 0.73, which kept its normals. Smaller grids, and a one-level volume (no
+/// coarser level), are judged on the bake itself.
 #[test]
 fn the_coarse_normals_judgement_agrees_with_the_full_bakes_level_2() {
     use billow::import::{import, ImportOptions};
     use billow::procgen::{fur_tile, leafy_tree, torus, write_obj};
-    use billow::voxelize::toksvig::{judge_normals, keeps, NormalsJudgement};
+    use billow::voxelize::toksvig::{
+        coarse_normal_coherence, judge_normals, keeps, NormalsJudgement,
+    };
     use billow::voxelize::voxelize_sparse;
     let dir = tempfile::tempdir().unwrap();
     let unit = Aabb {
@@ -419,9 +422,7 @@ fn the_coarse_normals_judgement_agrees_with_the_full_bakes_level_2() {
                 combine: CombineFn::Preset(Preset::Opaque),
                 ..Default::default()
             };
-            let NormalsJudgement::Coarse(c) = judge_normals(scene, &opts).unwrap() else {
-                panic!("{name} {res} K{k}: judged on the bake");
-            };
+            let c = coarse_normal_coherence(scene, &opts, 2).unwrap();
             let full = voxelize_sparse(scene, &opts, &|_, _| {})
                 .unwrap()
                 .normal_coherence(2);
@@ -437,14 +438,19 @@ fn the_coarse_normals_judgement_agrees_with_the_full_bakes_level_2() {
         }
     }
     assert_eq!(fur, [(64, false), (64, false), (128, true)]);
-    let one = VoxelizeOptions {
-        resolution: Resolution::Longest(32),
-        mip_levels: Some(1),
+    let torus = &cases[0].1;
+    let at = |res: u32, mips: Option<u32>| VoxelizeOptions {
+        resolution: Resolution::Exact([res; 3]),
+        mip_levels: mips,
         normals: true,
         ..Default::default()
     };
-    assert_eq!(
-        judge_normals(&cases[0].1, &one).unwrap(),
-        NormalsJudgement::OnTheBake
-    );
+    let judged = |o: &VoxelizeOptions| judge_normals(torus, o).unwrap();
+    let coarse = coarse_normal_coherence(torus, &at(256, None), 2).unwrap();
+    assert_eq!(judged(&at(256, None)), NormalsJudgement::Coarse(coarse));
+    assert_eq!(judged(&at(255, None)), NormalsJudgement::OnTheBake);
+    assert_eq!(judged(&at(256, Some(1))), NormalsJudgement::OnTheBake);
+    // Two levels: judged at level 1.
+    let l1 = coarse_normal_coherence(torus, &at(256, Some(2)), 1).unwrap();
+    assert_eq!(judged(&at(256, Some(2))), NormalsJudgement::Coarse(l1));
 }
