@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """`billow voxelize` against its peers, side by side (see `make bench`, docs/benchmarks.md).
 
-For every resolution R, runs alternately (so all see the same machine load), RUNS times each:
+For every resolution R, runs alternately (so all see the same machine load; each round starts
+one program later, so none always follows the same one), RUNS times each:
 - the raster floor (`benches/raster_floor.c`: occupancy only, one sample per voxel column,
   nearest texel, one thread) on MESH at R;
 - OpenVDB's `vdb_tool -read MESH -mesh2ls dim=R` when `--vdb-tool` is given (a narrow-band
@@ -99,20 +100,26 @@ def main():
         for c in configs:
             m[c] = []
         info = {}
+        programs = ["floor"] + (["vdb"] if a.vdb_tool else []) + configs
         for i in range(a.runs):
-            w, rss, cpu, _ = run_measured([a.floor, a.mesh, str(r)])
-            m["floor"].append((w, rss, cpu, None))
-            if a.vdb_tool:
-                w, rss, cpu, _ = run_measured([a.vdb_tool, "-read", a.mesh, "-mesh2ls", f"dim={r}",
-                                               "-write", vdb_out])
-                m["vdb"].append((w, rss, cpu, None))
-                os.remove(vdb_out)
-            for c in configs:
-                w, rss, cpu, out = run_measured(billow_cmd(*c, r))
-                j = json.loads(out)
-                info[c] = j
-                m[c].append((w, rss, cpu, j))
-                os.remove(asset)
+            # Each round starts one program later: no program always follows the same one
+            # (the first billow run after OpenVDB's measured 0.15 s slower to import when
+            # it always came right after it).
+            for p in programs[i % len(programs):] + programs[:i % len(programs)]:
+                if p == "floor":
+                    w, rss, cpu, _ = run_measured([a.floor, a.mesh, str(r)])
+                    m["floor"].append((w, rss, cpu, None))
+                elif p == "vdb":
+                    w, rss, cpu, _ = run_measured([a.vdb_tool, "-read", a.mesh, "-mesh2ls",
+                                                   f"dim={r}", "-write", vdb_out])
+                    m["vdb"].append((w, rss, cpu, None))
+                    os.remove(vdb_out)
+                else:
+                    w, rss, cpu, out = run_measured(billow_cmd(*p, r))
+                    j = json.loads(out)
+                    info[p] = j
+                    m[p].append((w, rss, cpu, j))
+                    os.remove(asset)
             print(f"res {r} run {i + 1}/{a.runs}: " + ", ".join(
                 f"{k if isinstance(k, str) else '/'.join(k)} {v[-1][0]:.2f} s" for k, v in m.items() if v)
                   + f" (load {os.getloadavg()[0]:.2f})", file=sys.stderr)
@@ -171,7 +178,8 @@ def main():
         "  does), and with `--normals off --compress none` (what the defaults cost on top: the",
         "  normals' judgement, and their bake where kept; BC7 encoding)"
         + (f"; *{a.before_label}* is an older binary measured in the same alternating runs." if a.before else "."),
-        f"- Every program runs alternately, {a.runs} times per resolution; tables show **medians**",
+        f"- Every program runs alternately, {a.runs} times per resolution, each round starting one program"
+        " later (none always follows the same one); tables show **medians**",
         "  of whole-process wall time, and the ratios are medians of the per-round ratios.",
         f"- Machine: {platform.machine()}, {os.cpu_count()} logical CPUs, {platform.system()} {platform.release()};"
         f" measured {time.strftime('%Y-%m-%d %H:%M %Z')}. Load average (1/5/15 min) before:"
