@@ -70,13 +70,15 @@ demo: build
 	sh .ci/ensure-vulkan
 	$(BILLOW) view $(OUT)/demo.ron --headless --screenshot $(OUT)/oak_view.png --size 640x480 --background 0.55,0.62,0.72
 
-## The whole test suite: format, lint, unit + integration tests (also what .ci/run runs).
+## The whole test suite: format, lint, API docs without broken links, unit + integration
+## tests (also what .ci/run runs).
 ## The viewer's tests render on a Vulkan adapter: .ci/ensure-vulkan installs Mesa's
 ## lavapipe when none is found; without one the suite stops here with the reason
 ## (BILLOW_ALLOW_NO_GPU=1 runs it anyway, the GPU tests then say they skip).
 test:
 	$(CARGO) fmt --all -- --check
 	$(CARGO) clippy --locked --workspace --all-targets -- -D warnings
+	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --locked --workspace --no-deps
 	sh .ci/ensure-vulkan || [ -n "$$BILLOW_ALLOW_NO_GPU" ] || { \
 		echo "make test: no Vulkan adapter and none could be installed (see above); set BILLOW_ALLOW_NO_GPU=1 to skip the GPU tests" >&2; exit 1; }
 	NODEVICE_SELECT=1 $(CARGO) test --locked --workspace
@@ -84,6 +86,7 @@ test:
 lint:
 	$(CARGO) fmt --all -- --check
 	$(CARGO) clippy --locked --workspace --all-targets -- -D warnings
+	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --locked --workspace --no-deps
 
 fmt:
 	$(CARGO) fmt --all

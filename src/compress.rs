@@ -101,8 +101,8 @@ pub fn encode_bc7(texels: &[u8], dims: [u32; 3], omit: u8) -> Vec<u8> {
 }
 
 /// [`encode_bc7`]; `opaque_fast`: encode tiles of alpha 255 with the opaque profile
-/// ([`Kind::Alpha`]); `keep_zero`: texels that are all zero bytes (empty space) decode to
-/// all zero bytes exactly ([`encode_keep_zero`]; `opaque_fast` is then not used), so that
+/// (`Kind::Alpha`); `keep_zero`: texels that are all zero bytes (empty space) decode to
+/// all zero bytes exactly (`encode_keep_zero`; `opaque_fast` is then not used), so that
 /// a volume's empty space stays empty after compression and `billow emptyspace` can still
 /// prune it.
 pub fn encode_bc7_with(
@@ -121,7 +121,7 @@ pub fn encode_bc7_with(
 }
 
 /// The payload of a volume normal level in its unsigned form ([`snorm_to_unorm`]; tiles
-/// all 0x80 omitted), encoded by [`encode_normal_tile`].
+/// all 0x80 omitted), encoded by `encode_normal_tile`.
 pub fn encode_bc7_normals(texels: &[u8], dims: [u32; 3]) -> Vec<u8> {
     encode_level(texels, dims, 0x80, Kind::Normals)
 }

@@ -38,7 +38,7 @@ pub fn source_info(path: &Path) -> std::io::Result<SourceInfo> {
     })
 }
 
-/// The source of a mesh whose import also read `files` (its [`crate::scene::Scene::files`]),
+/// The source of a mesh whose import also read `files` (its [`crate::import::ImportReport::files`]),
 /// given `mesh`, the [`source_info`] of the mesh file itself. Without companion files this
 /// is `mesh` unchanged. Otherwise `sha256` is the SHA-256 of a manifest with one line per
 /// file, the mesh first, then the companions sorted by their path relative to the mesh's

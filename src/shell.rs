@@ -1,5 +1,5 @@
 //! Shells: volumetric textures on a surface (VB paper §4 "Volumetric textures",
-//! Figures 11–12; in the spirit of shell maps / [LDS02]).
+//! Figures 11–12; in the spirit of shell maps / \[LDS02\]).
 //!
 //! Every triangle of a surface is extruded along its vertex normals into one prism cell,
 //! and the prisms' texture coordinates come from the surface's UVs, so one small tileable

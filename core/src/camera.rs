@@ -2,7 +2,7 @@
 //!
 //! Conventions (shared by the reference ray tracer, the CPU slicer and the viewer):
 //! - world space is right-handed; view space is right-handed with the camera at the
-//!   origin looking down **−Z**, +Y up, +X right ([`Mat4::look_at_rh`]);
+//!   origin looking down **−Z**, +Y up, +X right (`glam::Mat4::look_at_rh`);
 //! - clip space is wgpu's: right-handed perspective, depth in `0..1` (near → 0, far → 1);
 //! - pixel `(x, y)` covers `[x, x+1) × [y, y+1)`, row 0 at the **top** of the image;
 //!   a sample at `(x + jx, y + jy)` with `jx, jy ∈ [0,1)` (centre = 0.5, 0.5);

@@ -1,7 +1,7 @@
 //! Stochastic billboard clouds (Lacewell, Edwards, Shirley & Thompson 2006).
 //!
 //! Pipeline: [`foliage`] split → [`lod`] chain of [`plane_search`] (Algorithm 1) levels →
-//! [`rect`] trimming → texel density → [`bake`] front/back textures → [`atlas`] packing and
+//! [`rect`] trimming → texel density → [`bake`](mod@bake) front/back textures → [`atlas`] packing and
 //! MIPs → a [`CloudAsset`]. A pure function of (scene, options): the seed drives one PCG32
 //! stream per level and every parallel step reduces in a fixed order, so the same inputs give
 //! the same bytes for any thread count.

@@ -4,7 +4,7 @@
 //! - [`Lighting::Unlit`] (the default): base colour × texture × vertex colour.
 //! - [`Lighting::Ao`]: the voxelizer's baked ambient occlusion (`--bake ao`,
 //!   `src/voxelize/ao.rs`) evaluated **at the hit point** instead of at the voxel centre:
-//!   the same estimator ([`AoRays::ambient_occlusion`]: same ray count, full-sphere
+//!   the same estimator (`AoRays::ambient_occlusion`: same ray count, full-sphere
 //!   stratified directions, `t_min` = half the asset's voxel diagonal, the asset's AO
 //!   distance and seed), with the random stream of the asset voxel that contains the hit
 //!   point ([`voxel_stream`]), so the reference and the bake draw the same directions and

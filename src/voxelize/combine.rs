@@ -20,11 +20,11 @@
 //! an f32 accumulator per level above 0 (4 floats per voxel; 5 for `opaque` and `min`), in
 //! the fixed order above, so results do not depend on scheduling; level 0 is combined at
 //! the end from the six directions' sparse level 0, one z plane at a time
-//! ([`combine_level0`], same order, same arithmetic), so it never needs a full-size
+//! (`combine_level0`, same order, same arithmetic), so it never needs a full-size
 //! accumulator; `voxelize --prune` folds level 0 too, direction by direction, into a
-//! sparse accumulator over the voxels seen ([`super::level0`]), and frees each stack. Expressions and custom functions need all six values at once, so the six
+//! sparse accumulator over the voxels seen (`super::level0`), and frees each stack. Expressions and custom functions need all six values at once, so the six
 //! pyramids are kept, brick-sparse in f16 (8 bytes per voxel per direction), and combined
-//! brick by brick ([`combine_level_bricks`]).
+//! brick by brick (`combine_level_bricks`).
 
 use std::fmt;
 use std::str::FromStr;

@@ -2,19 +2,19 @@
 //! §3.1–3.2, Figure 3).
 //!
 //! Pipeline, one direction at a time (`+X, −X, +Y, −Y, +Z, −Z`):
-//! 1. [`slices`]: rasterize the scene into that direction's stack of slices (level 0),
+//! 1. `slices`: rasterize the scene into that direction's stack of slices (level 0),
 //!    kept **sparse** (the non-empty voxels of every image row); with [`Bake::Ao`],
 //!    multiply its colour by the voxels' ambient occlusion (`ao`). When many triangles
 //!    are double-sided, the two directions of an axis are rasterized in one pass (each
-//!    triangle covered and shaded once for both, [`slices::passes`]; same result);
+//!    triangle covered and shaded once for both, `slices::passes`; same result);
 //! 2. [`mip`]: build that direction's MIP pyramid (composite along the view axis, average
 //!    across), level 1 straight from the sparse level 0; every level above 0 is
-//!    brick-sparse ([`bricks`]: 8³ bricks, only those near non-empty voxels allocated);
+//!    brick-sparse (`bricks`: 8³ bricks, only those near non-empty voxels allocated);
 //! 3. [`combine`]: fold every coarser level into the combined volume as it is built
 //!    (streamed for the presets; expressions and custom functions keep the six pyramids in
 //!    f16 and combine at the end); with a preset, level 0 is combined at the end from the
 //!    six sparse stacks, one z plane at a time, or, for [`voxelize_sparse`] (`--prune`),
-//!    folded direction by direction into one sparse accumulator ([`level0`]) so that each
+//!    folded direction by direction into one sparse accumulator (`level0`) so that each
 //!    stack is freed once its pyramid is built; normals, when asked for, are filtered with
 //!    [`toksvig`] and summed the same way;
 //! 4. [`quantize`]: RGBA8 `SrgbPremultiplied`, normals snorm8.
@@ -493,7 +493,7 @@ fn voxelize_as(
     let mut baker = ao_baker(scene, &shader, &grid, opts);
     times.bake += t.elapsed().as_secs_f64();
     let k = opts.supersample;
-    /// The directions of `axis` in `sides` (see [`slices::passes`]), + first.
+    /// The directions of `axis` in `sides` (see `slices::passes`), + first.
     fn raster(
         bufs: &mut slices::SetupBufs,
         ctx: (&Scene, &shade::Shader, &GridSpec, u32, bool),

@@ -79,9 +79,9 @@ impl SparseVolume {
     }
 }
 
-/// [`voxelize`] whose levels stay brick-sparse ([`SparseVolume`]): no level is ever dense.
+/// [`voxelize()`](super::voxelize()) whose levels stay brick-sparse ([`SparseVolume`]): no level is ever dense.
 /// Needs a preset combine ([`VoxelizeError::InvalidOption`] otherwise). The levels hold
-/// exactly the bytes of [`voxelize`]'s (zeros where no brick is).
+/// exactly the bytes of [`voxelize()`](super::voxelize())'s (zeros where no brick is).
 pub fn voxelize_sparse(
     scene: &Scene,
     opts: &VoxelizeOptions,

@@ -108,7 +108,7 @@ impl Renderer {
     }
 
     /// Per cloud: its bounding sphere (centre placed by its first instance, radius), level-change
-    /// distances and transition fraction (what [`select_level`] is given), for tools that
+    /// distances and transition fraction (what [`select_level`](crate::cloud_pass::select_level) is given), for tools that
     /// sweep the LOD switches.
     pub fn cloud_lod_setup(&self) -> Vec<(Vec3, f32, Vec<f32>, f32)> {
         self.clouds
