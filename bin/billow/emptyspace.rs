@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use billow::compress::{compress_volume, Compression};
+use billow::compress::{encode_volume, Compression};
 use billow::emptyspace::{prune, EmptySpaceOptions, EmptySpaceStats, DEFAULT_CELL_COST};
 use billow_format::{read_file, AssetKind, VolumeAsset};
 use serde::Serialize;
@@ -121,7 +121,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let blocks = compress.then(|| {
         let a = &mut pruned.asset;
         a.header.set_compress("bc7");
-        compress_volume(a)
+        encode_volume(a)
     });
     if blocks.is_none() {
         pruned

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use billow::compress::{compress_volume, Compression};
+use billow::compress::{encode_volume, Compression};
 use billow::import::{import, ImportOptions, Imported};
 use billow::shell::{shell, shell_asset, with_surface_normals};
 use billow_format::VolumeAsset;
@@ -136,7 +136,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             asset.header.set_compress("bc7");
             Some(match volume_blocks.filter(|_| !args.surface_normals) {
                 Some(b) => b,
-                None => compress_volume(&mut asset),
+                None => encode_volume(&asset),
             })
         }
     };

@@ -5,7 +5,7 @@
 use std::collections::BTreeMap;
 use std::time::Instant;
 
-use billow::compress::{compress_volume, Compression};
+use billow::compress::{compress_volume, encode_volume, Compression};
 use billow::emptyspace::{prune, prune_sparse, EmptySpaceOptions, EmptySpaceStats};
 use billow::presets::target::{search, Candidate, Judge, SearchError, TargetOptions};
 use billow::presets::{resolve_volume, Preset, VolumeFlags, VolumeSettings};
@@ -24,6 +24,8 @@ use crate::Ctx;
 
 /// One bake, compressed as asked: what is written and what the summary reports.
 pub(crate) struct Baked {
+    /// With BC7, its texels are the blocks' decoding only when [`bake_once`] was asked for
+    /// it (`decoded`); otherwise they are the bake's own, and only `blocks` is written.
     pub(crate) asset: billow_format::VolumeAsset,
     pub(crate) blocks: Option<billow_format::VolumeBlocks>,
     pub(crate) stats: billow::voxelize::VoxelizeStats,
@@ -38,8 +40,11 @@ pub(crate) struct Baked {
     pub(crate) notes: Vec<String>,
 }
 
-/// Bakes with `opts` (dense or `--prune`d) and compresses as `compression` says; the asset
-/// in memory is then what a reader of the file gets.
+/// Bakes with `opts` (dense or `--prune`d) and compresses as `compression` says. With
+/// `decoded`, the asset in memory is then what a reader of the file gets (BC7 blocks
+/// decoded back: for `--target-error`'s judge and `--slices`); without, a BC7 bake's texels
+/// stay the bake's own, which nothing after the write reads.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn bake_once(
     scene: &billow::scene::Scene,
     opts: &mut VoxelizeOptions,
@@ -48,6 +53,7 @@ pub(crate) fn bake_once(
     ctx: &Ctx,
     input: &str,
     source: billow_format::SourceInfo,
+    decoded: bool,
 ) -> Result<Baked, CliError> {
     let bar = Monotone::new(progress(ctx, progress::LEN, "voxelize"));
     let report = |stage: Stage, f: f32| {
@@ -105,7 +111,11 @@ pub(crate) fn bake_once(
     let compress_start = Instant::now();
     let blocks = (compression == Compression::Bc).then(|| {
         asset.header.set_compress("bc7");
-        compress_volume(&mut asset)
+        if decoded {
+            compress_volume(&mut asset)
+        } else {
+            encode_volume(&asset)
+        }
     });
     Ok(Baked {
         asset,
@@ -228,7 +238,17 @@ pub(crate) fn bake_to_target(
         o.align = args
             .align
             .unwrap_or_else(|| default_align(&o.resolution, &args.bounds));
-        let baked = bake_once(scene, &mut o, args, compression, ctx, input, source.clone())?;
+        // The judge renders what a reader of the file gets.
+        let baked = bake_once(
+            scene,
+            &mut o,
+            args,
+            compression,
+            ctx,
+            input,
+            source.clone(),
+            true,
+        )?;
         let error = judge
             .volume_error(&baked.asset)
             .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;
