@@ -403,17 +403,19 @@ fn encode_chain(dims: [u32; 3], levels: &[Vec<u8>], normals: Option<&Vec<Vec<u8>
     BandBlocks { colour, normals }
 }
 
-/// Replaces one MIP chain's texels with the decoding of its `blocks` ([`encode_chain`]'s).
+/// Replaces one MIP chain's texels with the decoding of its blocks ([`encode_chain`]'s:
+/// `colour`, and `normal_blocks` when present).
 fn decode_chain(
     dims: [u32; 3],
-    blocks: &BandBlocks,
+    colour: &[Vec<u8>],
+    normal_blocks: Option<&Vec<Vec<u8>>>,
     levels: &mut [Vec<u8>],
     normals: Option<&mut Vec<Vec<u8>>>,
 ) {
-    for (i, (l, b)) in levels.iter_mut().zip(&blocks.colour).enumerate() {
+    for (i, (l, b)) in levels.iter_mut().zip(colour).enumerate() {
         *l = decode_bc7(b, mip_dims(dims, i as u32), 0);
     }
-    if let (Some(ls), Some(bs)) = (normals, blocks.normals.as_ref()) {
+    if let (Some(ls), Some(bs)) = (normals, normal_blocks) {
         for (i, (l, b)) in ls.iter_mut().zip(bs).enumerate() {
             let mut dec = decode_bc7(b, mip_dims(dims, i as u32), 0x80);
             unorm_to_snorm_in_place(&mut dec);
@@ -447,19 +449,19 @@ pub fn encode_volume(asset: &VolumeAsset) -> VolumeBlocks {
 pub fn compress_volume(asset: &mut VolumeAsset) -> VolumeBlocks {
     let blocks = encode_volume(asset);
     let dims = asset.level_dims(0);
-    let base = BandBlocks {
-        colour: blocks.colour,
-        normals: blocks.normals,
-    };
-    decode_chain(dims, &base, &mut asset.levels, asset.normals.as_mut());
+    let (levels, normals) = (&mut asset.levels, asset.normals.as_mut());
+    decode_chain(
+        dims,
+        &blocks.colour,
+        blocks.normals.as_ref(),
+        levels,
+        normals,
+    );
     for (band, b) in asset.bands.iter_mut().zip(&blocks.bands) {
-        decode_chain(band.dims, b, &mut band.levels, band.normals.as_mut());
+        let (levels, normals) = (&mut band.levels, band.normals.as_mut());
+        decode_chain(band.dims, &b.colour, b.normals.as_ref(), levels, normals);
     }
-    VolumeBlocks {
-        colour: base.colour,
-        normals: base.normals,
-        bands: blocks.bands,
-    }
+    blocks
 }
 
 /// Compresses every atlas level, atlas normal map and mesh texture of `asset` and replaces

@@ -558,17 +558,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
 
     let (baked, target_summary) = match &target {
         None => (
-            bake_once(
-                &scene,
-                &mut opts,
-                &args,
-                compression,
-                ctx,
-                &input,
-                source,
-                // --slices writes the texels a reader gets.
-                args.slices.is_some(),
-            )?,
+            bake_once(&scene, &mut opts, &args, compression, ctx, &input, source)?,
             None,
         ),
         Some(t) => {

@@ -24,8 +24,9 @@ use crate::Ctx;
 
 /// One bake, compressed as asked: what is written and what the summary reports.
 pub(crate) struct Baked {
-    /// With BC7, its texels are the blocks' decoding only when [`bake_once`] was asked for
-    /// it (`decoded`); otherwise they are the bake's own, and only `blocks` is written.
+    /// With BC7, its texels are the blocks' decoding only where something reads them after
+    /// the write (`--target-error`'s judge, `--slices`); otherwise they are the bake's own,
+    /// and only `blocks` is written.
     pub(crate) asset: billow_format::VolumeAsset,
     pub(crate) blocks: Option<billow_format::VolumeBlocks>,
     pub(crate) stats: billow::voxelize::VoxelizeStats,
@@ -41,10 +42,9 @@ pub(crate) struct Baked {
 }
 
 /// Bakes with `opts` (dense or `--prune`d) and compresses as `compression` says. With
-/// `decoded`, the asset in memory is then what a reader of the file gets (BC7 blocks
-/// decoded back: for `--target-error`'s judge and `--slices`); without, a BC7 bake's texels
-/// stay the bake's own, which nothing after the write reads.
-#[allow(clippy::too_many_arguments)]
+/// `--target-error` (whose judge renders the asset) or `--slices`, the asset in memory is
+/// then what a reader of the file gets (BC7 blocks decoded back); otherwise a BC7 bake's
+/// texels stay the bake's own, which nothing after the write reads.
 pub(crate) fn bake_once(
     scene: &billow::scene::Scene,
     opts: &mut VoxelizeOptions,
@@ -53,7 +53,6 @@ pub(crate) fn bake_once(
     ctx: &Ctx,
     input: &str,
     source: billow_format::SourceInfo,
-    decoded: bool,
 ) -> Result<Baked, CliError> {
     let bar = Monotone::new(progress(ctx, progress::LEN, "voxelize"));
     let report = |stage: Stage, f: f32| {
@@ -111,7 +110,7 @@ pub(crate) fn bake_once(
     let compress_start = Instant::now();
     let blocks = (compression == Compression::Bc).then(|| {
         asset.header.set_compress("bc7");
-        if decoded {
+        if args.target_error.is_some() || args.slices.is_some() {
             compress_volume(&mut asset)
         } else {
             encode_volume(&asset)
@@ -238,17 +237,7 @@ pub(crate) fn bake_to_target(
         o.align = args
             .align
             .unwrap_or_else(|| default_align(&o.resolution, &args.bounds));
-        // The judge renders what a reader of the file gets.
-        let baked = bake_once(
-            scene,
-            &mut o,
-            args,
-            compression,
-            ctx,
-            input,
-            source.clone(),
-            true,
-        )?;
+        let baked = bake_once(scene, &mut o, args, compression, ctx, input, source.clone())?;
         let error = judge
             .volume_error(&baked.asset)
             .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;

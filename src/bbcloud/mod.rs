@@ -1,10 +1,10 @@
 //! Stochastic billboard clouds (Lacewell, Edwards, Shirley & Thompson 2006).
 //!
 //! Pipeline: [`foliage`] split → [`lod`] chain of [`plane_search`] (Algorithm 1) levels →
-//! [`rect`] trimming → texel density → [`bake`](mod@bake) front/back textures → [`atlas`] packing and
-//! MIPs → a [`CloudAsset`]. A pure function of (scene, options): the seed drives one PCG32
-//! stream per level and every parallel step reduces in a fixed order, so the same inputs give
-//! the same bytes for any thread count.
+//! [`rect`] trimming → texel density → [`bake`](mod@bake) front/back textures → [`atlas`]
+//! packing and MIPs → a [`CloudAsset`]. A pure function of (scene, options): the seed
+//! drives one PCG32 stream per level and every parallel step reduces in a fixed order, so
+//! the same inputs give the same bytes for any thread count.
 //!
 //! Atlas layout and MIPs: every atlas stores `mip_levels` (M) MIP levels and no more; each
 //! billboard side's allocation is aligned to `2^(M−1)` texels with a gutter of at least

@@ -2,7 +2,8 @@
 //! ground truth every asset is measured against.
 //!
 //! - Colour = `base_color_factor × texture(uv) × vertex colour` (all linear, straight
-//!   alpha; texture sampled bilinearly with [`crate::scene::Texture::sample_bilinear`]), unlit by default;
+//!   alpha; texture sampled bilinearly with [`crate::scene::Texture::sample_bilinear`]),
+//!   unlit by default;
 //!   [`ReferenceRenderer::with_lighting`] multiplies it by the lighting an asset was baked
 //!   with (baked AO at the hit point, or ambient + diffuse; [`super::lighting`]).
 //! - Alpha modes: `Opaque` stops the ray (alpha forced to 1); `Mask` stops it where

@@ -79,7 +79,8 @@ impl SparseVolume {
     }
 }
 
-/// [`voxelize()`](super::voxelize()) whose levels stay brick-sparse ([`SparseVolume`]): no level is ever dense.
+/// [`voxelize()`](super::voxelize()) whose levels stay brick-sparse ([`SparseVolume`]): no
+/// level is ever dense.
 /// Needs a preset combine ([`VoxelizeError::InvalidOption`] otherwise). The levels hold
 /// exactly the bytes of [`voxelize()`](super::voxelize())'s (zeros where no brick is).
 pub fn voxelize_sparse(
