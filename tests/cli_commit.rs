@@ -191,3 +191,99 @@ fn killed_bakes_leave_all_old_or_all_new_outputs() {
     want.sort();
     assert_eq!(temps(d), want, "the next run removes the stale temporaries");
 }
+
+/// SIGINT, SIGTERM and SIGHUP while the outputs are staged (every byte written, nothing
+/// renamed: `BILLOW_TEST_COMMIT_DELAY_MS` holds the run there) remove every temporary and
+/// the folder the run created, leave the old outputs as they were, and end the process by
+/// that signal. Only `kill -9` may leave a temporary (the test above).
+#[test]
+fn interrupted_runs_leave_no_temporary() {
+    use std::os::unix::process::ExitStatusExt;
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let mesh = d.join("box.obj");
+    std::fs::write(
+        &mesh,
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n\
+         f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n",
+    )
+    .unwrap();
+    for (name, sig) in [("SIGINT", 2), ("SIGTERM", 15), ("SIGHUP", 1)] {
+        std::fs::write(d.join("v.billow"), b"old").unwrap();
+        let mut c = Command::new(bin())
+            .args([
+                "voxelize",
+                "box.obj",
+                "-o",
+                "v.billow",
+                "--res",
+                "16",
+                "--slices",
+                "new/slices",
+                "-q",
+            ])
+            .current_dir(d)
+            .env("BILLOW_TEST_COMMIT_DELAY_MS", "20000")
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        let start = Instant::now();
+        let slices = d.join("new/slices");
+        while temps(d).is_empty() || !slices.is_dir() || temps(&slices).is_empty() {
+            assert!(
+                c.try_wait().unwrap().is_none(),
+                "{name}: the run ended before staging"
+            );
+            assert!(
+                start.elapsed() < Duration::from_secs(60),
+                "{name}: no temporary"
+            );
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        // The remaining slices are staged in milliseconds; the commit waits 20 s.
+        std::thread::sleep(Duration::from_millis(500));
+        let st = Command::new("kill")
+            .args([format!("-{sig}"), c.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(st.success());
+        let status = c.wait().unwrap();
+        assert_eq!(status.signal(), Some(sig), "{name}: {status:?}");
+        assert_eq!(temps(d), Vec::<String>::new(), "{name}: temporaries left");
+        assert!(
+            !d.join("new").exists(),
+            "{name}: the created folder is left"
+        );
+        assert_eq!(std::fs::read(d.join("v.billow")).unwrap(), b"old", "{name}");
+    }
+}
+
+/// An output folder that takes no new file is refused before the work, also with
+/// `--target-error`, whose search would bake every candidate first (exit 7, no trial).
+/// `/proc/self` refuses new files even to root, who ignores permission bits.
+#[test]
+fn unwritable_output_folder_is_refused_before_the_bake() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let oak = repo().join("fixtures/oak");
+    let mesh = oak.join("eztree_oak_medium.gltf");
+    let mesh = mesh.to_str().unwrap();
+    for extra in [&[][..], &["--target-error", "0.05"][..]] {
+        let mut args = vec!["voxelize", mesh, "-o", "/proc/self/v.billow"];
+        args.extend_from_slice(extra);
+        let r = run(&args, d);
+        assert_eq!(r.code, Some(7), "{args:?}: {}", r.stderr);
+        let line = r.error_line().unwrap();
+        assert!(
+            line.contains("/proc/self") && line.contains("cannot create a file"),
+            "{line}"
+        );
+        assert!(
+            !r.stderr.contains("RMSE"),
+            "baked before refusing: {}",
+            r.stderr
+        );
+    }
+}

@@ -99,22 +99,62 @@ fn writable_destination(flag: &str, out: &Path) -> Result<(), CliError> {
             dir.display()
         )));
     }
-    Ok(())
+    probe_writable(dir).map_err(|e| {
+        unwritable(format!(
+            "cannot create a file in directory {}: {e}",
+            dir.display()
+        ))
+    })
 }
+
+/// Creates and removes a hidden file in `dir` (named like the staging temporaries, so a
+/// kill in between leaves a file the next run sweeps): a read-only folder, a full disk's
+/// quota or missing permissions are found before the work, not after it.
+fn probe_writable(dir: &Path) -> std::io::Result<()> {
+    crate::signals::watch(dir);
+    let probe = dir.join(format!(
+        ".probe.{}-{}.billow.tmp",
+        std::process::id(),
+        PROBES.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+    ));
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)?;
+    std::fs::remove_file(&probe)
+}
+
+static PROBES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 
 /// Refuses, before any work, a folder output (`--slices DIR`, `--atlas DIR`, ...) whose
 /// path is an existing file; a missing folder is created when the output is written.
 pub fn refuse_file_as_folder(flag: &str, dir: &Path) -> Result<(), CliError> {
-    if dir.exists() && !dir.is_dir() {
-        return Err(CliError::new(
+    let unwritable = |why: String| {
+        CliError::new(
             Code::OutputIo,
             format!(
-                "cannot write output: {flag} {}: is a file, not a directory (nothing was written)",
+                "cannot write output: {flag} {}: {why} (nothing was written)",
                 dir.display()
             ),
-        ));
+        )
+    };
+    if dir.exists() && !dir.is_dir() {
+        return Err(unwritable("is a file, not a directory".into()));
     }
-    Ok(())
+    // The folder, or the nearest existing one it would be created in, takes new files.
+    let mut existing = dir;
+    while !existing.is_dir() {
+        existing = match existing.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+    }
+    probe_writable(existing).map_err(|e| {
+        unwritable(format!(
+            "cannot create a file in directory {}: {e}",
+            existing.display()
+        ))
+    })
 }
 
 /// [`refuse_clobbering`] for the files an import of `mesh` read beside it (its
@@ -175,5 +215,65 @@ fn folder_of(p: &Path) -> &Path {
     match p.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
+    }
+}
+
+/// The encodings an image output (`compare --diff`, `view --screenshot`) takes, chosen by
+/// the file's extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageOut {
+    Png,
+    /// Baseline JPEG, quality 92; alpha composited over black (a premultiplied image's
+    /// colour as it is).
+    Jpeg,
+}
+
+/// The encoding `flag`'s `path` asks for by its extension (`.png`, `.jpg`, `.jpeg`, any
+/// case); anything else is a usage error (exit 2), found before any work.
+pub fn image_out(flag: &str, path: &Path) -> Result<ImageOut, CliError> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("png") => Ok(ImageOut::Png),
+        Some("jpg" | "jpeg") => Ok(ImageOut::Jpeg),
+        other => Err(CliError::new(
+            Code::Usage,
+            format!(
+                "{flag} {}: {}; name a .png or .jpg file",
+                path.display(),
+                match other {
+                    Some(e) => format!("billow does not write .{e} images"),
+                    None => "the file name has no extension".into(),
+                }
+            ),
+        )),
+    }
+}
+
+/// `png` (the bytes billow's image writers make) in the encoding `path` asks for.
+pub fn encode_image(kind: ImageOut, png: Vec<u8>, path: &Path) -> Result<Vec<u8>, CliError> {
+    match kind {
+        ImageOut::Png => Ok(png),
+        ImageOut::Jpeg => {
+            let internal = |e: image::ImageError| {
+                CliError::new(Code::Internal, format!("{}: {e}", path.display()))
+            };
+            let rgba = image::load_from_memory_with_format(&png, image::ImageFormat::Png)
+                .map_err(internal)?
+                .to_rgba8();
+            let rgb = image::RgbImage::from_fn(rgba.width(), rgba.height(), |x, y| {
+                let p = rgba.get_pixel(x, y).0;
+                let a = u32::from(p[3]);
+                let over_black = |c: u8| ((u32::from(c) * a + 127) / 255) as u8;
+                image::Rgb([over_black(p[0]), over_black(p[1]), over_black(p[2])])
+            });
+            let mut out = Vec::new();
+            image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, 92)
+                .encode_image(&rgb)
+                .map_err(internal)?;
+            Ok(out)
+        }
     }
 }

@@ -124,6 +124,9 @@ impl Staged {
             d = p.parent();
         }
         std::fs::create_dir_all(dir)?;
+        for d in missing.iter().rev() {
+            crate::signals::watch_created(d);
+        }
         // Innermost first, so they can be removed in order.
         self.dirs.extend(missing);
         Ok(())
@@ -157,6 +160,7 @@ impl Staged {
         write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
     ) -> std::io::Result<()> {
         self.sweep(dest);
+        crate::signals::watch(folder(dest));
         let n = COUNTER.fetch_add(1, Ordering::Relaxed);
         let tmp = folder(dest).join(format!(
             ".{}.{}-{n}{SUFFIX}",
@@ -176,6 +180,14 @@ impl Staged {
     /// that was replaced stays replaced: a rename cannot be undone), and the rest are
     /// cleaned up by `Drop`.
     pub fn commit(mut self) -> Result<(), (PathBuf, std::io::Error)> {
+        // For tests of interruption: a pause with every output staged, before any rename
+        // (`BILLOW_TEST_COMMIT_DELAY_MS`; not for users, documented in docs/cli.md).
+        if let Some(ms) = std::env::var("BILLOW_TEST_COMMIT_DELAY_MS")
+            .ok()
+            .and_then(|v| v.parse::<u64>().ok())
+        {
+            std::thread::sleep(std::time::Duration::from_millis(ms));
+        }
         // Stable: the others keep their staging order.
         let primary = self.primary.clone();
         self.files.sort_by_key(|(_, d, _)| *d == primary);
