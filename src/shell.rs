@@ -74,7 +74,7 @@ pub enum ShellError {
     InvalidHeight(f32),
     #[error("shell UV scale must be positive and finite on both axes, got ({}, {})", .0.x, .0.y)]
     InvalidUvScale(Vec2),
-    #[error("the surface has no triangles to build a shell on")]
+    #[error("nothing to bake: the surface has no triangles to build a shell on")]
     EmptySurface,
     #[error(
         "no usable triangle in the surface: all {skipped} are degenerate (zero area or non-finite)"

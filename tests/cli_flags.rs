@@ -219,11 +219,7 @@ fn case(command: &str, flag: &str) -> Option<Case> {
         ("view", "frames") => both("abc", "0"),
         ("view", "background") => both("a", "2,0,0"),
 
-        ("emptyspace", "threshold") => Values {
-            unparsable: Some("256"), // a byte
-            out_of_range: None,      // every byte is a threshold
-            extra: &[],
-        },
+        ("emptyspace", "threshold") => both("abc", "256"), // a byte
         ("emptyspace", "min-box") | ("emptyspace", "max-tiers") => Values {
             unparsable: Some("abc"),
             out_of_range: None, // every u32 is accepted (clamped to the volume)

@@ -389,7 +389,7 @@ fn help_gives_ranges_and_keys() {
         ("--res", "1–2048"),
         ("--supersample", "1–8"),
         ("--mips", "1–"),
-        ("--margin", "0–64"),
+        ("--margin", "0–16"),
         ("--align", "1–2048"),
         ("--ao-rays", "1–4096"),
         ("--ao-distance", "> 0"),

@@ -359,7 +359,7 @@ fn huge_resolution_is_refused_before_allocating() {
     };
     assert!(matches!(
         voxelize(&scene, &opts, &|_, _| {}),
-        Err(VoxelizeError::InvalidOption(_))
+        Err(VoxelizeError::InvalidOption { .. })
     ));
     let empty = SceneBuilder::new().finish();
     assert!(matches!(

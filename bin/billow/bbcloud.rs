@@ -20,7 +20,7 @@ use glam::Vec3;
 use serde::Serialize;
 
 use crate::depfile;
-use crate::exit::{usage, CliError, Code};
+use crate::exit::{bbcloud_error, usage, CliError, Code};
 use crate::output::{
     print_json, progress, refuse_clobbering, refuse_clobbering_read, refuse_file_as_folder, warn,
 };
@@ -501,7 +501,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         let mut targets = vec![args.output.as_path()];
         targets.extend(args.gltf.as_deref());
         targets.extend(atlas_paths.iter().map(PathBuf::as_path));
-        let text = depfile::render(&targets, &args.input, &report.files)?;
+        let text = depfile::render(&targets, &args.input, &report.files, &[])?;
         stage.stage(d, text.as_bytes()).map_err(|e| out_err(d, e))?;
     }
     stage.commit_or_fail()?;
@@ -589,8 +589,7 @@ fn bake_once(
 ) -> Result<Cloud, CliError> {
     // What the bake will cost, before any heavy work: refused when the atlases would be
     // too large, a warning with the expected time when the plane search will be long.
-    let cost = estimate(scene, opts)
-        .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;
+    let cost = estimate(scene, opts).map_err(|e| bbcloud_error(input, &e))?;
     let mib = |b: u64| b as f64 / f64::from(1u32 << 20);
     if cost.atlas_bytes > MAX_ATLAS_BYTES {
         return Err(bad(
@@ -642,7 +641,7 @@ fn bake_once(
         );
     };
     let (asset, stats) = bake(scene, opts, &tool_version(), Some(source), &report)
-        .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;
+        .map_err(|e| bbcloud_error(input, &e))?;
     bar.finish();
 
     let compressed = (measure_compressed == Some(Compression::Bc)).then(|| {

@@ -9,7 +9,7 @@ use billow::eval::metrics::{compare, ImageError};
 use serde::Serialize;
 
 use crate::exit::{CliError, Code};
-use crate::output::{print_json, refuse_clobbering};
+use crate::output::{encode_image, image_out, print_json, refuse_clobbering, ImageOut};
 use crate::staged::{out_err, Staged};
 use crate::Ctx;
 
@@ -19,7 +19,7 @@ pub struct Args {
     reference: PathBuf,
     /// The image compared with it (same size).
     test: PathBuf,
-    /// Write reference | test | heatmap (×4) here, atomically.
+    /// Write reference | test | heatmap (×4) here, atomically: PNG, or JPEG for a .jpg/.jpeg name.
     #[arg(long, value_name = "OUT.png")]
     diff: Option<PathBuf>,
     /// Print a JSON summary on stdout.
@@ -38,8 +38,25 @@ struct Summary {
 
 /// Reads an image as premultiplied linear RGBA ([`ImageF32::from_image`]).
 fn load(p: &Path) -> Result<ImageF32, CliError> {
-    let img = image::open(p)
-        .map_err(|e| CliError::new(Code::from(&e), format!("{}: {e}", p.display())))?;
+    let img = image::open(p).map_err(|e| {
+        let why = match &e {
+            // The image crate's "The file extension `."billow"` was not recognized".
+            image::ImageError::Unsupported(_)
+                if p.extension()
+                    .is_some_and(|x| x.eq_ignore_ascii_case("billow")) =>
+            {
+                "a billow asset, not an image (`billow eval MESH ASSET` compares an asset \
+                 with its mesh)"
+                    .to_string()
+            }
+            image::ImageError::Unsupported(_) => format!(
+                "not an image billow reads ({e}); compare takes PNG, JPEG, EXR, TGA, BMP, \
+                 GIF, HDR or WebP"
+            ),
+            _ => e.to_string(),
+        };
+        CliError::new(Code::from(&e), format!("{}: {why}", p.display()))
+    })?;
     Ok(ImageF32::from_image(&img))
 }
 
@@ -47,6 +64,11 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     if let Some(d) = &args.diff {
         refuse_clobbering(&[&args.reference, &args.test], &[("--diff", d)])?;
     }
+    let diff_kind = args
+        .diff
+        .as_deref()
+        .map(|d| image_out("--diff", d))
+        .transpose()?;
     let r = load(&args.reference)?;
     let t = load(&args.test)?;
     if (r.width, r.height) != (t.width, t.height) {
@@ -67,6 +89,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     if let Some(d) = &args.diff {
         let png = comparisons_png_bytes(&r, &[&t], 4.0, d)
             .map_err(|e| CliError::new(Code::Internal, format!("{}: {e}", d.display())))?;
+        let png = encode_image(diff_kind.unwrap_or(ImageOut::Png), png, d)?;
         let mut stage = Staged::new(d);
         stage.stage(d, &png).map_err(|e| out_err(d, e))?;
         stage.commit_or_fail()?;

@@ -141,7 +141,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         .map_err(|e| CliError::new(Code::Internal, e))?
         .map_err(|e| out_err(&args.output, e))?;
     if let Some(d) = &args.depfile {
-        let text = depfile::render(&[&args.output], &args.input, &[])?;
+        let text = depfile::render(&[&args.output], &args.input, &[], &[])?;
         stage.stage(d, text.as_bytes()).map_err(|e| out_err(d, e))?;
     }
     stage.commit_or_fail()?;

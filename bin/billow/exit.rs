@@ -39,7 +39,9 @@ pub enum Code {
     OutputIo = 7,
     /// A parameter parses but is out of range (e.g. `--res 0`, `--res 4097`).
     BadParameter = 8,
-    /// The input is valid but holds nothing this command bakes (bbcloud: no foliage).
+    /// The input is valid but holds nothing this command bakes: a mesh without triangles
+    /// (points, lines or an empty scene) for every baking command, a mesh without foliage
+    /// for bbcloud. `make batch` skips such a mesh with its reason.
     NothingToBake = 9,
     /// `--target-error`: no setting tried reaches the target error (nothing is written).
     TargetNotMet = 10,
@@ -57,6 +59,53 @@ impl CliError {
         // One line, always: collapse any newline a library message might contain.
         let message = message.to_string().replace('\n', " ");
         CliError { code, message }
+    }
+}
+
+/// A [`VoxelizeError`] as the command's error: an option's error names the flag it came
+/// from (`--supersample: 9 is out of range (1 to 8)`), the rest the input file.
+pub fn voxelize_error(input: &str, e: &VoxelizeError) -> CliError {
+    use billow::voxelize::OptionName;
+    let flag = match e {
+        VoxelizeError::InvalidOption { option, .. } => Some(match option {
+            OptionName::Supersample => "--supersample",
+            OptionName::MipLevels => "--mips",
+            OptionName::Bake => "--bake",
+            OptionName::Combine => "--combine",
+        }),
+        VoxelizeError::Resolution(_) | VoxelizeError::Grid(GridError::Resolution(_)) => {
+            Some("--res")
+        }
+        VoxelizeError::Grid(GridError::BadMargin(_)) => Some("--margin"),
+        VoxelizeError::Grid(GridError::BadAlign(_) | GridError::AlignTooLarge { .. }) => {
+            Some("--align")
+        }
+        _ => None,
+    };
+    match (flag, e) {
+        (Some(flag), VoxelizeError::InvalidOption { message, .. }) => {
+            CliError::new(Code::from(e), format!("{flag}: {message}"))
+        }
+        (Some(flag), VoxelizeError::Grid(g)) => {
+            CliError::new(Code::from(e), format!("{flag}: {g}"))
+        }
+        (Some(flag), _) => CliError::new(Code::from(e), format!("{flag}: {e}")),
+        (None, _) => CliError::new(Code::from(e), format!("{input}: {e}")),
+    }
+}
+
+/// A [`BbcloudError`] as the command's error: an option's error names its flag
+/// (`--samples: 0 is out of range (1 to 1000000)`), the rest the input file.
+pub fn bbcloud_error(input: &str, e: &BbcloudError) -> CliError {
+    match e {
+        BbcloudError::BadParameter { option, message } => {
+            let flag = match *option {
+                "view" => "--view-dirs".to_string(),
+                o => format!("--{}", o.replace('_', "-")),
+            };
+            CliError::new(Code::from(e), format!("{flag}: {message}"))
+        }
+        _ => CliError::new(Code::from(e), format!("{input}: {e}")),
     }
 }
 
@@ -112,7 +161,9 @@ impl From<&ResolutionError> for Code {
             ResolutionError::Empty
             | ResolutionError::NotANumber { .. }
             | ResolutionError::WrongArity { .. } => Code::Usage,
-            ResolutionError::Zero { .. } | ResolutionError::TooLarge { .. } => Code::BadParameter,
+            ResolutionError::Zero { .. }
+            | ResolutionError::TooLarge { .. }
+            | ResolutionError::Negative { .. } => Code::BadParameter,
         }
     }
 }
@@ -146,10 +197,12 @@ impl From<&VoxelizeError> for Code {
         match e {
             VoxelizeError::Resolution(r) => Code::from(r),
             VoxelizeError::Grid(g) => Code::from(g),
-            VoxelizeError::InvalidOption(_) | VoxelizeError::TooMuchMemory { .. } => {
+            VoxelizeError::InvalidOption { .. } | VoxelizeError::TooMuchMemory { .. } => {
                 Code::BadParameter
             }
-            VoxelizeError::EmptyScene | VoxelizeError::InvalidScene(_) => Code::InvalidInput,
+            // A valid mesh without a triangle (points, lines, an empty scene).
+            VoxelizeError::EmptyScene => Code::NothingToBake,
+            VoxelizeError::InvalidScene(_) => Code::InvalidInput,
         }
     }
 }
@@ -205,7 +258,8 @@ impl From<&ShellError> for Code {
     fn from(e: &ShellError) -> Code {
         match e {
             ShellError::InvalidHeight(_) | ShellError::InvalidUvScale(_) => Code::BadParameter,
-            ShellError::EmptySurface | ShellError::NoPrisms { .. } => Code::InvalidInput,
+            ShellError::EmptySurface => Code::NothingToBake,
+            ShellError::NoPrisms { .. } => Code::InvalidInput,
         }
     }
 }
@@ -213,10 +267,10 @@ impl From<&ShellError> for Code {
 impl From<&BbcloudError> for Code {
     fn from(e: &BbcloudError) -> Code {
         match e {
-            BbcloudError::NoFoliage => Code::NothingToBake,
+            BbcloudError::NoFoliage | BbcloudError::EmptyScene => Code::NothingToBake,
             // TooLarge: the atlases the parameters ask for exceed the limit (estimate refused).
             BbcloudError::UnknownMaterial(..)
-            | BbcloudError::BadParameter(_)
+            | BbcloudError::BadParameter { .. }
             | BbcloudError::TooLarge(_) => Code::BadParameter,
             // The cloud billow built breaks a format rule: a bug.
             BbcloudError::Asset(_) => Code::Internal,

@@ -232,6 +232,7 @@ fn view_err(e: ViewError) -> CliError {
 pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     if let Some(shot) = &args.screenshot {
         refuse_clobbering(&[&args.target], &[("--screenshot", shot)])?;
+        crate::output::image_out("--screenshot", shot)?;
     }
     let mut scene = load_scene(&args.target)?;
     match args.shadows.as_deref() {
@@ -480,6 +481,8 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let png = image
         .png_bytes(out)
         .map_err(|e| CliError::new(Code::Internal, e))?; // names the path
+    let png =
+        crate::output::encode_image(crate::output::image_out("--screenshot", out)?, png, out)?;
     let mut stage = crate::staged::Staged::new(out);
     stage
         .stage(out, &png)

@@ -41,7 +41,7 @@ pub struct Args {
     pub(crate) res: Option<String>,
     /// K: K×K coverage samples per voxel column, 1–8; gives thin parts fractional opacity
     /// (default: the preset's, else 4).
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=i64::from(billow::voxelize::MAX_SUPERSAMPLE)))]
     pub(crate) supersample: Option<u32>,
     /// A named point of the measured accuracy/cost front, setting --res and --supersample:
     /// draft, balanced, quality or hero (docs/cli.md, "Presets"). Explicit --res or
@@ -85,7 +85,7 @@ pub struct Args {
     /// Number of MIP levels, 1–the full chain (default: the full chain down to 1×1×1).
     #[arg(long)]
     pub(crate) mips: Option<u32>,
-    /// Empty border around the mesh, in voxels, 0–64.
+    /// Empty border around the mesh, in voxels, 0–16.
     #[arg(long, default_value_t = 0.5)]
     pub(crate) margin: f32,
     /// Round every side of the grid up to a multiple of N voxels, 1–2048 (the box grows evenly with
@@ -312,10 +312,13 @@ pub fn options(
     let combine: CombineFn = combine
         .parse()
         .map_err(|e| CliError::new(Code::from(&e), format!("--combine: {e}")))?;
-    if !(margin.is_finite() && (0.0..=64.0).contains(&margin)) {
+    if !(margin.is_finite() && (0.0..=billow::voxelize::MAX_MARGIN).contains(&margin)) {
         return Err(bad(
             "--margin",
-            format!("must be between 0 and 64 voxels, got {margin}"),
+            format!(
+                "{margin} is out of range (0 to {} voxels)",
+                billow::voxelize::MAX_MARGIN
+            ),
         ));
     }
     Ok(VoxelizeOptions {
@@ -624,7 +627,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         let mut targets = vec![args.output.as_path()];
         targets.extend(args.ktx2.as_deref());
         targets.extend(written.iter().map(PathBuf::as_path));
-        let text = depfile::render(&targets, &args.input, &report.files)?;
+        let text = depfile::render(&targets, &args.input, &report.files, &[])?;
         stage.stage(d, text.as_bytes()).map_err(|e| out_err(d, e))?;
     }
     stage.commit_or_fail()?;
@@ -691,6 +694,65 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             bytes as f64 / (1 << 20) as f64,
             summary.seconds.total
         );
+        for line in summary_lines(&summary, args.normals) {
+            eprintln!("  {line}");
+        }
     }
     Ok(())
+}
+
+/// What the plain-text summary says below its first line: the settings and where each
+/// came from, what `--normals` decided and why, and what `--prune` saved.
+fn summary_lines(s: &Summary, normals: NormalsArg) -> Vec<String> {
+    use billow::voxelize::toksvig::AUTO_NORMALS_MIN_COHERENCE;
+    let from = |src: Source| match src {
+        Source::Default => "default",
+        Source::Preset => "preset",
+        Source::Flag => "flag",
+        Source::Target => "--target-error",
+    };
+    let mut lines = vec![format!(
+        "settings: {}--res {} ({}), --supersample {} ({}), --combine {}, --compress {}",
+        s.preset
+            .map_or(String::new(), |p| format!("--preset {p}: ")),
+        s.resolution,
+        from(s.settings_from.resolution),
+        s.supersample,
+        from(s.settings_from.supersample),
+        s.combine,
+        s.compress
+    )];
+    lines.push(match (normals, s.normals, s.normal_coherence) {
+        (NormalsArg::Auto, true, Some(k)) => format!(
+            "normals: kept (--normals auto: coherence {k:.2} ≥ {AUTO_NORMALS_MIN_COHERENCE}, a \
+             smooth surface; viewers shade the albedo under the scene light)"
+        ),
+        (NormalsArg::Auto, false, Some(k)) => format!(
+            "normals: dropped (--normals auto: coherence {k:.2} < {AUTO_NORMALS_MIN_COHERENCE}, \
+             a thin or fuzzy surface such as foliage; the colour is shown as baked)"
+        ),
+        (NormalsArg::Auto, _, None) => {
+            "normals: dropped (--normals auto: not judged, see the warning above)".to_string()
+        }
+        (_, true, _) => "normals: kept (--normals on)".to_string(),
+        (_, false, _) => "normals: none (--normals off)".to_string(),
+    });
+    if let Some(p) = &s.prune {
+        lines.push(if p.kept_whole {
+            format!(
+                "prune: kept whole ({})",
+                p.note.as_deref().unwrap_or("no brick layout was smaller")
+            )
+        } else {
+            format!(
+                "prune: texels {:.1} → {:.1} MiB ({:.0} % saved), {} boxes, {} LOD bands",
+                p.texel_bytes_before as f64 / (1 << 20) as f64,
+                p.texel_bytes_after as f64 / (1 << 20) as f64,
+                p.saving * 100.0,
+                p.boxes,
+                p.bands.len()
+            )
+        });
+    }
+    lines
 }

@@ -16,7 +16,7 @@ use billow::voxelize::{
     VoxelizeOptions,
 };
 
-use crate::exit::{CliError, Code};
+use crate::exit::{voxelize_error, CliError, Code};
 use crate::output::{progress, warn};
 use crate::progress::{self, Monotone};
 use crate::voxelize::{default_align, Args, NormalsArg, TargetSummary};
@@ -81,7 +81,7 @@ pub(crate) fn bake_once(
                 ));
                 NormalsJudgement::Coarse(None)
             }
-            r => r.map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?,
+            r => r.map_err(|e| voxelize_error(input, &e))?,
         }),
         _ => None,
     };
@@ -281,7 +281,7 @@ pub(crate) fn bake_dense(
     use billow::voxelize::toksvig::{normal_coherence, AUTO_NORMALS_LEVEL};
     let Hooks { report, note } = hooks;
     let mut volume = normals_optional(auto.is_some(), opts, note, |o| voxelize(scene, o, report))
-        .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;
+        .map_err(|e| voxelize_error(input, &e))?;
     // auto: keep the normals only where one normal per voxel describes the surface.
     let mut coherence = judged(auto);
     if auto == Some(NormalsJudgement::OnTheBake) {
@@ -336,7 +336,7 @@ fn bake_pruned(
 > {
     use billow::voxelize::toksvig::AUTO_NORMALS_LEVEL;
     use billow::voxelize::VoxelizeError;
-    let err = |e: VoxelizeError| CliError::new(Code::from(&e), format!("{input}: {e}"));
+    let err = |e: VoxelizeError| voxelize_error(input, &e);
     let perr = |e: billow::emptyspace::EmptySpaceError| {
         CliError::new(Code::from(&e), format!("{input}: {e}"))
     };

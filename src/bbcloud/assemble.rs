@@ -88,11 +88,12 @@ pub fn assemble(
         .into_par_iter()
         .map(|l| {
             let layout = &per_level[l].1;
-            atlas::pack(&sizes(l), layout).ok_or_else(|| {
-                BbcloudError::BadParameter(format!(
+            atlas::pack(&sizes(l), layout).ok_or_else(|| BbcloudError::BadParameter {
+                option: "atlas_size",
+                message: format!(
                     "level {l}: a billboard texture does not fit a {} atlas",
                     layout.max_size
-                ))
+                ),
             })
         })
         .collect::<Vec<_>>()

@@ -111,12 +111,22 @@ impl Default for BbcloudOptions {
 
 #[derive(Debug, thiserror::Error)]
 pub enum BbcloudError {
-    #[error("no foliage triangles (no MASK/BLEND material and no --foliage names)")]
+    #[error(
+        "nothing to bake: no foliage triangles (no MASK/BLEND material and no --foliage names)"
+    )]
     NoFoliage,
+    /// A valid scene without a single triangle (points, lines, an empty scene).
+    #[error("nothing to bake: the mesh has no triangles")]
+    EmptyScene,
     #[error("no material named {0:?} (materials: {1})")]
     UnknownMaterial(String, String),
-    #[error("{0}")]
-    BadParameter(String),
+    /// An option out of its range: `option` names the field of [`BbcloudOptions`] (so a
+    /// caller can name its own flag for it), `message` the value and the range.
+    #[error("{option}: {message}")]
+    BadParameter {
+        option: &'static str,
+        message: String,
+    },
     /// The atlases would exceed [`MAX_ATLAS_BYTES`] (found after the plane search, with the
     /// billboards' exact sizes, before any texture is allocated).
     #[error(
@@ -162,6 +172,9 @@ fn mip_factor(m: u32) -> f64 {
 /// [`Estimate`] of baking `scene` with `opts` (the options are checked first).
 pub fn estimate(scene: &Scene, opts: &BbcloudOptions) -> Result<Estimate, BbcloudError> {
     check(opts)?;
+    if scene.triangles.is_empty() {
+        return Err(BbcloudError::EmptyScene);
+    }
     let is_leaf = foliage::classify(scene, &opts.foliage)?;
     let leaves: Vec<u32> = (0..scene.triangles.len() as u32)
         .filter(|&i| is_leaf[i as usize])
@@ -251,63 +264,77 @@ pub struct BbcloudStats {
 }
 
 fn check(opts: &BbcloudOptions) -> Result<(), BbcloudError> {
-    let bad = |m: String| Err(BbcloudError::BadParameter(m));
+    let bad =
+        |option: &'static str, message: String| Err(BbcloudError::BadParameter { option, message });
     if !(opts.epsilon.is_finite() && opts.epsilon > 0.0 && opts.epsilon <= 2.0) {
-        return bad(format!(
-            "epsilon must be in (0, 2] bounding-sphere radii, got {}",
-            opts.epsilon
-        ));
+        return bad(
+            "epsilon",
+            format!(
+                "{} is out of range (above 0, at most 2 bounding-sphere radii)",
+                opts.epsilon
+            ),
+        );
     }
     if opts.samples == 0 || opts.samples > 1_000_000 {
-        return bad(format!(
-            "samples must be in 1..=1000000, got {}",
-            opts.samples
-        ));
+        return bad(
+            "samples",
+            format!("{} is out of range (1 to 1000000)", opts.samples),
+        );
     }
     if !(1..=8).contains(&opts.lods) {
-        return bad(format!("lods must be in 1..=8, got {}", opts.lods));
+        return bad("lods", format!("{} is out of range (1 to 8)", opts.lods));
     }
     if !opts.atlas_size.is_power_of_two() || !(64..=16384).contains(&opts.atlas_size) {
-        return bad(format!(
-            "atlas size must be a power of two in 64..=16384, got {}",
-            opts.atlas_size
-        ));
+        return bad(
+            "atlas_size",
+            format!(
+                "{} is out of range (a power of two from 64 to 16384)",
+                opts.atlas_size
+            ),
+        );
     }
-    if opts
-        .texel_density
-        .is_some_and(|d| !(d.is_finite() && d > 0.0))
-    {
-        return bad("texel density must be finite and > 0".into());
+    if let Some(d) = opts.texel_density.filter(|d| !(d.is_finite() && *d > 0.0)) {
+        return bad("texel_density", format!("{d} is out of range (above 0)"));
     }
-    if opts
+    if let Some(r) = opts
         .max_extent
-        .is_some_and(|r| !(r.is_finite() && r > 0.0 && r <= 4.0))
+        .filter(|r| !(r.is_finite() && *r > 0.0 && *r <= 4.0))
     {
-        return bad(format!(
-            "max extent must be in (0, 4] bounding-sphere radii, got {}",
-            opts.max_extent.unwrap_or(0.0)
-        ));
+        return bad(
+            "max_extent",
+            format!("{r} is out of range (above 0, at most 4 bounding-sphere radii)"),
+        );
     }
-    if !(1..=8).contains(&opts.supersample) || opts.gutter > 16 {
-        return bad("supersample must be in 1..=8 and gutter ≤ 16".into());
+    if !(1..=8).contains(&opts.supersample) {
+        return bad(
+            "supersample",
+            format!("{} is out of range (1 to 8)", opts.supersample),
+        );
+    }
+    if opts.gutter > 16 {
+        return bad(
+            "gutter",
+            format!("{} is out of range (0 to 16 texels)", opts.gutter),
+        );
     }
     if !(1..=5).contains(&opts.mip_levels) {
-        return bad(format!(
-            "mip levels must be in 1..=5, got {}",
-            opts.mip_levels
-        ));
+        return bad(
+            "mip_levels",
+            format!("{} is out of range (1 to 5)", opts.mip_levels),
+        );
     }
     if !(opts.up.is_finite() && (opts.up.length() - 1.0).abs() < 1e-3) {
-        return bad("up axis must be a finite unit vector".into());
+        return bad("up", "must be a finite unit vector".into());
     }
     if opts.view.as_ref().is_some_and(|v| !v.is_valid()) {
         return bad(
-            "view directions must be 1 to 64 finite unit vectors, strength in [0, 1]".into(),
+            "view",
+            "must be 1 to 64 finite unit vectors, strength from 0 to 1".into(),
         );
     }
     if let Some(l) = opts.shading.light {
         if !(l.is_finite() && l.length() > 0.0) {
-            return bad("light direction must be finite and non-zero".into());
+            return bad("light", "must be finite and non-zero".into());
         }
     }
     Ok(())
@@ -380,6 +407,9 @@ pub fn bake(
     check(opts)?;
     let mut secs = Seconds::default();
     let t = Instant::now();
+    if scene.triangles.is_empty() {
+        return Err(BbcloudError::EmptyScene);
+    }
     let is_leaf = foliage::classify(scene, &opts.foliage)?;
     let leaves: Vec<u32> = (0..scene.triangles.len() as u32)
         .filter(|&i| is_leaf[i as usize])

@@ -173,6 +173,10 @@ pub fn import(path: &Path, opts: &ImportOptions) -> Result<Imported, ImportError
         textures: Vec::new(),
         files: Mutex::new(Vec::new()),
     };
+    // A folder, a device or a FIFO is "not a regular file" (exit 3), whatever its name.
+    if let Err(e) = open_input(path) {
+        return Err(ctx.io(path, e));
+    }
     let builder = match ext.as_str() {
         "gltf" | "glb" => gltf::load(path, &mut ctx)?,
         "obj" => obj::load(path, &mut ctx)?,

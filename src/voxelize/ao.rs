@@ -89,7 +89,7 @@ impl Bake {
             Bake::None => Ok(()),
             Bake::Ao { rays, distance } => {
                 if !(1..=MAX_AO_RAYS).contains(&rays) {
-                    return Err(format!("AO rays must be 1..={MAX_AO_RAYS}, got {rays}"));
+                    return Err(format!("AO rays must be 1 to {MAX_AO_RAYS}, got {rays}"));
                 }
                 if let Some(d) = distance {
                     if !(d.is_finite() && d > 0.0) {

@@ -65,6 +65,8 @@ pub enum ResolutionError {
     Zero { axis: char },
     #[error("resolution: {} {value} is larger than the maximum of {max} voxels per axis", axis_name(*axis))]
     TooLarge { axis: char, value: u64, max: u32 },
+    #[error("resolution '{text}': {} is negative; every axis needs 1 to {MAX_AXIS} voxels", axis_name(*axis))]
+    Negative { text: String, axis: char },
 }
 
 /// `x size`, …, or `N (the longest axis)` for the single-number form (`axis` 'n').
@@ -77,6 +79,9 @@ fn axis_name(axis: char) -> String {
 }
 
 const AXES: [char; 3] = ['x', 'y', 'z'];
+
+/// Largest empty border around the mesh, in voxels (`VoxelizeOptions::margin`, `--margin`).
+pub const MAX_MARGIN: f32 = 16.0;
 
 fn check_axis(axis: char, value: u64) -> Result<u32, ResolutionError> {
     if value == 0 {
@@ -117,8 +122,15 @@ impl FromStr for Resolution {
             return Err(ResolutionError::Empty);
         }
         let parts: Vec<&str> = text.split(['x', 'X']).collect();
-        let num = |p: &str| -> Result<u64, ResolutionError> {
+        let num = |p: &str, axis: char| -> Result<u64, ResolutionError> {
             let p = p.trim();
+            // `-5`: a number, out of range (not "not a number").
+            if p.len() > 1 && p.starts_with('-') && p[1..].bytes().all(|b| b.is_ascii_digit()) {
+                return Err(ResolutionError::Negative {
+                    text: text.into(),
+                    axis,
+                });
+            }
             if p.is_empty() || !p.bytes().all(|b| b.is_ascii_digit()) {
                 return Err(ResolutionError::NotANumber {
                     text: text.into(),
@@ -129,18 +141,18 @@ impl FromStr for Resolution {
             Ok(p.parse::<u64>().unwrap_or(u64::MAX))
         };
         match parts.len() {
-            1 => Ok(Resolution::Longest(check_axis('n', num(parts[0])?)?)),
+            1 => Ok(Resolution::Longest(check_axis('n', num(parts[0], 'n')?)?)),
             3 => {
                 let mut d = [0u32; 3];
                 for i in 0..3 {
-                    d[i] = check_axis(AXES[i], num(parts[i])?)?;
+                    d[i] = check_axis(AXES[i], num(parts[i], AXES[i])?)?;
                 }
                 Ok(Resolution::Exact(d))
             }
             n => {
                 // "abc" splits into 1 part and is caught above; report non-numbers first.
                 for p in &parts {
-                    num(p)?;
+                    num(p, 'n')?;
                 }
                 Err(ResolutionError::WrongArity {
                     text: text.into(),
@@ -207,7 +219,7 @@ pub fn full_mip_count(dims: [u32; 3]) -> u32 {
 pub enum GridError {
     #[error("bounds are empty or not finite ({min:?} .. {max:?})")]
     BadBounds { min: [f32; 3], max: [f32; 3] },
-    #[error("margin must be finite and in [0, 16] voxels, got {0}")]
+    #[error("margin must be a number of voxels from 0 to {MAX_MARGIN}, got {0}")]
     BadMargin(f32),
     #[error(transparent)]
     Resolution(#[from] ResolutionError),
@@ -257,7 +269,7 @@ pub fn fit_grid(bounds: &Aabb, res: Resolution, margin: f32) -> Result<GridSpec,
     if bounds.is_empty() || !bounds.min.is_finite() || !bounds.max.is_finite() {
         return Err(bad());
     }
-    if !(margin.is_finite() && (0.0..=16.0).contains(&margin)) {
+    if !(margin.is_finite() && (0.0..=MAX_MARGIN).contains(&margin)) {
         return Err(GridError::BadMargin(margin));
     }
     res.validate()?;

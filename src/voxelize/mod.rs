@@ -72,7 +72,7 @@ pub use asset::{bake_params, bake_params_for};
 pub use cells::{box_prisms, Prism};
 pub use combine::{clamp_premultiplied, Combine, CombineFn, CombineParseError, Preset};
 pub use expr::{Expr, ExprError};
-pub use grid::{fit_grid, GridError, GridSpec, Resolution, ResolutionError, MAX_AXIS};
+pub use grid::{fit_grid, GridError, GridSpec, Resolution, ResolutionError, MAX_AXIS, MAX_MARGIN};
 use memory::estimate_bytes;
 pub use memory::{estimate_peak_bytes, estimate_peak_bytes_pruned, estimate_peak_bytes_sparse};
 pub use slices::MAX_SUPERSAMPLE;
@@ -249,12 +249,14 @@ pub enum VoxelizeError {
     Resolution(#[from] ResolutionError),
     #[error("voxel grid: {0}")]
     Grid(#[from] GridError),
-    #[error("the scene has no triangles to voxelize")]
+    #[error("nothing to bake: the scene has no triangles to voxelize")]
     EmptyScene,
     #[error("invalid scene: {0}")]
     InvalidScene(String),
-    #[error("invalid option: {0}")]
-    InvalidOption(String),
+    /// An option out of its range, or one that does not apply: `option` says which
+    /// field of [`VoxelizeOptions`], so a caller can name its own flag for it.
+    #[error("invalid option: {option}: {message}")]
+    InvalidOption { option: OptionName, message: String },
     #[error(
         "resolution {dims:?} needs about {needed_gib:.1} GiB of memory, more than the limit of {limit_gib:.1} GiB; lower the resolution or raise the memory limit"
     )]
@@ -263,6 +265,26 @@ pub enum VoxelizeError {
         needed_gib: f64,
         limit_gib: f64,
     },
+}
+
+/// The field of [`VoxelizeOptions`] an [`VoxelizeError::InvalidOption`] is about.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OptionName {
+    Supersample,
+    MipLevels,
+    Bake,
+    Combine,
+}
+
+impl std::fmt::Display for OptionName {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            OptionName::Supersample => "supersample",
+            OptionName::MipLevels => "mip_levels",
+            OptionName::Bake => "bake",
+            OptionName::Combine => "combine",
+        })
+    }
 }
 
 /// The grid `voxelize` would use for this scene and these options.
@@ -300,10 +322,13 @@ fn check(
     sparse: bool,
 ) -> Result<(GridSpec, u32, u64), VoxelizeError> {
     if !(1..=MAX_SUPERSAMPLE).contains(&opts.supersample) {
-        return Err(VoxelizeError::InvalidOption(format!(
-            "supersample must be 1..={MAX_SUPERSAMPLE}, got {}",
-            opts.supersample
-        )));
+        return Err(VoxelizeError::InvalidOption {
+            option: OptionName::Supersample,
+            message: format!(
+                "{} is out of range (1 to {MAX_SUPERSAMPLE})",
+                opts.supersample
+            ),
+        });
     }
     let grid = grid_for(scene, opts)?;
     let full = grid.full_mip_count();
@@ -311,13 +336,21 @@ fn check(
         None => full,
         Some(m) if (1..=full).contains(&m) => m,
         Some(m) => {
-            return Err(VoxelizeError::InvalidOption(format!(
-                "mip levels must be 1..={full} for {:?}, got {m}",
-                grid.dims
-            )))
+            return Err(VoxelizeError::InvalidOption {
+                option: OptionName::MipLevels,
+                message: format!(
+                    "{m} is out of range (1 to {full} for a {}x{}x{} grid)",
+                    grid.dims[0], grid.dims[1], grid.dims[2]
+                ),
+            })
         }
     };
-    opts.bake.validate().map_err(VoxelizeError::InvalidOption)?;
+    opts.bake
+        .validate()
+        .map_err(|message| VoxelizeError::InvalidOption {
+            option: OptionName::Bake,
+            message,
+        })?;
     let need = estimate_bytes(scene, opts, &grid, mips, sparse);
     if need > opts.memory_limit {
         let gib = |b: u64| b as f64 / (1u64 << 30) as f64;

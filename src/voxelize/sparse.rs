@@ -89,10 +89,13 @@ pub fn voxelize_sparse(
     progress: &dyn Fn(Stage, f32),
 ) -> Result<SparseVolume, VoxelizeError> {
     if !matches!(opts.combine, CombineFn::Preset(_)) {
-        return Err(VoxelizeError::InvalidOption(format!(
-            "a brick-sparse volume needs a preset combine (mean, max, min, opaque), not {}",
-            opts.combine
-        )));
+        return Err(VoxelizeError::InvalidOption {
+            option: super::OptionName::Combine,
+            message: format!(
+                "a brick-sparse volume needs a preset combine (mean, max, min, opaque), not {}",
+                opts.combine
+            ),
+        });
     }
     let (grid, out, stats) = voxelize_as(scene, opts, progress, true)?;
     let Output::Sparse(levels) = out else {

@@ -561,15 +561,26 @@ fn run_volume(
     Ok(())
 }
 
-fn print_table(s: &Summary) {
+/// `(112x128x112)` for a volume, `(grid 112x128x112, pruned into an 84x128x74 atlas)`
+/// for a pruned one (its level-0 texture is the atlas, the grid is in its `dims` param).
+fn dims_text(s: &Summary) -> String {
     let d = s.asset_dims;
+    let atlas = format!("{}x{}x{}", d[0], d[1], d[2]);
+    let pruned = s.asset_params.contains_key("emptyspace");
+    match s.asset_params.get("dims") {
+        Some(grid) if pruned && *grid != atlas => {
+            format!("grid {grid}, pruned into an {atlas} atlas")
+        }
+        _ => atlas,
+    }
+}
+
+fn print_table(s: &Summary) {
     outln!(
-        "{} vs {} ({}x{}x{}), {}x{} px, {} spp reference, spacing {}",
+        "{} vs {} ({}), {}x{} px, {} spp reference, spacing {}",
         s.asset,
         s.source,
-        d[0],
-        d[1],
-        d[2],
+        dims_text(s),
         s.size[0],
         s.size[1],
         s.reference_spp,
