@@ -315,7 +315,14 @@ fn resolution_parsing() {
         err("12x4"),
         ResolutionError::WrongArity { parts: 2, .. }
     ));
-    assert!(matches!(err("-5"), ResolutionError::NotANumber { .. }));
+    assert!(matches!(
+        err("-5"),
+        ResolutionError::Negative { axis: 'n', .. }
+    ));
+    assert!(matches!(
+        err("4x-2x4"),
+        ResolutionError::Negative { axis: 'y', .. }
+    ));
     assert!(matches!(err(""), ResolutionError::Empty));
     for s in ["0", "100000", "12x0x4", "abc", "12x4", ""] {
         let msg = err(s).to_string();
