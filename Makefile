@@ -15,35 +15,51 @@ BILLOW_SRC := $(shell find src bin formats/src viewer/src -type f 2>/dev/null) \
 	Cargo.toml Cargo.lock formats/Cargo.toml viewer/Cargo.toml
 endif
 
-# Batch conversion: every mesh under IN_DIR becomes an asset under OUT_DIR (make -j safe:
-# each output is its own target, written atomically by billow, and the binary is built once,
-# as an order-only prerequisite, before any job starts). Each bake writes a depfile
-# (billow --depfile, included below) naming every file it read, so a changed buffer,
-# texture or .mtl rebakes exactly the meshes that read it, and `make -q batch` is true
-# after a batch. Paths make cannot hold (spaces, quotes, : % # $ \) are refused loudly.
+# Batch conversion: every mesh under IN_DIR becomes assets under OUT_DIR (make -j safe: each
+# step of each mesh is its own target, written atomically by billow, and the binary is built
+# once, as an order-only prerequisite, before any job starts). Each step writes a depfile
+# (billow --depfile, included below) naming every file its bake looked for, found or not, so
+# a changed buffer, texture or .mtl rebakes exactly the meshes that read it, a texture that
+# was missing rebakes once it is there, and `make -q batch` is true after a batch. Paths make
+# cannot hold (spaces, quotes, : % # $ \) are refused loudly.
 IN_DIR  ?= fixtures
+# `in/`, `in//` and `in` are one folder (the pattern rules below need it without the slash).
+override IN_DIR := $(patsubst %/,%,$(patsubst %/,%,$(patsubst %/,%,$(IN_DIR))))
 OUT_DIR ?= $(OUT)/batch
 FOUND   := $(shell find $(IN_DIR) -type f \( -name '*.gltf' -o -name '*.glb' -o -name '*.obj' \) 2>/dev/null | sort)
 UNSAFE  := $(shell find $(IN_DIR) -type f \( -name '*.gltf' -o -name '*.glb' -o -name '*.obj' \) 2>/dev/null | grep "[][ :%\#$$\\\"'()*?;&|<>\`]" | head -n 3)
-ifneq ($(filter batch,$(MAKECMDGOALS)),)
+ifneq ($(filter batch batch-outputs,$(MAKECMDGOALS)),)
+ifeq ($(wildcard $(IN_DIR)/.),)
+$(error batch: IN_DIR=$(IN_DIR) is not a folder (nothing was baked))
+endif
+ifeq ($(FOUND),)
+$(error batch: no meshes (.gltf, .glb, .obj) under IN_DIR=$(IN_DIR) (nothing was baked))
+endif
 ifneq ($(UNSAFE),)
 $(error batch: mesh paths under $(IN_DIR) with a space or another character make cannot handle, such as: $(UNSAFE); rename them (nothing was baked))
 endif
 endif
 MESHES  := $(FOUND)
+STEPS   := volume pruned cloud
+STAMPS  := $(foreach s,$(STEPS),$(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.$(s).done,$(MESHES)))
 REPORTS := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.inspect.json,$(MESHES))
-VOLUMES := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.volume.billow,$(MESHES))
-PRUNED  := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.pruned.billow,$(MESHES))
-CLOUDS  := $(patsubst $(IN_DIR)/%,$(OUT_DIR)/%.cloud.done,$(MESHES))
 BATCH_RES ?= 128
+# Extra flags of each mesh's bakes (e.g. BATCH_VOXELIZE_ARGS='--preset quality').
+BATCH_VOXELIZE_ARGS ?=
 BATCH_CLOUD_ARGS ?=
+# BATCH_STRICT=1: a warning (a missing texture, a skipped primitive) fails the mesh (billow --strict).
+BATCH_STRICT ?=
+# BATCH_KTX2=1 also writes X.volume.ktx2; BATCH_GLB=1 also writes X.cloud.glb (engine-ready copies).
+BATCH_KTX2 ?=
+BATCH_GLB ?=
+STRICT  := $(if $(BATCH_STRICT),--strict)
 
-.PHONY: all build demo test lint fmt batch clean fixtures accuracy accuracy-emptyspace accuracy-pareto bench bench-bbcloud gallery bench-view bench-particles check-gltf check-ktx2 check-threejs fuzz lod-sweep
+.PHONY: all build demo test lint fmt batch batch-outputs clean fixtures accuracy accuracy-emptyspace accuracy-pareto bench bench-bbcloud gallery bench-view bench-particles check-gltf check-ktx2 check-threejs fuzz lod-sweep
 
 all: build
 
-build:
-	$(CARGO) build --release --locked
+# `make build` is the release binary (the CLI package; the library alone has no binary).
+build: $(BILLOW)
 
 $(BILLOW): $(BILLOW_SRC)
 	$(CARGO) build --release --locked -p billow-cli
@@ -54,7 +70,7 @@ $(BILLOW): $(BILLOW_SRC)
 ## compare volume and cloud with a ray-traced reference on the CPU (out/oak_eval/*.png), and
 ## render both side by side in the GPU viewer, headless (out/oak_view.png; installs Mesa's
 ## software Vulkan first when no adapter exists, like `make test`).
-demo: build
+demo: $(BILLOW)
 	@mkdir -p $(OUT)
 	$(BILLOW) inspect $(SAMPLE)
 	$(BILLOW) voxelize $(SAMPLE) -o $(OUT)/oak.billow --res 128 --align 8 --ktx2 $(OUT)/oak.ktx2
@@ -92,44 +108,62 @@ fmt:
 	$(CARGO) fmt --all
 
 ## Batch rule: `make -j2 batch IN_DIR=some/folder` maps every mesh in the folder to an
-## import report (X.inspect.json), a volume (X.volume.billow, --res BATCH_RES), the volume
-## with its empty space removed (X.pruned.billow) and a billboard cloud (X.cloud.billow,
-## with BATCH_CLOUD_ARGS), or, for a mesh without foliage, its reason in X.cloud.skipped;
-## X.cloud.done records which. Each has a depfile (X.….d) listing the files it was made from.
-batch: $(REPORTS) $(VOLUMES) $(PRUNED) $(CLOUDS)
+## import report (X.inspect.json), a volume (X.volume.billow, --res BATCH_RES and
+## BATCH_VOXELIZE_ARGS; X.volume.ktx2 with BATCH_KTX2=1), the volume with its empty space
+## removed (X.pruned.billow) and a billboard cloud (X.cloud.billow, with BATCH_CLOUD_ARGS;
+## X.cloud.glb with BATCH_GLB=1). Each step X.<step>.done records what it did ("done", or
+## "skipped: REASON" for valid input with nothing to bake: a mesh without triangles, a cloud
+## without foliage, whose message is kept in X.<step>.skipped); its warnings are kept in
+## X.<step>.log, a failure's message in X.<step>.failed. One failed mesh does not stop the
+## others (make -k); the batch ends with a summary (baked / skipped / failed / with warnings)
+## and fails if any mesh failed. BATCH_STRICT=1 fails a mesh on any warning.
+batch:
+	+@$(MAKE) --no-print-directory -k batch-outputs; rc=$$?; \
+	case '$(firstword -$(MAKEFLAGS))' in *[nqt]*) exit $$rc;; esac; \
+	sh .ci/batch-summary '$(OUT_DIR)' '$(IN_DIR)' $(patsubst $(IN_DIR)/%,%,$(MESHES)); exit $$rc
 
--include $(wildcard $(addsuffix .d,$(REPORTS) $(VOLUMES) $(PRUNED) $(CLOUDS)))
+batch-outputs: $(REPORTS) $(STAMPS)
 
-# $(call retarget,DEPFILE,TARGET): DEPFILE's prerequisites, for TARGET (billow's depfiles
-# have the targets on the first line and one prerequisite per line after it).
-retarget = { printf '%s: \\\n' '$(2)'; tail -n +2 '$(1)'; } > '$(2).d.tmp' && mv '$(2).d.tmp' '$(2).d'
+-include $(wildcard $(addsuffix .d,$(STAMPS)) $(addsuffix .d,$(REPORTS)))
 
-# The report depends on the files the volume's bake read (the same import).
-$(OUT_DIR)/%.inspect.json: $(IN_DIR)/% $(OUT_DIR)/%.volume.billow | $(BILLOW)
+# A depfile's files that were missing when it was written: once one exists, billow's
+# depfile makes its targets depend on this (always out of date) target.
+.billow-restored:
+
+# $(call batch_step,STAMP,DEPFILE,FALLBACK,OUTPUTS,COMMAND): .ci/batch-step's record of one step.
+batch_step = sh .ci/batch-step '$(1)' '$(2)' '$(3)' '$(4)' -- $(5)
+
+# The report depends on the files the volume's bake looked for (the same import).
+$(OUT_DIR)/%.inspect.json: $(IN_DIR)/% $(OUT_DIR)/%.volume.done | $(BILLOW)
 	@mkdir -p $(dir $@)
 	$(BILLOW) inspect --json $< > $@.tmp && mv $@.tmp $@
-	@$(call retarget,$(OUT_DIR)/$*.volume.billow.d,$@)
+	@if [ -f '$(OUT_DIR)/$*.volume.done.d' ]; then \
+		sed '1s|.*|$@: \\|; s|^.*: \.billow-restored$$|$@: .billow-restored|' '$(OUT_DIR)/$*.volume.done.d' > '$@.d.tmp' && mv '$@.d.tmp' '$@.d'; \
+	else rm -f '$@.d'; fi
 
-$(OUT_DIR)/%.volume.billow: $(IN_DIR)/% | $(BILLOW)
+$(OUT_DIR)/%.volume.done: $(IN_DIR)/% | $(BILLOW)
 	@mkdir -p $(dir $@)
-	$(BILLOW) voxelize -q --res $(BATCH_RES) --align 8 $< -o $@ --depfile $@.d
+	@echo '$(BILLOW) voxelize $<'
+	@$(call batch_step,$@,$(@:.done=.billow).d,,$(@:.done=.billow) $(@:.done=.ktx2),\
+		$(BILLOW) voxelize --res $(BATCH_RES) --align 8 $(STRICT) $(BATCH_VOXELIZE_ARGS) \
+		$(if $(BATCH_KTX2),--ktx2 $(@:.done=.ktx2)) $< -o $(@:.done=.billow) --depfile $(@:.done=.billow).d)
 
-$(OUT_DIR)/%.pruned.billow: $(OUT_DIR)/%.volume.billow | $(BILLOW)
-	$(BILLOW) emptyspace -q $< -o $@ --depfile $@.d
+# Skipped with the volume it would prune.
+$(OUT_DIR)/%.pruned.done: $(OUT_DIR)/%.volume.done | $(BILLOW)
+	@echo '$(BILLOW) emptyspace $(<:.done=.billow)'
+	@if grep -q '^skipped' $<; then rm -f $(@:.done=.billow) $@.d; echo 'skipped: no volume' > $@; else \
+	$(call batch_step,$@,$(@:.done=.billow).d,,$(@:.done=.billow),\
+		$(BILLOW) emptyspace $(<:.done=.billow) -o $(@:.done=.billow) --depfile $(@:.done=.billow).d); fi
 
-# A cloud for every mesh with foliage (alpha MASK/BLEND materials); a mesh without any gets
-# X.cloud.skipped (bbcloud's exit code 9 and its one-line reason) and no .billow. Either way X.cloud.done is
-# written, the target make keeps up to date, with the depfile of what the outcome came from.
-$(OUT_DIR)/%.cloud.done: $(IN_DIR)/% | $(BILLOW) $(OUT_DIR)/%.volume.billow
+# A cloud for every mesh with foliage (alpha MASK/BLEND materials); a mesh without any is
+# skipped (bbcloud's exit code 9 and its reason in X.cloud.skipped), depending on the files
+# the volume's bake looked for.
+$(OUT_DIR)/%.cloud.done: $(IN_DIR)/% | $(BILLOW) $(OUT_DIR)/%.volume.done
 	@mkdir -p $(dir $@)
-	@rm -f $(@:.done=.skipped)
-	@$(BILLOW) bbcloud -q $(BATCH_CLOUD_ARGS) $< -o $(@:.done=.billow) --depfile $@.bbcloud.d 2> $@.err; rc=$$?; \
-	if [ $$rc -eq 0 ]; then rm -f $@.err; echo 'cloud: $(notdir $(@:.done=.billow))' > $@.tmp; \
-		$(call retarget,$@.bbcloud.d,$@) && rm -f $@.bbcloud.d; \
-	elif [ $$rc -eq 9 ] && grep -q 'no foliage' $@.err; then mv $@.err $(@:.done=.skipped); \
-		rm -f $(@:.done=.billow) $(@:.done=.billow).d; echo 'skipped: no foliage' > $@.tmp; \
-		$(call retarget,$(OUT_DIR)/$*.volume.billow.d,$@); \
-	else cat $@.err >&2; rm -f $@.err $@.bbcloud.d; exit $$rc; fi && mv $@.tmp $@
+	@echo '$(BILLOW) bbcloud $<'
+	@$(call batch_step,$@,$(@:.done=.billow).d,$(OUT_DIR)/$*.volume.done.d,$(@:.done=.billow) $(@:.done=.glb),\
+		$(BILLOW) bbcloud $(STRICT) $(BATCH_CLOUD_ARGS) $(if $(BATCH_GLB),--gltf $(@:.done=.glb)) \
+		$< -o $(@:.done=.billow) --depfile $(@:.done=.billow).d)
 
 ## Regenerate the procedural hard-case shapes (truss, furry torus, fur tile) as OBJ files.
 fixtures:

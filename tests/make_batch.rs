@@ -143,13 +143,27 @@ fn touch(p: &Path) {
     f.set_modified(SystemTime::now()).unwrap();
 }
 
+/// Whether `make -n`'s `plan` runs a billow command on `mesh` (not the summary's list).
+fn bakes(plan: &str, mesh: &str) -> bool {
+    plan.lines().any(|l| {
+        ["voxelize", "emptyspace", "inspect", "bbcloud"]
+            .iter()
+            .any(|c| l.contains(&format!("billow {c}")))
+            && l.contains(mesh)
+    })
+}
+
+fn have_make(test: &str) -> bool {
+    if Command::new("make").arg("--version").output().is_err() {
+        common::skip(test, "GNU make not found");
+        return false;
+    }
+    true
+}
+
 #[test]
 fn batch_is_up_to_date_after_a_batch_and_rebakes_exactly_what_changed() {
-    if Command::new("make").arg("--version").output().is_err() {
-        common::skip(
-            "batch_is_up_to_date_after_a_batch_and_rebakes_exactly_what_changed",
-            "GNU make not found",
-        );
+    if !have_make("batch_is_up_to_date_after_a_batch_and_rebakes_exactly_what_changed") {
         return;
     }
     let tmp = tempfile::tempdir().unwrap();
@@ -164,6 +178,7 @@ fn batch_is_up_to_date_after_a_batch_and_rebakes_exactly_what_changed() {
     assert!(!text(&first).contains("cargo"), "{}", text(&first));
     for f in [
         "tree/leaves.gltf.volume.billow",
+        "tree/leaves.gltf.volume.done",
         "tree/leaves.gltf.pruned.billow",
         "tree/leaves.gltf.inspect.json",
         "tree/leaves.gltf.cloud.billow",
@@ -175,12 +190,23 @@ fn batch_is_up_to_date_after_a_batch_and_rebakes_exactly_what_changed() {
         assert!(out.join(f).is_file(), "{f} missing: {}", text(&first));
     }
     assert!(!out.join("crate/box.obj.cloud.billow").exists());
-    // The volume's depfile names every file the bake read.
-    let dep = std::fs::read_to_string(out.join("tree/leaves.gltf.volume.billow.d")).unwrap();
+    let done = std::fs::read_to_string(out.join("crate/box.obj.cloud.done")).unwrap();
+    assert!(done.starts_with("skipped: no foliage"), "{done}");
+    // The summary counts what happened.
+    assert!(
+        text(&first).contains(&format!(
+            "batch: 2 meshes under {}: 2 baked (1 without foliage: no cloud), 0 skipped (nothing to bake), 0 failed, ",
+            src.display()
+        )),
+        "{}",
+        text(&first)
+    );
+    // The depfiles name every file the bake read.
+    let dep = std::fs::read_to_string(out.join("tree/leaves.gltf.volume.done.d")).unwrap();
     for f in ["leaves.gltf", "leaves.bin", "leaf.png"] {
         assert!(dep.contains(f), "{dep}");
     }
-    let dep = std::fs::read_to_string(out.join("crate/box.obj.volume.billow.d")).unwrap();
+    let dep = std::fs::read_to_string(out.join("crate/box.obj.volume.done.d")).unwrap();
     for f in ["box.obj", "box.mtl", "wood.png"] {
         assert!(dep.contains(f), "{dep}");
     }
@@ -192,7 +218,9 @@ fn batch_is_up_to_date_after_a_batch_and_rebakes_exactly_what_changed() {
     let again = make(&["batch"], &src, &out);
     assert!(again.status.success());
     assert!(
-        !text(&again).contains("billow"),
+        !["voxelize", "emptyspace", "bbcloud", "inspect"]
+            .iter()
+            .any(|c| text(&again).contains(c)),
         "nothing to do, but: {}",
         text(&again)
     );
@@ -201,7 +229,7 @@ fn batch_is_up_to_date_after_a_batch_and_rebakes_exactly_what_changed() {
     touch(&src.join("crate/wood.png"));
     let n = make(&["-n", "batch"], &src, &out);
     let plan = text(&n);
-    assert!(!plan.contains("leaves.gltf"), "only the box: {plan}");
+    assert!(!bakes(&plan, "leaves.gltf"), "only the box: {plan}");
     for what in ["voxelize", "emptyspace", "inspect", "bbcloud"] {
         assert!(
             plan.lines()
@@ -217,16 +245,31 @@ fn batch_is_up_to_date_after_a_batch_and_rebakes_exactly_what_changed() {
     touch(&src.join("tree/leaves.bin"));
     let plan = text(&make(&["-n", "batch"], &src, &out));
     assert!(
-        plan.contains("leaves.gltf") && !plan.contains("box.obj"),
+        bakes(&plan, "leaves.gltf") && !bakes(&plan, "box.obj"),
         "{plan}"
     );
     make(&["batch"], &src, &out);
     touch(&src.join("crate/box.mtl"));
     let plan = text(&make(&["-n", "batch"], &src, &out));
     assert!(
-        plan.contains("box.obj") && !plan.contains("leaves.gltf"),
+        bakes(&plan, "box.obj") && !bakes(&plan, "leaves.gltf"),
         "{plan}"
     );
+
+    // The same folder with a trailing slash is the same batch (and up to date).
+    make(&["batch"], &src, &out);
+    let slash = format!("{}/", src.display());
+    let q = Command::new("make")
+        .args(["--no-print-directory", "-q", "-C"])
+        .arg(repo())
+        .arg("batch")
+        .arg(format!("IN_DIR={slash}"))
+        .arg(format!("OUT_DIR={}", out.display()))
+        .arg(format!("BILLOW={}", bin().display()))
+        .arg("BATCH_RES=16")
+        .output()
+        .unwrap();
+    assert_eq!(q.status.code(), Some(0), "IN_DIR={slash}: {}", text(&q));
 
     // A mesh path with a space: refused with a message naming it, nothing baked.
     std::fs::create_dir_all(src.join("odd dir")).unwrap();
@@ -239,4 +282,140 @@ fn batch_is_up_to_date_after_a_batch_and_rebakes_exactly_what_changed() {
         text(&spaced)
     );
     assert!(!out.join("odd dir").exists());
+}
+
+/// A texture missing at bake time: the mesh bakes with its warning kept in a log and
+/// counted, the batch is up to date while the texture stays missing, and restoring it
+/// (with an old modification time, as a backup restores it) rebakes the mesh. With
+/// BATCH_STRICT=1 the same mesh fails instead, and the batch says so.
+#[test]
+fn a_restored_texture_rebakes_and_warnings_are_kept() {
+    if !have_make("a_restored_texture_rebakes_and_warnings_are_kept") {
+        return;
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let (src, out) = (tmp.path().join("in"), tmp.path().join("out"));
+    std::fs::create_dir_all(&src).unwrap();
+    write_box(&src);
+    let texture = std::fs::read(src.join("wood.png")).unwrap();
+    let old = std::fs::metadata(src.join("wood.png"))
+        .unwrap()
+        .modified()
+        .unwrap();
+    std::fs::remove_file(src.join("wood.png")).unwrap();
+
+    let first = make(&["batch"], &src, &out);
+    assert!(first.status.success(), "{}", text(&first));
+    let log = std::fs::read_to_string(out.join("box.obj.volume.log")).unwrap();
+    assert!(log.contains("wood.png"), "{log}");
+    assert!(
+        text(&first).contains("1 with warnings")
+            && text(&first).contains("warned:  box.obj")
+            && text(&first).contains("wood.png"),
+        "{}",
+        text(&first)
+    );
+    // Up to date while the texture is missing.
+    assert_eq!(make(&["-q", "batch"], &src, &out).status.code(), Some(0));
+
+    // Restored with its old time: out of date, and the rebake has no warning left.
+    std::fs::write(src.join("wood.png"), &texture).unwrap();
+    std::fs::File::options()
+        .append(true)
+        .open(src.join("wood.png"))
+        .unwrap()
+        .set_modified(old)
+        .unwrap();
+    assert_eq!(
+        make(&["-q", "batch"], &src, &out).status.code(),
+        Some(1),
+        "a restored texture must rebake"
+    );
+    let re = make(&["batch"], &src, &out);
+    assert!(re.status.success(), "{}", text(&re));
+    assert!(text(&re).contains("voxelize"), "{}", text(&re));
+    assert!(!out.join("box.obj.volume.log").exists());
+    assert!(!text(&re).contains("wood.png"), "{}", text(&re));
+    assert_eq!(make(&["-q", "batch"], &src, &out).status.code(), Some(0));
+
+    // Strict: the missing texture fails the mesh (exit 6 from billow), the batch fails.
+    std::fs::remove_file(src.join("wood.png")).unwrap();
+    let strict = make(&["batch", "BATCH_STRICT=1"], &src, &out);
+    assert!(!strict.status.success(), "{}", text(&strict));
+    assert!(out.join("box.obj.volume.failed").is_file());
+    assert!(text(&strict).contains("1 failed"), "{}", text(&strict));
+}
+
+/// Folders the batch cannot use are refused, not silently "nothing to be done"; a mesh
+/// with nothing to bake is skipped with its reason; a broken mesh fails alone, is named in
+/// the summary and fails the batch; engine-ready copies are written on request.
+#[test]
+fn batch_refuses_bad_folders_skips_empty_meshes_and_isolates_failures() {
+    if !have_make("batch_refuses_bad_folders_skips_empty_meshes_and_isolates_failures") {
+        return;
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let (src, out) = (tmp.path().join("in"), tmp.path().join("out"));
+    let missing = make(&["batch"], &tmp.path().join("nope"), &out);
+    assert!(!missing.status.success());
+    assert!(
+        text(&missing).contains("is not a folder"),
+        "{}",
+        text(&missing)
+    );
+    std::fs::create_dir_all(src.join("empty")).unwrap();
+    std::fs::write(src.join("empty/readme.txt"), "no meshes here").unwrap();
+    let empty = make(&["batch"], &src.join("empty"), &out);
+    assert!(!empty.status.success());
+    assert!(text(&empty).contains("no meshes"), "{}", text(&empty));
+    assert!(!out.exists(), "nothing may be written");
+
+    std::fs::create_dir_all(src.join("set")).unwrap();
+    write_leaves(&src.join("set"));
+    std::fs::write(
+        src.join("set/points.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\np 1 2 3\n",
+    )
+    .unwrap();
+    std::fs::write(src.join("set/broken.obj"), "v 0 0 0\nf 1 2 3\n").unwrap();
+    let set = src.join("set");
+    let r = make(&["batch", "BATCH_KTX2=1", "BATCH_GLB=1"], &set, &out);
+    let t = text(&r);
+    assert!(!r.status.success(), "a failed mesh fails the batch: {t}");
+    assert!(
+        t.contains(&format!(
+            "batch: 3 meshes under {}: 1 baked (0 without foliage: no cloud), 1 skipped (nothing to bake), 1 failed",
+            set.display()
+        )),
+        "{t}"
+    );
+    assert!(t.contains("failed:  broken.obj: error: "), "{t}");
+    assert!(
+        t.contains("skipped: points.obj: the scene has no triangles"),
+        "{t}"
+    );
+    for f in [
+        "leaves.gltf.volume.billow",
+        "leaves.gltf.volume.ktx2",
+        "leaves.gltf.cloud.glb",
+        "leaves.gltf.pruned.billow",
+        "points.obj.volume.done",
+        "points.obj.volume.skipped",
+        "broken.obj.volume.failed",
+    ] {
+        assert!(out.join(f).is_file(), "{f}: {t}");
+    }
+    assert!(!out.join("points.obj.volume.billow").exists());
+    assert!(!out.join("broken.obj.volume.done").exists());
+    // The failed mesh is tried again; the others are up to date.
+    let again = make(&["-n", "batch", "BATCH_KTX2=1", "BATCH_GLB=1"], &set, &out);
+    let plan = text(&again);
+    let runs = |mesh: &str| {
+        plan.lines()
+            .any(|l| l.contains("billow voxelize") && l.contains(mesh))
+    };
+    assert!(
+        runs("broken.obj") && !runs("leaves.gltf") && !runs("points.obj"),
+        "{plan}"
+    );
 }

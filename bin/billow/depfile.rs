@@ -15,6 +15,21 @@
 //! rather than stops, when one of them is deleted. Spaces, `#` and `%` are
 //! escaped with a backslash and `$` is written `$$`, as GNU make reads them; a path make
 //! cannot express (a newline, a colon, a backslash) is refused with exit 8 before the bake.
+//!
+//! Files the bake looked for and did not find (a missing texture or .mtl) cannot be
+//! prerequisites: make would stop on them, or rebake on every run. They go into a GNU make
+//! conditional instead, so that the outputs are up to date while the file stays missing
+//! and out of date as soon as it exists, whatever its modification time (a texture
+//! restored from a backup keeps its old one):
+//!
+//! ```make
+//! ifneq ($(wildcard tex/leaf.png),)
+//! out.billow out.ktx2: .billow-restored
+//! endif
+//! .billow-restored:
+//! ```
+//!
+//! `.billow-restored` has no file and no recipe, so make treats it as always new.
 
 use std::path::{Path, PathBuf};
 
@@ -64,15 +79,23 @@ pub fn check(depfile: Option<&Path>, paths: &[&Path]) -> Result<(), CliError> {
     Ok(())
 }
 
-/// The depfile's text: `targets` depend on `input` and then `read`.
-pub fn render(targets: &[&Path], input: &Path, read: &[PathBuf]) -> Result<String, CliError> {
+/// The depfile's text: `targets` depend on `input` and then `read`, and are out of date as
+/// soon as one of `missing` exists.
+pub fn render(
+    targets: &[&Path],
+    input: &Path,
+    read: &[PathBuf],
+    missing: &[PathBuf],
+) -> Result<String, CliError> {
     let mut out = String::new();
+    let mut target_list = String::new();
     for (i, t) in targets.iter().enumerate() {
         if i > 0 {
-            out.push(' ');
+            target_list.push(' ');
         }
-        out.push_str(&escape("--depfile", t)?);
+        target_list.push_str(&escape("--depfile", t)?);
     }
+    out.push_str(&target_list);
     out.push(':');
     let mut prereqs = vec![input];
     prereqs.extend(read.iter().map(PathBuf::as_path));
@@ -86,7 +109,33 @@ pub fn render(targets: &[&Path], input: &Path, read: &[PathBuf]) -> Result<Strin
         out.push_str(&escape("--depfile", p)?);
         out.push_str(":\n");
     }
+    if !missing.is_empty() {
+        out.push_str(
+            "\n# Looked for when baked, not found: once one exists, the targets are out of date.\n",
+        );
+        out.push_str("ifneq ($(wildcard");
+        for p in missing {
+            out.push(' ');
+            out.push_str(&glob_escape(&escape("--depfile", p)?));
+        }
+        out.push_str("),)\n");
+        out.push_str(&target_list);
+        out.push_str(": .billow-restored\nendif\n.billow-restored:\n");
+    }
     Ok(out)
+}
+
+/// A path already escaped for make, with the characters `$(wildcard)`'s glob would take
+/// as patterns (`*`, `?`, `[`, `]`) escaped too.
+fn glob_escape(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        if matches!(c, '*' | '?' | '[' | ']') {
+            out.push('\\');
+        }
+        out.push(c);
+    }
+    out
 }
 
 #[cfg(test)]
@@ -99,6 +148,7 @@ mod tests {
             &[Path::new("out dir/a.billow"), Path::new("b.ktx2")],
             Path::new("my mesh.gltf"),
             &[PathBuf::from("tex/50%#$.png")],
+            &[],
         )
         .unwrap();
         assert_eq!(
@@ -106,8 +156,30 @@ mod tests {
             "out\\ dir/a.billow b.ktx2: \\\n my\\ mesh.gltf \\\n tex/50\\%\\#$$.png\n\n\
              tex/50\\%\\#$$.png:\n"
         );
-        assert!(render(&[Path::new("a:b")], Path::new("m.obj"), &[]).is_err());
+        assert!(render(&[Path::new("a:b")], Path::new("m.obj"), &[], &[]).is_err());
         assert!(check(Some(Path::new("d")), &[Path::new("x\ny")]).is_err());
         assert!(check(None, &[Path::new("x\ny")]).is_ok());
+    }
+
+    #[test]
+    fn missing_files_make_a_conditional_rule() {
+        let t = render(
+            &[Path::new("a.billow")],
+            Path::new("m.obj"),
+            &[PathBuf::from("m.mtl")],
+            &[PathBuf::from("tex/leaf*1.png"), PathBuf::from("b c.png")],
+        )
+        .unwrap();
+        assert!(
+            t.starts_with("a.billow: \\\n m.obj \\\n m.mtl\n\nm.mtl:\n"),
+            "{t}"
+        );
+        assert!(
+            t.contains(
+                "ifneq ($(wildcard tex/leaf\\*1.png b\\ c.png),)\na.billow: .billow-restored\nendif\n\
+                 .billow-restored:\n"
+            ),
+            "{t}"
+        );
     }
 }
