@@ -23,6 +23,9 @@ pub struct InspectReport {
     /// The files read beside the mesh file ([`crate::import::ImportReport::files`]), as the
     /// import resolved them.
     pub files: Vec<String>,
+    /// The files the import looked for and could not read
+    /// ([`crate::import::ImportReport::missing`]): a missing texture, MTL library or image.
+    pub missing_files: Vec<String>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -128,6 +131,11 @@ pub fn inspect(imported: &Imported, path: &Path) -> InspectReport {
             .iter()
             .map(|p| p.display().to_string())
             .collect(),
+        missing_files: report
+            .missing
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect(),
     }
 }
 
@@ -191,6 +199,12 @@ impl fmt::Display for InspectReport {
         writeln!(f, "files read {}", self.files.len())?;
         for p in &self.files {
             writeln!(f, "  {p}")?;
+        }
+        if !self.missing_files.is_empty() {
+            writeln!(f, "files missing {}", self.missing_files.len())?;
+            for p in &self.missing_files {
+                writeln!(f, "  {p}")?;
+            }
         }
         write!(f, "warnings   {}", self.warnings.len())?;
         for w in &self.warnings {

@@ -282,6 +282,7 @@ pub fn leaf_texture(size: u32) -> Texture {
         texels,
         wrap_u: Wrap::ClampToEdge,
         wrap_v: Wrap::ClampToEdge,
+        encoded: None,
     }
 }
 
@@ -467,6 +468,7 @@ pub fn bench_tree(seed: u64) -> IndexedMesh {
         texels,
         wrap_u: Wrap::Repeat,
         wrap_v: Wrap::Repeat,
+        encoded: None,
     };
     // Icosphere.
     let t = (1.0 + 5f32.sqrt()) / 2.0;

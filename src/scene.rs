@@ -91,13 +91,45 @@ impl Default for Material {
 /// A decoded texture. RGB are sRGB-encoded, A linear, straight alpha.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Texture {
-    /// URI or name as the source file gives it (for messages and `inspect`).
+    /// URI or name as the source file gives it (for messages, `inspect` and the names of
+    /// exported images).
     pub name: String,
     pub width: u32,
     pub height: u32,
     pub texels: Vec<[u8; 4]>,
     pub wrap_u: Wrap,
     pub wrap_v: Wrap,
+    /// The source's encoded image when [`Texture::texels`] are exactly its decoding and it
+    /// is a format glTF carries (JPEG, PNG), so that an export can embed the author's bytes
+    /// instead of encoding the texels again (a JPEG stays a JPEG). `None` for other formats
+    /// (TGA, BMP, …), generated textures, and textures the import changed (an OBJ `map_Kd`
+    /// combined with its `map_d`). Whoever changes the texels must clear it.
+    pub encoded: Option<EncodedImage>,
+}
+
+/// An image file's bytes as the source held them ([`Texture::encoded`]). Cloning shares
+/// the bytes.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct EncodedImage {
+    pub format: EncodedFormat,
+    pub bytes: std::sync::Arc<[u8]>,
+}
+
+/// The formats [`EncodedImage`] holds: those glTF 2.0 embeds without an extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum EncodedFormat {
+    Png,
+    Jpeg,
+}
+
+impl EncodedFormat {
+    /// The MIME type glTF names the format with (`image/png`, `image/jpeg`).
+    pub fn mime_type(self) -> &'static str {
+        match self {
+            EncodedFormat::Png => "image/png",
+            EncodedFormat::Jpeg => "image/jpeg",
+        }
+    }
 }
 
 /// What the source calls a mesh (glTF mesh primitive, OBJ object/group).

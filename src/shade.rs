@@ -318,6 +318,7 @@ mod tests {
                 texels,
                 wrap_u: wrap,
                 wrap_v: wrap,
+                encoded: None,
             };
             for _ in 0..20_000 {
                 let f = |v: u32| (v % 40_000) as f32 / 10_000.0 - 1.5;

@@ -218,6 +218,7 @@ mod tests {
             texels,
             wrap_u: wrap,
             wrap_v: wrap,
+            encoded: None,
         }
     }
 

@@ -11,7 +11,10 @@ use billow::eval::image::write_comparisons_png;
 use billow::eval::metrics::compare;
 use billow::eval::reference::{ReferenceRenderer, Sampling};
 use billow::eval::ImageF32;
-use billow::export::{cloud_glb_bytes, write_cloud_glb, GltfOptions};
+use billow::export::{
+    cloud_glb_bytes, cloud_gltf_bytes, write_cloud_glb, write_cloud_gltf, GltfContainer,
+    GltfOptions,
+};
 use billow::import::{import, ImportOptions};
 use billow::scene::Scene;
 use glam::{Vec3, Vec4};
@@ -304,4 +307,285 @@ fn pictures_for_the_docs() {
     img.resize(512, 512, image::imageops::FilterType::Triangle)
         .save(out.join("oak_lod0_atlas.png"))
         .unwrap();
+}
+
+/// A small tree as OBJ + MTL in `dir`: a trunk of three opaque quads textured with a JPEG
+/// (`bark`), a PNG (`moss`) and a BMP (`stone`), and a crown of alpha-masked leaf quads.
+/// Returns the OBJ's path.
+fn textured_tree(dir: &Path) -> PathBuf {
+    use image::{ExtendedColorType, ImageEncoder};
+    let (w, h) = (64u32, 32u32);
+    let rgb: Vec<u8> = (0..w * h)
+        .flat_map(|i| [(i % w * 4) as u8, (i / w * 8) as u8, 90])
+        .collect();
+    let rgba: Vec<u8> = rgb
+        .chunks(3)
+        .flat_map(|p| [p[0], p[1], p[2], 255])
+        .collect();
+    let mut jpeg = Vec::new();
+    image::codecs::jpeg::JpegEncoder::new_with_quality(&mut jpeg, 85)
+        .encode(&rgb, w, h, ExtendedColorType::Rgb8)
+        .unwrap();
+    let mut png = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut png)
+        .write_image(&rgba, w, h, ExtendedColorType::Rgba8)
+        .unwrap();
+    let mut bmp = Vec::new();
+    image::codecs::bmp::BmpEncoder::new(&mut bmp)
+        .write_image(&rgba, w, h, ExtendedColorType::Rgba8)
+        .unwrap();
+    let leaf: Vec<u8> = (0..16 * 16)
+        .flat_map(|i: u32| {
+            let (x, y) = (i % 16, i / 16);
+            let inside = (x as i32 - 8).pow(2) + (y as i32 - 8).pow(2) < 40;
+            [40, 140, 30, if inside { 255 } else { 0 }]
+        })
+        .collect();
+    let mut leaf_png = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut leaf_png)
+        .write_image(&leaf, 16, 16, ExtendedColorType::Rgba8)
+        .unwrap();
+    std::fs::write(dir.join("bark.jpg"), &jpeg).unwrap();
+    std::fs::write(dir.join("moss.png"), &png).unwrap();
+    std::fs::write(dir.join("stone.bmp"), &bmp).unwrap();
+    std::fs::write(dir.join("leaf.png"), &leaf_png).unwrap();
+    std::fs::write(
+        dir.join("tree.mtl"),
+        "newmtl bark\nKd 1 1 1\nmap_Kd bark.jpg\n\nnewmtl moss\nKd 1 1 1\nmap_Kd moss.png\n\n\
+         newmtl stone\nKd 1 1 1\nmap_Kd stone.bmp\n\nnewmtl leaf\nKd 1 1 1\nmap_Kd leaf.png\n\
+         map_d leaf.png\n",
+    )
+    .unwrap();
+    let mut obj = String::from("mtllib tree.mtl\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n");
+    let mut n = 0;
+    let mut quad = |obj: &mut String, c: [[f32; 3]; 4], mat: &str| {
+        obj.push_str(&format!("usemtl {mat}\n"));
+        for p in c {
+            obj.push_str(&format!("v {} {} {}\n", p[0], p[1], p[2]));
+        }
+        obj.push_str(&format!(
+            "f {}/1 {}/2 {}/3 {}/4\n",
+            n + 1,
+            n + 2,
+            n + 3,
+            n + 4
+        ));
+        n += 4;
+    };
+    for (k, mat) in ["bark", "moss", "stone"].iter().enumerate() {
+        let x = k as f32 * 0.2 - 0.2;
+        quad(
+            &mut obj,
+            [
+                [x, 0.0, 0.0],
+                [x + 0.1, 0.0, 0.0],
+                [x + 0.1, 2.0, 0.0],
+                [x, 2.0, 0.0],
+            ],
+            mat,
+        );
+    }
+    for k in 0..12 {
+        let a = k as f32 * 0.52;
+        let (s, c) = a.sin_cos();
+        let (x, y, z) = (c * 0.6, 2.0 + (k % 3) as f32 * 0.3, s * 0.6);
+        quad(
+            &mut obj,
+            [
+                [x - 0.2 * s, y, z + 0.2 * c],
+                [x + 0.2 * s, y, z - 0.2 * c],
+                [x + 0.2 * s, y + 0.4, z - 0.2 * c],
+                [x - 0.2 * s, y + 0.4, z + 0.2 * c],
+            ],
+            "leaf",
+        );
+    }
+    let path = dir.join("tree.obj");
+    std::fs::write(&path, obj).unwrap();
+    path
+}
+
+/// The trunk keeps what glTF can carry as it was: the source's JPEG and PNG bytes
+/// (identical, with their mimeType), the source's material names and image/texture names;
+/// only an image glTF cannot hold (BMP) is encoded as PNG. Before: every trunk texture was
+/// re-encoded as PNG (the oak's 298 KB bark JPEG as a PNG several times larger) and named
+/// `trunk/material0`, `texture0`.
+#[test]
+fn trunk_keeps_source_image_bytes_and_names() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = textured_tree(dir.path());
+    let scene = import(&obj, &ImportOptions { strict: true }).unwrap().scene;
+    let opts = BbcloudOptions {
+        samples: 20,
+        lods: 1,
+        atlas_size: 256,
+        ..BbcloudOptions::default()
+    };
+    let asset = bake(&scene, &opts, "billow test", None, &|_, _| {})
+        .unwrap()
+        .0;
+    let opts = GltfOptions {
+        source: Some(&scene),
+        ..GltfOptions::default()
+    };
+    let glb = cloud_glb_bytes(&asset, &opts).unwrap();
+    assert_eq!(
+        glb,
+        cloud_glb_bytes(&asset, &opts).unwrap(),
+        "deterministic"
+    );
+    let doc = gltf::Gltf::from_slice(&glb).unwrap();
+    let blob = doc.blob.as_deref().unwrap();
+    let trunk = doc.meshes().find(|m| m.name() == Some("trunk")).unwrap();
+    let mut seen = Vec::new();
+    for p in trunk.primitives() {
+        let m = p.material();
+        let name = m.name().unwrap().to_string();
+        let tex = m
+            .pbr_metallic_roughness()
+            .base_color_texture()
+            .unwrap()
+            .texture();
+        let img = tex.source();
+        let gltf::image::Source::View { view, mime_type } = img.source() else {
+            panic!("{name}: image not in the buffer")
+        };
+        let bytes = &blob[view.offset()..view.offset() + view.length()];
+        let (file, mime) = match name.as_str() {
+            "bark" => ("bark.jpg", "image/jpeg"),
+            "moss" => ("moss.png", "image/png"),
+            "stone" => ("stone.bmp", "image/png"),
+            other => panic!("trunk material named {other:?}"),
+        };
+        assert_eq!(mime_type, mime, "{name}");
+        assert_eq!(tex.name(), Some(file), "{name}");
+        assert_eq!(img.name(), Some(file), "{name}");
+        let source = std::fs::read(dir.path().join(file)).unwrap();
+        if file.ends_with(".bmp") {
+            // Re-encoded: the same texels as the BMP, as PNG.
+            let a = image::load_from_memory(bytes).unwrap().into_rgba8();
+            let b = image::load_from_memory(&source).unwrap().into_rgba8();
+            assert_eq!(a, b, "{name}");
+        } else {
+            assert!(bytes == source, "{name}: the source's bytes, unchanged");
+        }
+        seen.push(name);
+    }
+    seen.sort();
+    assert_eq!(seen, ["bark", "moss", "stone"]);
+
+    // Without the source scene (a caller with only the asset): generic names, PNG images
+    // that decode to the same texels.
+    let plain = cloud_glb_bytes(&asset, &GltfOptions::default()).unwrap();
+    let (doc, _, images) = gltf::import_slice(&plain).unwrap();
+    let trunk = doc.meshes().find(|m| m.name() == Some("trunk")).unwrap();
+    for p in trunk.primitives() {
+        let m = p.material();
+        assert!(
+            m.name().unwrap().starts_with("trunk/material"),
+            "{:?}",
+            m.name()
+        );
+        let img = m
+            .pbr_metallic_roughness()
+            .base_color_texture()
+            .unwrap()
+            .texture()
+            .source();
+        let gltf::image::Source::View { mime_type, .. } = img.source() else {
+            panic!("image not in the buffer")
+        };
+        assert_eq!(mime_type, "image/png");
+        assert_eq!(images[img.index()].format, gltf::image::Format::R8G8B8A8);
+    }
+    // The source of another scene is refused, not half used.
+    let mut other = scene.clone();
+    other.textures.pop();
+    let wrong = GltfOptions {
+        source: Some(&other),
+        ..GltfOptions::default()
+    };
+    let e = cloud_glb_bytes(&asset, &wrong).unwrap_err().to_string();
+    assert!(e.contains("source scene"), "{e}");
+}
+
+/// `GltfContainer::Embedded` writes the `.glb`'s document as one JSON `.gltf`: the buffer
+/// a base64 `data:` URI of the same bytes, everything else equal; the `gltf` crate loads
+/// both to the same buffers and images.
+#[test]
+fn embedded_gltf_holds_the_glb_document() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = textured_tree(dir.path());
+    let scene = import(&obj, &ImportOptions { strict: true }).unwrap().scene;
+    let opts = BbcloudOptions {
+        samples: 20,
+        lods: 2,
+        atlas_size: 256,
+        ..BbcloudOptions::default()
+    };
+    let asset = bake(&scene, &opts, "billow test", None, &|_, _| {})
+        .unwrap()
+        .0;
+    let glb_opts = GltfOptions {
+        source: Some(&scene),
+        ..GltfOptions::default()
+    };
+    let gltf_opts = GltfOptions {
+        container: GltfContainer::Embedded,
+        ..glb_opts
+    };
+    let glb = cloud_gltf_bytes(&asset, &glb_opts).unwrap();
+    assert_eq!(
+        glb,
+        cloud_glb_bytes(&asset, &gltf_opts).unwrap(),
+        "glb whatever the container"
+    );
+    let text = cloud_gltf_bytes(&asset, &gltf_opts).unwrap();
+    assert_eq!(
+        text,
+        cloud_gltf_bytes(&asset, &gltf_opts).unwrap(),
+        "deterministic"
+    );
+    let written = dir.path().join("cloud.gltf");
+    write_cloud_gltf(&asset, &written, &gltf_opts).unwrap();
+    assert_eq!(std::fs::read(&written).unwrap(), text);
+
+    // The JSON documents are equal but for the buffer's URI.
+    let binary = gltf::Gltf::from_slice(&glb).unwrap();
+    let mut json: serde_json::Value = serde_json::from_slice(&text).unwrap();
+    let uri = json["buffers"][0]
+        .as_object_mut()
+        .unwrap()
+        .remove("uri")
+        .unwrap();
+    let uri = uri.as_str().unwrap();
+    let payload = uri
+        .strip_prefix("data:application/octet-stream;base64,")
+        .expect("a base64 data: URI");
+    assert_eq!(
+        json,
+        serde_json::to_value(binary.document.as_json()).unwrap()
+    );
+    // The same bytes: the gltf crate's loads of both agree.
+    let (_, glb_buffers, glb_images) = gltf::import_slice(&glb).unwrap();
+    let (_, buffers, images) = gltf::import(&written).unwrap();
+    assert_eq!(buffers.len(), 1);
+    assert_eq!(*buffers[0], *glb_buffers[0]);
+    assert_eq!(*buffers[0], binary.blob.unwrap()[..]);
+    assert_eq!(payload.len(), buffers[0].len().div_ceil(3) * 4);
+    assert_eq!(images.len(), glb_images.len());
+    for (a, b) in images.iter().zip(&glb_images) {
+        assert_eq!((a.width, a.height, a.format), (b.width, b.height, b.format));
+        assert!(a.pixels == b.pixels);
+    }
+    assert_eq!(
+        GltfContainer::from_path(Path::new("a/B.GLTF")),
+        Some(GltfContainer::Embedded)
+    );
+    assert_eq!(
+        GltfContainer::from_path(Path::new("b.glb")),
+        Some(GltfContainer::Glb)
+    );
+    assert_eq!(GltfContainer::from_path(Path::new("c.gltf.tmp")), None);
+    assert_eq!(GltfContainer::from_path(Path::new("glb")), None);
 }

@@ -339,3 +339,49 @@ fn extra_options_are_applied_and_recorded() {
     assert_eq!(v["stats"]["foliage_triangles"], 3166);
     assert_eq!(v["stats"]["kept_triangles"], 10_640);
 }
+
+/// `--gltf` picks the container by the extension: `.glb` binary, `.gltf` one JSON file
+/// (its buffer a base64 `data:` URI) holding the same document, anything else a usage error
+/// naming `--gltf` (exit 2) before any bake. Before: `y.gltf` got GLB bytes, `y.txt` too.
+#[test]
+fn gltf_extension_picks_the_container() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let r = bake(d, "x.billow", "1", "2", &["--gltf", "x.glb"]);
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let r = bake(d, "y.billow", "1", "2", &["--gltf", "y.gltf"]);
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let text = std::fs::read(d.join("y.gltf")).unwrap();
+    let json: serde_json::Value = serde_json::from_slice(&text).expect("a .gltf is JSON");
+    let uri = json["buffers"][0]["uri"].as_str().unwrap();
+    assert!(uri.starts_with("data:application/octet-stream;base64,"));
+    let (glb, glb_buffers, glb_images) = gltf::import(d.join("x.glb")).unwrap();
+    let (embedded, buffers, images) = gltf::import(d.join("y.gltf")).unwrap();
+    assert_eq!(glb.as_json().meshes.len(), embedded.as_json().meshes.len());
+    assert!(buffers
+        .iter()
+        .map(|b| &b.0)
+        .eq(glb_buffers.iter().map(|b| &b.0)));
+    assert!(images
+        .iter()
+        .map(|i| &i.pixels)
+        .eq(glb_images.iter().map(|i| &i.pixels)));
+    assert_eq!(
+        std::fs::read(d.join("x.billow")).unwrap(),
+        std::fs::read(d.join("y.billow")).unwrap()
+    );
+
+    for bad in ["z.txt", "z", "z.GLTF.bak"] {
+        let r = bake(d, "z.billow", "1", "2", &["--gltf", bad]);
+        assert_eq!(r.code, Some(2), "{bad}: {}", r.stderr);
+        let line = r.error_line().unwrap();
+        assert!(
+            line.contains("--gltf") && line.contains(".glb") && line.contains(".gltf"),
+            "{line}"
+        );
+        assert!(
+            !d.join("z.billow").exists() && !d.join(bad).exists(),
+            "{bad}"
+        );
+    }
+}

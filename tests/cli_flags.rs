@@ -185,7 +185,9 @@ fn case(command: &str, flag: &str) -> Option<Case> {
             out_of_range: Some("no-such-material"),
             extra: &[],
         },
-        ("bbcloud", "gltf") | ("bbcloud", "atlas") => PATH,
+        // A file name that ends in neither .glb nor .gltf names no glTF container.
+        ("bbcloud", "gltf") => keyword("x.png"),
+        ("bbcloud", "atlas") => PATH,
         ("bbcloud", "gltf-alpha") => keyword("bogus"),
 
         ("eval", "views") => both("bogus", "+x@2000x"),

@@ -93,20 +93,14 @@ fn two_outputs_of_one_command_cannot_share_a_file() {
         ],
         "--ktx2 a.billow",
     );
+    // (`--gltf` takes only a .glb or .gltf name, so -o is named like one here.)
     refused(
         d,
-        &[
-            "bbcloud",
-            "tri.obj",
-            "-o",
-            "c.billow",
-            "--gltf",
-            "./c.billow",
-        ],
+        &["bbcloud", "tri.obj", "-o", "c.glb", "--gltf", "./c.glb"],
         "-o writes that file too",
     );
     assert!(!d.join("a.billow").exists());
-    assert!(!d.join("c.billow").exists());
+    assert!(!d.join("c.glb").exists());
 }
 
 #[test]
@@ -159,6 +153,8 @@ fn outputs_never_replace_the_files_a_mesh_refers_to() {
         &["voxelize", obj, "-o", "eztree_oak_medium.mtl", "--res", "8"],
         "eztree_oak_medium.mtl",
     );
+    // (`--gltf` takes only a .glb or .gltf name, which no file of the oak has; the depfile
+    // is the bbcloud output checked here.)
     refused(
         d,
         &[
@@ -166,7 +162,7 @@ fn outputs_never_replace_the_files_a_mesh_refers_to() {
             obj,
             "-o",
             "c.billow",
-            "--gltf",
+            "--depfile",
             "oak_color_1k.jpg",
         ],
         "oak_color_1k.jpg",

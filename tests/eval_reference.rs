@@ -132,6 +132,7 @@ fn solid_texture(rgba: [u8; 4]) -> Texture {
         texels: vec![rgba; 4],
         wrap_u: Wrap::Repeat,
         wrap_v: Wrap::Repeat,
+        encoded: None,
     }
 }
 
@@ -224,6 +225,7 @@ fn gradient_texture() -> Texture {
         texels,
         wrap_u: Wrap::Repeat,
         wrap_v: Wrap::Repeat,
+        encoded: None,
     }
 }
 
@@ -326,6 +328,7 @@ fn mask_and_blend() {
         texels: vec![[255, 255, 255, 255], [255, 255, 255, 0]],
         wrap_u: Wrap::ClampToEdge,
         wrap_v: Wrap::ClampToEdge,
+        encoded: None,
     });
     let d = 3.1;
     let h = half_px(0.5, d);

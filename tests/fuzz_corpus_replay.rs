@@ -131,8 +131,9 @@ fn every_target_is_replayed() {
 }
 
 /// The fuzzer's first find (`fuzz/regressions/obj_import/`): tobj 4.0.5 panics on an MTL
-/// colour line with fewer than three values (`Kd 1`). The import now loads the mesh with
-/// default materials and a warning (an error with `strict`), as for any unreadable MTL.
+/// colour line with fewer than three values (`Kd 1`). billow parses MTL itself now: one
+/// value is grey (g = b = r, as the MTL specification says), and two values are a warning
+/// naming the line (an error with `strict`) that ignores that statement only.
 #[test]
 fn short_mtl_colour_line_is_a_warning() {
     use billow::import::{import, ImportErrorKind, ImportOptions, Imported};
@@ -152,16 +153,32 @@ fn short_mtl_colour_line_is_a_warning() {
         let Imported { scene, report } = import(&obj, &ImportOptions::default())
             .unwrap_or_else(|e| panic!("{colour}: import refused: {e}"));
         assert_eq!(scene.triangles.len(), 1, "{colour}");
+        assert_eq!(
+            scene.materials[0].name, "a",
+            "{colour}: the material is kept"
+        );
         assert!(
-            report
-                .warnings
-                .iter()
-                .any(|w| w.message.contains("tri.mtl") && w.message.contains("not loaded")),
+            report.warnings.iter().any(|w| w.message.contains("tri.mtl")
+                && w.message.contains("line 2")
+                && w.message.contains("ignored")),
             "{colour}: no warning about the MTL: {:?}",
             report.warnings
         );
         let strict = import(&obj, &ImportOptions { strict: true }).expect_err("strict");
         assert_eq!(strict.kind(), ImportErrorKind::Strict, "{colour}: {strict}");
+        std::fs::write(
+            dir.path().join("tri.mtl"),
+            format!("newmtl a\n{colour} 0.5\n"),
+        )
+        .expect("write tri.mtl");
+        let report = import(&obj, &ImportOptions { strict: true })
+            .unwrap_or_else(|e| panic!("{colour} 0.5: {e}"))
+            .report;
+        assert!(
+            report.warnings.is_empty(),
+            "{colour} 0.5: {:?}",
+            report.warnings
+        );
     }
     // Three values are still read.
     std::fs::write(dir.path().join("tri.mtl"), "newmtl a\nKd 1 0.5 0.25\n").expect("write");

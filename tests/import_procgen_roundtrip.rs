@@ -98,6 +98,8 @@ fn missing_texture_is_reported_and_strict_refuses() {
         missing.report.warnings
     );
     assert_eq!(missing.report.files, [dir.path().join("tree.mtl")]);
+    assert_eq!(missing.report.missing, [dir.path().join("leaf.png")]);
+    assert!(present.report.missing.is_empty());
     assert_eq!(missing.report.dropped_triangles, 0);
     let e = import(&path, &ImportOptions { strict: true }).unwrap_err();
     assert_eq!(e.kind(), ImportErrorKind::Strict);

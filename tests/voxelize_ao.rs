@@ -167,6 +167,7 @@ fn alpha_mask_occludes_only_where_alpha_passes() {
             texels: vec![[255, 255, 255, alpha]],
             wrap_u: Wrap::Repeat,
             wrap_v: Wrap::Repeat,
+            encoded: None,
         });
         scene
     };

@@ -9,8 +9,8 @@ use billow::bbcloud::{
     ViewPreference, MAX_ATLAS_BYTES,
 };
 use billow::compress::{compress_cloud, Compression};
-use billow::export::gltf::cloud_glb_bytes_with;
-use billow::export::{GltfAlpha, GltfOptions};
+use billow::export::gltf::cloud_gltf_bytes_with;
+use billow::export::{GltfAlpha, GltfContainer, GltfOptions};
 use billow::import::{import, ImportOptions, Imported};
 use billow::presets::target::{search, Candidate, Judge, SearchError, TargetOptions};
 use billow::presets::{resolve_cloud, CloudFlags, CloudSettings, Preset, Source};
@@ -122,11 +122,11 @@ pub struct Args {
     /// Materials that make up the foliage (default: every alpha MASK/BLEND material).
     #[arg(long, num_args = 1..)]
     foliage: Vec<String>,
-    /// Also write the cloud (every LOD) and the kept mesh as glTF 2.0 binary (.glb).
-    /// Written atomically.
-    #[arg(long, value_name = "FILE.glb")]
+    /// Also write the cloud (every LOD) and the kept mesh as glTF 2.0: FILE.glb binary,
+    /// FILE.gltf one JSON file with its data embedded. Written atomically.
+    #[arg(long, value_name = "FILE.glb|FILE.gltf")]
     gltf: Option<PathBuf>,
-    /// Alpha mode of the billboards in the .glb: mask (alpha test at 0.5) or blend.
+    /// Alpha mode of the billboards in the --gltf file: mask (alpha test at 0.5) or blend.
     #[arg(long, value_enum, default_value_t = GltfAlphaArg::Mask)]
     gltf_alpha: GltfAlphaArg,
     /// Texel storage: bc (BC7 blocks for the atlases, normal maps and mesh textures, format
@@ -315,6 +315,22 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         .map(|error| target_options(error, args.target_distance, &args.target_size))
         .transpose()?;
     let compression: Compression = args.compress.parse().map_err(|e| usage("--compress", e))?;
+    let gltf_container = args
+        .gltf
+        .as_deref()
+        .map(|p| {
+            GltfContainer::from_path(p).ok_or_else(|| {
+                usage(
+                    "--gltf",
+                    format!(
+                        "{}: the name must end in .glb (binary glTF) or .gltf (JSON glTF)",
+                        p.display()
+                    ),
+                )
+            })
+        })
+        .transpose()?
+        .unwrap_or_default();
     let mut outputs = vec![("-o", args.output.as_path())];
     outputs.extend(args.gltf.as_deref().map(|g| ("--gltf", g)));
     outputs.extend(args.depfile.as_deref().map(|g| ("--depfile", g)));
@@ -448,9 +464,11 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
                     GltfAlphaArg::Mask => GltfAlpha::Mask { cutoff: 0.5 },
                     GltfAlphaArg::Blend => GltfAlpha::Blend,
                 },
+                container: gltf_container,
+                source: Some(&scene),
             };
             let png_bytes: Vec<Vec<u8>> = pngs.iter().map(|(_, b)| b.clone()).collect();
-            let bytes = cloud_glb_bytes_with(&asset, &opts, Some(&png_bytes))
+            let bytes = cloud_gltf_bytes_with(&asset, &opts, Some(&png_bytes))
                 .map_err(|e| CliError::new(Code::Internal, format!("{}: {e}", path.display())))?;
             Some((path, bytes))
         }

@@ -95,6 +95,7 @@ mod tests {
                     texels,
                     wrap_u,
                     wrap_v: Wrap::Repeat,
+                    encoded: None,
                 };
                 let d = Decoded::new(&t);
                 for _ in 0..500 {

@@ -175,6 +175,7 @@ pub fn trunk_scene(asset: &CloudAsset) -> Scene {
                 .collect(),
             wrap_u: wrap_of(t.wrap[0]),
             wrap_v: wrap_of(t.wrap[1]),
+            encoded: None,
         })
         .collect();
     let m = &asset.trunk;

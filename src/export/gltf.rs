@@ -1,7 +1,9 @@
-//! Exporting a billboard cloud ([`CloudAsset`]) as standard glTF 2.0 binary (`.glb`).
+//! Exporting a billboard cloud ([`CloudAsset`]) as standard glTF 2.0: binary (`.glb`) or
+//! one self-contained JSON file (`.gltf`), [`GltfContainer`].
 //!
-//! The document is built with `gltf-json` (re-exported as `gltf::json`) and packed with
-//! `::gltf::binary::Glb`; every image is a PNG inside the binary chunk.
+//! The document is built with `gltf-json` (re-exported as `gltf::json`). A `.glb` is
+//! packed with `::gltf::binary::Glb`, every image a buffer view of its binary chunk; a
+//! `.gltf` is the same document with its one buffer as a base64 `data:` URI.
 //!
 //! - **One node per LOD** (`lod0`, `lod1`, …) and a `trunk` node with the kept mesh. Scene
 //!   `k` (named `lod{k}`) shows LOD k with the trunk; scene 0 is the default, so a viewer
@@ -29,7 +31,10 @@
 //!   weight 0): the displacement of each corner to its projection onto the parent
 //!   billboard in the next level, so a renderer can morph between levels (Lacewell §3).
 //! - **Trunk**: the kept mesh with its materials (base colour factor and texture, alpha
-//!   mode, double-sided) and textures as authored (PNG, straight alpha, wrap modes).
+//!   mode, double-sided) and textures as authored (straight alpha, wrap modes). With the
+//!   source scene ([`GltfOptions::source`]) they keep their names, and a texture whose
+//!   texels are its source image's embeds that image's bytes unchanged (JPEG or PNG, with
+//!   its `mimeType`); any other texture is PNG-encoded from the texels.
 //!
 //! Deterministic: the same asset gives the same bytes.
 
@@ -37,14 +42,16 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use ::gltf::json;
-use billow_format::{CloudAsset, CloudError, FormatError, Mesh};
+use billow_format::{CloudAsset, CloudError, FormatError, Mesh, MeshTexture};
 use json::validation::{Checked::Valid, USize64};
 use json::Index;
 
 use super::straight;
 
 mod build;
-use build::{extras, material, sampler, Bin};
+use build::{base64, extras, material, sampler, Bin};
+
+use crate::scene::{EncodedImage, Scene, Texture};
 
 /// How billboard coverage is turned into visibility by a viewer.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -61,9 +68,41 @@ impl Default for GltfAlpha {
     }
 }
 
+/// How the document and its binary data are packed into the one output file.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum GltfContainer {
+    /// Binary glTF (`.glb`): the JSON chunk and one binary chunk with every buffer view.
+    #[default]
+    Glb,
+    /// JSON glTF (`.gltf`), self-contained in one file: the same document, its one buffer a
+    /// base64 `data:application/octet-stream` URI (images stay buffer views of it).
+    Embedded,
+}
+
+impl GltfContainer {
+    /// The container an output path asks for by its extension (any case): `.glb` →
+    /// [`GltfContainer::Glb`], `.gltf` → [`GltfContainer::Embedded`]; `None` otherwise.
+    pub fn from_path(path: &Path) -> Option<Self> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "glb" => Some(GltfContainer::Glb),
+            "gltf" => Some(GltfContainer::Embedded),
+            _ => None,
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct GltfOptions {
+pub struct GltfOptions<'a> {
     pub alpha: GltfAlpha,
+    pub container: GltfContainer,
+    /// The scene the cloud was baked from (its materials and textures are the asset's, in
+    /// the same order). With it the trunk keeps the source's material names and texture
+    /// and image names, and embeds a texture's source image unchanged (JPEG or PNG bytes,
+    /// [`crate::scene::Texture::encoded`]) where its texels are the asset's; without it
+    /// they are named `trunk/material{m}` and `texture{t}` and every image is PNG-encoded
+    /// from the asset's texels.
+    pub source: Option<&'a Scene>,
 }
 
 /// Why a cloud could not be exported. `Display` names the file.
@@ -81,13 +120,26 @@ pub enum GltfError {
     Write(FormatError),
 }
 
-/// Writes `asset` as a `.glb` at `path`, atomically.
+/// Writes `asset` as a `.glb` at `path`, atomically, whatever `opts.container` says.
 pub fn write_cloud_glb(
     asset: &CloudAsset,
     path: &Path,
     opts: &GltfOptions,
 ) -> Result<(), GltfError> {
-    let bytes = cloud_glb_bytes(asset, opts).map_err(|e| match e {
+    let opts = GltfOptions {
+        container: GltfContainer::Glb,
+        ..*opts
+    };
+    write_cloud_gltf(asset, path, &opts)
+}
+
+/// Writes `asset` as glTF in `opts.container` at `path`, atomically.
+pub fn write_cloud_gltf(
+    asset: &CloudAsset,
+    path: &Path,
+    opts: &GltfOptions,
+) -> Result<(), GltfError> {
+    let bytes = cloud_gltf_bytes(asset, opts).map_err(|e| match e {
         GltfError::InvalidAsset { source, .. } => GltfError::InvalidAsset {
             path: path.to_path_buf(),
             source,
@@ -180,15 +232,39 @@ fn tangent(c: &[[f32; 3]; 4], n: glam::Vec3) -> glam::Vec3 {
         .unwrap_or_else(|| n.any_orthonormal_vector())
 }
 
-/// The kept mesh as one glTF mesh (one primitive per material, shared vertex streams).
+/// Whether `source`'s texels are exactly `texture`'s.
+fn same_texels(source: &Texture, texture: &MeshTexture) -> bool {
+    (source.width, source.height) == (texture.width, texture.height)
+        && source.texels.len() * 4 == texture.texels.len()
+        && source.texels.iter().flatten().eq(texture.texels.iter())
+}
+
+/// The kept mesh as one glTF mesh (one primitive per material, shared vertex streams),
+/// named and with images as [`GltfOptions::source`] says.
 fn trunk_mesh(
     bin: &mut Bin<'_>,
     asset: &CloudAsset,
     mesh: &Mesh,
+    source: Option<&Scene>,
 ) -> Result<Option<Index<json::Mesh>>, String> {
+    if let Some(s) = source {
+        if (s.materials.len(), s.textures.len()) != (asset.materials.len(), asset.textures.len()) {
+            return Err(format!(
+                "the source scene is not the asset's: it has {} materials and {} textures, \
+                 the asset {} and {}",
+                s.materials.len(),
+                s.textures.len(),
+                asset.materials.len(),
+                asset.textures.len()
+            ));
+        }
+    }
     if mesh.triangles.is_empty() {
         return Ok(None);
     }
+    // Source images already embedded, so that one image used with two samplers (two
+    // textures) is stored once.
+    let mut kept: Vec<(&EncodedImage, Index<json::Image>)> = Vec::new();
     let mut by_mat: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
     for (t, &m) in mesh.triangles.iter().zip(&mesh.materials) {
         by_mat.entry(m).or_default().extend(t);
@@ -220,8 +296,26 @@ fn trunk_mesh(
                     let s = *samplers
                         .entry(tx.wrap)
                         .or_insert_with(|| sampler(bin.root, tx.wrap));
-                    let png = straight::encode_png(tx.width, tx.height, &tx.texels)?;
-                    let i = bin.png_texture(&png, format!("texture{t}"), s);
+                    let src = source.map(|s| &s.textures[t as usize]);
+                    let name = src.map_or_else(|| format!("texture{t}"), |s| s.name.clone());
+                    let encoded = src
+                        .filter(|s| same_texels(s, tx))
+                        .and_then(|s| s.encoded.as_ref());
+                    let image = match encoded {
+                        Some(e) => match kept.iter().find(|(k, _)| *k == e) {
+                            Some(&(_, image)) => image,
+                            None => {
+                                let image = bin.image(&e.bytes, e.format.mime_type(), name.clone());
+                                kept.push((e, image));
+                                image
+                            }
+                        },
+                        None => {
+                            let png = straight::encode_png(tx.width, tx.height, &tx.texels)?;
+                            bin.image(&png, "image/png", name.clone())
+                        }
+                    };
+                    let i = bin.texture(image, name, s);
                     textures.insert(t, i);
                     i
                 }
@@ -232,9 +326,13 @@ fn trunk_mesh(
             2 => (json::material::AlphaMode::Blend, 0.5),
             _ => (json::material::AlphaMode::Opaque, 0.5),
         };
+        let name = source.map_or_else(
+            || format!("trunk/material{m}"),
+            |s| s.materials[m as usize].name.clone(),
+        );
         let mat = material(
             bin.root,
-            format!("trunk/material{m}"),
+            name,
             mm.base_color_factor,
             tex,
             alpha,
@@ -266,7 +364,7 @@ fn trunk_mesh(
     })))
 }
 
-/// The `.glb` bytes of `asset` (validated first).
+/// The `.glb` bytes of `asset` (validated first), whatever `opts.container` says.
 pub fn cloud_glb_bytes(asset: &CloudAsset, opts: &GltfOptions) -> Result<Vec<u8>, GltfError> {
     cloud_glb_bytes_with(asset, opts, None)
 }
@@ -275,6 +373,27 @@ pub fn cloud_glb_bytes(asset: &CloudAsset, opts: &GltfOptions) -> Result<Vec<u8>
 /// ([`straight::atlas_pngs`], in atlas order), so a caller that also dumps them encodes
 /// them once.
 pub fn cloud_glb_bytes_with(
+    asset: &CloudAsset,
+    opts: &GltfOptions,
+    atlas_pngs: Option<&[Vec<u8>]>,
+) -> Result<Vec<u8>, GltfError> {
+    let opts = GltfOptions {
+        container: GltfContainer::Glb,
+        ..*opts
+    };
+    cloud_gltf_bytes_with(asset, &opts, atlas_pngs)
+}
+
+/// The glTF bytes of `asset` (validated first) in `opts.container`: a `.glb`, or a
+/// self-contained `.gltf`.
+pub fn cloud_gltf_bytes(asset: &CloudAsset, opts: &GltfOptions) -> Result<Vec<u8>, GltfError> {
+    cloud_gltf_bytes_with(asset, opts, None)
+}
+
+/// [`cloud_gltf_bytes`] with the atlases' level-0 PNGs already encoded
+/// ([`straight::atlas_pngs`], in atlas order), so a caller that also dumps them encodes
+/// them once.
+pub fn cloud_gltf_bytes_with(
     asset: &CloudAsset,
     opts: &GltfOptions,
     atlas_pngs: Option<&[Vec<u8>]>,
@@ -375,7 +494,7 @@ pub fn cloud_glb_bytes_with(
             atlas_mats.push([side(&mut bin, "front"), side(&mut bin, "back")]);
         }
     }
-    let trunk = trunk_mesh(&mut bin, asset, &asset.trunk).map_err(encode)?;
+    let trunk = trunk_mesh(&mut bin, asset, &asset.trunk, opts.source).map_err(encode)?;
     let mut lod_nodes = Vec::new();
     for (l, lv) in asset.levels.iter().enumerate() {
         // (atlas, side) → quads, in billboard order.
@@ -451,13 +570,19 @@ pub fn cloud_glb_bytes_with(
     }
     let data = std::mem::take(&mut bin.data);
     root.scene = Some(Index::new(0));
+    let embedded = opts.container == GltfContainer::Embedded;
     root.push(json::Buffer {
         byte_length: USize64(data.len() as u64),
         name: None,
-        uri: None,
+        uri: embedded.then(|| format!("data:application/octet-stream;base64,{}", base64(&data))),
         extensions: None,
         extras: None,
     });
+    if embedded {
+        let mut text = root.to_vec_pretty().map_err(|e| encode(e.to_string()))?;
+        text.push(b'\n');
+        return Ok(text);
+    }
     let mut text = root.to_vec().map_err(|e| encode(e.to_string()))?;
     while !text.len().is_multiple_of(4) {
         text.push(b' ');

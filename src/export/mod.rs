@@ -1,4 +1,5 @@
-//! Exporting a [`VolumeAsset`]'s 3D texture to interchange formats.
+//! Exporting assets to interchange formats: a [`VolumeAsset`]'s 3D texture, and a billboard
+//! cloud as glTF 2.0 ([`gltf`]: [`write_cloud_gltf`], `.glb` or `.gltf`).
 //!
 //! - [`write_ktx2`] ([`ktx2`]): the whole MIP chain as one KTX 2.0 3D texture, ready to
 //!   upload to a GPU (`R8G8B8A8_SRGB` or `_UNORM`, premultiplied alpha declared in the
@@ -19,7 +20,10 @@ use std::path::PathBuf;
 
 use billow_format::{ColourSpace, FormatError, VolumeAsset};
 
-pub use self::gltf::{cloud_glb_bytes, write_cloud_glb, GltfAlpha, GltfError, GltfOptions};
+pub use self::gltf::{
+    cloud_glb_bytes, cloud_gltf_bytes, write_cloud_glb, write_cloud_gltf, GltfAlpha, GltfContainer,
+    GltfError, GltfOptions,
+};
 pub use self::ktx2::{ktx2_bytes, ktx2_bytes_with, write_ktx2, Supercompression};
 pub use self::slices::{check_slices, slice_bytes, slice_file_name, write_slices, SliceFormat};
 

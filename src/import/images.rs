@@ -2,7 +2,7 @@
 
 use std::io::Cursor;
 
-use crate::scene::{Texture, Wrap};
+use crate::scene::{EncodedFormat, EncodedImage, Texture, Wrap};
 
 /// Largest accepted image side, in texels.
 const MAX_SIDE: u32 = 16384;
@@ -10,13 +10,21 @@ const MAX_SIDE: u32 = 16384;
 const MAX_ALLOC: u64 = 1 << 30;
 
 /// Decodes an encoded image (PNG, JPEG, ...) into RGBA8 texels as stored
-/// (RGB sRGB-encoded, alpha linear, straight). `mime` is a hint; content sniffing wins.
+/// (RGB sRGB-encoded, alpha linear, straight). Content sniffing says the format; `mime`,
+/// else `name`'s extension, where it cannot (TGA). A PNG or JPEG keeps its bytes in
+/// [`Texture::encoded`].
 pub(crate) fn decode(bytes: &[u8], name: &str, mime: Option<&str>) -> Result<Texture, String> {
     let mut reader = image::ImageReader::new(Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|e| e.to_string())?;
     if reader.format().is_none() {
-        match mime.and_then(image::ImageFormat::from_mime_type) {
+        // Formats without a signature (TGA) are told by the MIME type, else by the name's
+        // extension (an OBJ `map_Kd bark.tga`).
+        let by_name = || image::ImageFormat::from_path(name).ok();
+        match mime
+            .and_then(image::ImageFormat::from_mime_type)
+            .or_else(by_name)
+        {
             Some(f) => reader.set_format(f),
             None => return Err("unrecognised image format".into()),
         }
@@ -26,6 +34,11 @@ pub(crate) fn decode(bytes: &[u8], name: &str, mime: Option<&str>) -> Result<Tex
     limits.max_image_height = Some(MAX_SIDE);
     limits.max_alloc = Some(MAX_ALLOC);
     reader.limits(limits);
+    let encoded = match reader.format() {
+        Some(image::ImageFormat::Png) => Some(EncodedFormat::Png),
+        Some(image::ImageFormat::Jpeg) => Some(EncodedFormat::Jpeg),
+        _ => None,
+    };
     let img = reader.decode().map_err(|e| e.to_string())?.into_rgba8();
     let (width, height) = img.dimensions();
     if width == 0 || height == 0 {
@@ -39,6 +52,10 @@ pub(crate) fn decode(bytes: &[u8], name: &str, mime: Option<&str>) -> Result<Tex
         texels,
         wrap_u: Wrap::Repeat,
         wrap_v: Wrap::Repeat,
+        encoded: encoded.map(|format| EncodedImage {
+            format,
+            bytes: bytes.into(),
+        }),
     })
 }
 
@@ -55,6 +72,7 @@ pub(crate) fn combine_alpha(color: &mut Texture, alpha_map: &Texture) {
     let lut = crate::texture::srgb_to_linear_lut();
     let (w, h) = (color.width as u64, color.height as u64);
     let (aw, ah) = (alpha_map.width as u64, alpha_map.height as u64);
+    let mut changed = false;
     for y in 0..h {
         let sy = ((y * ah) / h).min(ah - 1);
         for x in 0..w {
@@ -68,8 +86,15 @@ pub(crate) fn combine_alpha(color: &mut Texture, alpha_map: &Texture) {
                     + 0.0722 * lut[s[2] as usize];
                 (l * 255.0).round().clamp(0.0, 255.0) as u8
             };
-            color.texels[(y * w + x) as usize][3] = a;
+            let texel = &mut color.texels[(y * w + x) as usize];
+            changed |= texel[3] != a;
+            texel[3] = a;
         }
+    }
+    if changed {
+        // The texels are no longer the source image's (an image that is its own alpha
+        // map, `map_Kd` and `map_d` naming one RGBA file, is unchanged and keeps it).
+        color.encoded = None;
     }
 }
 
@@ -82,6 +107,7 @@ pub(crate) fn white_like(alpha_map: &Texture, name: &str) -> Texture {
         texels: vec![[255; 4]; alpha_map.texels.len()],
         wrap_u: Wrap::Repeat,
         wrap_v: Wrap::Repeat,
+        encoded: None,
     }
 }
 

@@ -172,6 +172,7 @@ pub fn import(path: &Path, opts: &ImportOptions) -> Result<Imported, ImportError
         seen: HashSet::new(),
         textures: Vec::new(),
         files: Mutex::new(Vec::new()),
+        missing: Mutex::new(Vec::new()),
     };
     // A folder, a device or a FIFO is "not a regular file" (exit 3), whatever its name.
     if let Err(e) = open_input(path) {
@@ -198,6 +199,7 @@ pub fn import(path: &Path, opts: &ImportOptions) -> Result<Imported, ImportError
         textures: ctx.textures,
         dropped_triangles: builder.dropped(),
         files: ctx.files.into_inner().unwrap_or_else(|e| e.into_inner()),
+        missing: ctx.missing.into_inner().unwrap_or_else(|e| e.into_inner()),
     };
     Ok(Imported {
         scene: builder.finish(),
@@ -215,6 +217,8 @@ pub(crate) struct Ctx {
     textures: Vec<TextureReport>,
     /// The files read besides the mesh file ([`ImportReport::files`]).
     files: Mutex<Vec<PathBuf>>,
+    /// The files looked for and not read ([`ImportReport::missing`]).
+    missing: Mutex<Vec<PathBuf>>,
 }
 
 impl Ctx {
@@ -228,12 +232,29 @@ impl Ctx {
             });
         }
     }
-    /// Notes that `path` was read (once per path).
+    /// Notes that `path` was read (once per path), whatever its bytes then turn out to be.
     pub fn read_from(&self, path: &Path) {
         let mut files = self.files.lock().unwrap_or_else(|e| e.into_inner());
         if !files.iter().any(|f| f == path) {
             files.push(path.to_path_buf());
         }
+    }
+    /// Notes that `path` was looked for and could not be read (once per path).
+    pub fn not_read(&self, path: &Path) {
+        let mut missing = self.missing.lock().unwrap_or_else(|e| e.into_inner());
+        if !missing.iter().any(|f| f == path) {
+            missing.push(path.to_path_buf());
+        }
+    }
+    /// Reads a file the mesh refers to through [`read_input`], noting it in
+    /// [`ImportReport::files`] when read and in [`ImportReport::missing`] when not.
+    pub fn read_referenced(&self, path: &Path) -> std::io::Result<Vec<u8>> {
+        let r = read_input(path);
+        match &r {
+            Ok(_) => self.read_from(path),
+            Err(_) => self.not_read(path),
+        }
+        r
     }
     /// Records a warning (identical messages once, e.g. for an instanced mesh), or
     /// fails with [`ImportError::Strict`] in strict mode.

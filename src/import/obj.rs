@@ -1,4 +1,18 @@
-//! Wavefront OBJ + MTL import (via `tobj`, triangulated, single index).
+//! Wavefront OBJ + MTL import (OBJ statements via `tobj`, triangulated, single index; MTL
+//! libraries parsed here).
+//!
+//! Text: UTF-8 (a byte-order mark is skipped; bytes that are not UTF-8 become U+FFFD) or
+//! UTF-16 LE/BE, with a byte-order mark or recognised by its NUL bytes; the same for MTL
+//! libraries. Only faces (`f` with three or more vertices) are imported: `p` and `l`
+//! statements (and `f` with fewer vertices) are counted in one warning per file. An
+//! import without a single triangle is a warning that says why (no face; or statements
+//! that are not OBJ, naming the first), and so are an MTL library that defines no material
+//! and a `usemtl` that names a material no library defines.
+//!
+//! MTL statements are parsed one by one: one whose values do not parse is ignored with a
+//! warning naming its line (the rest of the library is kept). Colours take one value
+//! (grey: g = b = r, as the MTL specification says and Blender writes `Ks 0`), three, or
+//! `xyz` and CIE XYZ values; `d -halo f` is read as `d f`.
 //!
 //! Material mapping (MTL → [`Material`]):
 //! - `Kd` → base colour factor RGB, taken as **linear** (as Blender's importer does);
@@ -16,6 +30,7 @@
 //! UV `v` is flipped (OBJ's origin is bottom-left, the scene's top-left). Vertex
 //! colours (`v x y z r g b`) are taken as linear.
 
+use std::borrow::Cow;
 use std::cell::RefCell;
 use std::collections::HashMap;
 use std::io::Cursor;
@@ -29,43 +44,52 @@ use crate::scene::{AlphaMode, Material, SceneBuilder, Texture, Triangle, Vertex}
 pub(super) fn load(path: &Path, ctx: &mut Ctx) -> Result<SceneBuilder, ImportError> {
     let raw = super::read_input(path).map_err(|e| ctx.io(path, e))?;
     // Real exporters write bytes that are not UTF-8 (a Latin-1 `©` in a 3ds Max comment or
-    // group name) and statements tobj refuses although they are harmless (a bare `usemtl`):
-    // both are made acceptable here; what is still refused is reported with its line.
-    let bytes = tolerate_obj(&String::from_utf8_lossy(&raw)).into_bytes();
+    // group name), UTF-16 (Windows tools) and statements tobj refuses although they are
+    // harmless (a bare `usemtl`): all are made acceptable here; what is still refused is
+    // reported with its line.
+    let (text, scan) = tolerate_obj(&decode_text(&raw));
     drop(raw);
     let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
     // The index check runs before tobj's parse, not beside it: tobj overflows on some
     // out-of-range indices (`vt * 2` on a negative index past the start, a panic with
     // overflow checks; found by the obj_import fuzzer), and only the check reports them.
-    check_face_indices(&String::from_utf8_lossy(&bytes), ctx)?;
-    let parsed = {
-        // Load MTL files ourselves to learn their folders and report missing ones.
-        let mtl_dirs: RefCell<HashMap<String, PathBuf>> = RefCell::new(HashMap::new());
-        let mtl_failures: RefCell<Vec<(PathBuf, String)>> = RefCell::new(Vec::new());
-        let r = tobj::load_obj_buf(&mut Cursor::new(&bytes), &OBJ_OPTIONS, |mtl: &Path| {
-            let p = resolve_relative(&dir, &mtl.to_string_lossy());
-            let (r, failure) = load_mtl(&p);
-            match &r {
-                Ok((mats, _)) => {
-                    ctx.read_from(&p);
-                    let d = p.parent().unwrap_or(Path::new(".")).to_path_buf();
-                    for m in mats {
-                        mtl_dirs
-                            .borrow_mut()
-                            .entry(m.name.clone())
-                            .or_insert_with(|| d.clone());
-                    }
-                }
-                Err(e) => mtl_failures
-                    .borrow_mut()
-                    .push((p, failure.unwrap_or_else(|| e.to_string()))),
+    check_face_indices(&text, ctx)?;
+    let bytes = text.into_bytes();
+    // MTL libraries are read and parsed here (tobj's MTL parser drops a whole library over
+    // one statement it does not expect); tobj gets their material names, to resolve
+    // `usemtl`, and `materials` the same list in the same order with what billow uses.
+    let materials: RefCell<Vec<MtlMaterial>> = RefCell::new(Vec::new());
+    let libraries: RefCell<Vec<(PathBuf, Result<MtlNotes, String>)>> = RefCell::new(Vec::new());
+    let parsed = tobj::load_obj_buf(&mut Cursor::new(&bytes), &OBJ_OPTIONS, |mtl: &Path| {
+        let p = resolve_relative(&dir, &mtl.to_string_lossy());
+        let raw = match ctx.read_referenced(&p) {
+            Ok(raw) => raw,
+            Err(e) => {
+                libraries.borrow_mut().push((p, Err(e.to_string())));
+                return Err(tobj::LoadError::OpenFileFailed);
             }
-            r
-        });
-        (r, mtl_dirs.into_inner(), mtl_failures.into_inner())
-    };
-    let (parsed, mtl_dirs, mtl_failures) = parsed;
-    let (models, _materials_result) = parsed.map_err(|e| {
+        };
+        let folder = p.parent().unwrap_or(Path::new(".")).to_path_buf();
+        let (mats, notes) = parse_mtl(&decode_text(&raw), &folder);
+        let list = mats
+            .iter()
+            .map(|m| tobj::Material {
+                name: m.name.clone(),
+                ..Default::default()
+            })
+            .collect();
+        // A later material of the same name wins, as in tobj.
+        let names = mats
+            .iter()
+            .enumerate()
+            .map(|(i, m)| (m.name.clone(), i))
+            .collect();
+        materials.borrow_mut().extend(mats);
+        libraries.borrow_mut().push((p, Ok(notes)));
+        Ok((list, names))
+    });
+    let (materials, libraries) = (materials.into_inner(), libraries.into_inner());
+    let (models, _) = parsed.map_err(|e| {
         let at = failing_line(&bytes, |prefix| {
             tobj::load_obj_buf(&mut Cursor::new(prefix), &OBJ_OPTIONS, |_| {
                 Ok((Vec::new(), Default::default()))
@@ -81,17 +105,51 @@ pub(super) fn load(path: &Path, ctx: &mut Ctx) -> Result<SceneBuilder, ImportErr
             _ => ctx.parse(format!("{at}{e}")),
         }
     })?;
-    for (p, e) in mtl_failures {
+    let mut all_loaded = true;
+    for (p, r) in &libraries {
+        match r {
+            Err(e) => {
+                all_loaded = false;
+                ctx.warn(format!(
+                    "material library {} not loaded ({e}); using default materials",
+                    p.display()
+                ))?;
+            }
+            Ok(notes) => {
+                for w in notes.warnings(p) {
+                    ctx.warn(w)?;
+                }
+            }
+        }
+    }
+    // A `usemtl` that names no material is drawn with the default material: said, unless
+    // a library that was not loaded already explains it. A bare `usemtl` (no name) means
+    // the default material and is not reported.
+    let undefined: Vec<&String> = scan
+        .usemtl
+        .iter()
+        .filter(|n| *n != UNNAMED_MATERIAL && !materials.iter().any(|m| &m.name == *n))
+        .collect();
+    if all_loaded && !undefined.is_empty() {
+        let shown: Vec<String> = undefined.iter().take(5).map(|n| format!("'{n}'")).collect();
+        let more = if undefined.len() > 5 { ", …" } else { "" };
+        let what = if undefined.len() == 1 {
+            "a material".to_string()
+        } else {
+            format!("{} materials", undefined.len())
+        };
         ctx.warn(format!(
-            "material library {} not loaded ({e}); using default materials",
-            p.display()
+            "usemtl names {what} that no material library defines ({}{more}); their faces use \
+             the default material",
+            shown.join(", ")
         ))?;
     }
-    // Re-read the materials that did load (tobj merges them and drops the folder).
+    if let Some(w) = scan.skipped_warning() {
+        ctx.warn(w)?;
+    }
     let mut b = SceneBuilder::new();
     let mut tex_cache: HashMap<(Option<PathBuf>, Option<PathBuf>), Option<u32>> = HashMap::new();
     let mut mat_map: HashMap<usize, u32> = HashMap::new();
-    let materials = _materials_result.unwrap_or_default();
     let mut default_material = None;
 
     for (oi, model) in models.iter().enumerate() {
@@ -118,11 +176,7 @@ pub(super) fn load(path: &Path, ctx: &mut Ctx) -> Result<SceneBuilder, ImportErr
             Some(i) => match mat_map.get(&i) {
                 Some(&s) => s,
                 None => {
-                    let dir = mtl_dirs
-                        .get(&materials[i].name)
-                        .cloned()
-                        .unwrap_or_else(|| dir.clone());
-                    let mat = convert_material(&materials[i], &dir, &mut b, &mut tex_cache, ctx)?;
+                    let mat = convert_material(&materials[i], &mut b, &mut tex_cache, ctx)?;
                     let idx = b.material(mat);
                     mat_map.insert(i, idx);
                     idx
@@ -184,22 +238,20 @@ pub(super) fn load(path: &Path, ctx: &mut Ctx) -> Result<SceneBuilder, ImportErr
             });
         }
     }
+    if b.offered() == 0 {
+        ctx.warn(scan.no_triangles())?;
+    }
     Ok(b)
 }
 
 fn convert_material(
-    m: &tobj::Material,
-    dir: &Path,
+    m: &MtlMaterial,
     b: &mut SceneBuilder,
     cache: &mut HashMap<(Option<PathBuf>, Option<PathBuf>), Option<u32>>,
     ctx: &mut Ctx,
 ) -> Result<Material, ImportError> {
-    let kd = m.diffuse.unwrap_or([1.0; 3]);
-    let tr = m
-        .unknown_param
-        .get("Tr")
-        .and_then(|s| s.split_whitespace().next()?.parse::<f32>().ok());
-    let d = m.dissolve.or(tr.map(|t| 1.0 - t)).unwrap_or(1.0);
+    let kd = m.kd.unwrap_or([1.0; 3]);
+    let d = m.d.or(m.tr.map(|t| 1.0 - t)).unwrap_or(1.0);
     let d = if d.is_finite() {
         d.clamp(0.0, 1.0)
     } else {
@@ -215,7 +267,8 @@ fn convert_material(
             .filter(|s| !s.is_empty())
             .map(|s| s.replace('\\', "/"))
     };
-    let (kd_name, d_name) = (map(&m.diffuse_texture), map(&m.dissolve_texture));
+    let (kd_name, d_name) = (map(&m.map_kd), map(&m.map_d));
+    let dir = m.dir.as_path();
     let (alpha_mode, double_sided) = if d_name.is_some() {
         (AlphaMode::Mask { cutoff: 0.5 }, true)
     } else if d < 1.0 {
@@ -272,16 +325,6 @@ fn convert_material(
     })
 }
 
-/// `tobj::load_mtl` without its panic: tobj 4.0.5 unwraps when a `Ka`, `Kd`, `Ks` or `Ke`
-/// line has fewer than three numbers (found by fuzzing, `fuzz/regressions/obj_import/`).
-/// Such a file is refused as a material parse error instead, like any other bad MTL.
-/// A colour statement (`Ka`, `Kd`, `Ks`, `Ke`) with fewer than three values.
-fn short_colour_line(line: &[u8]) -> bool {
-    let line = String::from_utf8_lossy(line);
-    let mut words = line.split_whitespace();
-    matches!(words.next(), Some("Ka" | "Kd" | "Ks" | "Ke")) && words.count() < 3
-}
-
 /// Loads and decodes one MTL texture; a failure is a warning and `None`.
 fn load_texture(
     name: &str,
@@ -290,8 +333,8 @@ fn load_texture(
     slot: &str,
     ctx: &mut Ctx,
 ) -> Result<Option<Texture>, ImportError> {
-    let r = super::read_input(path)
-        .inspect(|_| ctx.read_from(path))
+    let r = ctx
+        .read_referenced(path)
         .map_err(|e| format!("{}: {e}", path.display()))
         .and_then(|bytes| images::decode(&bytes, name, None));
     ctx.texture(name, r.is_ok());
@@ -345,83 +388,484 @@ const OBJ_OPTIONS: tobj::LoadOptions = tobj::LoadOptions {
 /// material without a name); a bare `usemtl` selects it.
 const UNNAMED_MATERIAL: &str = "(unnamed)";
 
-/// The OBJ text with the harmless statements tobj would refuse rewritten: a bare
-/// `usemtl` selects [`UNNAMED_MATERIAL`] (tobj requires a name).
-fn tolerate_obj(text: &str) -> String {
-    let mut out = String::with_capacity(text.len() + 16);
-    for line in text.split_inclusive('\n') {
-        let body = line.trim_end_matches(['\n', '\r']);
-        if body.trim() == "usemtl" {
-            out.push_str("usemtl ");
-            out.push_str(UNNAMED_MATERIAL);
-            out.push_str(&line[body.len()..]);
-        } else {
-            out.push_str(line);
-        }
-    }
-    out
-}
-
-/// The MTL text with the harmless statements tobj would refuse rewritten or dropped: a
-/// bare `newmtl` names [`UNNAMED_MATERIAL`]; a texture statement (`map_Kd`, `bump`, ...)
-/// without a file name and an `illum` without a number are dropped (they say nothing).
-fn tolerate_mtl(text: &str) -> String {
-    const MAPS: [&str; 11] = [
-        "map_Ka", "map_Kd", "map_Ks", "map_Bump", "map_bump", "map_Ns", "map_ns", "map_NS", "bump",
-        "map_d", "illum",
-    ];
-    let mut out = String::with_capacity(text.len() + 16);
-    for line in text.split_inclusive('\n') {
-        let body = line.trim_end_matches(['\n', '\r']);
-        let t = body.trim();
-        if t == "newmtl" {
-            out.push_str("newmtl ");
-            out.push_str(UNNAMED_MATERIAL);
-            out.push_str(&line[body.len()..]);
-        } else if MAPS.contains(&t) {
-            out.push_str(&line[body.len()..]);
-        } else {
-            out.push_str(line);
-        }
-    }
-    out
-}
-
-/// Reads and parses one MTL library; an error is one line naming the line number and the
-/// problem (the caller names the file).
-fn load_mtl(p: &Path) -> (tobj::MTLLoadResult, Option<String>) {
-    let raw = match super::read_input(p) {
-        Ok(raw) => raw,
-        Err(e) => return (Err(tobj::LoadError::OpenFileFailed), Some(e.to_string())),
+/// The text of an OBJ or MTL file: UTF-8, its byte-order mark dropped and bytes that are
+/// not UTF-8 (a Latin-1 `©`) replaced by U+FFFD, or UTF-16, little or big endian, told by
+/// its byte-order mark or, without one, by NUL bytes in every other byte (as ASCII text in
+/// UTF-16 has; text in UTF-8 has none).
+fn decode_text(raw: &[u8]) -> Cow<'_, str> {
+    let utf16 = match raw {
+        [0xEF, 0xBB, 0xBF, rest @ ..] => return String::from_utf8_lossy(rest),
+        [0xFF, 0xFE, rest @ ..] => Some((rest, false)),
+        [0xFE, 0xFF, rest @ ..] => Some((rest, true)),
+        _ => utf16_without_bom(raw).map(|big_endian| (raw, big_endian)),
     };
-    let text = tolerate_mtl(&String::from_utf8_lossy(&raw)).into_bytes();
-    // tobj panics on a colour statement with fewer than three values (found by the
-    // obj_import fuzzer): refuse it here, naming the line.
-    if let Some((n, line)) = text
-        .split(|&b| b == b'\n')
-        .enumerate()
-        .find(|(_, l)| short_colour_line(l))
-    {
-        let shown = String::from_utf8_lossy(line);
-        return (
-            Err(tobj::LoadError::MaterialParseError),
-            Some(format!(
-                "line {}: '{}': a colour needs three values: {}",
-                n + 1,
-                shown.trim(),
-                tobj::LoadError::MaterialParseError
-            )),
-        );
-    }
-    match tobj::load_mtl_buf(&mut Cursor::new(&text)) {
-        Ok(r) => (Ok(r), None),
-        Err(e) => {
-            let at = failing_line(&text, |prefix| {
-                tobj::load_mtl_buf(&mut Cursor::new(prefix)).err()
+    match utf16 {
+        None => String::from_utf8_lossy(raw),
+        Some((bytes, big_endian)) => {
+            let units = bytes.chunks_exact(2).map(|c| {
+                if big_endian {
+                    u16::from_be_bytes([c[0], c[1]])
+                } else {
+                    u16::from_le_bytes([c[0], c[1]])
+                }
             });
-            (Err(e), Some(format!("{at}{e}")))
+            Cow::Owned(
+                char::decode_utf16(units)
+                    .map(|c| c.unwrap_or(char::REPLACEMENT_CHARACTER))
+                    .collect(),
+            )
         }
     }
+}
+
+/// Whether text without a byte-order mark looks like UTF-16: `Some(big_endian)` when at
+/// least three quarters of the odd (LE) or even (BE) bytes of its first 4 KiB are NUL and
+/// almost none of the others.
+fn utf16_without_bom(raw: &[u8]) -> Option<bool> {
+    let head = &raw[..raw.len().min(4096) & !1];
+    let pairs = head.len() / 2;
+    if pairs < 2 {
+        return None;
+    }
+    let zeros = |k: usize| head.iter().skip(k).step_by(2).filter(|&&b| b == 0).count();
+    let (even, odd) = (zeros(0), zeros(1));
+    let mostly = |n: usize| 4 * n >= 3 * pairs;
+    let hardly = |n: usize| 16 * n <= pairs;
+    if mostly(odd) && hardly(even) {
+        Some(false)
+    } else if mostly(even) && hardly(odd) {
+        Some(true)
+    } else {
+        None
+    }
+}
+
+/// Statement keywords of the OBJ format (including free-form geometry, which billow does
+/// not import): a line starting with anything else is not understood.
+const OBJ_KEYWORDS: &[&str] = &[
+    "v",
+    "vt",
+    "vn",
+    "vp",
+    "f",
+    "fo",
+    "l",
+    "p",
+    "o",
+    "g",
+    "s",
+    "mg",
+    "usemtl",
+    "mtllib",
+    "usemap",
+    "maplib",
+    "lod",
+    "bevel",
+    "c_interp",
+    "d_interp",
+    "trace_obj",
+    "shadow_obj",
+    "ctech",
+    "stech",
+    "cstype",
+    "deg",
+    "bmat",
+    "step",
+    "curv",
+    "curv2",
+    "surf",
+    "parm",
+    "trim",
+    "hole",
+    "scrv",
+    "sp",
+    "end",
+    "con",
+    "call",
+    "csh",
+];
+
+/// What [`tolerate_obj`] saw: the statements, those skipped and those not understood.
+#[derive(Debug, Default)]
+struct ObjScan {
+    /// Non-blank lines that are not comments.
+    statements: usize,
+    vertices: usize,
+    /// `f` statements with at least three vertices.
+    faces: usize,
+    /// `f` statements with one or two vertices (tobj drops them).
+    short_faces: usize,
+    points: usize,
+    lines: usize,
+    /// Statements whose keyword is not OBJ, and the first of them (line number, text).
+    unknown: usize,
+    first_unknown: Option<(usize, String)>,
+    /// The material names `usemtl` selects, each once, in order.
+    usemtl: Vec<String>,
+}
+
+impl ObjScan {
+    /// The warning for the `p`, `l` and short `f` statements skipped, if any.
+    fn skipped_warning(&self) -> Option<String> {
+        let plural =
+            |n: usize, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
+        let mut kinds = Vec::new();
+        if self.points > 0 {
+            kinds.push(format!("{} point (`p`)", self.points));
+        }
+        if self.lines > 0 {
+            kinds.push(format!("{} line (`l`)", self.lines));
+        }
+        let mut parts = Vec::new();
+        if !kinds.is_empty() {
+            let n = self.points + self.lines;
+            let noun = if n == 1 { "statement" } else { "statements" };
+            parts.push(format!("{} {noun}", kinds.join(" and ")));
+        }
+        if self.short_faces > 0 {
+            parts.push(format!(
+                "{} (`f`) with fewer than three vertices",
+                plural(self.short_faces, "face", "faces")
+            ));
+        }
+        (!parts.is_empty()).then(|| {
+            format!(
+                "{} skipped (only faces of three or more vertices are imported)",
+                parts.join(" and ")
+            )
+        })
+    }
+
+    /// The warning for an import without a single triangle: why there is none.
+    fn no_triangles(&self) -> String {
+        if let Some((line, text)) = &self.first_unknown {
+            format!(
+                "no triangles: {} of its {} statements are not OBJ (the first, line {line}: \
+                 '{}'); is it a text OBJ file (UTF-8 or UTF-16)?",
+                self.unknown,
+                self.statements,
+                shown(text)
+            )
+        } else if self.statements == 0 {
+            "no triangles: the file holds no statements".to_string()
+        } else {
+            format!(
+                "no triangles: no face (`f` with three or more vertices) among its {} \
+                 statements ({} vertices)",
+                self.statements, self.vertices
+            )
+        }
+    }
+}
+
+/// A line as a message shows it: at most 60 characters, control characters escaped.
+fn shown(line: &str) -> String {
+    let line = line.trim();
+    let mut out: String = line
+        .chars()
+        .take(60)
+        .flat_map(|c| {
+            if c.is_control() {
+                c.escape_debug().collect::<Vec<_>>()
+            } else {
+                vec![c]
+            }
+        })
+        .collect();
+    if line.chars().count() > 60 {
+        out.push('…');
+    }
+    out
+}
+
+/// The OBJ text with the statements tobj would mishandle rewritten, and what it holds
+/// ([`ObjScan`]): a bare `usemtl` selects [`UNNAMED_MATERIAL`] (tobj requires a name); `p`
+/// and `l` statements are blanked (billow imports faces only, and tobj would make a
+/// triangle of a three-vertex `l`). Line numbers are kept.
+fn tolerate_obj(text: &str) -> (String, ObjScan) {
+    let mut scan = ObjScan::default();
+    let mut out = String::with_capacity(text.len() + 16);
+    for (n, line) in text.split_inclusive('\n').enumerate() {
+        let body = line.trim_end_matches(['\n', '\r']);
+        let ending = &line[body.len()..];
+        let t = body.trim();
+        if t.is_empty() || t.starts_with('#') {
+            out.push_str(line);
+            continue;
+        }
+        scan.statements += 1;
+        let mut words = t.split_whitespace();
+        let keyword = words.next().unwrap_or_default();
+        match keyword {
+            "usemtl" => {
+                let name = t["usemtl".len()..].trim();
+                let name = if name.is_empty() {
+                    out.push_str("usemtl ");
+                    out.push_str(UNNAMED_MATERIAL);
+                    out.push_str(ending);
+                    UNNAMED_MATERIAL
+                } else {
+                    out.push_str(line);
+                    name
+                };
+                if !scan.usemtl.iter().any(|u| u == name) {
+                    scan.usemtl.push(name.to_string());
+                }
+                continue;
+            }
+            "p" | "l" => {
+                if keyword == "p" {
+                    scan.points += 1;
+                } else {
+                    scan.lines += 1;
+                }
+                out.push_str(ending);
+                continue;
+            }
+            "f" if words.by_ref().count() >= 3 => scan.faces += 1,
+            "f" => scan.short_faces += 1,
+            "v" => scan.vertices += 1,
+            k if OBJ_KEYWORDS.contains(&k) => {}
+            _ => {
+                scan.unknown += 1;
+                if scan.first_unknown.is_none() {
+                    scan.first_unknown = Some((n + 1, t.to_string()));
+                }
+            }
+        }
+        out.push_str(line);
+    }
+    (out, scan)
+}
+
+/// One MTL material, with what billow takes from it.
+#[derive(Clone, Debug)]
+struct MtlMaterial {
+    name: String,
+    kd: Option<[f32; 3]>,
+    d: Option<f32>,
+    tr: Option<f32>,
+    /// `map_Kd` and `map_d` as written (options and all).
+    map_kd: Option<String>,
+    map_d: Option<String>,
+    /// The library's folder: texture paths are relative to it.
+    dir: PathBuf,
+}
+
+/// What parsing a library noticed: statements it could not use, and how much it held.
+#[derive(Debug, Default)]
+struct MtlNotes {
+    /// Statements ignored because their values do not parse: (line number, text, problem).
+    bad: Vec<(usize, String, String)>,
+    /// Non-blank lines that are not comments.
+    statements: usize,
+    materials: usize,
+    /// Statements whose keyword is not MTL, and the first of them.
+    unknown: usize,
+    first_unknown: Option<(usize, String)>,
+    first_statement: Option<(usize, String)>,
+}
+
+impl MtlNotes {
+    /// The warnings about library `p`: its first bad statement (and how many more), and a
+    /// library that holds statements but no material.
+    fn warnings(&self, p: &Path) -> Vec<String> {
+        let mut out = Vec::new();
+        if let Some((line, text, problem)) = self.bad.first() {
+            let more = match self.bad.len() - 1 {
+                0 => String::new(),
+                1 => " (and 1 more such statement)".into(),
+                n => format!(" (and {n} more such statements)"),
+            };
+            out.push(format!(
+                "material library {}: line {line}: '{}': {problem}; the statement is ignored{more}",
+                p.display(),
+                shown(text)
+            ));
+        }
+        // A library with statements but no material (an empty one says nothing).
+        let described = match (&self.first_unknown, &self.first_statement) {
+            (Some(u), _) => Some((
+                format!(
+                    "{} of its {} statements are not MTL",
+                    self.unknown, self.statements
+                ),
+                u,
+            )),
+            (None, Some(s)) => Some((
+                format!("none of its {} statements is `newmtl`", self.statements),
+                s,
+            )),
+            (None, None) => None,
+        };
+        if let (0, Some((what, (line, text)))) = (self.materials, described) {
+            out.push(format!(
+                "material library {} defines no material: {what} (the first, line {line}: '{}')",
+                p.display(),
+                shown(text)
+            ));
+        }
+        out
+    }
+}
+
+/// Statement keywords of the MTL format (lower case; matched without regard to case) that
+/// billow reads or knowingly ignores.
+const MTL_KEYWORDS: &[&str] = &[
+    "newmtl",
+    "ka",
+    "kd",
+    "ks",
+    "ke",
+    "tf",
+    "d",
+    "tr",
+    "ns",
+    "ni",
+    "illum",
+    "sharpness",
+    "map_ka",
+    "map_kd",
+    "map_ks",
+    "map_ke",
+    "map_ns",
+    "map_d",
+    "map_tr",
+    "map_bump",
+    "bump",
+    "disp",
+    "decal",
+    "refl",
+    "map_refl",
+    "map_aat",
+    "pr",
+    "pm",
+    "ps",
+    "pc",
+    "pcr",
+    "aniso",
+    "anisor",
+    "norm",
+    "map_pr",
+    "map_pm",
+    "map_ps",
+    "map_norm",
+];
+
+/// Parses an MTL library, statement by statement: a statement whose values do not parse
+/// is noted ([`MtlNotes::bad`]) and ignored, never the whole library. Colours (`Ka`, `Kd`,
+/// `Ks`, `Ke`, `Tf`) take one value (grey: g = b = r), three, or `xyz` and CIE XYZ values;
+/// `d` takes `-halo`; a bare `newmtl` names [`UNNAMED_MATERIAL`]; a texture statement
+/// without a file name says nothing. Statements before the first `newmtl` are ignored.
+fn parse_mtl(text: &str, dir: &Path) -> (Vec<MtlMaterial>, MtlNotes) {
+    let mut materials: Vec<MtlMaterial> = Vec::new();
+    let mut notes = MtlNotes::default();
+    for (n, line) in text.lines().enumerate() {
+        let t = line.trim();
+        if t.is_empty() || t.starts_with('#') {
+            continue;
+        }
+        notes.statements += 1;
+        notes.first_statement.get_or_insert((n + 1, t.to_string()));
+        let (keyword, rest) = t.split_once(char::is_whitespace).unwrap_or((t, ""));
+        let rest = rest.trim();
+        let keyword = keyword.to_ascii_lowercase();
+        if keyword == "newmtl" {
+            materials.push(MtlMaterial {
+                name: if rest.is_empty() {
+                    UNNAMED_MATERIAL.to_string()
+                } else {
+                    rest.to_string()
+                },
+                kd: None,
+                d: None,
+                tr: None,
+                map_kd: None,
+                map_d: None,
+                dir: dir.to_path_buf(),
+            });
+            continue;
+        }
+        if !MTL_KEYWORDS.contains(&keyword.as_str()) {
+            notes.unknown += 1;
+            notes.first_unknown.get_or_insert((n + 1, t.to_string()));
+            continue;
+        }
+        let Some(m) = materials.last_mut() else {
+            continue;
+        };
+        let file = || (!rest.is_empty()).then(|| rest.to_string());
+        let r: Result<(), String> = match keyword.as_str() {
+            "ka" | "ks" | "ke" | "tf" => mtl_colour(rest).map(drop),
+            "kd" => mtl_colour(rest).map(|c| m.kd = Some(c)),
+            "d" => {
+                let v = rest.strip_prefix("-halo").map_or(rest, str::trim_start);
+                mtl_number(v).map(|v| m.d = Some(v))
+            }
+            "tr" => mtl_number(rest).map(|v| m.tr = Some(v)),
+            "map_kd" => {
+                m.map_kd = file().or(m.map_kd.take());
+                Ok(())
+            }
+            "map_d" => {
+                m.map_d = file().or(m.map_d.take());
+                Ok(())
+            }
+            _ => Ok(()),
+        };
+        if let Err(problem) = r {
+            notes.bad.push((n + 1, t.to_string(), problem));
+        }
+    }
+    notes.materials = materials.len();
+    (materials, notes)
+}
+
+/// One number, the first word of `s`.
+fn mtl_number(s: &str) -> Result<f32, String> {
+    let w = s.split_whitespace().next().ok_or("a number is missing")?;
+    w.parse::<f32>()
+        .map_err(|_| format!("'{w}' is not a number"))
+}
+
+/// An MTL colour: `r [g b]` (one value is grey), or `xyz x [y z]` (CIE XYZ, turned into
+/// linear sRGB); `spectral` curves are not supported.
+fn mtl_colour(s: &str) -> Result<[f32; 3], String> {
+    let mut words = s.split_whitespace().peekable();
+    let xyz = match words.peek() {
+        Some(&"spectral") => return Err("spectral colours (.rfl files) are not supported".into()),
+        Some(&"xyz") => {
+            words.next();
+            true
+        }
+        _ => false,
+    };
+    let values = words
+        .map(|w| {
+            w.parse::<f32>()
+                .map_err(|_| format!("'{w}' is not a number"))
+        })
+        .collect::<Result<Vec<f32>, String>>()?;
+    let c = match values[..] {
+        [v] => [v; 3],
+        [r, g, b, ..] => [r, g, b],
+        _ => {
+            return Err(format!(
+                "a colour is one value (grey) or three (r g b), not {}",
+                values.len()
+            ))
+        }
+    };
+    Ok(if xyz {
+        let [x, y, z] = c;
+        [
+            3.240_454_2 * x - 1.537_138_5 * y - 0.498_531_4 * z,
+            -0.969_266 * x + 1.876_010_8 * y + 0.041_556 * z,
+            0.055_643_4 * x - 0.204_025_9 * y + 1.057_225_2 * z,
+        ]
+    } else {
+        c
+    })
 }
 
 /// `"line N: '<text>': "` for the first line of `text` at which `parse` (run on a prefix

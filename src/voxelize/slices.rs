@@ -508,6 +508,7 @@ mod tests {
                 .collect(),
             wrap_u: Wrap::Repeat,
             wrap_v: Wrap::MirroredRepeat,
+            encoded: None,
         });
         s
     }

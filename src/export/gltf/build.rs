@@ -1,5 +1,5 @@
-//! Building blocks of the glTF export: the binary chunk with its views and accessors, PNG
-//! textures, samplers and materials.
+//! Building blocks of the glTF export: the binary chunk with its views and accessors,
+//! images and textures, samplers, materials, and base64 for a `.gltf`'s `data:` URI.
 
 use ::gltf::json;
 use json::validation::{Checked::Valid, USize64};
@@ -117,15 +117,29 @@ impl Bin<'_> {
         name: String,
         sampler: Index<json::texture::Sampler>,
     ) -> Index<json::Texture> {
-        let view = self.view(png, None);
-        let image = self.root.push(json::Image {
+        let image = self.image(png, "image/png", name.clone());
+        self.texture(image, name, sampler)
+    }
+
+    /// An image: `bytes` (encoded as `mime_type` says) as a buffer view.
+    pub fn image(&mut self, bytes: &[u8], mime_type: &str, name: String) -> Index<json::Image> {
+        let view = self.view(bytes, None);
+        self.root.push(json::Image {
             buffer_view: Some(view),
-            mime_type: Some(json::image::MimeType("image/png".into())),
-            name: Some(name.clone()),
+            mime_type: Some(json::image::MimeType(mime_type.into())),
+            name: Some(name),
             uri: None,
             extensions: None,
             extras: None,
-        });
+        })
+    }
+
+    pub fn texture(
+        &mut self,
+        image: Index<json::Image>,
+        name: String,
+        sampler: Index<json::texture::Sampler>,
+    ) -> Index<json::Texture> {
         self.root.push(json::Texture {
             name: Some(name),
             sampler: Some(sampler),
@@ -134,6 +148,28 @@ impl Bin<'_> {
             extras: None,
         })
     }
+}
+
+/// Standard base64 with padding (RFC 4648 §4), for `data:` URIs.
+pub(super) fn base64(bytes: &[u8]) -> String {
+    const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
+    for chunk in bytes.chunks(3) {
+        let b = [
+            chunk[0],
+            chunk.get(1).copied().unwrap_or(0),
+            chunk.get(2).copied().unwrap_or(0),
+        ];
+        let n = u32::from_be_bytes([0, b[0], b[1], b[2]]);
+        for k in 0..4 {
+            if k <= chunk.len() {
+                out.push(ALPHABET[((n >> (18 - 6 * k)) & 63) as usize] as char);
+            } else {
+                out.push('=');
+            }
+        }
+    }
+    out
 }
 
 pub(super) fn extras(v: serde_json::Value) -> json::Extras {
@@ -197,4 +233,24 @@ pub(super) fn material(
         }),
         ..Default::default()
     })
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn base64_of_rfc_4648_test_vectors() {
+        let cases = [
+            ("", ""),
+            ("f", "Zg=="),
+            ("fo", "Zm8="),
+            ("foo", "Zm9v"),
+            ("foob", "Zm9vYg=="),
+            ("fooba", "Zm9vYmE="),
+            ("foobar", "Zm9vYmFy"),
+        ];
+        for (plain, encoded) in cases {
+            assert_eq!(super::base64(plain.as_bytes()), encoded);
+        }
+        assert_eq!(super::base64(&[0xfb, 0xff]), "+/8=");
+    }
 }

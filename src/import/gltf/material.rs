@@ -138,9 +138,9 @@ impl Importer<'_> {
                     Err(format!("external URI {uri} is not fetched"))
                 } else {
                     let p = resolve_relative(self.base, &percent_decode(uri));
-                    let bytes = crate::import::read_input(&p)
+                    let bytes = ctx
+                        .read_referenced(&p)
                         .map_err(|e| format!("{}: {e}", p.display()))?;
-                    ctx.read_from(&p);
                     images::decode(&bytes, &name, mime)
                 }
             } else if let Some(v) = img.buffer_view {

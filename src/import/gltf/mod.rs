@@ -393,6 +393,8 @@ fn parse_json(bytes: &[u8]) -> Result<json::Root, JsonProblem> {
             _ => {}
         }
     }
+    // A UTF-8 byte-order mark is not JSON, but editors on Windows write one.
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     let mut v: serde_json::Value = serde_json::from_slice(bytes).map_err(JsonProblem::Json)?;
     let version = match v.pointer("/asset/version") {
         Some(serde_json::Value::String(s)) => Some(s.clone()),
