@@ -519,7 +519,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         let mut targets = vec![args.output.as_path()];
         targets.extend(args.gltf.as_deref());
         targets.extend(atlas_paths.iter().map(PathBuf::as_path));
-        let text = depfile::render(&targets, &args.input, &report.files, &[])?;
+        let text = depfile::render(&targets, &args.input, &report.files, &report.missing)?;
         stage.stage(d, text.as_bytes()).map_err(|e| out_err(d, e))?;
     }
     stage.commit_or_fail()?;

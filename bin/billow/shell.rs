@@ -150,7 +150,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     if let Some(d) = &args.depfile {
         let mut read = report.files.clone();
         read.push(args.volume.clone());
-        let text = depfile::render(&[&args.output], &args.surface, &read, &[])?;
+        let text = depfile::render(&[&args.output], &args.surface, &read, &report.missing)?;
         stage.stage(d, text.as_bytes()).map_err(|e| out_err(d, e))?;
     }
     stage.commit_or_fail()?;

@@ -627,7 +627,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         let mut targets = vec![args.output.as_path()];
         targets.extend(args.ktx2.as_deref());
         targets.extend(written.iter().map(PathBuf::as_path));
-        let text = depfile::render(&targets, &args.input, &report.files, &[])?;
+        let text = depfile::render(&targets, &args.input, &report.files, &report.missing)?;
         stage.stage(d, text.as_bytes()).map_err(|e| out_err(d, e))?;
     }
     stage.commit_or_fail()?;
