@@ -489,3 +489,75 @@ fn eval_errors_are_one_line_with_documented_codes() {
     // Three views and three per-distance means.
     assert_eq!(r.stdout.lines().filter(|l| l.contains('@')).count(), 6);
 }
+
+/// `--lights standard`: every view under each of four lights, the mean over the set, and
+/// each light's means in JSON; the unlit volume of lit foliage shows as brighter than its
+/// mesh under every light (`luminance_rel_diff`), which the default `--lighting auto`
+/// (an unlit reference for an unlit asset) cannot see.
+#[test]
+fn eval_under_a_light_set_sees_an_unlit_volume_too_bright() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let o = oak();
+    let r = run(
+        &[
+            "voxelize",
+            &o,
+            "-o",
+            "v.billow",
+            "--res",
+            "48",
+            "--normals",
+            "off",
+            "-q",
+        ],
+        d,
+    );
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let args = [
+        "eval",
+        &o,
+        "v.billow",
+        "--views=+x,-z",
+        "--distances",
+        "1",
+        "--size",
+        "48x48",
+        "--spp",
+        "4",
+    ];
+    let lit = run(
+        &[&args[..], &["--lights", "standard", "--json"]].concat(),
+        d,
+    );
+    assert_eq!(lit.code, Some(0), "{}", lit.stderr);
+    let j: Value = serde_json::from_str(&lit.stdout).unwrap();
+    let lights = j["lights"].as_array().unwrap();
+    let names: Vec<&str> = lights.iter().map(|l| l["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["overhead", "sun-east", "sun-west", "below"]);
+    assert_eq!(j["views"].as_array().unwrap().len(), 8);
+    assert_eq!(j["mean"]["asset"]["views"], 8);
+    for l in lights {
+        let lum = l["asset"]["luminance_rel_diff"].as_f64().unwrap();
+        assert!(lum > 0.15, "{}: {lum}", l["name"]);
+    }
+    let auto = run(&[&args[..], &["--json"]].concat(), d);
+    let j: Value = serde_json::from_str(&auto.stdout).unwrap();
+    let auto_lum = j["mean"]["asset"]["luminance_rel_diff"].as_f64().unwrap();
+    let lit_lum = serde_json::from_str::<Value>(&lit.stdout).unwrap()["mean"]["asset"]
+        ["luminance_rel_diff"]
+        .as_f64()
+        .unwrap();
+    // The lit mesh is about 0.65 as bright as its albedo: the unlit volume's excess shows.
+    assert!(lit_lum - auto_lum > 0.3, "lit {lit_lum} vs auto {auto_lum}");
+    // Usage: --shadows needs a light; --light and --lights exclude each other.
+    let r = run(&[&args[..], &["--shadows"]].concat(), d);
+    assert_eq!(r.code, Some(2), "{}", r.stderr);
+    let r = run(
+        &[&args[..], &["--light", "0,1,0", "--lights", "standard"]].concat(),
+        d,
+    );
+    assert_eq!(r.code, Some(2), "{}", r.stderr);
+    let r = run(&[&args[..], &["--light", "0,0,0"]].concat(), d);
+    assert_eq!(r.code, Some(8), "{}", r.stderr);
+}

@@ -198,6 +198,14 @@ fn case(command: &str, flag: &str) -> Option<Case> {
         ("eval", "out") => PATH,
         ("eval", "lighting") => keyword("bogus"),
         ("eval", "lod") => both("abc", "9"),
+        ("eval", "light") => both("abc", "0,0,0"),
+        ("eval", "lights") => both("bogus", "a=0,0,0"),
+        ("eval", "ambient") => Values {
+            unparsable: Some("abc"),
+            out_of_range: Some("2"),
+            extra: &["--light", "0,1,0"],
+        },
+        ("eval", "shadows") => SWITCH,
 
         ("compare", "diff") => PATH,
 

@@ -221,3 +221,106 @@ fn ao_baked_volume_matches_the_lit_reference_better() {
         );
     }
 }
+
+/// A floor `y = 0` over `[-2, 2]²` (white, or unlit) and, 1 above its centre, a small
+/// opaque square that shades it from an overhead light.
+fn floor_and_roof(unlit: bool) -> Scene {
+    let mut sb = SceneBuilder::new();
+    let floor = sb.material(Material {
+        base_color_factor: Vec4::ONE,
+        double_sided: true,
+        unlit,
+        ..Material::default()
+    });
+    let roof = white(&mut sb);
+    let mesh = sb.mesh("l");
+    let v = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+    sb.quad(
+        [
+            v(-2., 0., -2.),
+            v(-2., 0., 2.),
+            v(2., 0., 2.),
+            v(2., 0., -2.),
+        ],
+        Vec4::ONE,
+        floor,
+        mesh,
+    );
+    sb.quad(
+        [
+            v(-0.5, 1., -0.5),
+            v(-0.5, 1., 0.5),
+            v(0.5, 1., 0.5),
+            v(0.5, 1., -0.5),
+        ],
+        Vec4::ONE,
+        roof,
+        mesh,
+    );
+    sb.finish()
+}
+
+/// `billow eval --light`'s reference is the mesh as the viewer's mesh pass lights it:
+/// two-sided Lambert with ambient (a light from below lights the floor as one from above
+/// does), unlit materials unshaded, and with `--shadows` the light's transmittance (a
+/// roof leaves the ambient term alone under it).
+#[test]
+fn scene_lighting_is_the_viewers_mesh_model() {
+    let grey = |c: Vec4| (c.x, c.w);
+    // A ray grazing under the roof to the floor's centre.
+    let (o, d) = (
+        Vec3::new(3.0, 0.5, 0.0),
+        Vec3::new(-3.0, -0.5, 0.0).normalize(),
+    );
+    let at = |scene: &Scene, light: Vec3, shadows: bool| {
+        let r = ReferenceRenderer::new(scene)
+            .with_lighting(Lighting::Scene {
+                light: light.normalize(),
+                ambient: 0.3,
+                shadows,
+            })
+            .unwrap();
+        grey(r.trace(o, d, 0.0, 100.0))
+    };
+    let s = floor_and_roof(false);
+    let close = |a: (f32, f32), b: f32| (a.0 - b).abs() < 1e-4 && a.1 == 1.0;
+    assert!(
+        close(at(&s, Vec3::Y, false), 1.0),
+        "{:?}",
+        at(&s, Vec3::Y, false)
+    );
+    assert!(close(at(&s, -Vec3::Y, false), 1.0), "two-sided");
+    assert!(close(at(&s, Vec3::X, false), 0.3), "grazing: ambient");
+    let k = 0.3 + 0.7 * std::f32::consts::FRAC_1_SQRT_2;
+    assert!(close(at(&s, Vec3::new(1.0, 1.0, 0.0), false), k));
+    assert!(
+        close(at(&s, Vec3::Y, true), 0.3),
+        "under the roof: {:?}",
+        at(&s, Vec3::Y, true)
+    );
+    assert!(close(
+        at(&s, Vec3::new(1.0, 0.2, 0.0), true),
+        0.3 + 0.7 * 0.2 / 1.04f32.sqrt()
+    ));
+    let unlit = floor_and_roof(true);
+    assert!(close(at(&unlit, Vec3::X, true), 1.0), "unlit: unshaded");
+}
+
+/// The reference states the lighting models itself (src/eval/reference.rs), so that a
+/// mistake in the asset path's statement (`billow_core::shading`, used by the bakes and
+/// the slicer) is an error against it rather than shared: the two agree.
+#[test]
+fn the_references_lighting_models_agree_with_the_asset_paths() {
+    use billow::eval::lighting::{diffuse_factor, volume_diffuse_factor};
+    use billow::eval::reference::{one_sided, two_sided};
+    let mut rng = billow::rng::Pcg32::new(7, 11);
+    for _ in 0..2000 {
+        let mut v = || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0;
+        let (n, l) = (v() * 0.9, v().normalize_or(Vec3::Y));
+        let ambient = (n.x + 1.0) * 0.5;
+        assert!((two_sided(n, l, ambient, 1.0) - diffuse_factor(n, l, ambient)).abs() < 1e-6);
+        assert!(
+            (one_sided(n, l, ambient) - volume_diffuse_factor(n, l, ambient, 1.0)).abs() < 1e-6
+        );
+    }
+}

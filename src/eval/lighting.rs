@@ -81,6 +81,62 @@ pub enum Lighting {
     Diffuse { light: Vec3, ambient: f32 },
     /// Ambient + one-sided diffuse: a volume with normals, shaded at runtime.
     Volume { light: Vec3, ambient: f32 },
+    /// The mesh as `billow view` draws it under a scene light, whatever the asset: base
+    /// colour × (ambient + (1 − ambient) · visibility · |n·L|), the two-sided Lambert of the
+    /// interpolated shading normal (`viewer/src/shaders/mesh.wgsl`); materials marked
+    /// unlit (`KHR_materials_unlit`) are not shaded. `shadows`: visibility is the
+    /// transmittance of a ray from the hit towards the light (opaque and alpha-tested
+    /// surfaces block it, blended ones let `1 − α` through); without, 1.
+    Scene {
+        light: Vec3,
+        ambient: f32,
+        shadows: bool,
+    },
+}
+
+/// One light of an evaluation: a name for tables, the unit direction towards the light,
+/// the ambient fraction.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EvalLight {
+    pub name: String,
+    pub dir: Vec3,
+    pub ambient: f32,
+}
+
+impl EvalLight {
+    /// A light towards `dir` (normalised; `None` when it is not a direction).
+    pub fn new(name: impl Into<String>, dir: Vec3, ambient: f32) -> Option<Self> {
+        let dir = dir.try_normalize()?;
+        (dir.is_finite() && (0.0..=1.0).contains(&ambient)).then(|| EvalLight {
+            name: name.into(),
+            dir,
+            ambient,
+        })
+    }
+}
+
+/// The named light sets of `billow eval --lights` (docs/eval.md, "Lights").
+pub const LIGHT_SETS: &[&str] = &["standard"];
+
+/// The light set `name` with `ambient` ([`LIGHT_SETS`]): `standard` is the sun overhead,
+/// a low sun from two sides (east and west, 20° above the horizon, a little off the view
+/// axes) and a light from below. Two-sided foliage is lit alike by `L` and `−L`, so the
+/// two low suns differ otherwise (the second is not the first's opposite), and overhead
+/// and below tell one-sided surfaces (solids) apart from two-sided ones (leaves).
+pub fn light_set(name: &str, ambient: f32) -> Option<Vec<EvalLight>> {
+    let lights: &[(&str, Vec3)] = match name {
+        "standard" => &[
+            ("overhead", Vec3::new(0.0, 1.0, 0.0)),
+            ("sun-east", Vec3::new(0.94, 0.34, 0.1)),
+            ("sun-west", Vec3::new(-0.94, 0.34, 0.25)),
+            ("below", Vec3::new(0.0, -1.0, 0.0)),
+        ],
+        _ => return None,
+    };
+    lights
+        .iter()
+        .map(|(n, d)| EvalLight::new(*n, *d, ambient))
+        .collect()
 }
 
 /// The two lighting models (two-sided Lambert of leaf cards and meshes, one-sided Lambert
@@ -113,6 +169,7 @@ impl Lighting {
             Lighting::Ao { .. } => "ao",
             Lighting::Diffuse { .. } => "diffuse",
             Lighting::Volume { .. } => "volume",
+            Lighting::Scene { .. } => "scene",
         }
     }
 
@@ -138,6 +195,18 @@ impl Lighting {
                 "ambient {ambient} + one-sided diffuse (the volume's runtime shading), light \
                  towards ({}, {}, {})",
                 light.x, light.y, light.z
+            ),
+            Lighting::Scene {
+                light,
+                ambient,
+                shadows,
+            } => format!(
+                "the viewer's mesh lighting: ambient {ambient} + two-sided diffuse, light \
+                 towards ({:.3}, {:.3}, {:.3}){}",
+                light.x,
+                light.y,
+                light.z,
+                if *shadows { ", ray-traced shadows" } else { "" }
             ),
         }
     }

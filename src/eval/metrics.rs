@@ -9,6 +9,10 @@
 //!   does not: `rmse² · pixels = rmse_covered² · covered pixels`.
 //! - Alpha coverage: mean `|Δα|`, and the relative coverage difference
 //!   `(Σα_test − Σα_ref) / Σα_ref` (signed: negative = the asset is too transparent).
+//! - Mean covered luminance: `Σ Y(premultiplied rgb) / Σ α` over the image, the
+//!   alpha-weighted mean linear luminance (Rec. 709) of what covers the pixels, which does
+//!   not depend on how much is covered; and its relative difference (signed: positive =
+//!   the asset is brighter than the mesh).
 //! - SSIM ([`super::ssim`]) on sRGB-encoded luma of the premultiplied colour (i.e. over
 //!   black) and on alpha.
 //! - FLIP (LDR-ꟻLIP, Andersson et al. 2020, NVIDIA's implementation through the `nv-flip`
@@ -44,6 +48,12 @@ pub struct ImageError {
     pub ssim_alpha: f64,
     /// Mean LDR-FLIP error of the colour over black (0 = identical).
     pub flip: f64,
+    /// Mean covered linear luminance of the reference and of the test (see the module
+    /// docs; 0 for an empty image).
+    pub luminance_reference: f64,
+    pub luminance_test: f64,
+    /// `(luminance_test − luminance_reference) / luminance_reference`; 0 when both are 0.
+    pub luminance_rel_diff: f64,
 }
 
 /// A pixel is covered when the reference's or the test's alpha exceeds this: half an 8-bit
@@ -108,7 +118,13 @@ pub fn compare(reference: &ImageF32, test: &ImageF32) -> Result<ImageError, Eval
     let mut abs_a = 0.0;
     let (mut cov_r, mut cov_t) = (0.0, 0.0);
     let (mut se_covered, mut covered) = (0.0f64, 0u64);
+    let (mut lum_r, mut lum_t) = (0.0f64, 0.0f64);
+    let y709 = |p: &glam::Vec4| {
+        0.2126 * f64::from(p.x) + 0.7152 * f64::from(p.y) + 0.0722 * f64::from(p.z)
+    };
     for (r, t) in reference.data.iter().zip(&test.data) {
+        lum_r += y709(r);
+        lum_t += y709(t);
         let mut se_px = 0.0;
         for c in 0..4 {
             let d = f64::from(t[c]) - f64::from(r[c]);
@@ -140,6 +156,15 @@ pub fn compare(reference: &ImageF32, test: &ImageF32) -> Result<ImageError, Eval
     };
     let alpha = |img: &ImageF32| -> Vec<f32> { img.data.iter().map(|p| p.w).collect() };
     let (w, h) = (reference.width as usize, reference.height as usize);
+    let mean_lum = |lum: f64, cov: f64| if cov > 0.0 { lum / cov } else { 0.0 };
+    let (luminance_reference, luminance_test) = (mean_lum(lum_r, cov_r), mean_lum(lum_t, cov_t));
+    let luminance_rel_diff = if luminance_reference > 0.0 {
+        (luminance_test - luminance_reference) / luminance_reference
+    } else if luminance_test > 0.0 {
+        f64::INFINITY
+    } else {
+        0.0
+    };
     Ok(ImageError {
         rmse_rgba: mse.map(f64::sqrt),
         rmse: mse_all.sqrt(),
@@ -158,6 +183,9 @@ pub fn compare(reference: &ImageF32, test: &ImageF32) -> Result<ImageError, Eval
         ssim_luma: ssim(&luma(reference), &luma(test), w, h),
         ssim_alpha: ssim(&alpha(reference), &alpha(test), w, h),
         flip: flip(reference, test),
+        luminance_reference,
+        luminance_test,
+        luminance_rel_diff,
     })
 }
 
@@ -188,6 +216,26 @@ mod tests {
             1.0
         };
         Vec4::new(v * 0.9, v * 0.6, v * 0.3, 1.0) * a
+    }
+
+    #[test]
+    fn covered_luminance_does_not_depend_on_coverage() {
+        // Reference: half the pixels covered by grey 0.5 (premultiplied, α 1). Test: every
+        // pixel covered by the same grey at α 0.5 (premultiplied 0.25): as bright.
+        let r = image(4, 4, |x, _| {
+            if x < 2 {
+                Vec4::new(0.5, 0.5, 0.5, 1.0)
+            } else {
+                Vec4::ZERO
+            }
+        });
+        let t = image(4, 4, |_, _| Vec4::new(0.25, 0.25, 0.25, 0.5));
+        let e = compare(&r, &t).unwrap();
+        assert!((e.luminance_reference - 0.5).abs() < 1e-9, "{e:?}");
+        assert!(e.luminance_rel_diff.abs() < 1e-9, "{e:?}");
+        let brighter = image(4, 4, |_, _| Vec4::new(0.3, 0.3, 0.3, 0.5));
+        let e = compare(&r, &brighter).unwrap();
+        assert!((e.luminance_rel_diff - 0.2).abs() < 1e-6, "{e:?}");
     }
 
     #[test]

@@ -19,6 +19,12 @@
 //!   sample at the pixel centre: what a renderer without anti-aliasing shows.
 //! - Output: premultiplied linear RGBA f32 over a transparent background. Rows are
 //!   rendered in parallel (rayon); results are identical for any thread count.
+//! - **Lighting is stated here, not borrowed**: the lighting models the viewer and the
+//!   bakers use (`billow_core::shading`, `mesh.wgsl`, `volume.wgsl`) are written out again
+//!   in this file ([`two_sided`], [`one_sided`]) instead of called, so that a mistake in
+//!   the asset path's formula shows up as an error against the reference instead of being
+//!   shared by both (tests/eval_lighting.rs compares the two statements, and
+//!   tests/view_lighting.rs the reference with the viewer's mesh pass).
 
 // `!(a < b)` comparisons are deliberate: they also catch NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -29,7 +35,7 @@ use obvhs::ray::{Ray, RayHit};
 use rayon::prelude::*;
 
 use super::compositing::under;
-use super::lighting::{diffuse_factor, volume_diffuse_factor, voxel_stream, Lighting};
+use super::lighting::{voxel_stream, Lighting};
 use super::ray_triangle::{TriangleHit, WatertightRay};
 use super::{EvalError, ImageF32};
 use crate::bvh::scene_bvh;
@@ -170,12 +176,18 @@ impl<'a> ReferenceRenderer<'a> {
     /// Shades with `lighting` ([`super::lighting`]). AO needs a scene whose material and
     /// texture indices are valid.
     pub fn with_lighting(mut self, lighting: Lighting) -> Result<Self, EvalError> {
+        self.set_lighting(lighting)?;
+        Ok(self)
+    }
+
+    /// [`ReferenceRenderer::with_lighting`] in place (the BVH is kept).
+    pub fn set_lighting(&mut self, lighting: Lighting) -> Result<(), EvalError> {
         if let Lighting::Ao { .. } = lighting {
             validate_scene(self.scene).map_err(EvalError::InvalidParam)?;
             self.shader = Some(Shader::new(self.scene));
         }
         self.lighting = lighting;
-        Ok(self)
+        Ok(())
     }
 
     pub fn lighting(&self) -> &Lighting {
@@ -226,6 +238,22 @@ impl<'a> ReferenceRenderer<'a> {
     pub fn shade_lit(&self, tri: usize, bary: [f32; 3], origin: Vec3, dir: Vec3, t: f32) -> Vec4 {
         let c = self.shade(tri, bary);
         let f = match self.lighting {
+            Lighting::Scene {
+                light,
+                ambient,
+                shadows,
+            } => {
+                if self.scene.material(&self.scene.triangles[tri]).unlit {
+                    return c;
+                }
+                let n = self.shading_normal(tri, bary);
+                let visibility = if shadows {
+                    self.transmittance(origin + dir * t, light, tri)
+                } else {
+                    1.0
+                };
+                two_sided(n, light, ambient, visibility)
+            }
             Lighting::Unlit => return c,
             Lighting::Ao { rays, grid, shaded } => {
                 let (Some(bvh), Some(shader)) = (&self.bvh, &self.shader) else {
@@ -234,22 +262,71 @@ impl<'a> ReferenceRenderer<'a> {
                 let p = origin + dir * t;
                 let ao = rays.ambient_occlusion(self.scene, shader, bvh, p, voxel_stream(&grid, p));
                 ao * shaded.map_or(1.0, |l| {
-                    volume_diffuse_factor(self.volume_normal(tri, bary, dir), l.dir, l.ambient, 1.0)
+                    one_sided(self.volume_normal(tri, bary, dir), l.dir, l.ambient)
                 })
             }
             Lighting::Diffuse { light, ambient } => {
-                let v = &self.scene.triangles[tri].v;
-                let face = (v[1].position - v[0].position).cross(v[2].position - v[0].position);
-                let n = (v[0].normal * bary[0] + v[1].normal * bary[1] + v[2].normal * bary[2])
-                    .normalize_or(face.normalize_or_zero());
-                let n = if n.dot(dir) > 0.0 { -n } else { n };
-                diffuse_factor(n, light, ambient)
+                two_sided(self.shading_normal(tri, bary), light, ambient, 1.0)
             }
             Lighting::Volume { light, ambient } => {
-                volume_diffuse_factor(self.volume_normal(tri, bary, dir), light, ambient, 1.0)
+                one_sided(self.volume_normal(tri, bary, dir), light, ambient)
             }
         };
         (c.truncate() * f).extend(c.w)
+    }
+
+    /// The interpolated shading normal of `tri` at `bary`, unit (the face normal where the
+    /// vertex normals cancel).
+    fn shading_normal(&self, tri: usize, bary: [f32; 3]) -> Vec3 {
+        let v = &self.scene.triangles[tri].v;
+        let face = (v[1].position - v[0].position).cross(v[2].position - v[0].position);
+        (v[0].normal * bary[0] + v[1].normal * bary[1] + v[2].normal * bary[2])
+            .normalize_or(face.normalize_or_zero())
+    }
+
+    /// The fraction of the light towards unit `light` that reaches `p` (on triangle
+    /// `from`): 0 behind an opaque or alpha-tested surface (whichever side faces the light,
+    /// as a shadow map sees it), `Π (1 − α)` through blended ones. The ray starts a hair
+    /// (10⁻⁴ of the scene's size) off the surface and ignores `from` itself.
+    fn transmittance(&self, p: Vec3, light: Vec3, from: usize) -> f32 {
+        let Some(bvh) = &self.bvh else {
+            return 1.0;
+        };
+        let size = (self.scene.bounds.max - self.scene.bounds.min)
+            .length()
+            .max(1e-6);
+        let origin = p + light * (1e-4 * size);
+        let wr = WatertightRay::new(origin, light);
+        let ray = Ray::new(Vec3A::from(origin), Vec3A::from(light), 0.0, f32::INFINITY);
+        let mut through = 1.0f32;
+        bvh.ray_traverse_anyhit(ray, |_, id| {
+            let tri = bvh.primitive_indices[id] as usize;
+            if tri == from || through == 0.0 {
+                return;
+            }
+            let t = &self.scene.triangles[tri];
+            let Some(h) = wr.intersect(
+                t.v[0].position,
+                t.v[1].position,
+                t.v[2].position,
+                0.0,
+                f32::INFINITY,
+            ) else {
+                return;
+            };
+            through *= match self.scene.material(t).alpha_mode {
+                AlphaMode::Opaque => 0.0,
+                AlphaMode::Mask { cutoff } => {
+                    if self.shade(tri, h.bary).w >= cutoff {
+                        0.0
+                    } else {
+                        1.0
+                    }
+                }
+                AlphaMode::Blend => 1.0 - self.shade(tri, h.bary).w.clamp(0.0, 1.0),
+            };
+        });
+        through
     }
 
     /// The shading normal as the voxelizer captures it: interpolated (the face normal where
@@ -258,8 +335,7 @@ impl<'a> ReferenceRenderer<'a> {
     fn volume_normal(&self, tri: usize, bary: [f32; 3], dir: Vec3) -> Vec3 {
         let v = &self.scene.triangles[tri].v;
         let face = (v[1].position - v[0].position).cross(v[2].position - v[0].position);
-        let n = (v[0].normal * bary[0] + v[1].normal * bary[1] + v[2].normal * bary[2])
-            .normalize_or(face.normalize_or_zero());
+        let n = self.shading_normal(tri, bary);
         if face.dot(dir) > 0.0 {
             -n
         } else {
@@ -376,4 +452,20 @@ impl<'a> ReferenceRenderer<'a> {
         });
         (out, stop)
     }
+}
+
+/// Two-sided Lambert with ambient, as the viewer's mesh pass (`mesh.wgsl`) and the billboard
+/// bake light a surface: `ambient + (1 − ambient) · visibility · |n·light|`. Stated here on
+/// purpose rather than taken from `billow_core::shading` (see the module docs).
+pub fn two_sided(n: Vec3, light: Vec3, ambient: f32, visibility: f32) -> f32 {
+    let cosine = n.dot(light).abs();
+    ambient + (1.0 - ambient) * visibility * cosine
+}
+
+/// One-sided Lambert with ambient, as a volume's runtime shading (`volume.wgsl`) lights its
+/// voxels: `ambient + (1 − ambient) · max(n·light, 0)`, `n` not renormalised. Stated here on
+/// purpose (see the module docs).
+pub fn one_sided(n: Vec3, light: Vec3, ambient: f32) -> f32 {
+    let cosine = n.dot(light).max(0.0);
+    ambient + (1.0 - ambient) * cosine
 }

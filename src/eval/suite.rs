@@ -22,7 +22,7 @@ use glam::Vec3;
 use serde::Serialize;
 
 use super::cloud_render::{CloudRenderer, PreparedCloud};
-use super::lighting::Lighting;
+use super::lighting::{EvalLight, Lighting, VolumeLight};
 use super::metrics::{compare, ImageError};
 use super::reference::{ReferenceRenderer, Sampling};
 use super::slicer::{render_decoded, SlicerParams};
@@ -90,6 +90,9 @@ pub struct ViewSeconds {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ViewResult {
     pub view: String,
+    /// The light of [`Evaluator::set_light`] (its name), if one was set.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub light: Option<String>,
     pub dir: [f32; 3],
     pub distance_factor: f32,
     /// The asset against the reference.
@@ -122,6 +125,9 @@ pub struct MeanErrors {
     pub ssim_alpha: f64,
     /// Mean FLIP error.
     pub flip: f64,
+    /// Mean of the signed relative differences of the mean covered luminance (positive =
+    /// brighter than the mesh).
+    pub luminance_rel_diff: f64,
 }
 
 /// Means of `errors` (all zeros for an empty set).
@@ -142,6 +148,11 @@ pub fn mean_errors<'a>(errors: impl IntoIterator<Item = &'a ImageError>) -> Mean
         m.ssim_luma += e.ssim_luma;
         m.ssim_alpha += e.ssim_alpha;
         m.flip += e.flip;
+        m.luminance_rel_diff += if e.luminance_rel_diff.is_finite() {
+            e.luminance_rel_diff
+        } else {
+            1.0
+        };
     }
     if m.views == 0 {
         return m;
@@ -160,6 +171,7 @@ pub fn mean_errors<'a>(errors: impl IntoIterator<Item = &'a ImageError>) -> Mean
     m.ssim_luma /= n;
     m.ssim_alpha /= n;
     m.flip /= n;
+    m.luminance_rel_diff /= n;
     m
 }
 
@@ -189,6 +201,47 @@ pub fn means_by_distance(results: &[ViewResult]) -> Vec<DistanceMeans> {
                 distance_factor: f,
                 asset: mean_errors(at.iter().map(|r| &r.asset)),
                 raster_1spp: (!raster.is_empty()).then(|| mean_errors(raster)),
+            }
+        })
+        .collect()
+}
+
+/// Means of the asset and of the 1-spp raster over the views under one light.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct LightMeans {
+    pub light: String,
+    pub asset: MeanErrors,
+    pub raster_1spp: Option<MeanErrors>,
+    /// Per distance factor, under this light.
+    pub by_distance: Vec<DistanceMeans>,
+}
+
+/// Per light ([`ViewResult::light`]), in order of first appearance; empty when no result
+/// names a light.
+pub fn means_by_light(results: &[ViewResult]) -> Vec<LightMeans> {
+    let mut lights: Vec<&str> = Vec::new();
+    for r in results {
+        if let Some(l) = r.light.as_deref() {
+            if !lights.contains(&l) {
+                lights.push(l);
+            }
+        }
+    }
+    lights
+        .into_iter()
+        .map(|l| {
+            let at: Vec<ViewResult> = results
+                .iter()
+                .filter(|r| r.light.as_deref() == Some(l))
+                .cloned()
+                .collect();
+            let raster: Vec<&ImageError> =
+                at.iter().filter_map(|r| r.raster_1spp.as_ref()).collect();
+            LightMeans {
+                light: l.to_string(),
+                asset: mean_errors(at.iter().map(|r| &r.asset)),
+                raster_1spp: (!raster.is_empty()).then(|| mean_errors(raster)),
+                by_distance: means_by_distance(&at),
             }
         })
         .collect()
@@ -233,6 +286,8 @@ pub struct Evaluator<'a> {
     renderer: ReferenceRenderer<'a>,
     bounds: Aabb,
     pub options: EvalOptions,
+    /// The name of the light of [`Evaluator::set_light`].
+    light: Option<String>,
 }
 
 /// A decoded asset ready to render from many views.
@@ -270,11 +325,33 @@ impl<'a> Evaluator<'a> {
             renderer: ReferenceRenderer::new(scene).with_lighting(options.lighting)?,
             bounds,
             options,
+            light: None,
         })
     }
 
     pub fn bounds(&self) -> Aabb {
         self.bounds
+    }
+
+    /// Everything lit by `light` from now on, as `billow view` lights each kind: the
+    /// reference is the mesh under the viewer's mesh lighting ([`Lighting::Scene`], with
+    /// ray-traced shadows when `shadows`), and the slicer shades volumes that carry
+    /// normals with `light` (volumes without normals show their baked colour, as the
+    /// viewer shows them).
+    pub fn set_light(&mut self, light: &EvalLight, shadows: bool) -> Result<(), EvalError> {
+        let lighting = Lighting::Scene {
+            light: light.dir,
+            ambient: light.ambient,
+            shadows,
+        };
+        self.renderer.set_lighting(lighting)?;
+        self.options.lighting = lighting;
+        self.options.slicer.light = Some(VolumeLight {
+            dir: light.dir,
+            ambient: light.ambient,
+        });
+        self.light = Some(light.name.clone());
+        Ok(())
     }
 
     pub fn camera(&self, spec: &ViewSpec) -> Camera {
@@ -331,6 +408,7 @@ impl<'a> Evaluator<'a> {
         let spec = &reference.spec;
         let result = ViewResult {
             view: spec.name.clone(),
+            light: self.light.clone(),
             dir: spec.dir.to_array(),
             distance_factor: spec.distance_factor,
             asset: err,
@@ -369,6 +447,7 @@ impl<'a> Evaluator<'a> {
         let spec = &reference.spec;
         let result = ViewResult {
             view: spec.name.clone(),
+            light: self.light.clone(),
             dir: spec.dir.to_array(),
             distance_factor: spec.distance_factor,
             asset: err,
@@ -429,6 +508,9 @@ mod tests {
             ssim_luma: 1.0,
             ssim_alpha: 0.5,
             flip: 0.1,
+            luminance_reference: 0.5,
+            luminance_test: 0.5,
+            luminance_rel_diff: 0.0,
         }
     }
 

@@ -6,16 +6,17 @@ use std::time::Instant;
 use billow::eval::cloud_render::{CloudRenderer, PreparedCloud};
 use billow::eval::lighting::Lighting;
 use billow::eval::suite::{
-    mean_errors, means_by_distance, view_file_stem, DistanceMeans, EvalOptions, Evaluator,
-    MeanErrors, ViewResult, EVAL_FOV_Y,
+    mean_errors, means_by_distance, DistanceMeans, EvalOptions, Evaluator, MeanErrors, ViewResult,
+    EVAL_FOV_Y,
 };
 use billow::import::Imported;
 use billow_format::{CloudAsset, Container};
 use serde::Serialize;
 
 use super::{
-    bad, create_out, finish_out, parse_distances, parse_size, parse_views, print_rows, source_note,
-    spp_per_axis, stage_png, Args, LightingArg, LightingJson, Means, Seconds,
+    bad, create_out, finish_out, image_stem, lights_json, parse_distances, parse_lights,
+    parse_size, parse_views, print_rows, source_note, spp_per_axis, stage_png, Args, LightJson,
+    LightingArg, LightingJson, Means, Seconds,
 };
 use crate::exit::{CliError, Code};
 use crate::output::{print_json, progress};
@@ -35,6 +36,9 @@ struct LevelSummary {
     views: Vec<ViewResult>,
     mean: MeanErrors,
     by_distance: Vec<DistanceMeans>,
+    /// With --light/--lights: each light and its means (`mean` is then over the set).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    lights: Vec<LightJson>,
     /// Cloud-render seconds, all views.
     seconds: f64,
     fragments: u64,
@@ -118,44 +122,76 @@ pub(super) fn run(
         lighting,
         ..EvalOptions::default()
     };
-    let evaluator = Evaluator::new(scene, options)
+    let mut evaluator = Evaluator::new(scene, options)
         .map_err(|e| CliError::new(Code::InvalidInput, format!("{source_shown}: {e}")))?;
-    let renderer = CloudRenderer::new(&prepared, lighting)
-        .map_err(|e| CliError::new(Code::from(&e), format!("{asset_shown}: {e}")))?;
     let mut stage = create_out(args)?;
     let mismatch = source_note(ctx, args, source, asset.header.source.as_ref());
+    let lights = parse_lights(args)?;
+    let light_list: Vec<Option<&billow::eval::lighting::EvalLight>> = match &lights {
+        Some(l) => l.iter().map(Some).collect(),
+        None => vec![None],
+    };
+    let (lighting, note) = match &lights {
+        Some(_) => (
+            Lighting::Scene {
+                light: glam::Vec3::ZERO,
+                ambient: args.ambient,
+                shadows: args.shadows,
+            },
+            lit.then(|| {
+                "the cloud's billboards carry the lighting they were baked with: under another \
+                 light the errors include the difference"
+                    .to_string()
+            }),
+        ),
+        None => (lighting, note),
+    };
 
-    let bar = progress(ctx, (views.len() * lods.len()) as u64, "eval");
+    let bar = progress(
+        ctx,
+        (views.len() * lods.len() * light_list.len()) as u64,
+        "eval",
+    );
     let mut per_lod: Vec<Vec<ViewResult>> = vec![Vec::new(); lods.len()];
     let mut raster = Vec::new();
     let mut images = Vec::new();
     let mut reference_s = 0.0;
     let mut raster_s = 0.0;
-    for spec in &views {
-        bar.set_message(spec.name.clone());
-        let reference = evaluator
-            .reference(spec)
-            .map_err(|e| CliError::new(Code::from(&e), format!("{source_shown}: {e}")))?;
-        reference_s += reference.seconds;
-        let mut panels = Vec::new();
-        for (i, &lod) in lods.iter().enumerate() {
-            let (result, image) = evaluator
-                .cloud(&renderer, &prepared, lod, &reference)
-                .map_err(|e| CliError::new(Code::from(&e), format!("{asset_shown}: {e}")))?;
-            per_lod[i].push(result);
-            panels.push(image);
-            bar.inc(1);
+    for light in &light_list {
+        if let Some(l) = light {
+            evaluator
+                .set_light(l, args.shadows)
+                .map_err(|e| CliError::new(Code::from(&e), format!("{source_shown}: {e}")))?;
         }
-        if let Some((img, err, s)) = &reference.raster_1spp {
-            raster.push(*err);
-            raster_s += s;
-            panels.push(img.clone());
-        }
-        if let Some(dir) = &args.out {
-            let path = dir.join(format!("{}.png", view_file_stem(&spec.name)));
-            let tests: Vec<_> = panels.iter().collect();
-            stage_png(&mut stage, &path, &reference.image, &tests)?;
-            images.push(path.display().to_string());
+        // The kept mesh is drawn as the viewer draws meshes: lit like the reference.
+        let renderer = CloudRenderer::new(&prepared, evaluator.options.lighting)
+            .map_err(|e| CliError::new(Code::from(&e), format!("{asset_shown}: {e}")))?;
+        for spec in &views {
+            bar.set_message(spec.name.clone());
+            let reference = evaluator
+                .reference(spec)
+                .map_err(|e| CliError::new(Code::from(&e), format!("{source_shown}: {e}")))?;
+            reference_s += reference.seconds;
+            let mut panels = Vec::new();
+            for (i, &lod) in lods.iter().enumerate() {
+                let (result, image) = evaluator
+                    .cloud(&renderer, &prepared, lod, &reference)
+                    .map_err(|e| CliError::new(Code::from(&e), format!("{asset_shown}: {e}")))?;
+                per_lod[i].push(result);
+                panels.push(image);
+                bar.inc(1);
+            }
+            if let Some((img, err, s)) = &reference.raster_1spp {
+                raster.push(*err);
+                raster_s += s;
+                panels.push(img.clone());
+            }
+            if let Some(dir) = &args.out {
+                let path = dir.join(format!("{}.png", image_stem(*light, &spec.name)));
+                let tests: Vec<_> = panels.iter().collect();
+                stage_png(&mut stage, &path, &reference.image, &tests)?;
+                images.push(path.display().to_string());
+            }
         }
     }
     bar.finish_and_clear();
@@ -171,6 +207,7 @@ pub(super) fn run(
             texture_bytes: prepared.texture_bytes(&asset, lod),
             mean: mean_errors(results.iter().map(|r| &r.asset)),
             by_distance: means_by_distance(&results),
+            lights: lights_json(lights.as_deref(), &results),
             seconds: results.iter().map(|r| r.seconds.asset).sum(),
             fragments: results.iter().map(|r| r.fragments).sum(),
             views: results,
@@ -240,11 +277,12 @@ fn print_table(s: &CloudSummary) {
         };
         let hit = l.views.iter().map(|v| v.polygons).max().unwrap_or(0);
         let totals = (s.seconds.reference, l.seconds, hit, l.fragments);
-        print_rows(&l.views, &l.by_distance, &mean, totals, "bboard");
+        print_rows(&l.views, &l.by_distance, &l.lights, &mean, totals, "bboard");
     }
     outln!(
-        "\nRMSE/PSNR on premultiplied linear RGBA; cov% = asset coverage vs reference; SSIM on \
-         luma; FLIP over black; bboard = billboards hit. Total {:.2} s.",
+        "\nRMSE/PSNR on premultiplied linear RGBA; cov% = asset coverage vs reference; lum% = \
+         its mean covered luminance vs the reference's; SSIM on luma; FLIP over black; bboard = \
+         billboards hit. Total {:.2} s.",
         s.seconds.total
     );
 }

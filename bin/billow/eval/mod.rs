@@ -9,14 +9,16 @@ use std::time::Instant;
 
 use billow::camera::{parse_direction, view_directions, views_of, ViewDirections, ViewSpec};
 use billow::eval::image::comparisons_png_bytes;
-use billow::eval::lighting::Lighting;
+use billow::eval::lighting::{light_set, EvalLight, Lighting, LIGHT_SETS};
 use billow::eval::slicer::{SlicerParams, Spacing};
 use billow::eval::suite::{
-    mean_errors, means_by_distance, reference_lighting, view_file_stem, DistanceMeans, EvalOptions,
-    Evaluator, MeanErrors, PreparedAsset, ViewResult, EVAL_FOV_Y,
+    mean_errors, means_by_distance, means_by_light, reference_lighting, view_file_stem,
+    DistanceMeans, EvalOptions, Evaluator, LightMeans, MeanErrors, PreparedAsset, ViewResult,
+    EVAL_FOV_Y,
 };
 use billow::import::{import, ImportOptions, Imported};
 use billow_format::{read_file, AssetKind, Container, VolumeAsset};
+use glam::Vec3;
 use serde::Serialize;
 
 use crate::exit::{usage, CliError, Code};
@@ -57,10 +59,32 @@ pub struct Args {
     /// mesh | difference) and eval.json; created if missing. Written atomically.
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
-    /// Lighting of the reference: auto (the lighting the asset was baked with: its baked AO
-    /// at each hit point, or unlit) or unlit.
+    /// Lighting of the reference when no --light/--lights is given: auto (the lighting the
+    /// asset was baked with: its baked AO at each hit point, or unlit) or unlit.
     #[arg(long, value_enum, default_value_t = LightingArg::Auto)]
     lighting: LightingArg,
+    /// Light the reference and the asset by this light, as `billow view` lights each kind:
+    /// the mesh with the viewer's two-sided Lambert, a volume with normals by them, a volume
+    /// without normals or a baked cloud by their baked colour. X,Y,Z points towards the light.
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true, conflicts_with_all = ["lights", "lighting"])]
+    light: Option<String>,
+    /// A set of lights, each evaluated like --light, and the mean over the set: `standard`
+    /// (overhead, a low sun from east and west, below; docs/eval.md) or a list
+    /// `NAME=X,Y,Z;X,Y,Z;…`.
+    #[arg(
+        long,
+        value_name = "SET",
+        allow_hyphen_values = true,
+        conflicts_with = "lighting"
+    )]
+    lights: Option<String>,
+    /// Ambient fraction of --light/--lights, 0–1.
+    #[arg(long, value_name = "A", default_value_t = billow::eval::lighting::DEFAULT_AMBIENT)]
+    ambient: f32,
+    /// With --light/--lights: shadows in the reference (ray traced towards the light) and in
+    /// the cloud's kept mesh; volumes are drawn unshadowed (noted).
+    #[arg(long)]
+    shadows: bool,
     /// Billboard clouds: evaluate only this LOD level, 0–(levels − 1) (0 = finest); default all levels.
     #[arg(long, value_name = "K")]
     lod: Option<usize>,
@@ -119,14 +143,116 @@ struct Summary {
     views: Vec<ViewResult>,
     mean: Means,
     by_distance: Vec<DistanceMeans>,
+    /// With --light/--lights: each light and its means (`mean` is then over the set).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    lights: Vec<LightJson>,
     slices: usize,
     fragments: u64,
     seconds: Seconds,
     images: Vec<String>,
 }
 
+/// One light of `--light`/`--lights` in the JSON, with its means.
+#[derive(Serialize)]
+pub(crate) struct LightJson {
+    name: String,
+    dir: [f32; 3],
+    ambient: f32,
+    #[serde(flatten)]
+    means: LightMeans,
+}
+
+/// The lights' JSON entries (empty without `--light`/`--lights`).
+pub(crate) fn lights_json(lights: Option<&[EvalLight]>, results: &[ViewResult]) -> Vec<LightJson> {
+    let Some(lights) = lights else {
+        return Vec::new();
+    };
+    means_by_light(results)
+        .into_iter()
+        .filter_map(|m| {
+            let l = lights.iter().find(|l| l.name == m.light)?;
+            Some(LightJson {
+                name: l.name.clone(),
+                dir: l.dir.to_array(),
+                ambient: l.ambient,
+                means: m,
+            })
+        })
+        .collect()
+}
+
+/// The `--out` image name of a view under a light (`overhead_pz_1x`), or of the view alone.
+pub(crate) fn image_stem(light: Option<&EvalLight>, view: &str) -> String {
+    match light {
+        Some(l) => view_file_stem(&format!("{}_{view}", l.name)),
+        None => view_file_stem(view),
+    }
+}
+
 pub(crate) fn bad(flag: &str, e: impl std::fmt::Display) -> CliError {
     CliError::new(Code::BadParameter, format!("{flag}: {e}"))
+}
+
+/// `--light`/`--lights`/`--ambient`: the lights to evaluate under, or `None` (the asset's
+/// own lighting, `--lighting`).
+pub(crate) fn parse_lights(args: &Args) -> Result<Option<Vec<EvalLight>>, CliError> {
+    if !(args.ambient.is_finite() && (0.0..=1.0).contains(&args.ambient)) {
+        return Err(bad(
+            "--ambient",
+            format!("{} is out of range (0 to 1)", args.ambient),
+        ));
+    }
+    let vector = |flag: &str, text: &str| -> Result<Vec3, CliError> {
+        let v: Vec<f32> = text
+            .split(',')
+            .map(|x| x.trim().parse::<f32>())
+            .collect::<Result<_, _>>()
+            .map_err(|e| usage(flag, format!("'{text}': {e} (expected X,Y,Z)")))?;
+        match v[..] {
+            [x, y, z] => Ok(Vec3::new(x, y, z)),
+            _ => Err(usage(flag, format!("'{text}': expected X,Y,Z"))),
+        }
+    };
+    let light = |flag: &str, name: String, dir: Vec3| {
+        EvalLight::new(name, dir, args.ambient).ok_or_else(|| {
+            bad(
+                flag,
+                format!("({}, {}, {}) is not a direction", dir.x, dir.y, dir.z),
+            )
+        })
+    };
+    if let Some(l) = &args.light {
+        let dir = vector("--light", l)?;
+        return Ok(Some(vec![light("--light", "light".into(), dir)?]));
+    }
+    let Some(set) = &args.lights else {
+        if args.shadows {
+            return Err(usage("--shadows", "needs --light or --lights"));
+        }
+        return Ok(None);
+    };
+    if let Some(lights) = light_set(set.trim(), args.ambient) {
+        return Ok(Some(lights));
+    }
+    if !set.contains(',') {
+        return Err(usage(
+            "--lights",
+            format!(
+                "'{set}': expected {} or NAME=X,Y,Z;…",
+                LIGHT_SETS.join(", ")
+            ),
+        ));
+    }
+    let mut out = Vec::new();
+    for (i, item) in set.split(';').filter(|i| !i.trim().is_empty()).enumerate() {
+        let (name, v) = match item.split_once('=') {
+            Some((n, v)) => (n.trim().to_string(), v),
+            None => (format!("light{}", i + 1), item),
+        };
+        let dir = vector("--lights", v)?;
+        out.push(light("--lights", name, dir)?);
+    }
+    Ok(Some(out))
 }
 
 /// `WxH`, each 1..=4096.
@@ -411,7 +537,12 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     parse_size(&args.size)?;
     spp_per_axis(args.spp)?;
     let views = parse_views(&args.views, &parse_distances(&args.distances)?)?;
-    check_cost(ctx, &args, views.len())?;
+    let lights = parse_lights(&args)?;
+    check_cost(
+        ctx,
+        &args,
+        views.len() * lights.as_ref().map_or(1, Vec::len),
+    )?;
     // Reject a bad --spacing before the (slow) work.
     parse_spacing(&args.spacing, None)?;
     if let Some(dir) = &args.out {
@@ -482,33 +613,60 @@ fn run_volume(
         raster_1spp: true,
         lighting,
     };
-    let evaluator = Evaluator::new(scene, options)
+    let mut evaluator = Evaluator::new(scene, options)
         .map_err(|e| CliError::new(Code::InvalidInput, format!("{source_shown}: {e}")))?;
     let mut stage = create_out(args)?;
     let mismatch = source_note(ctx, args, source, asset.header.source.as_ref());
+    let lights = parse_lights(args)?;
+    let (lighting, lighting_note) = match &lights {
+        Some(_) => (
+            Lighting::Scene {
+                light: Vec3::ZERO,
+                ambient: args.ambient,
+                shadows: args.shadows,
+            },
+            args.shadows.then(|| {
+                "--shadows: the reference and meshes are shadowed, the CPU slicer draws volumes \
+                 unshadowed: the errors include the shadows"
+                    .to_string()
+            }),
+        ),
+        None => (lighting, lighting_note),
+    };
+    let light_list: Vec<Option<&EvalLight>> = match &lights {
+        Some(l) => l.iter().map(Some).collect(),
+        None => vec![None],
+    };
 
-    let bar = progress(ctx, views.len() as u64, "eval");
-    let mut results = Vec::with_capacity(views.len());
+    let bar = progress(ctx, (views.len() * light_list.len()) as u64, "eval");
+    let mut results = Vec::with_capacity(views.len() * light_list.len());
     let mut images = Vec::new();
-    for spec in &views {
-        bar.set_message(spec.name.clone());
-        let reference = evaluator
-            .reference(spec)
-            .map_err(|e| CliError::new(Code::from(&e), format!("{source_shown}: {e}")))?;
-        let (result, image) = evaluator
-            .asset(&prepared, &reference)
-            .map_err(|e| CliError::new(Code::from(&e), format!("{asset_shown}: {e}")))?;
-        if let Some(dir) = &args.out {
-            let path = dir.join(format!("{}.png", view_file_stem(&spec.name)));
-            let mut tests = vec![&image];
-            if let Some((r, _, _)) = &reference.raster_1spp {
-                tests.push(r);
-            }
-            stage_png(&mut stage, &path, &reference.image, &tests)?;
-            images.push(path.display().to_string());
+    for light in &light_list {
+        if let Some(l) = light {
+            evaluator
+                .set_light(l, args.shadows)
+                .map_err(|e| CliError::new(Code::from(&e), format!("{source_shown}: {e}")))?;
         }
-        results.push(result);
-        bar.inc(1);
+        for spec in &views {
+            bar.set_message(spec.name.clone());
+            let reference = evaluator
+                .reference(spec)
+                .map_err(|e| CliError::new(Code::from(&e), format!("{source_shown}: {e}")))?;
+            let (result, image) = evaluator
+                .asset(&prepared, &reference)
+                .map_err(|e| CliError::new(Code::from(&e), format!("{asset_shown}: {e}")))?;
+            if let Some(dir) = &args.out {
+                let path = dir.join(format!("{}.png", image_stem(*light, &spec.name)));
+                let mut tests = vec![&image];
+                if let Some((r, _, _)) = &reference.raster_1spp {
+                    tests.push(r);
+                }
+                stage_png(&mut stage, &path, &reference.image, &tests)?;
+                images.push(path.display().to_string());
+            }
+            results.push(result);
+            bar.inc(1);
+        }
     }
     bar.finish_and_clear();
 
@@ -539,6 +697,7 @@ fn run_volume(
             raster_1spp: mean_errors(results.iter().filter_map(|r| r.raster_1spp.as_ref())),
         },
         by_distance: means_by_distance(&results),
+        lights: lights_json(lights.as_deref(), &results),
         slices: results.iter().map(|r| r.slices).sum(),
         fragments: results.iter().map(|r| r.fragments).sum(),
         seconds: Seconds {
@@ -590,10 +749,17 @@ fn print_table(s: &Summary) {
         outln!("note: {n}");
     }
     let totals = (s.seconds.reference, s.seconds.asset, s.slices, s.fragments);
-    print_rows(&s.views, &s.by_distance, &s.mean, totals, "slices");
+    print_rows(
+        &s.views,
+        &s.by_distance,
+        &s.lights,
+        &s.mean,
+        totals,
+        "slices",
+    );
     outln!(
-        "RMSE/PSNR on premultiplied linear RGBA; cov% = asset coverage vs reference; SSIM on luma; \
-         FLIP over black. Total {:.2} s.",
+        "RMSE/PSNR on premultiplied linear RGBA; cov% = asset coverage vs reference; lum% = its \
+         mean covered luminance vs the reference's; SSIM on luma; FLIP over black. Total {:.2} s.",
         s.seconds.total
     );
 }
@@ -603,17 +769,21 @@ fn print_table(s: &Summary) {
 pub(crate) fn print_rows(
     views: &[ViewResult],
     by_distance: &[DistanceMeans],
+    lights: &[LightJson],
     mean: &Means,
     totals: (f64, f64, usize, u64),
     count: &str,
 ) {
+    // Under lights the view column names the light too (`sun-east +x@4x`).
+    let w = if lights.is_empty() { 14 } else { 24 };
     outln!(
-        "{:<14} {:>7} {:>6} {:>6} {:>7} {:>6} {:>6} | {:>7} {:>6} {:>6} | {:>7} {:>7} {:>6} {:>9}",
+        "{:<w$} {:>7} {:>6} {:>6} {:>7} {:>7} {:>6} {:>6} | {:>7} {:>6} {:>6} | {:>7} {:>7} {:>6} {:>9}",
         "view",
         "RMSE",
         "PSNR",
         "|Δα|",
         "cov%",
+        "lum%",
         "SSIM",
         "FLIP",
         "1spp",
@@ -626,12 +796,13 @@ pub(crate) fn print_rows(
     );
     let row = |name: &str, a: &MeanErrors, r: &MeanErrors, tail: String| {
         outln!(
-            "{:<14} {:>7.4} {:>6.2} {:>6.4} {:>+7.2} {:>6.3} {:>6.4} | {:>7.4} {:>6.2} {:>6.3} |{}",
+            "{:<w$} {:>7.4} {:>6.2} {:>6.4} {:>+7.2} {:>+7.2} {:>6.3} {:>6.4} | {:>7.4} {:>6.2} {:>6.3} |{}",
             name,
             a.rmse,
             a.psnr,
             a.mean_abs_alpha,
             100.0 * a.coverage_rel_diff,
+            100.0 * a.luminance_rel_diff,
             a.ssim_luma,
             a.flip,
             r.rmse,
@@ -654,7 +825,11 @@ pub(crate) fn print_rows(
             v.polygons
         };
         let t = tail(v.seconds.reference, v.seconds.asset, count, v.fragments);
-        row(&v.view, &a, &r, t);
+        let name = match &v.light {
+            Some(l) => format!("{l} {}", v.view),
+            None => v.view.clone(),
+        };
+        row(&name, &a, &r, t);
     }
     for m in by_distance {
         let r = m.raster_1spp.unwrap_or_default();
@@ -665,6 +840,20 @@ pub(crate) fn print_rows(
             String::new(),
         );
     }
+    for l in lights {
+        let r = l.means.raster_1spp.unwrap_or_default();
+        row(
+            &format!("mean {}", l.name),
+            &l.means.asset,
+            &r,
+            String::new(),
+        );
+    }
     let t = tail(totals.0, totals.1, totals.2, totals.3);
-    row("mean", &mean.asset, &mean.raster_1spp, t);
+    let name = if lights.is_empty() {
+        "mean"
+    } else {
+        "mean over the lights"
+    };
+    row(name, &mean.asset, &mean.raster_1spp, t);
 }
