@@ -230,7 +230,7 @@ fn check_options(o: &EmptySpaceOptions) -> Result<(), EmptySpaceError> {
     }
     if o.max_depth > 64 {
         return Err(EmptySpaceError::InvalidParam(format!(
-            "maximum depth {} not in 0..=64",
+            "maximum depth {} is out of range (0 to 64)",
             o.max_depth
         )));
     }

@@ -252,7 +252,7 @@ impl Lighting {
                 let rays: u32 = num(params, "ao_rays")?.unwrap_or(DEFAULT_AO_RAYS);
                 if !(1..=MAX_AO_RAYS).contains(&rays) {
                     return Err(format!(
-                        "header parameter ao_rays={rays} not in 1..={MAX_AO_RAYS}"
+                        "header parameter ao_rays={rays} is out of range (1 to {MAX_AO_RAYS})"
                     ));
                 }
                 let distance: f32 = num(params, "ao_distance")?
@@ -307,7 +307,9 @@ impl Lighting {
         }
         let ambient: f32 = num(params, "ambient")?.unwrap_or(0.35);
         if !(0.0..=1.0).contains(&ambient) {
-            return Err(format!("header parameter ambient={ambient} not in 0..=1"));
+            return Err(format!(
+                "header parameter ambient={ambient} is out of range (0 to 1)"
+            ));
         }
         Ok(Lighting::Diffuse {
             light: l.normalize(),

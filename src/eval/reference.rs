@@ -134,7 +134,7 @@ pub(crate) fn per_axis(sampling: Sampling) -> Result<u32, EvalError> {
         Sampling::Centre => Ok(1),
         Sampling::Stratified { per_axis } if (1..=64).contains(&per_axis) => Ok(per_axis),
         Sampling::Stratified { per_axis } => Err(EvalError::InvalidParam(format!(
-            "samples per axis {per_axis} not in 1..=64"
+            "samples per axis {per_axis} is out of range (1 to 64)"
         ))),
     }
 }

@@ -316,7 +316,7 @@ impl<'a> Evaluator<'a> {
     pub fn new(scene: &'a Scene, options: EvalOptions) -> Result<Self, EvalError> {
         if !(1..=16).contains(&options.reference_per_axis) {
             return Err(EvalError::InvalidParam(format!(
-                "reference samples per axis {} not in 1..=16",
+                "reference samples per axis {} is out of range (1 to 16)",
                 options.reference_per_axis
             )));
         }

@@ -148,7 +148,7 @@ pub fn ktx2_bytes_with(
                 path: path.to_path_buf(),
                 format: "KTX2 (zstd)",
                 message: format!(
-                    "Zstandard level {level} is not one of {}..={}",
+                    "Zstandard level {level} is out of range ({} to {})",
                     ZSTD_LEVELS.start(),
                     ZSTD_LEVELS.end()
                 ),

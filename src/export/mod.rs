@@ -38,7 +38,7 @@ pub enum ExportError {
         source: FormatError,
     },
     /// The requested MIP level does not exist in the asset.
-    #[error("{path}: MIP level {level} does not exist: the asset has {mip_count} level(s), 0..={}", mip_count - 1)]
+    #[error("{path}: MIP level {level} does not exist: the asset has {mip_count} level(s), 0 to {}", mip_count - 1)]
     NoSuchLevel {
         path: PathBuf,
         level: u32,

@@ -57,7 +57,7 @@ impl Sway {
             return Err("direction: must be finite".into());
         }
         if !(1..=256).contains(&self.layers) {
-            return Err(format!("layers: {} must be in 1..=256", self.layers));
+            return Err(format!("layers: {} must be 1 to 256", self.layers));
         }
         Ok(())
     }

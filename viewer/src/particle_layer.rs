@@ -64,7 +64,7 @@ impl ParticleLayerDesc {
         if let Some(m) = self.motion_blur {
             if !(m.shutter > 0.0 && m.shutter.is_finite() && (2..=32).contains(&m.samples)) {
                 return Err(format!(
-                    "motion_blur: shutter {} must be > 0 and samples {} in 2..=32",
+                    "motion_blur: shutter {} must be > 0 and samples {} from 2 to 32",
                     m.shutter, m.samples
                 ));
             }

@@ -88,7 +88,7 @@ pub(super) fn run(
             return Err(bad(
                 "--lod",
                 format!(
-                    "{k}: {asset_shown} has {} LOD levels (0..={})",
+                    "{k}: {asset_shown} has {} LOD levels (0 to {})",
                     prepared.level_count(),
                     prepared.level_count() - 1
                 ),

@@ -142,7 +142,7 @@ impl ParticleSystemDesc {
             return Err("emitter.position: must be finite".into());
         }
         if e.count == 0 || e.count > 100_000 {
-            return Err(format!("emitter.count: {} must be in 1..=100000", e.count));
+            return Err(format!("emitter.count: {} must be 1 to 100000", e.count));
         }
         if !(pos(e.radius.0) && e.radius.0 <= e.radius.1 && e.radius.1.is_finite()) {
             return Err(format!(
