@@ -310,3 +310,74 @@ fn an_edge_on_billboard_is_finite_and_covers_no_more_than_its_projection() {
         assert!(last > 0.0, "the square shows at 0.1 rad");
     }
 }
+
+/// A cloud baked unlit with normal maps is lit under a scene light like the viewer lights
+/// it (`cloud.wgsl`, `fs_billboard`): `ambient + (1 − ambient)·|N·L|` with N from the side's
+/// tangent frame (SPEC §9.4: T = U, B = −V, N = ±plane normal). A normal map tilted
+/// towards +x (tangent-space (s, 0, c)) is brightest under a light along that normal,
+/// on the front and the back alike (two-sided); a cloud with baked lighting is not relit.
+#[test]
+fn normal_mapped_clouds_are_lit_by_the_scene_light() {
+    // Tangent-space normal tilted 60° towards +T (= +x for this quad): (sin, 0, cos).
+    let (s, c) = (60f32.to_radians().sin(), 60f32.to_radians().cos());
+    let enc = |v: f32| ((v * 0.5 + 0.5) * 255.0).round() as u8;
+    let white = [255, 255, 255, 255];
+    let mut front = atlas(8, 1, |_| white);
+    front.normals = Some(vec![[enc(s), enc(0.0), enc(c), 255].repeat(64)]);
+    let mut back = atlas(8, 1, |_| white);
+    back.normals = Some(vec![[enc(s), enc(0.0), enc(c), 255].repeat(64)]);
+    let mut asset = cloud(front, back, None);
+    asset.header.params.insert("light".into(), "unlit".into());
+    let prepared = PreparedCloud::new(&asset).unwrap();
+    let n = 16;
+    let centre = |light: Vec3, eye_z: f32| {
+        let r = CloudRenderer::new(
+            &prepared,
+            Lighting::Scene {
+                light: light.normalize(),
+                ambient: 0.3,
+                shadows: false,
+            },
+        )
+        .unwrap();
+        r.render(0, &camera(Vec3::new(0.5, 0.5, eye_z), n), Sampling::Centre)
+            .unwrap()
+            .image
+            .get(n / 2, n / 2)
+            .x
+    };
+    // World normal of the front: s·U + c·(+z) = (s, 0, c); of the back: (s, 0, −c).
+    let along = Vec3::new(s, 0.0, c);
+    let k = |l: Vec3| 0.3 + 0.7 * along.dot(l.normalize()).abs();
+    for (light, name) in [(along, "along"), (Vec3::Z, "+z"), (Vec3::Y, "+y")] {
+        let got = centre(light, 3.0);
+        assert!(
+            (got - k(light)).abs() < 0.02,
+            "front, light {name}: {got} vs {}",
+            k(light)
+        );
+    }
+    assert!(
+        (centre(Vec3::new(s, 0.0, -c), -3.0) - 1.0).abs() < 0.02,
+        "back, along its normal"
+    );
+    assert!(centre(along, 3.0) > centre(Vec3::Y, 3.0) + 0.5);
+    // Baked lit: the texels are final, whatever the light.
+    asset.header.params.insert("light".into(), "0,1,0".into());
+    let baked = PreparedCloud::new(&asset).unwrap();
+    let r = CloudRenderer::new(
+        &baked,
+        Lighting::Scene {
+            light: Vec3::Y,
+            ambient: 0.3,
+            shadows: false,
+        },
+    )
+    .unwrap();
+    let px = r
+        .render(0, &camera(Vec3::new(0.5, 0.5, 3.0), n), Sampling::Centre)
+        .unwrap()
+        .image
+        .get(n / 2, n / 2);
+    assert_eq!(px.x, 1.0);
+}

@@ -17,6 +17,12 @@
 //!   that misses the plane (grazing view) selects the coarsest level.
 //! - **Trunk**: the kept mesh is ray-traced by [`ReferenceRenderer`] with the reference's
 //!   shading and lighting (so it matches the reference wherever it is visible).
+//! - **Runtime lighting**: a cloud baked unlit with normal maps (`bbcloud --normal-map
+//!   --unlit`) is lit under a scene light ([`Lighting::Scene`], `billow eval --light`) as
+//!   the viewer lights it (`cloud.wgsl`, `fs_billboard`): its straight albedo times
+//!   `ambient + (1 − ambient)·|N·L|` (the shared core's two-sided Lambert), N the normal
+//!   map's texel in the side's tangent frame (SPEC §9.4), filtered like the colour. Clouds
+//!   with baked lighting show their texels as they are.
 //! - **Alpha test**: billboards are alpha-tested like the viewer draws them (and Lacewell
 //!   §6): a filtered texel with alpha at least [`ALPHA_CUTOFF`] (0.5) is an opaque hit of
 //!   its straight colour (`rgb / α`), any other is a miss. The atlases' MIPs keep each
@@ -100,6 +106,9 @@ struct Quad {
     dv: Vec3,
     /// (atlas, [u0, v0, u1, v1]) of the front and the back.
     sides: [(usize, [f32; 4]); 2],
+    /// Unit directions of increasing u and v (the normal maps' tangent frame, SPEC §9.4).
+    u_dir: Vec3,
+    v_dir: Vec3,
 }
 
 /// What a cloud render did.
@@ -126,6 +135,10 @@ pub struct PreparedCloud {
     levels: Vec<(std::ops::Range<usize>, f32)>,
     quads: Vec<Quad>,
     atlases: Vec<DecodedAtlas>,
+    /// The atlases' normal maps (tangent-space unit normals, linear), when the cloud was
+    /// baked unlit with them: the viewer then lights its billboards like meshes
+    /// (`cloud.wgsl`, `fs_billboard`), and so does this renderer under a scene light.
+    normal_maps: Option<Vec<DecodedAtlas>>,
     atlas_bytes: Vec<u64>,
     /// The kept mesh as a scene.
     pub trunk: Scene,
@@ -251,6 +264,34 @@ impl PreparedCloud {
             .iter()
             .map(|a| a.mips.iter().map(|m| m.len() as u64).sum())
             .collect();
+        let unlit = asset
+            .header
+            .light()
+            .is_none_or(|l| l.trim().is_empty() || l.trim() == "unlit");
+        let normal_maps = asset
+            .atlases
+            .iter()
+            .map(|a| {
+                let normals = a.normals.as_ref()?;
+                Some(DecodedAtlas {
+                    levels: normals
+                        .iter()
+                        .enumerate()
+                        .map(|(k, bytes)| {
+                            let w = (a.width >> k).max(1);
+                            let h = (a.height >> k).max(1);
+                            let n = |b: u8| f32::from(b) / 255.0 * 2.0 - 1.0;
+                            let t = bytes
+                                .chunks_exact(4)
+                                .map(|p| Vec4::new(n(p[0]), n(p[1]), n(p[2]), 0.0))
+                                .collect();
+                            (w, h, t)
+                        })
+                        .collect(),
+                })
+            })
+            .collect::<Option<Vec<_>>>()
+            .filter(|m| unlit && !m.is_empty());
         let quads = asset
             .billboards
             .iter()
@@ -272,6 +313,8 @@ impl PreparedCloud {
                     c0: c[0],
                     du: inv(e1),
                     dv: inv(e3),
+                    u_dir: e1.normalize_or_zero(),
+                    v_dir: e3.normalize_or_zero(),
                     sides: [
                         (b.front.atlas as usize, b.front.uv),
                         (b.back.atlas as usize, b.back.uv),
@@ -291,6 +334,7 @@ impl PreparedCloud {
             levels,
             quads,
             atlases,
+            normal_maps,
             atlas_bytes,
             trunk: trunk_scene(asset),
         })
@@ -325,6 +369,9 @@ impl PreparedCloud {
 pub struct CloudRenderer<'a> {
     cloud: &'a PreparedCloud,
     trunk: ReferenceRenderer<'a>,
+    /// Under a scene light ([`Lighting::Scene`]), a cloud with normal maps is lit by it:
+    /// unit direction towards the light, ambient.
+    light: Option<(Vec3, f32)>,
 }
 
 /// A billboard hit: depth, billboard index, premultiplied colour.
@@ -346,9 +393,16 @@ impl Rays<'_> {
 
 impl<'a> CloudRenderer<'a> {
     pub fn new(cloud: &'a PreparedCloud, lighting: Lighting) -> Result<Self, EvalError> {
+        let light = match lighting {
+            Lighting::Scene { light, ambient, .. } if cloud.normal_maps.is_some() => {
+                Some((light, ambient))
+            }
+            _ => None,
+        };
         Ok(CloudRenderer {
             cloud,
             trunk: ReferenceRenderer::new(&cloud.trunk).with_lighting(lighting)?,
+            light,
         })
     }
 
@@ -367,11 +421,20 @@ impl<'a> CloudRenderer<'a> {
     }
 
     /// Colour of quad `q` hit at `st` by a ray of direction `dir` through pixel
-    /// `(px, py)`; `lod` from the rays through the neighbouring pixels.
-    fn shade(&self, q: &Quad, st: Vec2, dir: Vec3, rays: &Rays, px: f32, py: f32) -> Vec4 {
+    /// `(px, py)`; `lod` from the rays through the neighbouring pixels. Also the side's
+    /// world normal from its normal map, when it is lit at runtime.
+    fn shade(
+        &self,
+        q: &Quad,
+        st: Vec2,
+        dir: Vec3,
+        rays: &Rays,
+        px: f32,
+        py: f32,
+    ) -> (Vec4, Option<Vec3>) {
         let side = usize::from(q.normal.dot(dir) > 0.0);
-        let (atlas, r) = q.sides[side];
-        let atlas = &self.cloud.atlases[atlas];
+        let (atlas_index, r) = q.sides[side];
+        let atlas = &self.cloud.atlases[atlas_index];
         let (w0, h0, _) = atlas.levels[0];
         let scale = Vec2::new((r[2] - r[0]) * w0 as f32, (r[3] - r[1]) * h0 as f32);
         let uv_of = |st: Vec2| Vec2::new(r[0], r[1]) + st * Vec2::new(r[2] - r[0], r[3] - r[1]);
@@ -384,7 +447,14 @@ impl<'a> CloudRenderer<'a> {
             (Some(_), Some(_)) => 0.0,
             _ => f32::INFINITY,
         };
-        atlas.sample(uv_of(st), lod)
+        let colour = atlas.sample(uv_of(st), lod);
+        let normal = self.light.and(self.cloud.normal_maps.as_ref()).map(|maps| {
+            // SPEC §9.4: T = U, B = −V, N = ±the plane normal (front +, back −).
+            let t = maps[atlas_index].sample(uv_of(st), lod);
+            let n_side = if side == 0 { q.normal } else { -q.normal };
+            (t.x * q.u_dir - t.y * q.v_dir + t.z * n_side).normalize_or_zero()
+        });
+        (colour, normal)
     }
 
     /// The billboards among `candidates` hit by one ray within `[t_min, t_max]`, shaded
@@ -406,9 +476,17 @@ impl<'a> CloudRenderer<'a> {
             }
             // Alpha test, as the viewer draws billboards: a texel at or above the cut-off
             // is an opaque surface of its straight colour, anything else is a miss.
-            let c = self.shade(q, st, dir, rays, pc.0, pc.1);
+            let (c, normal) = self.shade(q, st, dir, rays, pc.0, pc.1);
             if c.w >= ALPHA_CUTOFF {
-                out.push((t, i, (c.truncate() / c.w).extend(1.0)));
+                // Lit at runtime like the viewer's `fs_billboard`: the mesh pass's model
+                // (the shared core's, as the viewer's shader states it).
+                let k = match (normal, self.light) {
+                    (Some(n), Some((l, ambient))) if n != Vec3::ZERO => {
+                        billow_core::shading::diffuse_factor(n, l, ambient)
+                    }
+                    _ => 1.0,
+                };
+                out.push((t, i, (c.truncate() / c.w * k).extend(1.0)));
             }
         }
         out
