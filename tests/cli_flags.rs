@@ -102,9 +102,19 @@ fn case(command: &str, flag: &str) -> Option<Case> {
         ("voxelize", "res") => both("abc", "0"),
         ("voxelize", "preset") | ("bbcloud", "preset") => keyword("bogus"),
         ("voxelize", "target-error") | ("bbcloud", "target-error") => both("abc", "0"),
-        ("voxelize", "target-distance") | ("bbcloud", "target-distance") => Values {
+        ("voxelize", "target-distances") | ("bbcloud", "target-distances") => Values {
             unparsable: Some("abc"),
-            out_of_range: Some("0"),
+            out_of_range: Some("1,0"),
+            extra: &["--target-error", "0.5"],
+        },
+        ("voxelize", "target-weighting") | ("bbcloud", "target-weighting") => Values {
+            unparsable: Some("bogus"),
+            out_of_range: None, // a keyword
+            extra: &["--target-error", "0.5"],
+        },
+        ("voxelize", "target-lights") | ("bbcloud", "target-lights") => Values {
+            unparsable: Some("bogus"),
+            out_of_range: Some("0,0,0"),
             extra: &["--target-error", "0.5"],
         },
         ("voxelize", "target-size") | ("bbcloud", "target-size") => Values {

@@ -1,9 +1,12 @@
 //! `--preset` and `--target-error` on `billow voxelize` and `billow bbcloud`, driven as the
 //! real binary on a small procedurally generated tree (`procgen::leafy_tree`): presets
-//! resolve under explicit flags and the JSON records the result; a reachable target picks
-//! a setting whose `billow eval` error is at most the target while the next cheaper
-//! preset's (baked and evaluated on its own) is above it; an unreachable target exits 10
-//! with one error line and writes nothing. Small images (32×32, 64×64) keep it quick.
+//! resolve under explicit flags and the JSON records the result; a reachable target,
+//! judged over distances and lights, picks a setting whose `billow eval` error is at most
+//! the target while the next cheaper preset's (baked and evaluated on its own) is above
+//! it; on this tree, whose error is not monotone in `--res`, a target every preset misses
+//! is met by a resolution between them; an unreachable target exits 10 with one error
+//! line, writes nothing and, with `--json`, still prints every trial. Small images (32×32,
+//! 64×64) keep it quick.
 
 mod common;
 
@@ -31,9 +34,17 @@ fn ok(args: &[&str], dir: &Path) -> Value {
     serde_json::from_str(&r.stdout).expect("one JSON document on stdout")
 }
 
-/// `billow eval`'s mean RMSE over the six axis views at the framed distance, LOD 0 for a
-/// cloud (`cloud*.billow`): the measure `--target-error` uses.
-fn eval_rmse(dir: &Path, mesh: &str, asset: &str, size: &str) -> f64 {
+/// `billow eval`'s covered RMSE per distance over the six axis views at `distances`, LOD 0
+/// for a cloud (`cloud*.billow`), under the standard lights unless `auto`: the measure
+/// `--target-error` uses.
+fn eval_errors(
+    dir: &Path,
+    mesh: &str,
+    asset: &str,
+    size: &str,
+    distances: &str,
+    auto: bool,
+) -> Vec<f64> {
     let mut args = vec![
         "eval",
         mesh,
@@ -41,21 +52,39 @@ fn eval_rmse(dir: &Path, mesh: &str, asset: &str, size: &str) -> f64 {
         "--views",
         "axes",
         "--distances",
-        "1",
+        distances,
         "--size",
         size,
         "--json",
     ];
+    if !auto {
+        args.extend(["--lights", "standard"]);
+    }
     let cloud = asset.starts_with("cloud");
     if cloud {
         args.extend(["--lod", "0"]);
     }
     let v = ok(&args, dir);
-    if cloud {
-        v["levels"][0]["mean"]["rmse"].as_f64().unwrap()
+    let by = if cloud {
+        &v["levels"][0]["by_distance"]
     } else {
-        v["mean"]["asset"]["rmse"].as_f64().unwrap()
-    }
+        &v["by_distance"]
+    };
+    by.as_array()
+        .unwrap()
+        .iter()
+        .map(|d| d["asset"]["rmse_covered"].as_f64().unwrap())
+        .collect()
+}
+
+fn worst(e: &[f64]) -> f64 {
+    e.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+}
+
+/// The `--res` of a trial's or choice's label (`... --res 48 --supersample 4 ...`).
+fn res_of(label: &str) -> u32 {
+    let i = label.find("--res ").unwrap() + 6;
+    label[i..].split(' ').next().unwrap().parse().unwrap()
 }
 
 #[test]
@@ -141,11 +170,12 @@ fn a_preset_resolves_under_explicit_flags_and_the_json_records_it() {
 }
 
 #[test]
-fn voxelize_meets_a_reachable_target_that_the_next_cheaper_preset_misses() {
+fn voxelize_meets_a_reachable_target_judged_over_distances_and_lights() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let mesh = tree(d);
-    // Each preset baked and scored on its own.
+    // Each preset baked and scored on its own, as `--target-error` scores by default: the
+    // worst over 1x, 4x and 16x of the covered RMSE, mean over the standard lights.
     let mut errors = Vec::new();
     for p in ["draft", "balanced"] {
         let out = format!("vol_{p}.billow");
@@ -153,9 +183,9 @@ fn voxelize_meets_a_reachable_target_that_the_next_cheaper_preset_misses() {
             &["voxelize", &mesh, "-o", &out, "--preset", p, "-q", "--json"],
             d,
         );
-        errors.push(eval_rmse(d, &mesh, &out, VSIZE));
+        errors.push(eval_errors(d, &mesh, &out, VSIZE, "1,4,16", false));
     }
-    let (draft, balanced) = (errors[0], errors[1]);
+    let (draft, balanced) = (worst(&errors[0]), worst(&errors[1]));
     assert!(
         balanced < draft,
         "the ladder must gain accuracy: {errors:?}"
@@ -177,27 +207,170 @@ fn voxelize_meets_a_reachable_target_that_the_next_cheaper_preset_misses() {
         d,
     );
     let t = &v["target"];
-    assert_eq!(t["chosen_preset"], "balanced", "{t}");
-    assert_eq!(v["preset"], "balanced");
+    assert_eq!(t["distances"], serde_json::json!([1.0, 4.0, 16.0]), "{t}");
+    assert_eq!(t["weighting"], "worst");
+    assert_eq!(t["lights"].as_array().unwrap().len(), 4, "{t}");
     assert_eq!(v["settings_from"]["resolution"], "target");
     let trials = t["trials"].as_array().unwrap();
     assert_eq!(trials[0]["preset"], "draft");
     assert_eq!(trials[0]["met"], false);
-    // The search measured the draft exactly as `billow eval` scores it.
-    assert!(
-        (trials[0]["error"].as_f64().unwrap() - draft).abs() < 1e-9,
-        "{t} vs {draft}"
+    // The search measured the draft exactly as `billow eval` scores it, per distance.
+    for (i, e) in errors[0].iter().enumerate() {
+        let m = trials[0]["by_distance"][i]["error"].as_f64().unwrap();
+        assert!((m - e).abs() < 1e-9, "{t} vs {:?}", errors[0]);
+    }
+    assert!((trials[0]["error"].as_f64().unwrap() - draft).abs() < 1e-9);
+    // The balanced preset meets the target and the errors fell: the choice is it or a
+    // cheaper resolution between it and the draft.
+    assert_eq!(
+        (trials[1]["preset"].as_str(), trials[1]["met"].as_bool()),
+        (Some("balanced"), Some(true)),
+        "{t}"
     );
+    let chosen = t["chosen"].as_str().unwrap();
+    assert!((33..=64).contains(&res_of(chosen)), "{chosen}");
     let measured = t["measured_error"].as_f64().unwrap();
-    let written = eval_rmse(d, &mesh, "vol.billow", VSIZE);
+    assert!(measured <= target, "{measured} > {target}");
+    let written = eval_errors(d, &mesh, "vol.billow", VSIZE, "1,4,16", false);
+    for (i, e) in written.iter().enumerate() {
+        let m = t["by_distance"][i]["error"].as_f64().unwrap();
+        assert!(
+            (m - e).abs() < 1e-9,
+            "eval of the written asset {written:?} vs {t}"
+        );
+    }
+    assert!((worst(&written) - measured).abs() < 1e-9);
+}
+
+/// The tree's error is not monotone in `--res` (the grid's phase against the leaves):
+/// at 64×64 and the framed distance, resolutions between the presets score better than
+/// every preset. A target between the two is met by one of them, where the old search
+/// (bisecting only between a preset that missed and one that met) exited 10. Also: a
+/// target nothing meets exits 10 and `--json` still prints every trial, and each trial
+/// is one line on stderr.
+#[test]
+fn a_target_every_preset_misses_is_met_between_them_on_a_mesh_whose_error_is_not_monotone() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mesh = tree(d);
+    let search = |e: &str, out: &str| {
+        run_limited(
+            &[
+                "voxelize",
+                &mesh,
+                "-o",
+                out,
+                "--target-error",
+                e,
+                "--target-size",
+                VSIZE,
+                "--target-distances",
+                "1",
+                "--target-lights",
+                "auto",
+                "--json",
+            ],
+            d,
+            Duration::from_secs(600),
+            8 << 20,
+        )
+    };
+    // Nothing reaches 1e-6: exit 10, no file, one error line naming the best, and the
+    // JSON document on stdout with every trial.
+    let r = search("1e-6", "none.billow");
+    assert_eq!(r.code, Some(10), "{}", r.stderr);
+    assert!(!d.join("none.billow").exists());
+    // Stderr: one line per trial, then the one error line.
+    let all: Vec<&str> = r.stderr.lines().collect();
+    let (line, lines) = all.split_last().unwrap();
     assert!(
-        written <= target,
-        "eval of the written asset {written} > target {target}"
+        line.starts_with("error: --target-error: no setting reaches"),
+        "{line}"
+    );
+    let v: Value = serde_json::from_str(&r.stdout).expect("one JSON document on stdout");
+    assert_eq!(v["written"], false);
+    assert_eq!(&format!("error: {}", v["error"].as_str().unwrap()), line);
+    let t = &v["target"];
+    assert_eq!(t["chosen"], Value::Null);
+    let trials = t["trials"].as_array().unwrap();
+    let max = t["max_bakes"].as_u64().unwrap() as usize;
+    assert!(trials.len() > 4 && trials.len() <= max, "{t}");
+    let best = &t["best"];
+    assert!(
+        line.contains(&format!(
+            "the best measured, {}, scored {:.4}",
+            best["label"].as_str().unwrap(),
+            best["error"].as_f64().unwrap()
+        )),
+        "{line}"
+    );
+    // One line per trial, with its error, bytes and seconds.
+    assert_eq!(lines.len(), trials.len(), "{}", r.stderr);
+    for (l, t) in lines.iter().zip(trials) {
+        let label = t["label"].as_str().unwrap();
+        assert!(
+            l.starts_with(&format!(
+                "--target-error: {label}: {:.4} (1x ",
+                t["error"].as_f64().unwrap()
+            )),
+            "{l}"
+        );
+        assert!(
+            l.contains(" KiB, ") && l.ends_with(" s") && l.contains("misses"),
+            "{l}"
+        );
+        assert!(t["bytes"].as_u64().unwrap() > 0 && t["seconds"].as_f64().unwrap() > 0.0);
+    }
+    // The premise: some resolution between the presets scores below every preset.
+    let err = |t: &Value| t["error"].as_f64().unwrap();
+    let presets: Vec<f64> = trials
+        .iter()
+        .filter(|t| t["preset"].is_string())
+        .map(err)
+        .collect();
+    let between: Vec<f64> = trials
+        .iter()
+        .filter(|t| t["preset"].is_null())
+        .map(err)
+        .collect();
+    assert_eq!(presets.len(), 4, "{t}");
+    let (p, b) = (
+        presets.iter().copied().fold(f64::INFINITY, f64::min),
+        between.iter().copied().fold(f64::INFINITY, f64::min),
     );
     assert!(
-        (written - measured).abs() < 1e-9,
-        "{written} vs reported {measured}"
+        b < p,
+        "the error must not be monotone in --res for this test: {t}"
     );
+    // A target between them: every preset misses it, a resolution between them meets it.
+    let target = (b + p) / 2.0;
+    let r = search(&format!("{target}"), "vol.billow");
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let v: Value = serde_json::from_str(&r.stdout).unwrap();
+    let t = &v["target"];
+    let trials = t["trials"].as_array().unwrap();
+    assert!(
+        trials[..4]
+            .iter()
+            .all(|t| t["phase"] == "ladder" && t["met"] == false),
+        "{t}"
+    );
+    assert_eq!(t["chosen_preset"], Value::Null, "{t}");
+    assert_eq!(v["preset"], Value::Null);
+    let chosen = t["chosen"].as_str().unwrap();
+    let measured = t["measured_error"].as_f64().unwrap();
+    assert!(measured <= target, "{t}");
+    // The cheapest measured setting that meets the target.
+    let cheapest = trials
+        .iter()
+        .filter(|t| t["met"] == true)
+        .map(|t| res_of(t["label"].as_str().unwrap()))
+        .min()
+        .unwrap();
+    assert_eq!(res_of(chosen), cheapest, "{t}");
+    assert_eq!(v["resolution"], format!("{cheapest}"));
+    let written = eval_errors(d, &mesh, "vol.billow", VSIZE, "1", true);
+    assert!((written[0] - measured).abs() < 1e-9, "{written:?} vs {t}");
 }
 
 #[test]
@@ -267,7 +440,7 @@ fn an_unreachable_target_exits_10_and_writes_nothing() {
 }
 
 #[test]
-fn bbcloud_meets_a_reachable_target_that_the_next_cheaper_preset_misses() {
+fn bbcloud_meets_a_reachable_target_judged_over_distances_and_lights() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let mesh = tree(d);
@@ -280,9 +453,9 @@ fn bbcloud_meets_a_reachable_target_that_the_next_cheaper_preset_misses() {
             ],
             d,
         );
-        errors.push(eval_rmse(d, &mesh, &out, SIZE));
+        errors.push(eval_errors(d, &mesh, &out, SIZE, "1,4,16", false));
     }
-    let (draft, balanced) = (errors[0], errors[1]);
+    let (draft, balanced) = (worst(&errors[0]), worst(&errors[1]));
     assert!(
         balanced < draft,
         "the ladder must gain accuracy: {errors:?}"
@@ -316,7 +489,14 @@ fn bbcloud_meets_a_reachable_target_that_the_next_cheaper_preset_misses() {
         (trials[0]["error"].as_f64().unwrap() - draft).abs() < 1e-9,
         "{t} vs {draft}"
     );
-    let written = eval_rmse(d, &mesh, "cloud.billow", SIZE);
+    let written = worst(&eval_errors(
+        d,
+        &mesh,
+        "cloud.billow",
+        SIZE,
+        "1,4,16",
+        false,
+    ));
     assert!(
         written <= target,
         "eval of the written cloud {written} > target {target}"

@@ -12,7 +12,7 @@ use billow::compress::{compress_cloud, Compression};
 use billow::export::gltf::cloud_gltf_bytes_with;
 use billow::export::{GltfAlpha, GltfContainer, GltfOptions};
 use billow::import::{import, ImportOptions, Imported};
-use billow::presets::target::{search, Candidate, Judge, SearchError, TargetOptions};
+use billow::presets::target::{search_cloud, short, TargetOptions, Trial};
 use billow::presets::{resolve_cloud, CloudFlags, CloudSettings, Preset, Source};
 use billow::provenance::{source_info_all, tool_version};
 use billow_format::{CloudAsset, CloudBlocks};
@@ -26,7 +26,7 @@ use crate::output::{
 };
 use crate::progress::{self, Monotone};
 use crate::staged::{out_err, Staged};
-use crate::voxelize::{target_options, TargetSummary};
+use crate::target::{search_failed, target_options, trial_line, TargetArgs, TargetSummary};
 use crate::Ctx;
 
 #[derive(clap::Args, Debug)]
@@ -48,28 +48,8 @@ pub struct Args {
     /// flags override it.
     #[arg(long, value_name = "NAME", conflicts_with = "target_error")]
     preset: Option<String>,
-    /// Bake the cheapest setting whose measured error is at most E: `billow eval`'s mean
-    /// RMSE of LOD 0 over the six axis views at --target-distance. Tries the presets
-    /// cheapest first, then refines --epsilon between the last that failed and the first
-    /// that met E; exit 10 (and no file) when none does. Explicit flags stay fixed.
-    #[arg(long, value_name = "E")]
-    target_error: Option<f64>,
-    /// The view distance of --target-error, a multiple of the framed distance, in (0, 1000].
-    #[arg(
-        long,
-        value_name = "F",
-        default_value_t = 1.0,
-        requires = "target_error"
-    )]
-    target_distance: f32,
-    /// The image size WxH of --target-error (16-spp reference, as `billow eval`).
-    #[arg(
-        long,
-        value_name = "WxH",
-        default_value = "128x128",
-        requires = "target_error"
-    )]
-    target_size: String,
+    #[command(flatten)]
+    target: TargetArgs,
     /// Random seed (PCG32), any 64-bit number; the same seed gives the same bytes.
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -284,15 +264,6 @@ fn parse_view(s: &str, up: Vec3, strength: f32) -> Result<ViewPreference, CliErr
     Ok(ViewPreference { dirs, strength })
 }
 
-/// `0.04`, `1e-30`: a number as a person would write it.
-fn short(x: f32) -> String {
-    if x == 0.0 || x.abs() >= 1e-3 {
-        x.to_string()
-    } else {
-        format!("{x:e}")
-    }
-}
-
 /// A plane search expected to take longer than this (seconds) is announced with a warning.
 const SLOW_SECONDS: f64 = 60.0;
 
@@ -310,10 +281,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         atlas_size: args.atlas_size,
     };
     let resolved = resolve_cloud(preset, &flags);
-    let target = args
-        .target_error
-        .map(|error| target_options(error, args.target_distance, &args.target_size))
-        .transpose()?;
+    let target = target_options(&args.target)?;
     let compression: Compression = args.compress.parse().map_err(|e| usage("--compress", e))?;
     let gltf_container = args
         .gltf
@@ -676,9 +644,25 @@ fn bake_once(
     })
 }
 
-/// `--target-error`: the preset ladder (explicit flags fixed), cheapest first, then ε
-/// bisected geometrically ([`search`]); each bake measured by a [`Judge`] as the file
-/// would read back. Returns the chosen bake, its options and what was tried.
+/// A bake the `--target-error` search measured: the cloud and its options.
+struct Tried {
+    cloud: Cloud,
+    opts: BbcloudOptions,
+}
+
+impl AsRef<CloudAsset> for Tried {
+    /// What a reader of the file gets: the compressed copy, when there is one.
+    fn as_ref(&self) -> &CloudAsset {
+        self.cloud
+            .compressed
+            .as_ref()
+            .map_or(&self.cloud.asset, |c| &*c.0)
+    }
+}
+
+/// `--target-error`: the library's search ([`search_cloud`]), each candidate baked as
+/// asked here ([`bake_once`]) and its trial printed. Returns the chosen bake, its options
+/// and what was tried; with `--json`, a target none meets still prints its trials.
 #[allow(clippy::too_many_arguments)]
 fn bake_to_target(
     scene: &billow::scene::Scene,
@@ -691,60 +675,11 @@ fn bake_to_target(
     input: &str,
     source: &billow_format::SourceInfo,
 ) -> Result<(Cloud, BbcloudOptions, TargetSummary), CliError> {
-    let describe = |s: &CloudSettings| {
-        format!(
-            "--epsilon {} --samples {} --atlas-size {}",
-            short(s.epsilon),
-            s.samples,
-            s.atlas_size
-        )
-    };
-    let mut ladder: Vec<Candidate<CloudSettings>> = Preset::LADDER
-        .iter()
-        .map(|&p| {
-            let s = resolve_cloud(Some(p), flags).settings;
-            Candidate {
-                label: format!("{p} ({})", describe(&s)),
-                preset: Some(p),
-                settings: s,
-            }
-        })
-        .collect();
-    ladder.dedup_by(|a, b| a.settings == b.settings);
-    let pinned = flags.epsilon.is_some();
-    // Between a failing (larger) and a passing (smaller) ε: their geometric mean, to three
-    // significant digits.
-    let refine = |lo: &Candidate<CloudSettings>, hi: &Candidate<CloudSettings>| {
-        let (a, b) = (lo.settings.epsilon, hi.settings.epsilon);
-        let m = (a * b).sqrt();
-        let m = if m > 0.0 && m.is_finite() {
-            let k = 10f32.powi(2 - m.log10().floor() as i32);
-            (m * k).round() / k
-        } else {
-            return None;
-        };
-        (!pinned && m < a && m > b).then(|| {
-            let settings = CloudSettings {
-                epsilon: m,
-                ..hi.settings
-            };
-            Candidate {
-                label: format!(
-                    "{}, refined ({})",
-                    hi.preset.map_or("", Preset::name),
-                    describe(&settings)
-                ),
-                preset: hi.preset,
-                settings,
-            }
-        })
-    };
-    let mut judge = Judge::new(scene, target);
-    let mut measure = |c: &Candidate<CloudSettings>| {
+    let mut bake = |s: &CloudSettings| {
         let o = BbcloudOptions {
-            epsilon: c.settings.epsilon,
-            samples: c.settings.samples,
-            atlas_size: c.settings.atlas_size,
+            epsilon: s.epsilon,
+            samples: s.samples,
+            atlas_size: s.atlas_size,
             ..opts.clone()
         };
         let cloud = bake_once(
@@ -756,20 +691,24 @@ fn bake_to_target(
             source.clone(),
             Some(compression),
         )?;
-        let measured = cloud.compressed.as_ref().map_or(&cloud.asset, |c| &*c.0);
-        let error = judge
-            .cloud_error(measured)
-            .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;
-        if !ctx.quiet {
-            eprintln!("--target-error: {} → RMSE {error:.4}", c.label);
+        let bytes = match &cloud.compressed {
+            Some((c, blocks)) => c.to_bytes_with(Some(blocks)),
+            None => cloud.asset.to_bytes_with(None),
         }
-        Ok::<_, CliError>(((cloud, o), error))
+        .map_err(|e| CliError::new(Code::Internal, e))?
+        .len() as u64;
+        Ok::<_, CliError>((Tried { cloud, opts: o }, bytes))
     };
-    let found = search(ladder, target, &refine, &mut measure).map_err(|e| match e {
-        SearchError::Target(t) => CliError::new(Code::from(&t), format!("--target-error: {t}")),
-        SearchError::Bake(e) => e,
+    let mut on_trial = |t: &Trial| {
+        if !ctx.quiet {
+            eprintln!("{}", trial_line(target.error, t));
+        }
+    };
+    let found = search_cloud(scene, flags, target, &mut bake, &mut on_trial).map_err(|e| {
+        let output = args.output.display().to_string();
+        search_failed(e, target, args.json.then_some((input, &output)), input)
     })?;
     let summary = TargetSummary::new(target, &found);
-    let (cloud, chosen) = found.asset;
-    Ok((cloud, chosen, summary))
+    let Tried { cloud, opts } = found.asset;
+    Ok((cloud, opts, summary))
 }

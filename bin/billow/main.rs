@@ -19,6 +19,7 @@ mod progress;
 mod shell;
 mod signals;
 mod staged;
+mod target;
 mod view;
 mod view_load;
 mod voxelize;

@@ -10,7 +10,6 @@ use billow::export::{
     check_slices, ktx2_bytes_with, slice_bytes, slice_file_name, SliceFormat, Supercompression,
 };
 use billow::import::{import, ImportOptions, Imported};
-use billow::presets::target::{Found, TargetOptions, Trial};
 use billow::presets::{resolve_volume, Preset, Source, VolumeFlags};
 use billow::provenance::{source_info, with_companions};
 use billow::scene::Aabb;
@@ -25,6 +24,7 @@ use crate::output::{
     warn,
 };
 use crate::staged::{out_err, Staged};
+use crate::target::{target_options, TargetArgs, TargetSummary};
 use crate::voxelize_bake::{bake_once, bake_to_target, Baked};
 use crate::Ctx;
 
@@ -48,28 +48,8 @@ pub struct Args {
     /// --supersample override it.
     #[arg(long, value_name = "NAME", conflicts_with = "target_error")]
     pub(crate) preset: Option<String>,
-    /// Bake the cheapest setting whose measured error is at most E: `billow eval`'s mean
-    /// RMSE over the six axis views at --target-distance. Tries the presets cheapest first,
-    /// then refines --res between the last that failed and the first that met E; exit 10
-    /// (and no file) when none does. Explicit --res / --supersample stay fixed.
-    #[arg(long, value_name = "E")]
-    pub(crate) target_error: Option<f64>,
-    /// The view distance of --target-error, a multiple of the framed distance, in (0, 1000].
-    #[arg(
-        long,
-        value_name = "F",
-        default_value_t = 1.0,
-        requires = "target_error"
-    )]
-    pub(crate) target_distance: f32,
-    /// The image size WxH of --target-error (16-spp reference, as `billow eval`).
-    #[arg(
-        long,
-        value_name = "WxH",
-        default_value = "128x128",
-        requires = "target_error"
-    )]
-    pub(crate) target_size: String,
+    #[command(flatten)]
+    pub(crate) target: TargetArgs,
     /// How the six directional volumes merge: opaque (max opacity, averaged colour: keeps thin
     /// leaves and closed surfaces solid), mean (the paper's neutral average), max, min, or
     /// expr:<expression over px nx py ny pz nz> (see docs/voxelize.md).
@@ -182,75 +162,6 @@ pub enum NormalsArg {
 struct SettingsFrom {
     resolution: Source,
     supersample: Source,
-}
-
-/// What `--target-error` tried and chose.
-#[derive(Serialize)]
-pub(crate) struct TargetSummary {
-    /// E.
-    pub(crate) error: f64,
-    pub(crate) distance: f32,
-    pub(crate) size: [u32; 2],
-    /// The chosen setting, e.g. `balanced` or `quality, --res 96`.
-    pub(crate) chosen: String,
-    pub(crate) chosen_preset: Option<Preset>,
-    /// Its measured mean RMSE (≤ `error`).
-    pub(crate) measured_error: f64,
-    /// Every bake measured, in order.
-    pub(crate) trials: Vec<Trial>,
-}
-
-impl TargetSummary {
-    pub(crate) fn new<S, A>(t: &TargetOptions, found: &Found<S, A>) -> Self {
-        TargetSummary {
-            error: t.error,
-            distance: t.distance,
-            size: [t.width, t.height],
-            chosen: found.candidate.label.clone(),
-            chosen_preset: found.candidate.preset,
-            measured_error: found.error,
-            trials: found.trials.clone(),
-        }
-    }
-
-    /// The line printed on stderr: the choice and its measured error.
-    pub(crate) fn line(&self) -> String {
-        format!(
-            "--target-error {}: chose {} (RMSE {:.4} at {}x the framed distance; {} bake(s) measured)",
-            self.error,
-            self.chosen,
-            self.measured_error,
-            self.distance,
-            self.trials.len()
-        )
-    }
-}
-
-/// `--target-error E --target-distance F --target-size WxH`, checked before any work.
-pub(crate) fn target_options(
-    error: f64,
-    distance: f32,
-    size: &str,
-) -> Result<TargetOptions, CliError> {
-    let (width, height) = crate::eval::parse_size(size).map_err(|e| CliError {
-        message: e.message.replacen("--size", "--target-size", 1),
-        ..e
-    })?;
-    let t = TargetOptions {
-        error,
-        distance,
-        width,
-        height,
-    };
-    t.validate().map_err(|e| {
-        let flag = if !(error.is_finite() && error > 0.0) {
-            "--target-error"
-        } else {
-            "--target-distance"
-        };
-        CliError::new(Code::from(&e), format!("{flag}: {e}"))
-    })?;
-    Ok(t)
 }
 
 #[derive(Serialize)]
@@ -419,10 +330,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         supersample: args.supersample,
     };
     let resolved = resolve_volume(preset, &flags);
-    let target = args
-        .target_error
-        .map(|error| target_options(error, args.target_distance, &args.target_size))
-        .transpose()?;
+    let target = target_options(&args.target)?;
     let mut opts = options(
         resolved.settings.resolution,
         resolved.settings.supersample,

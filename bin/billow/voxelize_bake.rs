@@ -7,19 +7,19 @@ use std::time::Instant;
 
 use billow::compress::{compress_volume, encode_volume, Compression};
 use billow::emptyspace::{prune, prune_sparse, EmptySpaceOptions, EmptySpaceStats};
-use billow::presets::target::{search, Candidate, Judge, SearchError, TargetOptions};
-use billow::presets::{resolve_volume, Preset, VolumeFlags, VolumeSettings};
+use billow::presets::target::{search_volume, TargetOptions, Trial};
+use billow::presets::{VolumeFlags, VolumeSettings};
 use billow::provenance::tool_version;
 use billow::voxelize::toksvig::{judge_normals, keeps, NormalsJudgement};
 use billow::voxelize::{
-    bake_params, bake_params_for, voxelize, voxelize_sparse, CombineFn, Resolution, Stage,
-    VoxelizeOptions,
+    bake_params, bake_params_for, voxelize, voxelize_sparse, CombineFn, Stage, VoxelizeOptions,
 };
 
 use crate::exit::{voxelize_error, CliError, Code};
 use crate::output::{progress, warn};
 use crate::progress::{self, Monotone};
-use crate::voxelize::{default_align, Args, NormalsArg, TargetSummary};
+use crate::target::{search_failed, trial_line, TargetSummary};
+use crate::voxelize::{default_align, Args, NormalsArg};
 use crate::Ctx;
 
 /// One bake, compressed as asked: what is written and what the summary reports.
@@ -110,7 +110,7 @@ pub(crate) fn bake_once(
     let compress_start = Instant::now();
     let blocks = (compression == Compression::Bc).then(|| {
         asset.header.set_compress("bc7");
-        if args.target_error.is_some() || args.slices.is_some() {
+        if args.target.target_error.is_some() || args.slices.is_some() {
             compress_volume(&mut asset)
         } else {
             encode_volume(&asset)
@@ -170,9 +170,21 @@ fn normals_optional<T>(
     }
 }
 
-/// `--target-error`: the preset ladder (explicit --res / --supersample fixed), cheapest
-/// first, then --res bisected ([`search`]); each bake measured by a [`Judge`]. Returns the
-/// chosen bake, its options and what was tried.
+/// A bake the `--target-error` search measured: what it wrote, and with which options.
+pub(crate) struct Tried {
+    pub(crate) baked: Baked,
+    pub(crate) opts: VoxelizeOptions,
+}
+
+impl AsRef<billow_format::VolumeAsset> for Tried {
+    fn as_ref(&self) -> &billow_format::VolumeAsset {
+        &self.baked.asset
+    }
+}
+
+/// `--target-error`: the library's search ([`search_volume`]), each candidate baked as
+/// asked here ([`bake_once`]) and its trial printed. Returns the chosen bake, its options
+/// and what was tried; with `--json`, a target none meets still prints its trials.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn bake_to_target(
     scene: &billow::scene::Scene,
@@ -185,74 +197,34 @@ pub(crate) fn bake_to_target(
     input: &str,
     source: &billow_format::SourceInfo,
 ) -> Result<(Baked, VoxelizeOptions, TargetSummary), CliError> {
-    let label = |p: Preset, s: &VolumeSettings| {
-        format!(
-            "{p} (--res {} --supersample {})",
-            s.resolution, s.supersample
-        )
-    };
-    let mut ladder: Vec<Candidate<VolumeSettings>> = Preset::LADDER
-        .iter()
-        .map(|&p| {
-            let s = resolve_volume(Some(p), flags).settings;
-            Candidate {
-                label: label(p, &s),
-                preset: Some(p),
-                settings: s,
-            }
-        })
-        .collect();
-    ladder.dedup_by(|a, b| a.settings == b.settings);
-    let pinned = flags.resolution.is_some();
-    // Between a failing and a passing resolution: the midpoint, a multiple of 8 (so the
-    // default --align stays 8).
-    let refine = |lo: &Candidate<VolumeSettings>, hi: &Candidate<VolumeSettings>| {
-        let (Resolution::Longest(a), Resolution::Longest(b)) =
-            (lo.settings.resolution, hi.settings.resolution)
-        else {
-            return None;
-        };
-        let m = (a + b) / 2 / 8 * 8;
-        (!pinned && m > a && m < b).then(|| {
-            let settings = VolumeSettings {
-                resolution: Resolution::Longest(m),
-                ..hi.settings
-            };
-            Candidate {
-                label: format!(
-                    "{}, refined (--res {m} --supersample {})",
-                    hi.preset.map_or("", Preset::name),
-                    settings.supersample
-                ),
-                preset: hi.preset,
-                settings,
-            }
-        })
-    };
-    let mut judge = Judge::new(scene, target);
-    let mut measure = |c: &Candidate<VolumeSettings>| {
+    let mut bake = |s: &VolumeSettings| {
         let mut o = opts.clone();
-        o.resolution = c.settings.resolution;
-        o.supersample = c.settings.supersample;
+        o.resolution = s.resolution;
+        o.supersample = s.supersample;
         o.align = args
             .align
             .unwrap_or_else(|| default_align(&o.resolution, &args.bounds));
         let baked = bake_once(scene, &mut o, args, compression, ctx, input, source.clone())?;
-        let error = judge
-            .volume_error(&baked.asset)
-            .map_err(|e| CliError::new(Code::from(&e), format!("{input}: {e}")))?;
-        if !ctx.quiet {
-            eprintln!("--target-error: {} → RMSE {error:.4}", c.label);
-        }
-        Ok::<_, CliError>(((baked, o), error))
+        let bytes = baked
+            .asset
+            .with_parts_with(baked.blocks.as_ref(), |parts| {
+                parts.iter().map(|p| p.len() as u64).sum::<u64>()
+            })
+            .map_err(|e| CliError::new(Code::Internal, e))?;
+        Ok::<_, CliError>((Tried { baked, opts: o }, bytes))
     };
-    let found = search(ladder, target, &refine, &mut measure).map_err(|e| match e {
-        SearchError::Target(t) => CliError::new(Code::from(&t), format!("--target-error: {t}")),
-        SearchError::Bake(e) => e,
+    let mut on_trial = |t: &Trial| {
+        if !ctx.quiet {
+            eprintln!("{}", trial_line(target.error, t));
+        }
+    };
+    let found = search_volume(scene, flags, target, &mut bake, &mut on_trial).map_err(|e| {
+        let output = args.output.display().to_string();
+        search_failed(e, target, args.json.then_some((input, &output)), input)
     })?;
     let summary = TargetSummary::new(target, &found);
-    let (baked, chosen) = found.asset;
-    Ok((baked, chosen, summary))
+    let Tried { baked, opts } = found.asset;
+    Ok((baked, opts, summary))
 }
 
 /// The dense bake: [`voxelize`] (retried without normals when `--normals auto` and the

@@ -139,6 +139,55 @@ pub fn light_set(name: &str, ambient: f32) -> Option<Vec<EvalLight>> {
         .collect()
 }
 
+/// Why a light set's text names no lights ([`parse_light_set`]).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum LightSetError {
+    /// Not a set name, and not a list `NAME=X,Y,Z;X,Y,Z;…` (a usage error).
+    #[error("{0}")]
+    Syntax(String),
+    /// A listed vector that is not a direction (zero, not finite).
+    #[error("{0}")]
+    NotADirection(String),
+}
+
+/// A light set as `billow eval --lights` and `--target-lights` write it: a named set of
+/// [`LIGHT_SETS`] ([`light_set`]) or a list `NAME=X,Y,Z;X,Y,Z;…` (unnamed lights are
+/// `light1`, `light2`, …), every light with `ambient`.
+pub fn parse_light_set(text: &str, ambient: f32) -> Result<Vec<EvalLight>, LightSetError> {
+    if let Some(lights) = light_set(text.trim(), ambient) {
+        return Ok(lights);
+    }
+    if !text.contains(',') {
+        return Err(LightSetError::Syntax(format!(
+            "'{text}': expected {} or NAME=X,Y,Z;…",
+            LIGHT_SETS.join(", ")
+        )));
+    }
+    let mut out = Vec::new();
+    for (i, item) in text.split(';').filter(|i| !i.trim().is_empty()).enumerate() {
+        let (name, v) = match item.split_once('=') {
+            Some((n, v)) => (n.trim().to_string(), v),
+            None => (format!("light{}", i + 1), item),
+        };
+        let c: Vec<f32> = v
+            .split(',')
+            .map(|x| x.trim().parse::<f32>())
+            .collect::<Result<_, _>>()
+            .map_err(|e| LightSetError::Syntax(format!("'{v}': {e} (expected X,Y,Z)")))?;
+        let [x, y, z] = c[..] else {
+            return Err(LightSetError::Syntax(format!("'{v}': expected X,Y,Z")));
+        };
+        let dir = Vec3::new(x, y, z);
+        out.push(EvalLight::new(name, dir, ambient).ok_or_else(|| {
+            LightSetError::NotADirection(format!("({x}, {y}, {z}) is not a direction"))
+        })?);
+    }
+    if out.is_empty() {
+        return Err(LightSetError::Syntax(format!("'{text}': no lights")));
+    }
+    Ok(out)
+}
+
 /// The two lighting models (two-sided Lambert of leaf cards and meshes, one-sided Lambert
 /// of the Toksvig normal of a volume voxel): pure math of the shared core
 /// ([`billow_core::shading`], which the billboard bake uses too), re-exported here.

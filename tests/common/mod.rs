@@ -95,6 +95,18 @@ pub fn run_with(
         .stdout(Stdio::piped())
         .stderr(Stdio::piped());
     let mut child = cmd.spawn().expect("spawn billow");
+    // The pipes are drained while the child runs: a child whose output outgrows the pipe
+    // buffer (64 KiB, e.g. `eval --json` with many views) would otherwise block on its
+    // write and never exit.
+    let drain = |mut r: Box<dyn std::io::Read + Send>| {
+        std::thread::spawn(move || {
+            let mut buf = Vec::new();
+            let _ = r.read_to_end(&mut buf);
+            buf
+        })
+    };
+    let stdout = drain(Box::new(child.stdout.take().expect("stdout")));
+    let stderr = drain(Box::new(child.stderr.take().expect("stderr")));
     let start = Instant::now();
     let mut timed_out = false;
     loop {
@@ -108,11 +120,12 @@ pub fn run_with(
         }
         std::thread::sleep(Duration::from_millis(2));
     }
-    let out = child.wait_with_output().expect("output");
+    let status = child.wait().expect("wait");
+    let (stdout, stderr) = (stdout.join().unwrap(), stderr.join().unwrap());
     Run {
-        code: if timed_out { None } else { out.status.code() },
-        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
-        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+        code: if timed_out { None } else { status.code() },
+        stdout: String::from_utf8_lossy(&stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&stderr).into_owned(),
         timed_out,
     }
 }

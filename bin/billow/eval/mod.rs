@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use billow::camera::{parse_direction, view_directions, views_of, ViewDirections, ViewSpec};
 use billow::eval::image::comparisons_png_bytes;
-use billow::eval::lighting::{light_set, EvalLight, Lighting, LIGHT_SETS};
+use billow::eval::lighting::{parse_light_set, EvalLight, LightSetError, Lighting};
 use billow::eval::slicer::{SlicerParams, Spacing};
 use billow::eval::suite::{
     mean_errors, means_by_distance, means_by_light, reference_lighting, view_file_stem,
@@ -231,28 +231,12 @@ pub(crate) fn parse_lights(args: &Args) -> Result<Option<Vec<EvalLight>>, CliErr
         }
         return Ok(None);
     };
-    if let Some(lights) = light_set(set.trim(), args.ambient) {
-        return Ok(Some(lights));
-    }
-    if !set.contains(',') {
-        return Err(usage(
-            "--lights",
-            format!(
-                "'{set}': expected {} or NAME=X,Y,Z;…",
-                LIGHT_SETS.join(", ")
-            ),
-        ));
-    }
-    let mut out = Vec::new();
-    for (i, item) in set.split(';').filter(|i| !i.trim().is_empty()).enumerate() {
-        let (name, v) = match item.split_once('=') {
-            Some((n, v)) => (n.trim().to_string(), v),
-            None => (format!("light{}", i + 1), item),
-        };
-        let dir = vector("--lights", v)?;
-        out.push(light("--lights", name, dir)?);
-    }
-    Ok(Some(out))
+    parse_light_set(set, args.ambient)
+        .map(Some)
+        .map_err(|e| match e {
+            LightSetError::Syntax(m) => usage("--lights", m),
+            LightSetError::NotADirection(m) => bad("--lights", m),
+        })
 }
 
 /// `WxH`, each 1..=4096.
