@@ -22,6 +22,15 @@ pub struct Gpu {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
     pub info: wgpu::AdapterInfo,
+    /// Whether a BC7-compressed volume keeps its blocks on the GPU (where
+    /// [`Gpu::block_upload`] allows it), filtered in extinction space by eight loads per
+    /// level in the shader, rather than being uploaded as an extinction-space
+    /// `Rgba16Float` texture that the texture unit filters in one sample
+    /// ([`crate::volume_pass::VolumeStorage`]). On for hardware adapters (1 byte per
+    /// texel instead of 8); off for software rasterisers (`DeviceType::Cpu`, e.g.
+    /// lavapipe), which decode a BC7 block per load and drew the oak demo's volume 2.6×
+    /// slower from blocks than decoded (docs/performance.md). Tests set it to draw both.
+    pub volume_blocks: bool,
     /// Buffers, bind groups and textures made through this wrapper so far.
     created: AtomicU64,
     record: Mutex<RenderRecord>,
@@ -123,6 +132,7 @@ impl Gpu {
             adapter,
             device,
             queue,
+            volume_blocks: info.device_type != wgpu::DeviceType::Cpu,
             info,
             created: AtomicU64::new(0),
             record: Mutex::new(RenderRecord::default()),
