@@ -20,6 +20,7 @@ mod shell;
 mod staged;
 mod view;
 mod view_load;
+mod view_steps;
 mod voxelize;
 mod voxelize_bake;
 
