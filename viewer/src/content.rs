@@ -184,8 +184,9 @@ impl Content {
     /// [`Content::build`], telling `progress` when each [`BuildStep`] starts and ends: the
     /// uploads (meshes, clouds, volumes, particle tables; timed until the GPU has them),
     /// then the pipelines the passes need ([`Renderer::prepare`]). The volume pass binds
-    /// as many textures at once as the content has (at most the device's batch), so its
-    /// shader switches over no more texture slots than it uses.
+    /// at most as many textures at once as the content has (and the renderer's
+    /// [`Renderer::texture_batch`] allows), so its shader switches over no texture slot it
+    /// does not use.
     pub fn build_with(
         &self,
         gpu: Gpu,
@@ -199,9 +200,7 @@ impl Content {
         r.params = params;
         r.light_dir = self.light_dir;
         r.ambient = self.ambient;
-        r.texture_batch = self
-            .volume_textures()
-            .clamp(1, crate::volume_pass::MAX_TEXTURES_PER_BATCH);
+        r.texture_batch = r.texture_batch.min(self.volume_textures().max(1));
         r.set_shadows(self.shadows);
         for m in &self.meshes {
             r.add_mesh(m)?;

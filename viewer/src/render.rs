@@ -122,7 +122,8 @@ pub struct Renderer {
     /// Scene time in seconds (animated cells, particles).
     pub time: f32,
     /// Volume textures bound at once (clamped to the device's limit when the volume
-    /// pass is built, on the first volume added); tests lower it to exercise batches.
+    /// pass is built, on the first volume added): [`crate::volume_pass::preferred_batch`]
+    /// to start with (1 on software adapters); tests set it to exercise batches.
     pub texture_batch: usize,
     particles: Particles,
     /// Textures uploaded as BC7 blocks so far (volumes, atlases, normal maps); the others
@@ -170,6 +171,7 @@ impl Renderer {
     pub fn new(gpu: Gpu) -> Renderer {
         let receiver_layout = shadow::receiver_layout(&gpu.device);
         let none = ShadowMap::new(&gpu, &receiver_layout, 1);
+        let texture_batch = crate::volume_pass::preferred_batch(&gpu);
         Renderer {
             gpu,
             params: SliceParams::default(),
@@ -190,7 +192,7 @@ impl Renderer {
             dissolve_override: None,
             lines: None,
             time: 0.0,
-            texture_batch: crate::volume_pass::MAX_TEXTURES_PER_BATCH,
+            texture_batch,
             particles: Particles::default(),
             block_textures: 0,
         }

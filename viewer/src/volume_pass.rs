@@ -56,6 +56,22 @@ use crate::{Gpu, ViewError};
 /// Most textures bound at once (the shaders switch over this many slots at most).
 pub const MAX_TEXTURES_PER_BATCH: usize = 32;
 
+/// The texture batch a renderer on `gpu` starts with ([`crate::Renderer::texture_batch`]):
+/// [`MAX_TEXTURES_PER_BATCH`] (clamped to [`batch_size`]) on hardware adapters, where the
+/// fragment's switch over its cell's texture slot runs one case; **1** on software
+/// adapters (`DeviceType::Cpu`, lavapipe), whose SIMD fragment code runs every case of a
+/// switch under a mask, so each bound slot costs every fragment a trilinear fetch: the
+/// asteroid belt (18 textures) at 320×240 drew its frame in 2.2 s with one texture per
+/// batch (6,587 draws) and in 18.2 s with 18 per batch (699 draws), the same picture
+/// (docs/performance.md).
+pub fn preferred_batch(gpu: &Gpu) -> usize {
+    if gpu.info.device_type == wgpu::DeviceType::Cpu {
+        1
+    } else {
+        MAX_TEXTURES_PER_BATCH
+    }
+}
+
 /// Textures per batch on `gpu`: as many colour + normal pairs as the fragment stage may
 /// sample, keeping two for the shadow map and a spare, at most [`MAX_TEXTURES_PER_BATCH`].
 pub fn batch_size(gpu: &Gpu) -> usize {

@@ -166,3 +166,31 @@ fn volume_textures_are_stored_in_extinction_space() {
     assert_eq!(textures[0].texture.format(), EXTINCTION_FORMAT);
     assert_eq!(textures[0].levels as usize, asset.levels.len());
 }
+
+/// A software adapter runs every case of the shader's texture-slot switch, so it binds one
+/// volume texture per batch; a hardware adapter binds as many as the content has (at most
+/// the batch maximum), and the shader switches over no unused slot.
+#[test]
+fn texture_batches_fit_the_adapter_and_the_content() {
+    let name = "texture_batches_fit_the_adapter_and_the_content";
+    let Some(gpu) = common::gpu_or_skip(name) else {
+        return;
+    };
+    let software = gpu.info.device_type == wgpu::DeviceType::Cpu;
+    let preferred = billow_view::volume_pass::preferred_batch(&gpu);
+    assert_eq!(
+        preferred,
+        if software {
+            1
+        } else {
+            billow_view::volume_pass::MAX_TEXTURES_PER_BATCH
+        }
+    );
+    assert_eq!(billow_view::Renderer::new(gpu).texture_batch, preferred);
+    let gpu = common::gpu_or_skip(name).expect("adapter");
+    let mut c = content(false);
+    c.volumes.push(c.volumes[0].clone());
+    assert_eq!(c.volume_textures(), 2);
+    let r = c.build(gpu, SliceParams::default(), 0.8).expect("build");
+    assert_eq!(r.texture_batch, preferred.min(2));
+}
