@@ -456,7 +456,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             (params, fov, bg),
             (width, height),
             (cam_eye, cam_target),
-            ctx,
+            (ctx, steps),
         );
     }
     let out = args.screenshot.as_ref().expect("checked above");
@@ -635,7 +635,7 @@ fn run_window(
     (params, fov, background): (SliceParams, f32, [f32; 3]),
     size: (u32, u32),
     (eye, target): (Vec3, Vec3),
-    ctx: &Ctx,
+    (ctx, mut steps): (&Ctx, Steps),
 ) -> Result<(), CliError> {
     let lod = args.lod_distance;
     let wire = args.wireframe;
@@ -655,6 +655,12 @@ fn run_window(
                 first = false;
             }
             r.time = t0 + t;
+        })),
+        progress: Some(Box::new(move |p| match p {
+            billow_view::content::BuildProgress::Started(s) => steps.start(s.describe()),
+            billow_view::content::BuildProgress::Finished(..) => {
+                steps.end();
+            }
         })),
     };
     let stats = billow_view::window::run(content, opts).map_err(view_err)?;
