@@ -7,7 +7,7 @@
 //! filter of the CPU sampler (`billow::eval::volume_sampler`): one hardware sample per
 //! fragment instead of eight loads and conversions per MIP level. On hardware adapters a
 //! BC7-compressed asset keeps its blocks instead ([`VolumeStorage::Blocks`], 1 byte per
-//! texel against 8; [`Gpu::volume_blocks`]), filtered by loads in the shader
+//! texel against 8; [`Gpu::sample_blocks`]), filtered by loads in the shader
 //! ([`shader_source`]). Up to [`batch_size`] textures (the device's
 //! limit, at most [`MAX_TEXTURES_PER_BATCH`]) are bound at once (a *batch*), so one draw covers cells of several assets and a slice keeps its
 //! cells in ID order whatever their texture; each cell names its asset (and so its
@@ -245,7 +245,7 @@ pub struct GpuVolume {
     /// The `(α·n̄, α)` normal texture (module docs), when the asset stores normals.
     pub normals: Option<(wgpu::Texture, wgpu::TextureView)>,
     /// Extinction-space texels, or BC7 blocks (format 1.2, [`Gpu::block_upload`],
-    /// [`Gpu::volume_blocks`]).
+    /// [`Gpu::sample_blocks`]).
     pub storage: VolumeStorage,
 }
 
@@ -520,11 +520,8 @@ impl VolumePass {
         let repeat = rep[0] || rep[2];
         let cs = asset.header.colour_space;
         let dims0 = asset.level_dims(0);
-        let direct = blocks.filter(|b| {
-            b.colour.len() == asset.levels.len()
-                && gpu.volume_blocks
-                && gpu.block_upload(dims0, true)
-        });
+        let direct = blocks
+            .filter(|b| b.colour.len() == asset.levels.len() && gpu.block_upload(dims0, true));
         let mut out = vec![match direct {
             Some(b) => {
                 check_3d(gpu, dims0, b.colour.len() as u32)?;
@@ -561,11 +558,9 @@ impl VolumePass {
             .map(|b| b.bands.as_slice())
             .filter(|bb| bb.len() == asset.bands.len());
         for (i, b) in asset.bands.iter().enumerate() {
-            let direct = band_blocks.map(|bb| &bb[i]).filter(|bb| {
-                bb.colour.len() == b.levels.len()
-                    && gpu.volume_blocks
-                    && gpu.block_upload(b.dims, true)
-            });
+            let direct = band_blocks
+                .map(|bb| &bb[i])
+                .filter(|bb| bb.colour.len() == b.levels.len() && gpu.block_upload(b.dims, true));
             // Bands address their textures with clamp-to-edge (SPEC §8.6).
             out.push(match direct {
                 Some(bb) => {
