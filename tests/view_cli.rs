@@ -430,6 +430,52 @@ fn recorded_passes_equal_print_passes_for_every_scene() {
                 t.display()
             );
         }
+        // The shadow pipelines only with a shadow pass, each with its caster's pass
+        // (issue 37: a scene without shadows built the volumes' shadow pipeline).
+        for (pass, pipeline) in [
+            ("volume", "pipeline:volume-shadow"),
+            ("mesh", "pipeline:mesh-shadow"),
+            ("cloud", "pipeline:cloud-shadow"),
+        ] {
+            assert_eq!(
+                has(pipeline),
+                shadow && printed.iter().any(|p| p == pass),
+                "{}: {pipeline}: {built:?}",
+                t.display()
+            );
+        }
+        // Each pipeline is built once.
+        for b in &built {
+            assert_eq!(
+                built.iter().filter(|x| *x == b).count(),
+                1,
+                "{}: {b} built twice: {built:?}",
+                t.display()
+            );
+        }
+        // The start-up, step by step (ms).
+        let startup = &v["startup_ms"];
+        for k in [
+            "read",
+            "adapter",
+            "upload",
+            "pipelines",
+            "first_frame",
+            "total",
+        ] {
+            let ms = startup[k].as_f64().unwrap_or(-1.0);
+            assert!(
+                ms >= 0.0,
+                "{}: startup_ms.{k} = {}",
+                t.display(),
+                startup[k]
+            );
+        }
+        assert!(
+            startup["total"].as_f64().unwrap() >= startup["first_frame"].as_f64().unwrap(),
+            "{}: {startup}",
+            t.display()
+        );
         checked += 1;
     }
     assert_eq!(checked, 9, "scenes checked");

@@ -22,6 +22,7 @@ mod staged;
 mod target;
 mod view;
 mod view_load;
+mod view_steps;
 mod voxelize;
 mod voxelize_bake;
 

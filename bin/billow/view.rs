@@ -16,6 +16,7 @@ use crate::eval::parse_size;
 use crate::exit::{usage, CliError, Code};
 use crate::output::{print_json, refuse_clobbering, refuse_clobbering_read};
 use crate::view_load::{load_content, load_scene};
+use crate::view_steps::{self, Steps};
 use crate::Ctx;
 
 /// The window's controls, shown after `billow view --help`'s flags (docs/viewer.md).
@@ -139,9 +140,26 @@ struct Summary {
     /// Mean and minimum wall time per frame (encode, submit, wait for the GPU), ms.
     frame_ms_mean: f64,
     frame_ms_min: f64,
-    /// The first frame (includes compiling the pipelines on most drivers).
+    /// The first frame (includes compiling the shaders on lavapipe, which compiles a
+    /// fragment shader at its first draw).
     frame_ms_first: f64,
+    /// How long each start-up step took.
+    startup_ms: Startup,
     stats: FrameStats,
+}
+
+/// The start-up of `billow view --headless`, step by step, in milliseconds: the scene and
+/// its assets read and decoded, the adapter and device, the uploads (until the GPU has
+/// them), the pipelines built before the first frame, the first frame (encode, submit,
+/// wait), and all of it from the start of the command to the end of the first frame.
+#[derive(Serialize, Default)]
+struct Startup {
+    read: f64,
+    adapter: f64,
+    upload: f64,
+    pipelines: f64,
+    first_frame: f64,
+    total: f64,
 }
 
 fn bad(flag: &str, e: impl std::fmt::Display) -> CliError {
@@ -230,10 +248,13 @@ fn view_err(e: ViewError) -> CliError {
 }
 
 pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
+    let started = Instant::now();
     if let Some(shot) = &args.screenshot {
         refuse_clobbering(&[&args.target], &[("--screenshot", shot)])?;
         crate::output::image_out("--screenshot", shot)?;
     }
+    let mut steps = Steps::stderr(ctx.quiet || args.print_passes);
+    steps.start("reading the scene and its assets");
     let mut scene = load_scene(&args.target)?;
     match args.shadows.as_deref() {
         None => {}
@@ -244,6 +265,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     override_particles(&mut scene, &args)?;
     let mut read = Vec::new();
     let mut content = load_content(&scene, &mut read)?;
+    let read_time = steps.end();
     if let Some(o) = args.dissolve {
         for c in &mut content.clouds {
             c.dissolve = o;
@@ -419,7 +441,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     if let Some(dir) = &args.lod_sweep {
         return run_sweep(
             &args,
-            ctx,
+            (ctx, &mut steps),
             &content,
             (params, fov),
             (width, height),
@@ -435,30 +457,47 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             (params, fov, bg),
             (width, height),
             (cam_eye, cam_target),
-            ctx,
+            (ctx, steps),
         );
     }
     let out = args.screenshot.as_ref().expect("checked above");
     let frames = args.frames.unwrap_or(1);
 
-    let gpu = Gpu::headless().map_err(view_err)?;
+    let (gpu, adapter_time) = steps.run("requesting the GPU adapter", Gpu::headless);
+    let gpu = gpu.map_err(view_err)?;
     let adapter = gpu.describe();
-    let mut r = content.build(gpu, params, fov).map_err(view_err)?;
+    let (mut r, build) = build(&content, gpu, (params, fov), &mut steps)?;
     r.lod_distance_override = args.lod_distance;
     r.set_wireframe(args.wireframe);
     r.time = args.time;
     let target = billow_view::target::Target::new(&r.gpu, width, height);
     let mut stats = FrameStats::default();
     let (mut total, mut min, mut first) = (0.0f64, f64::INFINITY, None);
-    for _ in 0..frames {
+    let mut first_done = None;
+    for k in 0..frames {
+        steps.start(match k {
+            0 => "rendering the first frame".to_string(),
+            _ => format!("rendering frame {} of {frames}", k + 1),
+        });
         let t = Instant::now();
         stats = r.render(&target, &camera).map_err(view_err)?;
         r.gpu.wait().map_err(view_err)?;
         let s = t.elapsed().as_secs_f64();
+        steps.end();
         total += s;
         min = min.min(s);
         first.get_or_insert(s);
+        first_done.get_or_insert_with(|| started.elapsed());
     }
+    drop(steps);
+    let startup = Startup {
+        read: view_steps::ms(read_time),
+        adapter: view_steps::ms(adapter_time),
+        upload: view_steps::ms(build[0]),
+        pipelines: view_steps::ms(build[1]),
+        first_frame: 1e3 * first.unwrap_or(0.0),
+        total: view_steps::ms(first_done.unwrap_or_default()),
+    };
     let img = r.read(&target).map_err(view_err)?;
     let record = r.record();
     let bg = background.map(|b| b.extend(1.0));
@@ -500,6 +539,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         frame_ms_mean: 1e3 * total / f64::from(frames),
         frame_ms_min: 1e3 * min,
         frame_ms_first: 1e3 * first.unwrap_or(0.0),
+        startup_ms: startup,
         stats,
     };
     if args.json {
@@ -525,10 +565,35 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     Ok(())
 }
 
+/// `content` on `gpu`, its upload and pipeline steps told to `steps`; returns the
+/// renderer and the steps' times (upload, pipelines).
+fn build(
+    content: &billow_view::content::Content,
+    gpu: Gpu,
+    (params, fov): (SliceParams, f32),
+    steps: &mut Steps,
+) -> Result<(billow_view::Renderer, [std::time::Duration; 2]), CliError> {
+    use billow_view::content::{BuildProgress, BuildStep};
+    let mut times = [std::time::Duration::ZERO; 2];
+    let r = content
+        .build_with(gpu, params, fov, &mut |p| match p {
+            BuildProgress::Started(s) => steps.start(s.describe()),
+            BuildProgress::Finished(s, d) => {
+                steps.end();
+                times[match s {
+                    BuildStep::Upload => 0,
+                    BuildStep::Pipelines => 1,
+                }] = d;
+            }
+        })
+        .map_err(view_err)?;
+    Ok((r, times))
+}
+
 /// `--lod-sweep DIR` (bin/billow/lod_sweep.rs).
 fn run_sweep(
     args: &Args,
-    ctx: &Ctx,
+    (ctx, steps): (&Ctx, &mut Steps),
     content: &billow_view::content::Content,
     (params, fov): (SliceParams, f32),
     size: (u32, u32),
@@ -546,8 +611,8 @@ fn run_sweep(
     }
     std::fs::create_dir_all(dir)
         .map_err(|e| CliError::new(Code::OutputIo, format!("{}: {e}", dir.display())))?;
-    let gpu = Gpu::headless().map_err(view_err)?;
-    let mut r = content.build(gpu, params, fov).map_err(view_err)?;
+    let (gpu, _) = steps.run("requesting the GPU adapter", Gpu::headless);
+    let (mut r, _) = build(content, gpu.map_err(view_err)?, (params, fov), steps)?;
     let sweep =
         crate::lod_sweep::sweep(&mut r, size, (-view_dir, fov, args.sweep_fill), Some(dir))?;
     let table = crate::lod_sweep::table(&sweep);
@@ -573,7 +638,7 @@ fn run_window(
     (params, fov, background): (SliceParams, f32, [f32; 3]),
     size: (u32, u32),
     (eye, target): (Vec3, Vec3),
-    ctx: &Ctx,
+    (ctx, mut steps): (&Ctx, Steps),
 ) -> Result<(), CliError> {
     let lod = args.lod_distance;
     let wire = args.wireframe;
@@ -593,6 +658,12 @@ fn run_window(
                 first = false;
             }
             r.time = t0 + t;
+        })),
+        progress: Some(Box::new(move |p| match p {
+            billow_view::content::BuildProgress::Started(s) => steps.start(s.describe()),
+            billow_view::content::BuildProgress::Finished(..) => {
+                steps.end();
+            }
         })),
     };
     let stats = billow_view::window::run(content, opts).map_err(view_err)?;

@@ -7,6 +7,8 @@
 //! - [`slicing`]: slice planning of volumetric billboards (voxel size, adaptive slice
 //!   depths, the per-cell normal matrix);
 //! - [`compositing`]: premultiplied "over"/"under" and opacity correction;
+//! - [`extinction`]: the extinction space volume texels are filtered in (thin layers
+//!   stay opaque);
 //! - [`prism_plane`]: the prism/plane intersection (VB paper Appendix A);
 //! - [`ray_triangle`]: the watertight ray/triangle test;
 //! - [`cells`]: a box as the two prism cells of a volumetric billboard;
@@ -28,6 +30,7 @@ pub mod aabb;
 pub mod camera;
 pub mod cells;
 pub mod compositing;
+pub mod extinction;
 pub mod prism_plane;
 pub mod ray_triangle;
 pub mod shading;

@@ -312,44 +312,7 @@ fn texel_pair(u: f32, n: i64, repeat: bool) -> (usize, usize, f32) {
     (i0 as usize, i1 as usize, t)
 }
 
-/// The largest optical depth a texel holds: `ln 510`, the optical depth of
-/// `α = 1 − 1/510` (half an 8-bit step below 1). An opaque texel (α = 1, infinite
-/// optical depth) is given this one, so that filtering stays finite.
-pub const MAX_OPTICAL_DEPTH: f32 = 6.234_411;
-
-/// A premultiplied texel in extinction space: `(σ·c, σ)` with `σ = −ln(1 − α)` the
-/// texel's optical depth over one voxel (capped at [`MAX_OPTICAL_DEPTH`]) and `c = rgb/α`
-/// its straight colour. Filtering these linearly interpolates the *optical depth* (what
-/// the opacity correction `α' = 1 − (1 − α)^(d/d₀)` assumes α encodes), so a ray through
-/// a one-voxel opaque layer stays opaque between texel centres; filtering α linearly
-/// would give that layer an optical depth of only 2 (86 % opacity head-on) — the
-/// see-through stripes of thin layers (docs/eval.md, "Thin layers").
-#[inline]
-pub fn to_extinction(c: Vec4) -> Vec4 {
-    let a = c.w.min(1.0);
-    if !(a > 0.0) {
-        return Vec4::ZERO;
-    }
-    let s = (-(-a).ln_1p()).min(MAX_OPTICAL_DEPTH);
-    (c.truncate() * (s / a)).extend(s)
-}
-
-/// Back from [`to_extinction`] space to premultiplied RGBA: `α = 1 − e^(−σ)`, colour
-/// `(σ·c)/σ · α`. `σ` within 1e-4 of [`MAX_OPTICAL_DEPTH`] (every texel under the
-/// filter opaque) gives α = 1 exactly.
-#[inline]
-pub fn from_extinction(e: Vec4) -> Vec4 {
-    let s = e.w;
-    if !(s > 0.0) {
-        return Vec4::ZERO;
-    }
-    let a = if s >= MAX_OPTICAL_DEPTH - 1e-4 {
-        1.0
-    } else {
-        -(-s).exp_m1()
-    };
-    (e.truncate() * (a / s)).extend(a)
-}
+pub use billow_core::extinction::{from_extinction, to_extinction, MAX_OPTICAL_DEPTH};
 
 #[cfg(test)]
 mod tests {

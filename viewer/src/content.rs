@@ -3,6 +3,8 @@
 //! needed), and [`Content::build`] uploads it into a [`Renderer`] that builds exactly
 //! those passes.
 
+use std::time::{Duration, Instant};
+
 use billow_format::{CloudAsset, CloudBlocks, VolumeAsset, VolumeBlocks};
 use glam::{Mat4, Vec3};
 
@@ -168,12 +170,37 @@ impl Content {
         (lo.x <= hi.x).then_some((lo, hi))
     }
 
-    /// A renderer on `gpu` holding this content (`fov_y` sets default LOD distances).
+    /// A renderer on `gpu` holding this content (`fov_y` sets default LOD distances), its
+    /// pipelines built ([`Content::build_with`] without progress).
     pub fn build(&self, gpu: Gpu, params: SliceParams, fov_y: f32) -> Result<Renderer, ViewError> {
+        self.build_with(gpu, params, fov_y, &mut |_| {})
+    }
+
+    /// Volume textures of this content: each volume's base and LOD bands.
+    pub fn volume_textures(&self) -> usize {
+        self.volumes.iter().map(|v| 1 + v.asset.bands.len()).sum()
+    }
+
+    /// [`Content::build`], telling `progress` when each [`BuildStep`] starts and ends: the
+    /// uploads (meshes, clouds, volumes, particle tables; timed until the GPU has them),
+    /// then the pipelines the passes need ([`Renderer::prepare`]). The volume pass binds
+    /// at most as many textures at once as the content has (and the renderer's
+    /// [`Renderer::texture_batch`] allows), so its shader switches over no texture slot it
+    /// does not use.
+    pub fn build_with(
+        &self,
+        gpu: Gpu,
+        params: SliceParams,
+        fov_y: f32,
+        progress: &mut dyn FnMut(BuildProgress),
+    ) -> Result<Renderer, ViewError> {
+        progress(BuildProgress::Started(BuildStep::Upload));
+        let t = Instant::now();
         let mut r = Renderer::new(gpu);
         r.params = params;
         r.light_dir = self.light_dir;
         r.ambient = self.ambient;
+        r.texture_batch = r.texture_batch.min(self.volume_textures().max(1));
         r.set_shadows(self.shadows);
         for m in &self.meshes {
             r.add_mesh(m)?;
@@ -200,6 +227,41 @@ impl Content {
         if !self.particles.is_empty() {
             r.set_particles(self.particles.clone(), self.particle_layer)?;
         }
+        // The writes land with the next submission: submit one and wait, so the step's
+        // time includes them.
+        r.gpu.queue.submit([]);
+        r.gpu.wait()?;
+        progress(BuildProgress::Finished(BuildStep::Upload, t.elapsed()));
+        progress(BuildProgress::Started(BuildStep::Pipelines));
+        let t = Instant::now();
+        r.prepare();
+        progress(BuildProgress::Finished(BuildStep::Pipelines, t.elapsed()));
         Ok(r)
     }
+}
+
+/// A step of [`Content::build_with`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BuildStep {
+    /// Textures, buffers and tables to the GPU.
+    Upload,
+    /// The pipelines the passes need ([`Renderer::prepare`]).
+    Pipelines,
+}
+
+impl BuildStep {
+    /// What the step does, for a progress line ("uploading the content").
+    pub fn describe(self) -> &'static str {
+        match self {
+            BuildStep::Upload => "uploading the content",
+            BuildStep::Pipelines => "building the pipelines",
+        }
+    }
+}
+
+/// What [`Content::build_with`] tells its caller: a step started, or ended after a time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum BuildProgress {
+    Started(BuildStep),
+    Finished(BuildStep, Duration),
 }

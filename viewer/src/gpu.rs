@@ -22,6 +22,16 @@ pub struct Gpu {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
     pub info: wgpu::AdapterInfo,
+    /// Whether compressed textures (volumes, cloud atlases and normal maps) keep their
+    /// BC7 blocks on the GPU where the device can ([`Gpu::block_upload`]): on by default
+    /// on hardware adapters (a quarter of RGBA8's memory; volumes are then filtered by
+    /// loads in the shader, [`crate::volume_pass::VolumeStorage::Blocks`]); off on
+    /// software rasterisers (`DeviceType::Cpu`, e.g. lavapipe), which decode a BC7 block
+    /// at every texel fetch and memory is the host's anyway: lavapipe drew the oak demo's
+    /// volume 2.6× slower from blocks than decoded, and the `oak_clouds` gallery scene in
+    /// 3.1 s a frame against 0.4 s (docs/performance.md). Tests set it to draw both
+    /// paths.
+    pub sample_blocks: bool,
     /// Buffers, bind groups and textures made through this wrapper so far.
     created: AtomicU64,
     record: Mutex<RenderRecord>,
@@ -62,8 +72,9 @@ impl Gpu {
     /// Linux without a GPU, Mesa's lavapipe is the Vulkan adapter.
     ///
     /// Block-compressed textures (BC7, format 1.2) are uploaded as blocks when the adapter
-    /// has the BC features ([`Gpu::block_upload`]); `BILLOW_VIEW_BC=decode` leaves them off,
-    /// so every compressed texture is decoded on load instead.
+    /// has the BC features and is not a software rasteriser ([`Gpu::block_upload`],
+    /// [`Gpu::sample_blocks`]); `BILLOW_VIEW_BC=decode` leaves the features off, so every
+    /// compressed texture is decoded on load instead.
     pub fn headless() -> Result<Gpu, ViewError> {
         let decode = std::env::var("BILLOW_VIEW_BC").is_ok_and(|v| v == "decode");
         Self::headless_with(!decode)
@@ -123,6 +134,7 @@ impl Gpu {
             adapter,
             device,
             queue,
+            sample_blocks: info.device_type != wgpu::DeviceType::Cpu,
             info,
             created: AtomicU64::new(0),
             record: Mutex::new(RenderRecord::default()),
@@ -130,12 +142,14 @@ impl Gpu {
     }
 
     /// Whether a BC7 texture of `dims` (`d3`: a 3D texture) is uploaded as its blocks:
-    /// the device has `TEXTURE_COMPRESSION_BC` (and `TEXTURE_COMPRESSION_BC_SLICED_3D` for
-    /// 3D) and level 0's width and height are multiples of the 4×4 block. Otherwise the
-    /// viewer uploads the decoded texels.
+    /// blocks are wanted ([`Gpu::sample_blocks`]), the device has
+    /// `TEXTURE_COMPRESSION_BC` (and `TEXTURE_COMPRESSION_BC_SLICED_3D` for 3D) and level
+    /// 0's width and height are multiples of the 4×4 block. Otherwise the viewer uploads
+    /// the decoded texels.
     pub fn block_upload(&self, dims: [u32; 3], d3: bool) -> bool {
         let f = self.device.features();
-        f.contains(wgpu::Features::TEXTURE_COMPRESSION_BC)
+        self.sample_blocks
+            && f.contains(wgpu::Features::TEXTURE_COMPRESSION_BC)
             && (!d3 || f.contains(wgpu::Features::TEXTURE_COMPRESSION_BC_SLICED_3D))
             && dims[0].is_multiple_of(4)
             && dims[1].is_multiple_of(4)

@@ -7,6 +7,8 @@
 //! unlit: base colour × texture as it is, neither Lambert nor shadow (how glTF
 //! `KHR_materials_unlit` materials, whose lighting is baked in, are drawn).
 
+use std::cell::OnceCell;
+
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
@@ -103,7 +105,10 @@ struct MaterialUniform {
 
 pub struct MeshPass {
     pipeline: wgpu::RenderPipeline,
-    shadow_pipeline: wgpu::RenderPipeline,
+    /// Depth only, made by the first shadow pass ([`MeshPass::shadow_pipeline`]).
+    shadow_pipeline: OnceCell<wgpu::RenderPipeline>,
+    layout: wgpu::PipelineLayout,
+    module: wgpu::ShaderModule,
     /// Frame uniforms and their bind groups, made once: the camera's, the light's (both
     /// are written before the submission that reads them, so each has its own).
     frames: [(wgpu::Buffer, wgpu::BindGroup); 2],
@@ -134,32 +139,8 @@ impl MeshPass {
             ],
             immediate_size: 0,
         });
-        let attrs = wgpu::vertex_attr_array![
-            0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4
-        ];
-        let buffers = [Some(wgpu::VertexBufferLayout {
-            array_stride: std::mem::size_of::<MeshVertex>() as u64,
-            step_mode: wgpu::VertexStepMode::Vertex,
-            attributes: &attrs,
-        })];
-        let make = |label, fs, color: bool| {
-            Pipeline {
-                fs,
-                buffers: &buffers,
-                depth: Some((true, wgpu::CompareFunction::Less)),
-                target: if color {
-                    color_target(COLOR_FORMAT, None)
-                } else {
-                    None
-                },
-                ..Pipeline::new(label, &pl, &module)
-            }
-            .build(device)
-        };
-        let pipeline = make("mesh", "fs_main", true);
-        let shadow_pipeline = make("mesh shadow", "fs_shadow", false);
+        let pipeline = build_pipeline(device, &pl, &module, false);
         gpu.note_built("pipeline:mesh");
-        gpu.note_built("pipeline:mesh-shadow");
         let sampler = repeat_sampler(device, "mesh texture");
         let white =
             upload_rgba8_mips(gpu, &TextureData::white(), "white").create_view(&Default::default());
@@ -181,7 +162,9 @@ impl MeshPass {
         });
         MeshPass {
             pipeline,
-            shadow_pipeline,
+            shadow_pipeline: OnceCell::new(),
+            layout: pl,
+            module,
             frames,
             material_layout,
             sampler,
@@ -303,9 +286,20 @@ impl MeshPass {
         bind
     }
 
+    /// The depth-only pipeline of the shadow pass, made on first use (recorded as
+    /// `pipeline:mesh-shadow`; only scenes with shadows make it).
+    pub fn shadow_pipeline(&self, gpu: &Gpu) -> &wgpu::RenderPipeline {
+        self.shadow_pipeline.get_or_init(|| {
+            let p = build_pipeline(&gpu.device, &self.layout, &self.module, true);
+            gpu.note_built("pipeline:mesh-shadow");
+            p
+        })
+    }
+
     /// Draws `mesh` (colour pass, or the depth-only shadow pass); returns the draw calls.
     pub fn draw(
         &self,
+        gpu: &Gpu,
         rp: &mut wgpu::RenderPass<'_>,
         frame: &wgpu::BindGroup,
         shadow: &wgpu::BindGroup,
@@ -316,7 +310,7 @@ impl MeshPass {
             return 0;
         }
         rp.set_pipeline(if depth_only {
-            &self.shadow_pipeline
+            self.shadow_pipeline(gpu)
         } else {
             &self.pipeline
         });
@@ -329,4 +323,40 @@ impl MeshPass {
         }
         mesh.ranges.len()
     }
+}
+
+/// The vertex attributes of [`MeshVertex`].
+const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 4] = wgpu::vertex_attr_array![
+    0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4
+];
+
+/// The colour pipeline, or (`depth_only`) the shadow pass's.
+fn build_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    depth_only: bool,
+) -> wgpu::RenderPipeline {
+    let buffers = [Some(wgpu::VertexBufferLayout {
+        array_stride: std::mem::size_of::<MeshVertex>() as u64,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes: &VERTEX_ATTRIBUTES,
+    })];
+    let (label, fs) = if depth_only {
+        ("mesh shadow", "fs_shadow")
+    } else {
+        ("mesh", "fs_main")
+    };
+    Pipeline {
+        fs,
+        buffers: &buffers,
+        depth: Some((true, wgpu::CompareFunction::Less)),
+        target: if depth_only {
+            None
+        } else {
+            color_target(COLOR_FORMAT, None)
+        },
+        ..Pipeline::new(label, layout, module)
+    }
+    .build(device)
 }

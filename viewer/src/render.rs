@@ -23,7 +23,7 @@ use crate::particle_pass::{LayerTargets, ParticleLayerDesc, ParticlePass};
 use crate::particles::ParticleSystemDesc;
 use crate::shadow::{self, ShadowMap};
 use crate::target::{RgbaImage, Target};
-use crate::volume_pass::{GpuVolume, VolumePass};
+use crate::volume_pass::{GpuVolume, VolumePass, VolumeStorage};
 use crate::volume_plan::{self, PlanBuffers};
 use crate::{Gpu, SliceParams, ViewCamera, ViewError};
 
@@ -122,7 +122,8 @@ pub struct Renderer {
     /// Scene time in seconds (animated cells, particles).
     pub time: f32,
     /// Volume textures bound at once (clamped to the device's limit when the volume
-    /// pass is built, on the first volume added); tests lower it to exercise batches.
+    /// pass is built, on the first volume added): [`crate::volume_pass::preferred_batch`]
+    /// to start with (1 on software adapters); tests set it to exercise batches.
     pub texture_batch: usize,
     particles: Particles,
     /// Textures uploaded as BC7 blocks so far (volumes, atlases, normal maps); the others
@@ -170,6 +171,7 @@ impl Renderer {
     pub fn new(gpu: Gpu) -> Renderer {
         let receiver_layout = shadow::receiver_layout(&gpu.device);
         let none = ShadowMap::new(&gpu, &receiver_layout, 1);
+        let texture_batch = crate::volume_pass::preferred_batch(&gpu);
         Renderer {
             gpu,
             params: SliceParams::default(),
@@ -190,7 +192,7 @@ impl Renderer {
             dissolve_override: None,
             lines: None,
             time: 0.0,
-            texture_batch: crate::volume_pass::MAX_TEXTURES_PER_BATCH,
+            texture_batch,
             particles: Particles::default(),
             block_textures: 0,
         }
@@ -315,7 +317,14 @@ impl Renderer {
             VolumePass::new(&self.gpu, &self.shadows.receiver_layout, self.texture_batch)
         });
         let textures = pass.upload_with(&self.gpu, asset, blocks)?;
-        self.block_textures += textures.iter().filter(|t| t.blocks).count() as u32;
+        for t in &textures {
+            pass.note_storage(t.storage);
+        }
+        let block_textures = textures
+            .iter()
+            .filter(|t| t.storage == VolumeStorage::Blocks)
+            .count();
+        self.block_textures += block_textures as u32;
         let first_texture: usize = self.volumes.entries.iter().map(|v| v.bands.len()).sum();
         let b = &asset.header.bounds;
         let bounds = (Vec3::from(b.min), Vec3::from(b.max));
@@ -364,6 +373,32 @@ impl Renderer {
         let m = pass.upload(&self.gpu, mesh)?;
         self.meshes.push(m);
         Ok(())
+    }
+
+    /// Builds now the pipelines the next frame's passes need ([`Renderer::passes`]), which
+    /// the frame would otherwise build on first use: the volume slices' with volumes, and
+    /// the shadow pipelines of the meshes, clouds and volumes only when the frame has a
+    /// `shadow` pass (shadows on, something to cast). Drivers that compile shaders when a
+    /// pipeline is made do it here; lavapipe compiles a fragment shader at its first draw,
+    /// so there the first frame still pays for it.
+    pub fn prepare(&self) {
+        let shadow = self.has_casters();
+        if let Some(v) = &self.volumes.pass {
+            if !self.volumes.entries.is_empty() {
+                v.pipeline(&self.gpu);
+                if shadow {
+                    v.shadow_pipeline(&self.gpu);
+                }
+            }
+        }
+        if shadow {
+            if let Some(m) = &self.mesh_pass {
+                m.shadow_pipeline(&self.gpu);
+            }
+            if let Some(c) = &self.cloud_pass {
+                c.shadow_pipeline(&self.gpu);
+            }
+        }
     }
 
     /// Whether anything casts into a shadow map.

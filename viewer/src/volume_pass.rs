@@ -1,11 +1,21 @@
 //! The volume pass: GPU slicing of volumetric billboards (VB §3.3).
 //!
-//! Per volume asset a 3D texture with its MIP chain (`Rgba8UnormSrgb` for
-//! sRGB-premultiplied assets, so filtering happens on linear premultiplied values, as the
-//! CPU sampler decodes before filtering). Up to [`batch_size`] textures (the device's
+//! Per volume asset a 3D texture with its MIP chain, stored in **extinction space**
+//! ([`VolumeStorage::Extinction`]: each texel `(σ·c, σ)` in `Rgba16Float`, made on load
+//! from the asset's RGBA8 texels by `billow_core::extinction::extinction_texel`, sRGB
+//! decoded first), so the texture unit's trilinear filter *is* the extinction-space
+//! filter of the CPU sampler (`billow::eval::volume_sampler`): one hardware sample per
+//! fragment instead of eight loads and conversions per MIP level. On hardware adapters a
+//! BC7-compressed asset keeps its blocks instead ([`VolumeStorage::Blocks`], 1 byte per
+//! texel against 8; [`Gpu::sample_blocks`]), filtered by loads in the shader
+//! ([`shader_source`]). Up to [`batch_size`] textures (the device's
 //! limit, at most [`MAX_TEXTURES_PER_BATCH`]) are bound at once (a *batch*), so one draw covers cells of several assets and a slice keeps its
 //! cells in ID order whatever their texture; each cell names its asset (and so its
 //! texture slot, sampler and `v₀`).
+//!
+//! The pipelines are made on first use ([`VolumePass::pipeline`],
+//! [`VolumePass::shadow_pipeline`]): a scene without shadows never builds the shadow
+//! pipeline, and the shader holds the filter by loads only when a block texture is bound.
 //!
 //! Per frame: every cell of every instance goes to one storage buffer in camera space,
 //! the slices (back to front) to another, and the slabs' cell lists to a third
@@ -30,6 +40,8 @@
 //! view space by the cell's normal matrix (src/eval/lighting.rs::volume_diffuse_factor,
 //! src/eval/slicer.rs::normal_matrix). Assets without normals keep their baked colour.
 
+use std::cell::OnceCell;
+
 use billow_format::{ColourSpace, VolumeAsset, VolumeBlocks};
 use bytemuck::{Pod, Zeroable};
 use glam::Mat3;
@@ -44,6 +56,22 @@ use crate::{Gpu, ViewError};
 /// Most textures bound at once (the shaders switch over this many slots at most).
 pub const MAX_TEXTURES_PER_BATCH: usize = 32;
 
+/// The texture batch a renderer on `gpu` starts with ([`crate::Renderer::texture_batch`]):
+/// [`MAX_TEXTURES_PER_BATCH`] (clamped to [`batch_size`]) on hardware adapters, where the
+/// fragment's switch over its cell's texture slot runs one case; **1** on software
+/// adapters (`DeviceType::Cpu`, lavapipe), whose SIMD fragment code runs every case of a
+/// switch under a mask, so each bound slot costs every fragment a trilinear fetch: the
+/// asteroid belt (18 textures) at 320×240 drew its frame in 2.2 s with one texture per
+/// batch (6,587 draws) and in 18.2 s with 18 per batch (699 draws), the same picture
+/// (docs/performance.md).
+pub fn preferred_batch(gpu: &Gpu) -> usize {
+    if gpu.info.device_type == wgpu::DeviceType::Cpu {
+        1
+    } else {
+        MAX_TEXTURES_PER_BATCH
+    }
+}
+
 /// Textures per batch on `gpu`: as many colour + normal pairs as the fragment stage may
 /// sample, keeping two for the shadow map and a spare, at most [`MAX_TEXTURES_PER_BATCH`].
 pub fn batch_size(gpu: &Gpu) -> usize {
@@ -52,41 +80,66 @@ pub fn batch_size(gpu: &Gpu) -> usize {
 }
 
 /// The WGSL of the volume pass for `n` texture slots (prism/plane intersection +
-/// slicing shaders + the texture-slot switch). `sample_volume` filters in extinction
-/// space (`volume.wgsl`, `sample_extinction`: eight texel loads per level, as
-/// `billow::eval::volume_sampler::DecodedVolume::sample_opacity`), not with the
-/// hardware's trilinear filter on alpha, which would leave thin opaque layers
-/// see-through.
-pub fn shader_source(n: usize) -> String {
+/// slicing shaders + the texture-slot switch). `sample_volume` returns the sample in
+/// extinction space (`billow_core::extinction`), filtered trilinearly within a level and
+/// linearly between levels, not the hardware's filter on alpha, which would leave thin
+/// opaque layers see-through:
+/// - a texture of [`VolumeStorage::Extinction`] holds extinction-space texels and is
+///   filtered by the texture unit, one `textureSampleLevel`;
+/// - with `loads` (some texture is [`VolumeStorage::Blocks`], flag 4 of its params) the
+///   shader also has the filter by loads (`volume_loads.wgsl`: eight texel loads per
+///   level, each converted, as `billow::eval::volume_sampler` filters), used for those
+///   textures only.
+pub fn shader_source(n: usize, loads: bool) -> String {
     let mut bindings = String::new();
     let mut switch = String::new();
     let mut nswitch = String::new();
+    let sample = |t: &str| {
+        format!(
+            "if rep {{ return textureSampleLevel({t}, smp_repeat, uvw, lod); }} \
+             return textureSampleLevel({t}, smp_clamp, uvw, lod);"
+        )
+    };
     for i in 0..n {
         let j = n + i;
         bindings += &format!("@group(1) @binding({i}) var vol_tex{i}: texture_3d<f32>;\n");
         bindings += &format!("@group(1) @binding({j}) var vol_nrm{i}: texture_3d<f32>;\n");
+        let by_loads = if loads {
+            format!("if by_loads {{ return sample_extinction(vol_tex{i}, rep, uvw, lod); }} ")
+        } else {
+            String::new()
+        };
         switch += &format!(
-            "        case {i}u: {{ return sample_extinction(vol_tex{i}, rep, uvw, lod); }}\n"
+            "        case {i}u: {{ {by_loads}{} }}\n",
+            sample(&format!("vol_tex{i}"))
         );
         nswitch += &format!(
-            "        case {i}u: {{ if rep {{ return textureSampleLevel(vol_nrm{i}, smp_repeat, uvw, lod); }} \
-             return textureSampleLevel(vol_nrm{i}, smp_clamp, uvw, lod); }}\n"
+            "        case {i}u: {{ {} }}\n",
+            sample(&format!("vol_nrm{i}"))
         );
     }
     let sampler = format!(
         "{bindings}@group(1) @binding({}) var smp_clamp: sampler;\n\
          @group(1) @binding({}) var smp_repeat: sampler;\n\
-         fn sample_volume(slot: u32, rep: bool, uvw: vec3<f32>, lod: f32) -> vec4<f32> {{\n\
+         fn sample_volume(slot: u32, flags: u32, uvw: vec3<f32>, lod: f32) -> vec4<f32> {{\n\
+             let rep = (flags & 1u) != 0u;\n\
+             let by_loads = (flags & 4u) != 0u;\n\
              switch slot {{\n{switch}        default: {{ return vec4<f32>(0.0); }}\n    }}\n}}\n\
          fn sample_normals(slot: u32, rep: bool, uvw: vec3<f32>, lod: f32) -> vec4<f32> {{\n\
              switch slot {{\n{nswitch}        default: {{ return vec4<f32>(0.0); }}\n    }}\n}}\n",
         2 * n,
         2 * n + 1
     );
+    let loads_src = if loads {
+        include_str!("shaders/volume_loads.wgsl")
+    } else {
+        ""
+    };
     format!(
-        "{}\n{}\n{}\n{}",
+        "{}\n{}\n{}\n{}\n{}",
         include_str!("shaders/prism_plane.wgsl"),
         include_str!("shaders/shadow_lookup.wgsl"),
+        loads_src,
         sampler,
         include_str!("shaders/volume.wgsl")
     )
@@ -153,7 +206,8 @@ pub struct GpuSlice {
 }
 
 /// Per (volume instance, LOD band): `p` = (the band's `v₀·2^f`, its max lod, texture
-/// slot, flags: 1 = repeat addressing in x and z, + 2 = shaded from normals); `q` = (the instance's asset-wide `v₀`, the
+/// slot, flags: 1 = repeat addressing in x and z, + 2 = shaded from normals, + 4 = BC7
+/// blocks filtered by loads, [`VolumeStorage::Blocks`]); `q` = (the instance's asset-wide `v₀`, the
 /// asset's largest LOD `L`, and the slice-LOD range `[f_b, f_{b+1})` the band draws).
 /// Without bands: `q = (v₀, levels − 1, −∞, ∞)` (SPEC §8.6).
 #[repr(C)]
@@ -190,15 +244,32 @@ pub struct GpuVolume {
     pub view: wgpu::TextureView,
     /// The `(α·n̄, α)` normal texture (module docs), when the asset stores normals.
     pub normals: Option<(wgpu::Texture, wgpu::TextureView)>,
-    /// Uploaded as BC7 blocks (format 1.2, [`Gpu::block_upload`]) rather than RGBA8 texels.
-    pub blocks: bool,
+    /// Extinction-space texels, or BC7 blocks (format 1.2, [`Gpu::block_upload`],
+    /// [`Gpu::sample_blocks`]).
+    pub storage: VolumeStorage,
+}
+
+/// How a volume texture stores its texels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VolumeStorage {
+    /// `(σ·c, σ)` per texel in `Rgba16Float` (module docs), filtered by the texture unit.
+    Extinction,
+    /// The asset's BC7 blocks of premultiplied colour (format 1.2), filtered in extinction
+    /// space by eight loads per level in the shader.
+    Blocks,
 }
 
 /// Volume pipelines and layouts.
 pub struct VolumePass {
-    pub pipeline: wgpu::RenderPipeline,
-    /// Depth-only, alpha-tested (shadow map).
-    pub shadow_pipeline: wgpu::RenderPipeline,
+    /// The colour and shadow pipelines' layouts.
+    layouts: [wgpu::PipelineLayout; 2],
+    /// The shader for the textures uploaded so far and its pipelines, made on first use
+    /// (made again when a block texture first needs the filter by loads).
+    module: OnceCell<wgpu::ShaderModule>,
+    pipeline: OnceCell<wgpu::RenderPipeline>,
+    shadow_pipeline: OnceCell<wgpu::RenderPipeline>,
+    /// Some texture is [`VolumeStorage::Blocks`]: the shader has the filter by loads.
+    loads: bool,
     pub frame_layout: wgpu::BindGroupLayout,
     pub batch_layout: wgpu::BindGroupLayout,
     pub samplers: [wgpu::Sampler; 2],
@@ -218,11 +289,11 @@ pub fn repeat_axes(asset: &VolumeAsset) -> [bool; 3] {
 }
 
 impl VolumePass {
-    /// The pipelines with `batch` texture slots (at most [`batch_size`]`(gpu)`).
+    /// The layouts with `batch` texture slots (at most [`batch_size`]`(gpu)`); the
+    /// pipelines are made on first use.
     pub fn new(gpu: &Gpu, shadow_layout: &wgpu::BindGroupLayout, batch: usize) -> VolumePass {
         let batch = batch.clamp(1, batch_size(gpu));
         let device = &gpu.device;
-        let module = shader(device, "volume.wgsl", &[&shader_source(batch)]);
         let vs = wgpu::ShaderStages::VERTEX;
         let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
         let fs = wgpu::ShaderStages::FRAGMENT;
@@ -271,28 +342,6 @@ impl VolumePass {
             ],
             immediate_size: 0,
         });
-        // The slices fade at the opaque depth themselves (`depth_fade` in volume.wgsl),
-        // so the colour pipeline does not depth-test: a slice just behind a surface still
-        // adds the part of its slab in front of it.
-        let pipeline = Pipeline {
-            fs: "fs_main",
-            depth: Some((false, wgpu::CompareFunction::Always)),
-            target: color_target(
-                COLOR_FORMAT,
-                Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
-            ),
-            ..Pipeline::new("volume slices", &layout, &module)
-        }
-        .build(device);
-        let shadow_pipeline = Pipeline {
-            fs: "fs_shadow",
-            depth: Some((true, wgpu::CompareFunction::Less)),
-            target: None,
-            ..Pipeline::new("volume shadow slices", &shadow_pl, &module)
-        }
-        .build(device);
-        gpu.note_built("pipeline:volume");
-        gpu.note_built("pipeline:volume-shadow");
         let mode = |r: bool| {
             if r {
                 wgpu::AddressMode::Repeat
@@ -329,8 +378,11 @@ impl VolumePass {
             })
             .create_view(&Default::default());
         VolumePass {
-            pipeline,
-            shadow_pipeline,
+            layouts: [layout, shadow_pl],
+            module: OnceCell::new(),
+            pipeline: OnceCell::new(),
+            shadow_pipeline: OnceCell::new(),
+            loads: false,
             frame_layout,
             batch_layout,
             samplers: [sampler(false), sampler(true)],
@@ -338,6 +390,65 @@ impl VolumePass {
             batch,
             depth_layout,
         }
+    }
+
+    /// Notes textures of `storage` bound from now on: the first block texture drops
+    /// the pipelines made without the filter by loads (they are made again on use).
+    pub fn note_storage(&mut self, storage: VolumeStorage) {
+        if storage == VolumeStorage::Blocks && !self.loads {
+            self.loads = true;
+            self.module = OnceCell::new();
+            self.pipeline = OnceCell::new();
+            self.shadow_pipeline = OnceCell::new();
+        }
+    }
+
+    fn module(&self, gpu: &Gpu) -> &wgpu::ShaderModule {
+        self.module.get_or_init(|| {
+            shader(
+                &gpu.device,
+                "volume.wgsl",
+                &[&shader_source(self.batch, self.loads)],
+            )
+        })
+    }
+
+    /// The slices' pipeline (premultiplied "over" into the colour target), made on first
+    /// use (recorded as `pipeline:volume`).
+    pub fn pipeline(&self, gpu: &Gpu) -> &wgpu::RenderPipeline {
+        self.pipeline.get_or_init(|| {
+            // The slices fade at the opaque depth themselves (`depth_fade` in
+            // volume.wgsl), so the colour pipeline does not depth-test: a slice just
+            // behind a surface still adds the part of its slab in front of it.
+            let p = Pipeline {
+                fs: "fs_main",
+                depth: Some((false, wgpu::CompareFunction::Always)),
+                target: color_target(
+                    COLOR_FORMAT,
+                    Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
+                ),
+                ..Pipeline::new("volume slices", &self.layouts[0], self.module(gpu))
+            }
+            .build(&gpu.device);
+            gpu.note_built("pipeline:volume");
+            p
+        })
+    }
+
+    /// Depth-only, alpha-tested: the volumes into the shadow map, made on first use
+    /// (recorded as `pipeline:volume-shadow`; only scenes with shadows make it).
+    pub fn shadow_pipeline(&self, gpu: &Gpu) -> &wgpu::RenderPipeline {
+        self.shadow_pipeline.get_or_init(|| {
+            let p = Pipeline {
+                fs: "fs_shadow",
+                depth: Some((true, wgpu::CompareFunction::Less)),
+                target: None,
+                ..Pipeline::new("volume shadow slices", &self.layouts[1], self.module(gpu))
+            }
+            .build(&gpu.device);
+            gpu.note_built("pipeline:volume-shadow");
+            p
+        })
     }
 
     /// Group 3 of [`VolumePass::pipeline`] for the depth buffer `depth` (bound read-only
@@ -430,7 +541,7 @@ impl VolumePass {
                     texture,
                     view,
                     normals: normal_texture(gpu, dims0, &asset.levels, asset.normals.as_deref()),
-                    blocks: true,
+                    storage: VolumeStorage::Blocks,
                 }
             }
             None => upload_levels(
@@ -470,7 +581,7 @@ impl VolumePass {
                         texture,
                         view,
                         normals: normal_texture(gpu, b.dims, &b.levels, b.normals.as_deref()),
-                        blocks: true,
+                        storage: VolumeStorage::Blocks,
                     }
                 }
                 None => upload_levels(gpu, b.dims, &b.levels, b.normals.as_deref(), cs, false)?,
@@ -492,7 +603,8 @@ fn check_3d(gpu: &Gpu, dims0: [u32; 3], count: u32) -> Result<(), ViewError> {
     Ok(())
 }
 
-/// One 3D texture with its MIP chain (`levels[l]` is `mip_dims(dims0, l)` texels).
+/// One 3D texture in extinction space with its MIP chain (`levels[l]` is
+/// `mip_dims(dims0, l)` RGBA8 texels; [`extinction_levels`]).
 fn upload_levels(
     gpu: &Gpu,
     dims0: [u32; 3],
@@ -503,11 +615,14 @@ fn upload_levels(
 ) -> Result<GpuVolume, ViewError> {
     let count = levels.len() as u32;
     check_3d(gpu, dims0, count)?;
-    let format = match colour_space {
-        ColourSpace::SrgbPremultiplied => wgpu::TextureFormat::Rgba8UnormSrgb,
-        ColourSpace::LinearPremultiplied => wgpu::TextureFormat::Rgba8Unorm,
-    };
-    let (texture, view) = texture_3d(gpu, "volume", dims0, format, levels.iter().map(|b| &b[..]));
+    let texels = extinction_levels(levels, colour_space == ColourSpace::SrgbPremultiplied);
+    let (texture, view) = texture_3d(
+        gpu,
+        "volume (extinction)",
+        dims0,
+        EXTINCTION_FORMAT,
+        texels.iter().map(|b| &b[..]),
+    );
     let normals = normal_texture(gpu, dims0, levels, normals);
     Ok(GpuVolume {
         dims0,
@@ -516,8 +631,51 @@ fn upload_levels(
         texture,
         view,
         normals,
-        blocks: false,
+        storage: VolumeStorage::Extinction,
     })
+}
+
+/// The format of [`VolumeStorage::Extinction`] textures: filterable everywhere; f16
+/// keeps σ (at most 6.23) to 2⁻¹¹ of itself, which moves α by at most 1.8·10⁻⁴
+/// (`σ·e^−σ·2⁻¹¹ ≤ e⁻¹·2⁻¹¹`), under a twentieth of an 8-bit step.
+pub const EXTINCTION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+
+/// RGBA8 levels (`srgb`: sRGB-encoded premultiplied colour) as little-endian `Rgba16Float`
+/// texels in extinction space, `(σ·c, σ)` ([`billow_core::extinction::extinction_texel`],
+/// through tables of its per-byte factors: the same f32 operations, so the same values).
+pub fn extinction_levels(levels: &[Vec<u8>], srgb: bool) -> Vec<Vec<u8>> {
+    use billow_core::extinction::{srgb8_to_linear, to_extinction};
+    let lin: [f32; 256] = std::array::from_fn(|v| {
+        if srgb {
+            srgb8_to_linear(v as u8)
+        } else {
+            v as f32 / 255.0
+        }
+    });
+    // Per alpha byte: σ and the colour factor σ/α (0 where α = 0).
+    let sigma: [(f32, f32); 256] = std::array::from_fn(|a| {
+        let alpha = a as f32 / 255.0;
+        let s = to_extinction(glam::Vec4::new(0.0, 0.0, 0.0, alpha)).w;
+        (s, if a > 0 { s / alpha } else { 0.0 })
+    });
+    levels
+        .iter()
+        .map(|l| {
+            let mut out = Vec::with_capacity(l.len() * 2);
+            for t in l.chunks_exact(4) {
+                let (s, k) = sigma[t[3] as usize];
+                for v in [
+                    lin[t[0] as usize] * k,
+                    lin[t[1] as usize] * k,
+                    lin[t[2] as usize] * k,
+                    s,
+                ] {
+                    out.extend_from_slice(&half::f16::from_f32(v).to_le_bytes());
+                }
+            }
+            out
+        })
+        .collect()
 }
 
 /// The `(α·n̄, α)` normal texture of a volume that stores normals (module docs), f16: the
@@ -602,4 +760,46 @@ fn texture_3d<'a>(
     }
     let view = texture.create_view(&Default::default());
     (texture, view)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use billow_core::extinction::extinction_texel;
+
+    /// The tables of [`extinction_levels`] give `extinction_texel` exactly (before the
+    /// f16 rounding, which is the format's).
+    #[test]
+    fn extinction_levels_are_the_core_conversion_rounded_to_f16() {
+        for srgb in [false, true] {
+            let mut level = Vec::new();
+            for a in 0..=255u8 {
+                for c in [0u8, 1, 17, 128, 200, 255] {
+                    level.extend_from_slice(&[c, c / 2, 255 - c, a]);
+                }
+            }
+            let out = &extinction_levels(std::slice::from_ref(&level), srgb)[0];
+            assert_eq!(out.len(), 2 * level.len());
+            for (t, h) in level.chunks_exact(4).zip(out.chunks_exact(8)) {
+                let want = extinction_texel([t[0], t[1], t[2], t[3]], srgb).to_array();
+                for (k, w) in want.iter().enumerate() {
+                    let got = half::f16::from_le_bytes([h[2 * k], h[2 * k + 1]]);
+                    assert_eq!(got, half::f16::from_f32(*w), "{t:?} srgb {srgb} [{k}]");
+                }
+            }
+        }
+    }
+
+    /// Without block textures the shader filters by the texture unit alone: no texel
+    /// loads of the colour textures; with them, the loads are there for flag 4.
+    #[test]
+    fn the_filter_by_loads_is_in_the_shader_only_for_block_textures() {
+        let plain = shader_source(3, false);
+        assert!(!plain.contains("textureLoad(t,"), "no filter by loads");
+        assert!(!plain.contains("sample_extinction("));
+        assert_eq!(plain.matches("textureSampleLevel(vol_tex").count(), 2 * 3);
+        let loads = shader_source(3, true);
+        assert_eq!(loads.matches("sample_extinction(vol_tex").count(), 3);
+        assert!(loads.contains("textureLoad(t,"));
+    }
 }

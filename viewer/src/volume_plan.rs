@@ -16,7 +16,9 @@ use crate::gpu::GrowBuffer;
 use crate::render::{FrameStats, VolumeEntry, VERTICES_PER_INSTANCE};
 use crate::slab::partition;
 use crate::slice_plan::{slice_depths, voxel_size};
-use crate::volume_pass::{FrameUniform, GpuCell, GpuDraw, GpuSlice, GpuVolumeParams, VolumePass};
+use crate::volume_pass::{
+    FrameUniform, GpuCell, GpuDraw, GpuSlice, GpuVolumeParams, VolumePass, VolumeStorage,
+};
 use crate::{Gpu, SliceParams, ViewCamera, ViewError};
 
 /// One planned draw: its batch, the dynamic offset of its [`GpuDraw`], its instances.
@@ -283,7 +285,11 @@ pub fn plan(
                         v0 * (b.first_level as f32).exp2(),
                         (b.gpu.levels - 1) as f32,
                         (b.texture % pass.batch) as f32,
-                        f32::from(u8::from(b.gpu.repeat) + 2 * u8::from(shaded)),
+                        f32::from(
+                            u8::from(b.gpu.repeat)
+                                + 2 * u8::from(shaded)
+                                + 4 * u8::from(b.gpu.storage == VolumeStorage::Blocks),
+                        ),
                     ],
                     q: [v0, v.max_lod as f32, lo, hi],
                 });

@@ -94,7 +94,12 @@ pub struct WindowOptions {
     pub max_frames: Option<u64>,
     /// Called before each frame with the time since start (animation).
     pub animate: Option<AnimateFn>,
+    /// Told the steps of building the renderer ([`crate::content::Content::build_with`]).
+    pub progress: Option<ProgressFn>,
 }
+
+/// [`WindowOptions::progress`].
+pub type ProgressFn = Box<dyn FnMut(crate::content::BuildProgress)>;
 
 /// The stats line of a frame.
 pub fn stats_line(ms: f64, s: &FrameStats, r: &Renderer) -> String {
@@ -243,9 +248,14 @@ impl App {
         let srgb = config.format.is_srgb();
         surface.configure(&gpu.device, &config);
         let resolve = Resolve::new(&gpu, config.format);
-        let renderer = self
-            .content
-            .build(gpu, self.opts.params, self.orbit.fov_y)?;
+        let progress = &mut self.opts.progress;
+        let renderer =
+            self.content
+                .build_with(gpu, self.opts.params, self.orbit.fov_y, &mut |p| {
+                    if let Some(f) = progress {
+                        f(p)
+                    }
+                })?;
         let target = Target::new(&renderer.gpu, w, h);
         Ok(State {
             window,

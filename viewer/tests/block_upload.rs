@@ -41,12 +41,50 @@ fn max_abs(a: &ImageF32, b: &ImageF32) -> f32 {
         .fold(0.0, f32::max)
 }
 
-/// Two devices: with the BC features requested (when the adapter has them) and without.
+/// Two devices: with the BC features requested (when the adapter has them, and blocks
+/// kept even on a software adapter, which by default uploads compressed textures decoded:
+/// `Gpu::sample_blocks`) and without.
 fn devices(name: &str) -> Option<(Gpu, Gpu)> {
     common::gpu_or_skip(name)?;
-    let with = Gpu::headless_with(true).expect("adapter");
+    let mut with = Gpu::headless_with(true).expect("adapter");
+    with.sample_blocks = true;
     let without = Gpu::headless_with(false).expect("adapter");
     Some((with, without))
+}
+
+/// A software adapter (lavapipe) decodes a BC7 block at every texel fetch, so by default
+/// it uploads compressed assets decoded — volumes in extinction space (one filtered sample
+/// per fragment), cloud atlases as RGBA8 — and no block texture; a hardware adapter with
+/// the BC features keeps the blocks.
+#[test]
+fn software_adapters_upload_compressed_assets_decoded() {
+    let name = "software_adapters_upload_compressed_assets_decoded";
+    let Some(gpu) = common::gpu_or_skip(name) else {
+        return;
+    };
+    drop(gpu);
+    let gpu = Gpu::headless_with(true).expect("adapter");
+    let software = gpu.info.device_type == wgpu::DeviceType::Cpu;
+    assert_eq!(gpu.sample_blocks, !software, "{}", gpu.describe());
+    let mut asset = common::ball_asset(false);
+    let blocks = compress_volume(&mut asset);
+    let direct = gpu.block_upload(asset.level_dims(0), true);
+    if software {
+        assert!(!direct && !gpu.block_upload([64, 64, 1], false));
+    }
+    let mut r = Renderer::new(gpu);
+    r.add_volume_blocks(&asset, Some(&blocks), vec![Mat4::IDENTITY], None)
+        .unwrap();
+    assert_eq!(r.block_textures, u32::from(direct));
+    println!(
+        "PATH: {}: compressed assets {}",
+        r.gpu.describe(),
+        if r.block_textures > 0 {
+            "kept as blocks"
+        } else {
+            "uploaded decoded"
+        }
+    );
 }
 
 #[test]

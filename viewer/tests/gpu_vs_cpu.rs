@@ -176,6 +176,9 @@ fn the_same_frame_twice_is_bit_identical() {
         1.0,
     );
     let mut r = Renderer::new(gpu);
+    // Both assets in one texture batch (a software adapter starts with one texture per
+    // batch: volume_pass::preferred_batch).
+    r.texture_batch = 2;
     // Two overlapping instances of one asset (one texture), plus a second asset: one
     // draw per (slice, asset) in a fixed order.
     r.add_volume(

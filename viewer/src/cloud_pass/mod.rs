@@ -43,7 +43,7 @@
 //! each so the shadow pass does not overwrite what the main pass reads in the same
 //! submission) and their bind groups are made once with the pass.
 
-use std::cell::{Cell, RefCell};
+use std::cell::{Cell, OnceCell, RefCell};
 
 use bytemuck::{Pod, Zeroable};
 use glam::Mat4;
@@ -216,7 +216,11 @@ pub enum View {
 pub struct CloudPass {
     foliage: wgpu::RenderPipeline,
     billboard: wgpu::RenderPipeline,
-    shadow: wgpu::RenderPipeline,
+    /// Alpha-tested depth only, made by the first shadow pass
+    /// ([`CloudPass::shadow_pipeline`]).
+    shadow: OnceCell<wgpu::RenderPipeline>,
+    layout: wgpu::PipelineLayout,
+    module: wgpu::ShaderModule,
     draw_layout: wgpu::BindGroupLayout,
     sampler: wgpu::Sampler,
     white: wgpu::TextureView,
@@ -277,47 +281,8 @@ impl CloudPass {
             bind_group_layouts: &[Some(&frame_layout), Some(&draw_layout), Some(shadow_layout)],
             immediate_size: 0,
         });
-        let vattrs = wgpu::vertex_attr_array![
-            0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32x2, 4 => Float32x4
-        ];
-        let iattrs = wgpu::vertex_attr_array![
-            5 => Float32x4, 6 => Float32x4, 7 => Float32x4, 8 => Float32x4, 9 => Float32x4
-        ];
-        let buffers = [
-            Some(wgpu::VertexBufferLayout {
-                array_stride: std::mem::size_of::<CloudVertex>() as u64,
-                step_mode: wgpu::VertexStepMode::Vertex,
-                attributes: &vattrs,
-            }),
-            Some(wgpu::VertexBufferLayout {
-                array_stride: INSTANCE_SIZE,
-                step_mode: wgpu::VertexStepMode::Instance,
-                attributes: &iattrs,
-            }),
-        ];
-        let make = |kind: Kind| {
-            let (label, fs, cull) = match kind {
-                Kind::Foliage => ("cloud foliage", "fs_foliage", None),
-                Kind::Billboard => ("cloud billboards", "fs_billboard", Some(wgpu::Face::Back)),
-                Kind::Shadow => ("cloud shadow", "fs_shadow", None),
-            };
-            Pipeline {
-                fs,
-                buffers: &buffers,
-                cull,
-                depth: Some((true, wgpu::CompareFunction::Less)),
-                target: match kind {
-                    Kind::Shadow => None,
-                    _ => Some(wgpu::ColorTargetState {
-                        format: COLOR_FORMAT,
-                        blend: None,
-                        write_mask: wgpu::ColorWrites::ALL,
-                    }),
-                },
-                ..Pipeline::new(label, &pl, &module)
-            }
-            .build(device)
-        };
+        let foliage = build_pipeline(device, &pl, &module, Kind::Foliage);
+        let billboard = build_pipeline(device, &pl, &module, Kind::Billboard);
         gpu.note_built("pipeline:cloud");
         let sampler = repeat_sampler(device, "cloud texture");
         let white =
@@ -345,9 +310,11 @@ impl CloudPass {
             (buf, bind)
         });
         CloudPass {
-            foliage: make(Kind::Foliage),
-            billboard: make(Kind::Billboard),
-            shadow: make(Kind::Shadow),
+            foliage,
+            billboard,
+            shadow: OnceCell::new(),
+            layout: pl,
+            module,
             draw_layout,
             sampler,
             white,
@@ -435,11 +402,22 @@ impl CloudPass {
         bind
     }
 
+    /// The alpha-tested depth-only pipeline of the shadow pass, made on first use
+    /// (recorded as `pipeline:cloud-shadow`; only scenes with shadows make it).
+    pub fn shadow_pipeline(&self, gpu: &Gpu) -> &wgpu::RenderPipeline {
+        self.shadow.get_or_init(|| {
+            let p = build_pipeline(&gpu.device, &self.layout, &self.module, Kind::Shadow);
+            gpu.note_built("pipeline:cloud-shadow");
+            p
+        })
+    }
+
     /// Records the frame's clouds: per (cloud, level) the foliage mesh's materials or
     /// the billboards' atlas groups, each one instanced draw (`shadow`: everything
     /// alpha-tested into the shadow map). Returns the draw calls.
     pub fn draw(
         &self,
+        gpu: &Gpu,
         rp: &mut wgpu::RenderPass<'_>,
         frame_bind: &wgpu::BindGroup,
         receiver: &wgpu::BindGroup,
@@ -447,13 +425,14 @@ impl CloudPass {
         shadow: bool,
     ) -> usize {
         let mut n = 0;
+        let shadow_pipeline = shadow.then(|| self.shadow_pipeline(gpu));
         rp.set_bind_group(0, frame_bind, &[]);
         rp.set_bind_group(2, receiver, &[]);
         rp.set_vertex_buffer(1, f.instances.slice(..));
         for &(cloud, level, ref range) in &f.groups {
             rp.set_vertex_buffer(0, cloud.vertices.slice(..));
             if level == 0 {
-                rp.set_pipeline(if shadow { &self.shadow } else { &self.foliage });
+                rp.set_pipeline(shadow_pipeline.unwrap_or(&self.foliage));
                 for r in &cloud.foliage {
                     rp.set_bind_group(1, &r.bind, &[]);
                     rp.draw(r.vertices.clone(), range.clone());
@@ -464,11 +443,7 @@ impl CloudPass {
             let Some(atlas_groups) = cloud.billboard_levels.get(level - 1) else {
                 continue;
             };
-            rp.set_pipeline(if shadow {
-                &self.shadow
-            } else {
-                &self.billboard
-            });
+            rp.set_pipeline(shadow_pipeline.unwrap_or(&self.billboard));
             rp.set_index_buffer(cloud.indices.slice(..), wgpu::IndexFormat::Uint32);
             for g in atlas_groups {
                 rp.set_bind_group(1, &g.bind, &[]);
@@ -492,6 +467,56 @@ pub fn instance_dissolving(model: Mat4, morph: f32, t: f32, incoming: bool) -> C
         model: model.to_cols_array_2d(),
         morph: [morph, t, if incoming { 1.0 } else { 0.0 }, 0.0],
     }
+}
+
+const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 5] = wgpu::vertex_attr_array![
+    0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32x2, 4 => Float32x4
+];
+const INSTANCE_ATTRIBUTES: [wgpu::VertexAttribute; 5] = wgpu::vertex_attr_array![
+    5 => Float32x4, 6 => Float32x4, 7 => Float32x4, 8 => Float32x4, 9 => Float32x4
+];
+
+/// One of the cloud pass's pipelines (vertex and instance buffers as [`CloudVertex`] and
+/// [`CloudInstance`]).
+fn build_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    kind: Kind,
+) -> wgpu::RenderPipeline {
+    let buffers = [
+        Some(wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<CloudVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &VERTEX_ATTRIBUTES,
+        }),
+        Some(wgpu::VertexBufferLayout {
+            array_stride: INSTANCE_SIZE,
+            step_mode: wgpu::VertexStepMode::Instance,
+            attributes: &INSTANCE_ATTRIBUTES,
+        }),
+    ];
+    let (label, fs, cull) = match kind {
+        Kind::Foliage => ("cloud foliage", "fs_foliage", None),
+        Kind::Billboard => ("cloud billboards", "fs_billboard", Some(wgpu::Face::Back)),
+        Kind::Shadow => ("cloud shadow", "fs_shadow", None),
+    };
+    Pipeline {
+        fs,
+        buffers: &buffers,
+        cull,
+        depth: Some((true, wgpu::CompareFunction::Less)),
+        target: match kind {
+            Kind::Shadow => None,
+            _ => Some(wgpu::ColorTargetState {
+                format: COLOR_FORMAT,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            }),
+        },
+        ..Pipeline::new(label, layout, module)
+    }
+    .build(device)
 }
 
 #[cfg(test)]

@@ -239,12 +239,12 @@ impl Renderer {
             }
             for m in &self.meshes {
                 stats.mesh_triangles += m.triangles as usize;
-                stats.draw_calls += pass.draw(&mut rp, bind, f.receiver, m, false);
+                stats.draw_calls += pass.draw(&self.gpu, &mut rp, bind, f.receiver, m, false);
             }
         }
         if let (Some(pass), Some(bind), Some(cf)) = (&self.cloud_pass, cloud_bind, cloud_frame) {
             self.gpu.note_pass("cloud");
-            stats.draw_calls += pass.draw(&mut rp, bind, f.receiver, cf, false);
+            stats.draw_calls += pass.draw(&self.gpu, &mut rp, bind, f.receiver, cf, false);
         }
     }
 
@@ -288,8 +288,12 @@ impl Renderer {
                 .get_or_init(|| pass.depth_bind_group(&self.gpu, &f.target.depth_view));
             rp.set_bind_group(3, depth, &[]);
             self.gpu.note_pass("volume");
-            stats.draw_calls +=
-                plan.draw(&mut rp, &pass.pipeline, &self.volumes.batches, f.receiver);
+            stats.draw_calls += plan.draw(
+                &mut rp,
+                pass.pipeline(&self.gpu),
+                &self.volumes.batches,
+                f.receiver,
+            );
         }
         if let Some(lines) = &self.lines {
             let vp = f.camera.projection() * f.camera.view;
@@ -377,16 +381,21 @@ impl Renderer {
         if let Some(pass) = &self.mesh_pass {
             let bind = pass.frame_bind_group(&self.gpu, View::Light, &frame);
             for m in &self.meshes {
-                pass.draw(&mut rp, bind, none, m, true);
+                pass.draw(&self.gpu, &mut rp, bind, none, m, true);
             }
         }
         if let (Some(pass), Some(cf)) = (&self.cloud_pass, clouds) {
             let bind = pass.frame_bind_group(&self.gpu, View::Light, &frame);
             stats.cloud_bytes_uploaded += std::mem::size_of::<MeshFrame>();
-            pass.draw(&mut rp, bind, none, cf, true);
+            pass.draw(&self.gpu, &mut rp, bind, none, cf, true);
         }
         if let (Some(pass), Some(plan)) = (&self.volumes.pass, &plan) {
-            plan.draw(&mut rp, &pass.shadow_pipeline, &self.volumes.batches, none);
+            plan.draw(
+                &mut rp,
+                pass.shadow_pipeline(&self.gpu),
+                &self.volumes.batches,
+                none,
+            );
         }
         Ok(())
     }

@@ -23,7 +23,7 @@ struct Slice {
 
 struct VolumeParams {
     // The band's: x: v0 · 2^first_level, y: its max lod, z: texture slot,
-    // w: flags (1 = repeat, + 2 = shaded from normals)
+    // w: flags (1 = repeat, + 2 = shaded from normals, + 4 = BC7 blocks filtered by loads)
     p: vec4<f32>,
     // The asset's: x: v0, y: largest LOD L, z..w: slice-LOD range [f_b, f_{b+1}) of the band
     q: vec4<f32>,
@@ -50,7 +50,8 @@ struct VOut {
     @location(0) uvw: vec3<f32>,
     // x: lod, y: opacity-correction ratio d / d0, z: the slice's view distance, w: d
     @location(1) @interpolate(flat) lod_ratio: vec4<f32>,
-    // x: texture slot, y: flags (1 = repeat addressing, 2 = shaded from normals)
+    // x: texture slot, y: flags (1 = repeat addressing, 2 = shaded from normals,
+    // 4 = BC7 blocks filtered by loads)
     @location(2) @interpolate(flat) slot: vec2<u32>,
     @location(3) shadow_clip: vec4<f32>,
     // Rows of the cell's normal matrix (stored normals → view space).
@@ -147,24 +148,19 @@ fn correct_premultiplied(c: vec4<f32>, ratio: f32) -> vec4<f32> {
     return vec4<f32>(c.rgb * scale, a2);
 }
 
-// Extinction-space filtering (src/eval/volume_sampler.rs): a texel becomes (σ·c, σ),
-// σ = −ln(1 − α) capped at ln 510, c its straight colour; these are filtered
-// trilinearly (eight loads per level, the CPU's texel addressing) and linearly between
-// levels, and turned back into premultiplied RGBA. Filtering α instead gives a
-// one-voxel opaque layer an optical depth of only 2: thin layers turn see-through.
+// Extinction-space filtering (billow_core::extinction, src/eval/volume_sampler.rs): a
+// texel is (σ·c, σ), σ = −ln(1 − α) capped at ln 510, c its straight colour, filtered
+// trilinearly within a level and linearly between levels, and turned back into
+// premultiplied RGBA here. `sample_volume` (volume_pass.rs) returns the filtered sample:
+// the texture unit's trilinear sample of a texture stored in extinction space
+// (Rgba16Float), or for BC7 block textures eight converted loads per level
+// (volume_loads.wgsl). Filtering α instead gives a one-voxel opaque layer an optical
+// depth of only 2: thin layers turn see-through.
 const MAX_OPTICAL_DEPTH: f32 = 6.234411;
-
-fn to_extinction(c: vec4<f32>) -> vec4<f32> {
-    let a = min(c.a, 1.0);
-    if !(a > 0.0) {
-        return vec4<f32>(0.0);
-    }
-    var s = MAX_OPTICAL_DEPTH;
-    if a < 1.0 {
-        s = min(-log1p_(-a), MAX_OPTICAL_DEPTH);
-    }
-    return vec4<f32>(c.rgb * (s / a), s);
-}
+// σ at or above this is opaque (α = 1): the CPU's MAX_OPTICAL_DEPTH − 1e-4, lowered by
+// one f16 step (2^-8 at 6.2) so that a footprint of opaque texels stored as f16
+// (6.234375) and filtered with the hardware's weights still gives α = 1.
+const OPAQUE_OPTICAL_DEPTH: f32 = 6.2304;
 
 fn from_extinction(e: vec4<f32>) -> vec4<f32> {
     let s = e.a;
@@ -172,76 +168,14 @@ fn from_extinction(e: vec4<f32>) -> vec4<f32> {
         return vec4<f32>(0.0);
     }
     var a = 1.0;
-    if s < MAX_OPTICAL_DEPTH - 1e-4 {
+    if s < OPAQUE_OPTICAL_DEPTH {
         a = -expm1_(-s);
     }
     return vec4<f32>(e.rgb * (a / s), a);
 }
 
-struct TexelPair {
-    i0: i32,
-    i1: i32,
-    t: f32,
-}
-
-// Texels and weight of a linear filter along an axis of n texels (centres at (i + ½)/n);
-// repeat wraps each index, clamp-to-edge clamps.
-fn texel_pair(u_in: f32, n: i32, rep: bool) -> TexelPair {
-    var u = u_in;
-    if rep {
-        u = u - floor(u);
-    }
-    let x = u * f32(n) - 0.5;
-    let x0 = floor(x);
-    var p: TexelPair;
-    p.t = x - x0;
-    let i = i32(x0);
-    if rep {
-        p.i0 = ((i % n) + n) % n;
-        p.i1 = (((i + 1) % n) + n) % n;
-    } else {
-        p.i0 = clamp(i, 0, n - 1);
-        p.i1 = clamp(i + 1, 0, n - 1);
-    }
-    return p;
-}
-
-fn extinction_level(t: texture_3d<f32>, rep: bool, uvw: vec3<f32>, level: i32) -> vec4<f32> {
-    let n = vec3<i32>(textureDimensions(t, level));
-    let px = texel_pair(uvw.x, n.x, rep);
-    let py = texel_pair(uvw.y, n.y, false);
-    let pz = texel_pair(uvw.z, n.z, rep);
-    let e000 = to_extinction(textureLoad(t, vec3<i32>(px.i0, py.i0, pz.i0), level));
-    let e100 = to_extinction(textureLoad(t, vec3<i32>(px.i1, py.i0, pz.i0), level));
-    let e010 = to_extinction(textureLoad(t, vec3<i32>(px.i0, py.i1, pz.i0), level));
-    let e110 = to_extinction(textureLoad(t, vec3<i32>(px.i1, py.i1, pz.i0), level));
-    let e001 = to_extinction(textureLoad(t, vec3<i32>(px.i0, py.i0, pz.i1), level));
-    let e101 = to_extinction(textureLoad(t, vec3<i32>(px.i1, py.i0, pz.i1), level));
-    let e011 = to_extinction(textureLoad(t, vec3<i32>(px.i0, py.i1, pz.i1), level));
-    let e111 = to_extinction(textureLoad(t, vec3<i32>(px.i1, py.i1, pz.i1), level));
-    let c00 = e000 + (e100 - e000) * px.t;
-    let c10 = e010 + (e110 - e010) * px.t;
-    let c01 = e001 + (e101 - e001) * px.t;
-    let c11 = e011 + (e111 - e011) * px.t;
-    let c0 = c00 + (c10 - c00) * py.t;
-    let c1 = c01 + (c11 - c01) * py.t;
-    return c0 + (c1 - c0) * pz.t;
-}
-
-// Extinction-space sample at fractional level lod (already clamped to the texture's).
-fn sample_extinction(t: texture_3d<f32>, rep: bool, uvw: vec3<f32>, lod: f32) -> vec4<f32> {
-    let l0 = floor(lod);
-    let f = lod - l0;
-    let a = extinction_level(t, rep, uvw, i32(l0));
-    if f <= 0.0 {
-        return a;
-    }
-    let b = extinction_level(t, rep, uvw, i32(l0) + 1);
-    return a + (b - a) * f;
-}
-
 fn sample_corrected(in: VOut, ratio: f32) -> vec4<f32> {
-    let e = sample_volume(in.slot.x, (in.slot.y & 1u) != 0u, in.uvw, in.lod_ratio.x);
+    let e = sample_volume(in.slot.x, in.slot.y, in.uvw, in.lod_ratio.x);
     return correct_premultiplied(from_extinction(e), ratio);
 }
 
