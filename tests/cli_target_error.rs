@@ -503,3 +503,43 @@ fn bbcloud_meets_a_reachable_target_judged_over_distances_and_lights() {
     );
     assert!((written - t["measured_error"].as_f64().unwrap()).abs() < 1e-9);
 }
+
+/// A volume that keeps its normals is shaded by each light (the judge slices it once per
+/// light, where a volume without normals is sliced once): the judge still equals `billow
+/// eval --lights standard` of the written file, per distance.
+#[test]
+fn the_judge_of_a_volume_with_normals_equals_eval_under_the_lights() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let path = d.join("torus.obj");
+    billow::procgen::write_obj(&billow::procgen::torus(1.0, 0.35, 24, 12), &path).unwrap();
+    let mesh = path.to_str().unwrap();
+    let v = ok(
+        &[
+            "voxelize",
+            mesh,
+            "-o",
+            "vol.billow",
+            "--normals",
+            "on",
+            "--target-error",
+            "1",
+            "--target-size",
+            SIZE,
+            "--target-distances",
+            "1,4",
+            "-q",
+            "--json",
+        ],
+        d,
+    );
+    assert_eq!(v["normals"], true);
+    let t = &v["target"];
+    assert_eq!(t["chosen_preset"], "draft", "{t}");
+    let written = eval_errors(d, mesh, "vol.billow", SIZE, "1,4", false);
+    assert_eq!(written.len(), 2);
+    for (i, e) in written.iter().enumerate() {
+        let m = t["by_distance"][i]["error"].as_f64().unwrap();
+        assert!((m - e).abs() < 1e-9, "eval {written:?} vs {t}");
+    }
+}

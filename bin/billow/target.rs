@@ -90,7 +90,11 @@ pub(crate) fn target_options(a: &TargetArgs) -> Result<Option<TargetOptions>, Cl
     let lights = match a.target_lights.trim() {
         "auto" => None,
         set => Some(parse_light_set(set, DEFAULT_AMBIENT).map_err(|e| match e {
-            LightSetError::Syntax(m) => usage("--target-lights", format!("{m} or auto")),
+            LightSetError::Syntax(_) if !set.contains(',') => usage(
+                "--target-lights",
+                format!("'{set}': expected standard, auto or NAME=X,Y,Z;…"),
+            ),
+            LightSetError::Syntax(m) => usage("--target-lights", m),
             LightSetError::NotADirection(m) => {
                 CliError::new(Code::BadParameter, format!("--target-lights: {m}"))
             }

@@ -450,8 +450,12 @@ impl<S: Clone + PartialEq, A, E> State<'_, S, A, E> {
     }
 }
 
+fn cmp_rank(a: (f64, usize), b: (f64, usize)) -> std::cmp::Ordering {
+    a.0.total_cmp(&b.0).then(a.1.cmp(&b.1))
+}
+
 fn lt(a: (f64, usize), b: (f64, usize)) -> bool {
-    a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).is_lt()
+    cmp_rank(a, b).is_lt()
 }
 
 /// Searches `space` for the cheapest measured setting that meets `target` (see the module
@@ -559,22 +563,16 @@ pub fn search<Sp: Space, A, E>(
         let Some(xc) = space.position(&c.candidate.settings) else {
             break;
         };
-        // The nearest measured positions on each side (strictly cheaper / dearer).
-        let positions: Vec<f64> = st
-            .points
-            .iter()
-            .filter_map(|p| space.position(&p.candidate.settings))
-            .collect();
-        let below = positions
-            .iter()
-            .copied()
-            .filter(|&p| p < xc)
-            .max_by(f64::total_cmp);
-        let above = positions
-            .iter()
-            .copied()
-            .filter(|&p| p > xc)
-            .min_by(f64::total_cmp);
+        // Its neighbours in the cost order among the measured (a preset that shares its
+        // position, such as a cloud's quality and hero, leaves no room between them).
+        let mut order: Vec<usize> = (0..st.points.len()).collect();
+        order.sort_by(|&a, &b| cmp_rank(st.points[a].rank, st.points[b].rank));
+        let k = order.iter().position(|&i| i == centre).unwrap_or(0);
+        let at = |j: Option<usize>| {
+            j.and_then(|j| order.get(j))
+                .and_then(|&i| space.position(&st.points[i].candidate.settings))
+        };
+        let (below, above) = (at(k.checked_sub(1)), at(Some(k + 1)));
         let mut targets: Vec<(f64, f64, f64)> = Vec::new(); // (x, lo, hi)
         match (below, above) {
             (Some(b), _) => targets.push(((b + xc) / 2.0, b, xc)),
@@ -1284,6 +1282,43 @@ mod tests {
             },
         };
         assert!(pinned.position(&ladder[0].settings).is_none());
+    }
+
+    #[test]
+    fn a_cloud_met_only_by_hero_is_not_refined_along_epsilon() {
+        // Quality and hero share ε and differ in the atlas: nothing lies between them on
+        // ε, so the search stops at hero after the ladder (as the bisection did).
+        let err = |s: &CloudSettings| match (s.atlas_size, s.samples) {
+            (512, _) => 0.17,
+            (1024, _) => 0.16,
+            (2048, _) => 0.127,
+            _ => 0.116,
+        };
+        let mut measure = |c: &Candidate<CloudSettings>| {
+            let e = err(&c.settings);
+            Ok::<_, ()>(Measured {
+                asset: c.settings,
+                score: Score::new(
+                    vec![DistanceError {
+                        distance: 1.0,
+                        error: e,
+                        rmse: e,
+                        coverage_rel_diff: 0.0,
+                    }],
+                    Weighting::Worst,
+                ),
+                bytes: 1,
+            })
+        };
+        let f = search(
+            &CloudSpace::default(),
+            &target(0.12),
+            &mut measure,
+            &mut |_| {},
+        )
+        .unwrap();
+        assert_eq!(f.candidate.preset, Some(Preset::Hero));
+        assert_eq!(f.trials.len(), 4);
     }
 
     #[test]
