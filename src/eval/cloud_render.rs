@@ -645,6 +645,8 @@ mod tests {
             du: Vec3::X,
             dv: Vec3::Y,
             sides: [(0, [0.0, 0.0, 1.0, 1.0]); 2],
+            u_dir: Vec3::X,
+            v_dir: Vec3::Y,
         }
     }
 

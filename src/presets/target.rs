@@ -647,6 +647,27 @@ pub struct VolumeSpace {
 }
 
 /// `--res N --supersample K`.
+/// The presets cheapest first as candidates (`settings` of each, labelled with the preset
+/// and `describe`), neighbours with equal settings once.
+fn preset_ladder<S: PartialEq>(
+    settings: impl Fn(Preset) -> S,
+    describe: impl Fn(&S) -> String,
+) -> Vec<Candidate<S>> {
+    let mut ladder: Vec<Candidate<S>> = Preset::LADDER
+        .iter()
+        .map(|&p| {
+            let s = settings(p);
+            Candidate {
+                label: format!("{p} ({})", describe(&s)),
+                preset: Some(p),
+                settings: s,
+            }
+        })
+        .collect();
+    ladder.dedup_by(|a, b| a.settings == b.settings);
+    ladder
+}
+
 pub fn describe_volume(s: &VolumeSettings) -> String {
     format!("--res {} --supersample {}", s.resolution, s.supersample)
 }
@@ -655,19 +676,10 @@ impl Space for VolumeSpace {
     type Settings = VolumeSettings;
 
     fn ladder(&self) -> Vec<Candidate<VolumeSettings>> {
-        let mut ladder: Vec<Candidate<VolumeSettings>> = Preset::LADDER
-            .iter()
-            .map(|&p| {
-                let s = resolve_volume(Some(p), &self.flags).settings;
-                Candidate {
-                    label: format!("{p} ({})", describe_volume(&s)),
-                    preset: Some(p),
-                    settings: s,
-                }
-            })
-            .collect();
-        ladder.dedup_by(|a, b| a.settings == b.settings);
-        ladder
+        preset_ladder(
+            |p| resolve_volume(Some(p), &self.flags).settings,
+            describe_volume,
+        )
     }
 
     fn position(&self, s: &VolumeSettings) -> Option<f64> {
@@ -729,19 +741,10 @@ impl Space for CloudSpace {
     type Settings = CloudSettings;
 
     fn ladder(&self) -> Vec<Candidate<CloudSettings>> {
-        let mut ladder: Vec<Candidate<CloudSettings>> = Preset::LADDER
-            .iter()
-            .map(|&p| {
-                let s = resolve_cloud(Some(p), &self.flags).settings;
-                Candidate {
-                    label: format!("{p} ({})", describe_cloud(&s)),
-                    preset: Some(p),
-                    settings: s,
-                }
-            })
-            .collect();
-        ladder.dedup_by(|a, b| a.settings == b.settings);
-        ladder
+        preset_ladder(
+            |p| resolve_cloud(Some(p), &self.flags).settings,
+            describe_cloud,
+        )
     }
 
     /// −ln ε: a smaller ε costs more.
