@@ -181,6 +181,13 @@ fn missing_buffer_file_is_an_io_error_and_unknown_extension_unsupported() {
     let e = import(&p, &ImportOptions::default()).unwrap_err();
     assert_eq!(e.kind(), ImportErrorKind::Io);
     assert!(e.to_string().contains("nobin.gltf"), "{e}");
-    let e = import(&dir.path().join("x.fbx"), &ImportOptions::default()).unwrap_err();
+    // A missing file is an I/O error whatever its name; an existing file with an
+    // unknown extension is unsupported.
+    let fbx = dir.path().join("x.fbx");
+    let e = import(&fbx, &ImportOptions::default()).unwrap_err();
+    assert_eq!(e.kind(), ImportErrorKind::Io);
+    std::fs::write(&fbx, b"Kaydara FBX Binary  \0").unwrap();
+    let e = import(&fbx, &ImportOptions::default()).unwrap_err();
     assert_eq!(e.kind(), ImportErrorKind::Unsupported);
+    assert!(e.to_string().contains("unknown mesh file extension"), "{e}");
 }
