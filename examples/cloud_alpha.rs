@@ -16,7 +16,10 @@ fn main() {
             let img = Image {
                 width: w,
                 height: h,
-                texels: m.chunks_exact(4).map(|p| Vec4::new(0.0, 0.0, 0.0, f32::from(p[3]) / 255.0)).collect(),
+                texels: m
+                    .chunks_exact(4)
+                    .map(|p| Vec4::new(0.0, 0.0, 0.0, f32::from(p[3]) / 255.0))
+                    .collect(),
             };
             r += rendered_coverage(&img, 1.0, ALPHA_CUTOFF) * img.texels.len() as f64;
             for px in m.chunks_exact(4) {
@@ -26,6 +29,11 @@ fn main() {
             }
         }
         let n = n as f64;
-        println!("mip {k}: mean {:.4} tested {:.4} rendered {:.4}", sum / n, t as f64 / n, r / n);
+        println!(
+            "mip {k}: mean {:.4} tested {:.4} rendered {:.4}",
+            sum / n,
+            t as f64 / n,
+            r / n
+        );
     }
 }

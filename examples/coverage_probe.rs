@@ -10,7 +10,8 @@ use billow_format::VolumeAsset;
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     for p in &args {
-        let asset = VolumeAsset::read(std::path::Path::new(p)).unwrap_or_else(|e| panic!("{p}: {e}"));
+        let asset =
+            VolumeAsset::read(std::path::Path::new(p)).unwrap_or_else(|e| panic!("{p}: {e}"));
         let vol = DecodedVolume::decode(&asset).unwrap();
         let d0 = vol.levels[0].dims;
         println!("{p}: {:?}, {} levels", d0, vol.levels.len());

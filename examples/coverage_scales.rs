@@ -10,7 +10,11 @@ fn main() {
         .unwrap()
         .scene;
     let res: u32 = args.get(1).map_or(128, |r| r.parse().unwrap());
-    let combine: CombineFn = args.get(2).map_or("opaque", |c| c.as_str()).parse().unwrap();
+    let combine: CombineFn = args
+        .get(2)
+        .map_or("opaque", |c| c.as_str())
+        .parse()
+        .unwrap();
     let opts = VoxelizeOptions {
         resolution: Resolution::Longest(res),
         combine,

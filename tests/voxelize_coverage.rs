@@ -135,7 +135,10 @@ fn the_slicer_draws_the_coverage_the_bakes_model_computes() {
             }
         }
     }
-    let level0: Vec<u8> = alpha.iter().flat_map(|&a| [a / 2, a / 3, a / 4, a]).collect();
+    let level0: Vec<u8> = alpha
+        .iter()
+        .flat_map(|&a| [a / 2, a / 3, a / 4, a])
+        .collect();
     let dims0u = dims0.map(|d| d as u32);
     let mut header = billow_format::Header::volume(
         "billow test",

@@ -113,9 +113,10 @@ pub fn level_weights(lod: f32, d: f32, sizes: &[f32], nearest: bool) -> [(usize,
 
 pub use crate::extinction::MAX_OPTICAL_DEPTH;
 
-/// The optical depth an opaque texel of size `size` holds (`v0`: a level-0 texel's,
-/// [`voxel_size`]): [`MAX_OPTICAL_DEPTH`] per level-0 texel of thickness, so that opaque
-/// texels of every level have the same density and a slice between two levels
+/// The optical depth an opaque texel of size `size` holds (`v0`: the size of a texel of
+/// level 0 of the same texture, [`voxel_size`]; each LOD band of a pruned asset is its own
+/// texture): [`MAX_OPTICAL_DEPTH`] per level-0 texel of thickness, so that opaque texels
+/// of every level have the same density and a slice between two levels
 /// ([`level_weights`]) blends their colours linearly, as it does for a homogeneous medium.
 pub fn opaque_optical_depth(size: f32, v0: f32) -> f32 {
     let r = size / v0;
@@ -124,6 +125,19 @@ pub fn opaque_optical_depth(size: f32, v0: f32) -> f32 {
     } else {
         MAX_OPTICAL_DEPTH
     }
+}
+
+/// A texel of a level of size `dims` of a texture whose level 0 is `dims0`, drawn on the
+/// same cells: its size over a level-0 texel's, `cbrt(Π dims0 / dims)` ([`voxel_size`]
+/// scales as the cube root of the texel count). A renderer that filters between levels in
+/// hardware stores each level's optical depth divided by this (a density per level-0
+/// texel) so that the blend of two levels is what [`level_weights`] gives; opaque texels
+/// then hold [`MAX_OPTICAL_DEPTH`] at every level ([`opaque_optical_depth`]).
+pub fn level_size_ratio(dims0: [u32; 3], dims: [u32; 3]) -> f32 {
+    let r: f64 = (0..3)
+        .map(|a| f64::from(dims0[a].max(1)) / f64::from(dims[a].max(1)))
+        .product();
+    r.cbrt() as f32
 }
 
 /// The slab the farthest slice stands for: from `z − d/2` (its own spacing `d` at depth
@@ -288,12 +302,26 @@ mod tests {
     /// range 112 deep stands for all 112.
     #[test]
     fn the_far_slab_covers_the_range() {
-        let d = slice_depths(|_| 105.0, Spacing::Adaptive { bias: 1.0 }, 1.0, 0.0, 112.0, 10)
-            .unwrap();
+        let d = slice_depths(
+            |_| 105.0,
+            Spacing::Adaptive { bias: 1.0 },
+            1.0,
+            0.0,
+            112.0,
+            10,
+        )
+        .unwrap();
         assert_eq!(d, vec![(52.5, 105.0)]);
         assert_eq!(far_slab(52.5, 105.0, 112.0), 112.0);
-        let d = slice_depths(|_| 1.0, Spacing::Uniform { spacing: 4.0 }, 1.0, 0.0, 9.0, 10)
-            .unwrap();
+        let d = slice_depths(
+            |_| 1.0,
+            Spacing::Uniform { spacing: 4.0 },
+            1.0,
+            0.0,
+            9.0,
+            10,
+        )
+        .unwrap();
         let (z, s) = *d.last().unwrap();
         let total: f32 = d[..d.len() - 1].iter().map(|x| x.1).sum::<f32>() + far_slab(z, s, 9.0);
         assert!((total - 9.0).abs() < 1e-6, "{d:?}");

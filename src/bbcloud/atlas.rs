@@ -307,7 +307,11 @@ pub const ALPHA_CUTOFF: f32 = 0.5;
 
 /// The mean alpha of `img`'s texels: the share of its area the bake saw covered.
 pub fn mean_alpha(img: &Image) -> f64 {
-    let sum: f64 = img.texels.iter().map(|t| f64::from(t.w.clamp(0.0, 1.0))).sum();
+    let sum: f64 = img
+        .texels
+        .iter()
+        .map(|t| f64::from(t.w.clamp(0.0, 1.0)))
+        .sum();
     sum / img.texels.len().max(1) as f64
 }
 

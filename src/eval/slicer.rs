@@ -67,8 +67,8 @@ use crate::camera::Camera;
 /// [`shade_normal`]: the shared slice planning of the rendering core
 /// ([`billow_core::slicing`], which the viewer uses too), re-exported here.
 pub use billow_core::slicing::{
-    far_slab, level_texel_size, level_weights, normal_matrix, opaque_optical_depth,
-    shade_normal, voxel_size, Spacing,
+    far_slab, level_texel_size, level_weights, normal_matrix, opaque_optical_depth, shade_normal,
+    voxel_size, Spacing,
 };
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -437,7 +437,7 @@ fn render_sliced(
             &sizes[band],
             params.mip_filter == MipFilter::Nearest,
         )
-        .map(|(l, w)| (l, w, opaque_optical_depth(sizes[band][l], v0)));
+        .map(|(l, w)| (l, w, opaque_optical_depth(sizes[band][l], sizes[band][0])));
         for (ci, c) in cam_cells[band].iter().enumerate() {
             let poly = intersect_prism_plane(c, &parts[band].cells[ci].uvw, z);
             if poly.is_empty() {

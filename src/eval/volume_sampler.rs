@@ -258,11 +258,7 @@ impl DecodedVolume {
         if !(s > 0.0) {
             return Vec4::ZERO;
         }
-        let a = if s >= total {
-            1.0
-        } else {
-            -(-s).exp_m1()
-        };
+        let a = if s >= total { 1.0 } else { -(-s).exp_m1() };
         (e.truncate() * (a / s)).extend(a)
     }
 

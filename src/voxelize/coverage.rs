@@ -409,7 +409,12 @@ pub(crate) fn level0_scale(
 }
 
 /// A coarse level's scale: its rendered coverage summed over the axes equals `target`'s.
-pub(crate) fn level_scale(cols: &Columns, dims0: [usize; 3], voxel: [f64; 3], target: &[f64; 3]) -> f32 {
+pub(crate) fn level_scale(
+    cols: &Columns,
+    dims0: [usize; 3],
+    voxel: [f64; 3],
+    target: &[f64; 3],
+) -> f32 {
     Model::new(cols, dims0, voxel).solve(target, K_RANGE) as f32
 }
 

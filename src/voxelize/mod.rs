@@ -71,8 +71,8 @@ pub use ao::{
 };
 pub use asset::{bake_params, bake_params_for};
 pub use cells::{box_prisms, Prism};
-pub use coverage::CoverageScales;
 pub use combine::{clamp_premultiplied, Combine, CombineFn, CombineParseError, Preset};
+pub use coverage::CoverageScales;
 pub use expr::{Expr, ExprError};
 pub use grid::{fit_grid, GridError, GridSpec, Resolution, ResolutionError, MAX_AXIS, MAX_MARGIN};
 use memory::estimate_bytes;

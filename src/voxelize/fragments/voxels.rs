@@ -129,7 +129,12 @@ impl Scratch {
         let mut out: [RowOut; 2] = [0, 1].map(|side| {
             let n = seen[side];
             let n_nrm = if normals { n as usize } else { 0 };
-            (Vec::with_capacity(n as usize), Vec::with_capacity(n_nrm), n, 0.0)
+            (
+                Vec::with_capacity(n as usize),
+                Vec::with_capacity(n_nrm),
+                n,
+                0.0,
+            )
         });
         let mut transmit = [1.0f32; 64];
         let mut column = [1.0f32; 64];
