@@ -27,6 +27,8 @@ row() { # NAME KIND SETTINGS JSON
 import json, sys
 name, kind, settings, path = sys.argv[1:5]
 d = json.load(open(path))
+if 'by_distance' not in d:
+    d = d['levels'][0]  # a cloud: its LOD 0
 cov = {m['distance_factor']: m['asset']['coverage_rel_diff'] for m in d['by_distance']}
 rmse = {m['distance_factor']: m['asset']['rmse'] for m in d['by_distance']}
 cells = ' | '.join('%+.1f %%' % (100 * cov[f]) for f in sorted(cov))
@@ -39,9 +41,11 @@ for m in "$@"; do
   n=$(basename "$m"); n=${n%.*}
   for c in $COMBINES; do
     for p in $PRESETS; do
+      if [ -z "$CLOUDS_ONLY" ]; then
       $B voxelize "$m" -o "$D/$n.$c.$p.billow" --preset "$p" --combine "$c" -q
       $B eval "$m" "$D/$n.$c.$p.billow" --distances 1,4,16,64 --size "$SIZE" --json > "$D/$n.$c.$p.json"
       row "$n" volume "$c, $p" "$D/$n.$c.$p.json"
+      fi
     done
   done
   for p in $PRESETS; do

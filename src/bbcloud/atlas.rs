@@ -23,10 +23,10 @@
 //! to either 0 or 1") after filtering the texture bilinearly. A box filter keeps the
 //! *mean* alpha, but the area that passes the test shrinks level by level wherever leaves
 //! are thinner than a texel, so distant canopies thin out and go see-through. So each
-//! level k of a side, level 0 included, is scaled by the one factor `s_k` that makes its
-//! **rendered** coverage (the share of its area where the bilinearly filtered, scaled
-//! alpha passes the test, [`rendered_coverage`], measured at 4 × 4 points per texel) equal
-//! the bake's mean alpha at level 0 — what the bake saw covered ([`rendered_coverage_scale`]),
+//! level k ≥ 1 of a side is scaled by the one factor `s_k` that makes its **rendered**
+//! coverage (the share of its area where the bilinearly filtered, scaled alpha passes the
+//! test, [`rendered_coverage`], measured at 4 × 4 points per texel) equal level 0's
+//! ([`rendered_coverage_scale`]),
 //! applied as `texel · min(s_k, 1/α)`: premultiplied colour and alpha together, so straight
 //! colour is unchanged and alpha never exceeds 1 (Castaño's coverage-preserving MIPs, per
 //! billboard side, measured as a renderer draws them). Keeping the share of *texels* at or
@@ -305,16 +305,6 @@ pub enum Chain {
 /// glTF `MASK`), and the one [`coverage_chain`] preserves.
 pub const ALPHA_CUTOFF: f32 = 0.5;
 
-/// The mean alpha of `img`'s texels: the share of its area the bake saw covered.
-pub fn mean_alpha(img: &Image) -> f64 {
-    let sum: f64 = img
-        .texels
-        .iter()
-        .map(|t| f64::from(t.w.clamp(0.0, 1.0)))
-        .sum();
-    sum / img.texels.len().max(1) as f64
-}
-
 /// Share of `img`'s texels whose alpha is at least `cutoff`.
 pub fn tested_coverage(img: &Image, cutoff: f32) -> f64 {
     let n = img.texels.iter().filter(|t| t.w >= cutoff).count();
@@ -513,16 +503,14 @@ pub fn rendered_coverage_scale(img: &Image, target: f64, cutoff: f32) -> f32 {
     }
 }
 
-/// The MIP chain of a colour allocation every level of which, level 0 included, covers
-/// what the bake saw covered, **as a renderer draws it** (module docs): the area where its
-/// bilinearly filtered alpha passes the test at `cutoff` equals level 0's mean alpha.
-/// Levels are box filtered from the unscaled level above, then scaled by
-/// [`rendered_coverage_scale`].
+/// The MIP chain of a colour allocation every level of which covers what level 0 covers,
+/// **as a renderer draws it** (module docs): the area where its bilinearly filtered alpha
+/// passes the test at `cutoff` equals level 0's. Levels are box filtered from the unscaled
+/// level above, then scaled by [`rendered_coverage_scale`]; level 0 is stored as baked.
 pub fn coverage_chain(atlas: Image, levels: u32, cutoff: f32) -> Vec<Vec<u8>> {
     let n = mip_count(atlas.width, atlas.height, levels);
-    let target = mean_alpha(&atlas);
-    let s0 = rendered_coverage_scale(&atlas, target, cutoff);
-    let mut out = vec![encode_srgb_premultiplied(&scale_coverage(&atlas, s0))];
+    let target = rendered_coverage(&atlas, 1.0, cutoff);
+    let mut out = vec![encode_srgb_premultiplied(&atlas)];
     let mut cur = atlas;
     while (out.len() as u32) < n {
         cur = downsample(&cur);
