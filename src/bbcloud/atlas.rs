@@ -37,6 +37,9 @@
 //! Where a level's alpha cannot reach the target (every passing texel already at 1), it
 //! stays short.
 
+// `!(a > b)` comparisons are deliberate: they also catch NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use glam::Vec4;
 use rayon::prelude::*;
 

@@ -28,13 +28,13 @@
 //! level's **rendered projected coverage**, summed over the three axes, equals a target
 //! ([`Model`]): for each axis, the level's texel columns are composited (`τ = Σ σ`,
 //! `σ = −ln(1 − α)`, an opaque texel counted as the slicer caps it,
-//! [`MAX_OPTICAL_DEPTH`]; each texel's `σ` taken over its extent along the axis divided
+//! [`billow_core::slicing::MAX_OPTICAL_DEPTH`]; each texel's `σ` taken over its extent along the axis divided
 //! by its size, as the slicer's opacity correction does,
 //! [`billow_core::slicing::level_weights`]), the column optical depths are interpolated
 //! bilinearly across with clamp-to-edge (what the slicer's trilinear extinction filter
 //! does to them) at 4 × 4 points per texel, and `1 − e^(−τ)` is summed.
 //! - **Level 0** is matched to the mesh's projected coverage along each axis, the mean of
-//!   its two directions' level-0 stacks (`Σ_columns 1 − Π(1 − α)`, [`stack_coverage`]:
+//!   its two directions' level-0 stacks (`Σ_columns 1 − Π(1 − α)`, `stack_coverage`:
 //!   what the 4×4-supersampled rasterizer saw, within 1 % of the ray-traced mesh on the
 //!   oak), but only ever **thinned** (`k ≤ 1`): a combine that made it denser than any
 //!   view of the mesh (`opaque`, `max` on foliage) is brought back, and one that made it
@@ -49,6 +49,9 @@
 //! quantization. Every sum runs in a fixed order (each column front to back in increasing
 //! coordinate), so `k` and the bytes do not depend on the number of threads, and the
 //! dense and the brick-sparse (`--prune`) bakes compute the same `k`.
+
+// `!(a > b)` comparisons are deliberate: they also catch NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use rayon::prelude::*;
 
@@ -71,7 +74,7 @@ pub(crate) fn stack_coverage(s: &DirSlices) -> f64 {
 }
 
 /// The mesh's projected coverage per axis (x, y, z): the mean of its two directions'
-/// [`stack_coverage`] (`per_dir` indexed like [`super::Dir::ALL`]).
+/// `stack_coverage` (`per_dir` indexed like [`super::Dir::ALL`]).
 pub fn mesh_coverage(per_dir: &[f64; 6]) -> [f64; 3] {
     std::array::from_fn(|a| 0.5 * (per_dir[2 * a] + per_dir[2 * a + 1]))
 }
