@@ -29,11 +29,21 @@ pub const MAX_OPTICAL_DEPTH: f32 = 6.234_411;
 /// see-through stripes of thin layers (docs/eval.md, "Thin layers").
 #[inline]
 pub fn to_extinction(c: Vec4) -> Vec4 {
+    to_extinction_capped(c, MAX_OPTICAL_DEPTH)
+}
+
+/// [`to_extinction`] with the optical depth of an opaque texel (one whose own is at least
+/// [`MAX_OPTICAL_DEPTH`], within half an 8-bit step of opaque) set to `cap`: a texel of a
+/// coarser level, [`crate::slicing::opaque_optical_depth`], whose opaque texels are as
+/// dense as level 0's.
+#[inline]
+pub fn to_extinction_capped(c: Vec4, cap: f32) -> Vec4 {
     let a = c.w.min(1.0);
     if !(a > 0.0) {
         return Vec4::ZERO;
     }
-    let s = (-(-a).ln_1p()).min(MAX_OPTICAL_DEPTH);
+    let s = -(-a).ln_1p();
+    let s = if s >= MAX_OPTICAL_DEPTH { cap } else { s };
     (c.truncate() * (s / a)).extend(s)
 }
 

@@ -71,6 +71,90 @@ pub fn voxel_size(cells: &[Prism], dims: [u32; 3]) -> Option<f32> {
     best
 }
 
+/// World size of a texel of MIP level `level` of a texture of level-0 size `dims0` drawn
+/// on `cells`: [`voxel_size`] at that level's size (`max(1, d >> level)` per axis, the GPU
+/// rule). For sides that are multiples of `2^level` this is `2^level · v₀`; otherwise a
+/// texel spans `d / max(1, d >> level)` level-0 voxels along each axis (more than
+/// `2^level` where a side was rounded down), and this is their geometric mean.
+pub fn level_texel_size(cells: &[Prism], dims0: [u32; 3], level: u32) -> Option<f32> {
+    voxel_size(cells, billow_format::mip_dims(dims0, level))
+}
+
+/// The opacity correction of one slice, agreeing with the bake's coverage-keeping levels
+/// (`billow::voxelize::coverage`): a texel of level `l` holds the optical depth `σ` of
+/// its own thickness `s_l` ([`level_texel_size`]), so a slice standing for a slab of
+/// thickness `d` takes `σ · d / s_l` from it. At the fractional level `lod` (clamped to
+/// `sizes`, one per level) the two nearest levels are blended by their densities:
+/// `[(l₀, (1 − t) · d / s_l₀), (l₀ + 1, t · d / s_l₀₊₁)]` with `l₀ = floor(lod)`,
+/// `t = lod − l₀` (`nearest`: the one level `round(lod)`, weight `d / s`). The sample is
+/// `α = 1 − e^(−Σ wᵢ σᵢ)`. For power-of-two sides and a whole `lod` this is the paper's
+/// `α' = 1 − (1 − α)^(d/d₀)`, `d₀ = v₀ · 2^lod`; blending optical depths of levels of
+/// different thickness as if they had the same one (the correction before) made a
+/// slice between two levels up to 6 % denser.
+pub fn level_weights(lod: f32, d: f32, sizes: &[f32], nearest: bool) -> [(usize, f32); 2] {
+    let max = sizes.len().saturating_sub(1);
+    let lod = if lod.is_finite() {
+        lod.clamp(0.0, max as f32)
+    } else {
+        0.0
+    };
+    let w = |l: usize| d / sizes[l];
+    if nearest {
+        let l = (lod.round() as usize).min(max);
+        return [(l, w(l)), (l, 0.0)];
+    }
+    let l0 = (lod.floor() as usize).min(max);
+    let t = lod - l0 as f32;
+    if t <= 0.0 || l0 == max {
+        return [(l0, w(l0)), (l0, 0.0)];
+    }
+    [(l0, (1.0 - t) * w(l0)), (l0 + 1, t * w(l0 + 1))]
+}
+
+pub use crate::extinction::MAX_OPTICAL_DEPTH;
+
+/// The optical depth an opaque texel of size `size` holds (`v0`: the size of a texel of
+/// level 0 of the same texture, [`voxel_size`]; each LOD band of a pruned asset is its own
+/// texture): [`MAX_OPTICAL_DEPTH`] per level-0 texel of thickness, so that opaque texels
+/// of every level have the same density and a slice between two levels
+/// ([`level_weights`]) blends their colours linearly, as it does for a homogeneous medium.
+pub fn opaque_optical_depth(size: f32, v0: f32) -> f32 {
+    let r = size / v0;
+    if r.is_finite() && r > 0.0 {
+        MAX_OPTICAL_DEPTH * r
+    } else {
+        MAX_OPTICAL_DEPTH
+    }
+}
+
+/// A texel of a level of size `dims` of a texture whose level 0 is `dims0`, drawn on the
+/// same cells: its size over a level-0 texel's, `cbrt(Π dims0 / dims)` ([`voxel_size`]
+/// scales as the cube root of the texel count). A renderer that filters between levels in
+/// hardware stores each level's optical depth divided by this (a density per level-0
+/// texel) so that the blend of two levels is what [`level_weights`] gives; opaque texels
+/// then hold [`MAX_OPTICAL_DEPTH`] at every level ([`opaque_optical_depth`]).
+pub fn level_size_ratio(dims0: [u32; 3], dims: [u32; 3]) -> f32 {
+    let r: f64 = (0..3)
+        .map(|a| f64::from(dims0[a].max(1)) / f64::from(dims[a].max(1)))
+        .product();
+    r.cbrt() as f32
+}
+
+/// The slab the farthest slice stands for: from `z − d/2` (its own spacing `d` at depth
+/// `z`) to the far end `z_max` of the sliced depth range, so that the slabs of a
+/// [`slice_depths`] list cover the whole range (its last slice's centre lies before
+/// `z_max`, so this is more than `d/2`; at most `3d/2`). Every other slice stands for
+/// `d`. Without it, a range only one or two slices deep (a distant object) lost up to
+/// half a slice of its optical depth.
+pub fn far_slab(z: f32, d: f32, z_max: f32) -> f32 {
+    let t = z_max - (z - 0.5 * d);
+    if t > 0.5 * d {
+        t
+    } else {
+        0.5 * d
+    }
+}
+
 /// Slice depths and spacings `(depth, d)`, **front to back**, over `[z_min, z_max]`.
 /// `pixel_size_at(z)`: the world size of one pixel at view depth `z` (the camera's,
 /// e.g. [`crate::camera::Camera::pixel_size_at`]); `v0`: [`voxel_size`]; at most
@@ -176,6 +260,71 @@ mod tests {
         let e = slice_depths(|_| 1.0, s, 0.1, 1.0, 3.0, 3).unwrap_err();
         assert_eq!(e.limit, 3);
         assert!(e.needed > 3);
+    }
+
+    /// A whole lod of a power-of-two texture is the paper's correction; between levels the
+    /// two densities are blended; odd sides give thicker texels.
+    #[test]
+    fn level_weights_blend_densities() {
+        let sizes = [1.0, 2.0, 4.0];
+        assert_eq!(level_weights(1.0, 2.0, &sizes, false), [(1, 1.0), (1, 0.0)]);
+        let [(a, wa), (b, wb)] = level_weights(1.5, 2f32.powf(1.5), &sizes, false);
+        assert_eq!((a, b), (1, 2));
+        // A homogeneous medium of density 1 per voxel: σ_l = s_l, and the slab gets d.
+        assert!((wa * 2.0 + wb * 4.0 - 2f32.powf(1.5)).abs() < 1e-5);
+        assert_eq!(level_weights(9.0, 4.0, &sizes, false), [(2, 1.0), (2, 0.0)]);
+        assert_eq!(level_weights(1.6, 4.0, &sizes, true), [(2, 1.0), (2, 0.0)]);
+        let cube = |n: f32| Prism {
+            pos: [
+                [0.0, 0.0, 0.0],
+                [n, 0.0, 0.0],
+                [n, 0.0, n],
+                [0.0, n, 0.0],
+                [n, n, 0.0],
+                [n, n, n],
+            ],
+            uvw: [
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [1.0, 0.0, 1.0],
+                [0.0, 1.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [1.0, 1.0, 1.0],
+            ],
+        };
+        let c = [cube(12.0)];
+        assert!((level_texel_size(&c, [12, 12, 12], 2).unwrap() - 4.0).abs() < 1e-5);
+        // 12 >> 3 = 1: the one texel spans all 12 voxels.
+        assert!((level_texel_size(&c, [12, 12, 12], 3).unwrap() - 12.0).abs() < 1e-4);
+    }
+
+    /// The farthest slab reaches the end of the range: one slice of spacing 105 in a
+    /// range 112 deep stands for all 112.
+    #[test]
+    fn the_far_slab_covers_the_range() {
+        let d = slice_depths(
+            |_| 105.0,
+            Spacing::Adaptive { bias: 1.0 },
+            1.0,
+            0.0,
+            112.0,
+            10,
+        )
+        .unwrap();
+        assert_eq!(d, vec![(52.5, 105.0)]);
+        assert_eq!(far_slab(52.5, 105.0, 112.0), 112.0);
+        let d = slice_depths(
+            |_| 1.0,
+            Spacing::Uniform { spacing: 4.0 },
+            1.0,
+            0.0,
+            9.0,
+            10,
+        )
+        .unwrap();
+        let (z, s) = *d.last().unwrap();
+        let total: f32 = d[..d.len() - 1].iter().map(|x| x.1).sum::<f32>() + far_slab(z, s, 9.0);
+        assert!((total - 9.0).abs() < 1e-6, "{d:?}");
     }
 
     /// Adaptive spacing follows the pixel footprint, never finer than `v₀`, times `bias`.

@@ -20,13 +20,25 @@
 //!
 //! **Alpha-tested coverage is kept at every level** ([`coverage_chain`]). Renderers alpha-test
 //! billboards at [`ALPHA_CUTOFF`] (Lacewell §6: custom MIP code "which rounds alpha values
-//! to either 0 or 1"). A box filter keeps the *mean* alpha, but the *tested* coverage (the
-//! share of texels at or above the cut-off) shrinks level by level wherever leaves are
-//! thinner than a texel, so distant canopies thin out and go see-through. So each level
-//! k ≥ 1 of a side is scaled by the one factor `s_k` that makes its tested coverage equal
-//! level 0's ([`coverage_scale`]), applied as `texel · min(s_k, 1/α)`: premultiplied colour
-//! and alpha together, so straight colour is unchanged and alpha never exceeds 1
-//! (Castaño's coverage-preserving MIPs, per billboard side).
+//! to either 0 or 1") after filtering the texture bilinearly. A box filter keeps the
+//! *mean* alpha, but the area that passes the test shrinks level by level wherever leaves
+//! are thinner than a texel, so distant canopies thin out and go see-through. So each
+//! level k ≥ 1 of a side is scaled by the one factor `s_k` that makes its **rendered**
+//! coverage (the share of its area where the bilinearly filtered, scaled alpha passes the
+//! test, [`rendered_coverage`], measured at 4 × 4 points per texel) equal level 0's
+//! ([`rendered_coverage_scale`]),
+//! applied as `texel · min(s_k, 1/α)`: premultiplied colour and alpha together, so straight
+//! colour is unchanged and alpha never exceeds 1 (Castaño's coverage-preserving MIPs, per
+//! billboard side, measured as a renderer draws them). Keeping the share of *texels* at or
+//! above the cut-off instead ([`coverage_scale`], the chain before 2026-12) was not
+//! enough: an isolated passing texel of a coarse level draws only about 0.6 of its area
+//! once filtered (`(1 − |x|)(1 − |y|) ≥ ½`), so the oak's LOD 0 lost 24 % of its coverage
+//! at 4× the framed distance and 30 % at 64× (docs/bbcloud.md, "Coverage at a distance").
+//! Where a level's alpha cannot reach the target (every passing texel already at 1), it
+//! stays short.
+
+// `!(a > b)` comparisons are deliberate: they also catch NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use glam::Vec4;
 use rayon::prelude::*;
@@ -302,8 +314,8 @@ pub fn tested_coverage(img: &Image, cutoff: f32) -> f64 {
     n as f64 / img.texels.len().max(1) as f64
 }
 
-/// The factor that gives `img` tested coverage `target` (a share of its texels) at
-/// `cutoff`: with n = round(target · texels) and the alphas sorted, the cut-off is put
+/// The factor that gives `img` tested coverage `target` (a share of its *texels*, not of
+/// the area a renderer draws: see [`rendered_coverage_scale`]) at `cutoff`: with n = round(target · texels) and the alphas sorted, the cut-off is put
 /// halfway between two neighbouring distinct alphas so that as close to n texels as
 /// possible pass (texels of equal alpha pass or fail together, so a tie at the n-th is
 /// split on the side nearer n). 1 when nothing has coverage.
@@ -361,17 +373,151 @@ pub fn scale_coverage(img: &Image, scale: f32) -> Image {
     }
 }
 
-/// The MIP chain of a colour allocation whose every level keeps level 0's alpha-tested
-/// coverage at `cutoff` (module docs): levels are box filtered from the unscaled level
-/// above, then scaled by [`coverage_scale`] for storage.
+/// Points per texel and axis at which [`rendered_coverage`] tests the filtered alpha.
+const RENDER_POINTS: usize = 4;
+
+/// `f(taps)` for every test point of `img` (`RENDER_POINTS²` per texel, on a regular grid)
+/// whose four bilinear taps `(weight, alpha)` are not all empty, where `f` returns
+/// something. Bilinear as a renderer samples: texel centres at `(i + ½)`, clamp-to-edge
+/// (the allocation's gutter repeats its edge).
+fn over_points<T: Send>(img: &Image, f: impl Fn([(f32, f32); 4]) -> Option<T> + Sync) -> Vec<T> {
+    let (w, h) = (img.width as usize, img.height as usize);
+    let taps = |n: usize| -> Vec<(usize, usize, f32)> {
+        (0..n * RENDER_POINTS)
+            .map(|q| {
+                let x = (q as f32 + 0.5) / RENDER_POINTS as f32 - 0.5;
+                let x0 = x.floor();
+                let t = x - x0;
+                let i0 = (x0 as i64).clamp(0, n as i64 - 1) as usize;
+                let i1 = (x0 as i64 + 1).clamp(0, n as i64 - 1) as usize;
+                (i0, i1, t)
+            })
+            .collect()
+    };
+    let (tx, ty) = (taps(w), taps(h));
+    let alpha = |x: usize, y: usize| img.texels[y * w + x].w.clamp(0.0, 1.0);
+    // Per texel column, whether it has any alpha in a row (a point reads two of each).
+    let any: Vec<bool> = img.texels.iter().map(|t| t.w > 0.0).collect();
+    let any_row: Vec<bool> = any.chunks(w.max(1)).map(|r| r.iter().any(|&a| a)).collect();
+    ty.par_iter()
+        .filter(|&&(y0, y1, _)| any_row[y0] || any_row[y1])
+        .flat_map_iter(|&(y0, y1, fy)| {
+            let f = &f;
+            let any = &any;
+            tx.iter().filter_map(move |&(x0, x1, fx)| {
+                if !(any[y0 * w + x0] || any[y0 * w + x1] || any[y1 * w + x0] || any[y1 * w + x1]) {
+                    return None;
+                }
+                f([
+                    ((1.0 - fx) * (1.0 - fy), alpha(x0, y0)),
+                    (fx * (1.0 - fy), alpha(x1, y0)),
+                    ((1.0 - fx) * fy, alpha(x0, y1)),
+                    (fx * fy, alpha(x1, y1)),
+                ])
+            })
+        })
+        .collect()
+}
+
+/// For every test point of `img` that can pass ([`over_points`]), the smallest scale `s`
+/// at which the bilinearly filtered alpha of `img` scaled by `s` (each texel
+/// `min(s·α, 1)`, [`scale_coverage`]) reaches `cutoff` there.
+fn pass_scales(img: &Image, cutoff: f32) -> Vec<f32> {
+    over_points(img, |taps| {
+        let s = pass_scale(taps, cutoff);
+        s.is_finite().then_some(s)
+    })
+}
+
+/// The smallest `s` with `Σ wᵢ · min(s·αᵢ, 1) ≥ cutoff` (`∞` if none): the sum grows
+/// piecewise linearly in `s`, with a kink where each `s·αᵢ` reaches 1.
+fn pass_scale(mut taps: [(f32, f32); 4], cutoff: f32) -> f32 {
+    // By the scale at which each tap saturates, 1/α (empty taps never count).
+    taps.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let (mut sat, mut slope) = (0.0f32, 0.0f32);
+    for &(w, a) in &taps {
+        if a > 0.0 {
+            slope += w * a;
+        }
+    }
+    let mut s0 = 0.0f32;
+    for &(w, a) in &taps {
+        if !(a > 0.0) {
+            break;
+        }
+        // On [s0, 1/a] the sum is sat + s·slope.
+        let end = 1.0 / a;
+        if slope > 0.0 {
+            let s = (cutoff - sat) / slope;
+            if s <= end {
+                return s.max(s0);
+            }
+        }
+        sat += w;
+        slope -= w * a;
+        s0 = end;
+    }
+    if sat >= cutoff {
+        s0
+    } else {
+        f32::INFINITY
+    }
+}
+
+/// The share of `img`'s area that a renderer alpha-testing it at `cutoff` after bilinear
+/// filtering draws once its alpha is scaled by `scale` ([`scale_coverage`]), measured at
+/// `RENDER_POINTS²` points per texel.
+pub fn rendered_coverage(img: &Image, scale: f32, cutoff: f32) -> f64 {
+    let pass = over_points(img, |taps| {
+        let a: f32 = taps.iter().map(|&(w, a)| w * (scale * a).min(1.0)).sum();
+        (a >= cutoff).then_some(())
+    });
+    let total = img.texels.len() * RENDER_POINTS * RENDER_POINTS;
+    pass.len() as f64 / total.max(1) as f64
+}
+
+/// The factor that makes [`rendered_coverage`] of `img` as close as it can be to `target`
+/// (a share of its area): the points are ordered by the scale at which they start to
+/// pass, and the factor lies halfway between the `n`-th and the next (`n` the target's
+/// share of the points). 1 when nothing can pass.
+pub fn rendered_coverage_scale(img: &Image, target: f64, cutoff: f32) -> f32 {
+    let mut p = pass_scales(img, cutoff);
+    if p.is_empty() {
+        return 1.0;
+    }
+    let total = img.texels.len() * RENDER_POINTS * RENDER_POINTS;
+    let n = ((target * total as f64).round() as usize).min(p.len());
+    // The n-th smallest and the next (order statistics, no full sort).
+    let nth = |p: &mut [f32], k: usize| *p.select_nth_unstable_by(k, f32::total_cmp).1;
+    let scale = match n {
+        0 => 0.5 * nth(&mut p, 0),
+        n if n == p.len() => nth(&mut p, n - 1) * 1.0001,
+        n => {
+            let a = nth(&mut p, n - 1);
+            // After the selection, everything past n - 1 is at least `a`.
+            let b = p[n..].iter().copied().fold(f32::INFINITY, f32::min);
+            0.5 * (a + b)
+        }
+    };
+    if scale.is_finite() && scale > 0.0 {
+        scale.min(1.0 / f32::EPSILON)
+    } else {
+        1.0
+    }
+}
+
+/// The MIP chain of a colour allocation every level of which covers what level 0 covers,
+/// **as a renderer draws it** (module docs): the area where its bilinearly filtered alpha
+/// passes the test at `cutoff` equals level 0's. Levels are box filtered from the unscaled
+/// level above, then scaled by [`rendered_coverage_scale`]; level 0 is stored as baked.
 pub fn coverage_chain(atlas: Image, levels: u32, cutoff: f32) -> Vec<Vec<u8>> {
     let n = mip_count(atlas.width, atlas.height, levels);
-    let target = tested_coverage(&atlas, cutoff);
+    let target = rendered_coverage(&atlas, 1.0, cutoff);
     let mut out = vec![encode_srgb_premultiplied(&atlas)];
     let mut cur = atlas;
     while (out.len() as u32) < n {
         cur = downsample(&cur);
-        let s = coverage_scale(&cur, target, cutoff);
+        let s = rendered_coverage_scale(&cur, target, cutoff);
         out.push(encode_srgb_premultiplied(&scale_coverage(&cur, s)));
     }
     out

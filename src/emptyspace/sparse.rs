@@ -244,6 +244,35 @@ impl SparseLevel {
         }
     }
 
+    /// The alpha (byte / 255) of every texel of brick `bc` into `out` (x fastest inside
+    /// the brick, zero where nothing is stored); `false` (and `out` untouched) for a brick
+    /// that is not allocated.
+    pub(crate) fn brick_alpha(&self, bc: [usize; 3], out: &mut [f32; B3]) -> bool {
+        let s = self.slot[bc[0] + self.nb[0] * (bc[1] + self.nb[1] * bc[2])];
+        if s == EMPTY {
+            return false;
+        }
+        out.fill(0.0);
+        let mut k = self.first[s as usize];
+        for (w, &word) in self.mask[s as usize].iter().enumerate() {
+            let mut bits = word;
+            while bits != 0 {
+                let i = 64 * w + bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                out[i] = f32::from(self.colour[k][3]) / 255.0;
+                k += 1;
+            }
+        }
+        true
+    }
+
+    /// Replaces every stored texel's colour `c` by `f(c)`; `f` must keep a non-zero colour
+    /// non-zero (what is stored does not change).
+    pub(crate) fn map_colour(&mut self, f: impl Fn([u8; 4]) -> [u8; 4] + Sync) {
+        use rayon::prelude::*;
+        self.colour.par_iter_mut().for_each(|c| *c = f(*c));
+    }
+
     /// Zeroes the colour and normal of every texel whose alpha byte is ≤ `threshold`
     /// ([`super::occupancy::apply_threshold`]); 0 changes nothing.
     pub fn apply_threshold(&mut self, threshold: u8) {

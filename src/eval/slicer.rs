@@ -55,10 +55,10 @@ use billow_format::{Prism, VolumeAsset};
 use glam::{Mat3, Vec3, Vec4};
 use rayon::prelude::*;
 
-use super::compositing::{correct_premultiplied, over};
+use super::compositing::over;
 use super::lighting::{volume_diffuse_factor, VolumeLight};
 use super::prism_plane::intersect_prism_plane;
-use super::reference::validate_camera;
+use super::reference::{sample_offset, validate_camera, Sampling};
 use super::volume_sampler::{DecodedVolume, MipFilter};
 use super::{EvalError, ImageF32};
 use crate::camera::Camera;
@@ -66,7 +66,10 @@ use crate::camera::Camera;
 /// Slice spacing mode, [`voxel_size`], the per-cell [`normal_matrix`] and
 /// [`shade_normal`]: the shared slice planning of the rendering core
 /// ([`billow_core::slicing`], which the viewer uses too), re-exported here.
-pub use billow_core::slicing::{normal_matrix, shade_normal, voxel_size, Spacing};
+pub use billow_core::slicing::{
+    far_slab, level_texel_size, level_weights, normal_matrix, opaque_optical_depth, shade_normal,
+    voxel_size, Spacing,
+};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SlicerParams {
@@ -77,7 +80,19 @@ pub struct SlicerParams {
     /// The scene light volumes with normals are shaded with (`None`: drawn unlit, their
     /// albedo as it is). World space, as the cells.
     pub light: Option<VolumeLight>,
+    /// Coverage samples per pixel along each axis, `n × n` at the eval reference's
+    /// stratified points ([`Sampling::Stratified`]), MSAA-style: each cell ∩ slice polygon
+    /// is shaded once per pixel (at the centroid of the samples it covers) and composited
+    /// into every sample it covers; the pixel is their mean. So the cells' edges are
+    /// anti-aliased as the reference's geometry is, and a volume a few pixels wide covers
+    /// the area its box projects to, not the number of pixel centres inside it. 1 (the
+    /// default, what the GPU viewer draws): the pixel centre only. At most 16; lowered
+    /// until the image holds at most 2²⁴ samples.
+    pub coverage_samples: u32,
 }
+
+/// Most coverage samples per axis ([`SlicerParams::coverage_samples`]).
+pub const MAX_COVERAGE_SAMPLES: u32 = 16;
 
 impl Default for SlicerParams {
     fn default() -> Self {
@@ -86,6 +101,7 @@ impl Default for SlicerParams {
             mip_filter: MipFilter::Linear,
             max_slices: 100_000,
             light: Some(VolumeLight::default()),
+            coverage_samples: 1,
         }
     }
 }
@@ -122,11 +138,15 @@ struct ScreenPoly {
     base: Vec3,
     gx: Vec3,
     gy: Vec3,
+    /// The level the normals are sampled at (`lod` of the band's texture).
     lod: f32,
-    ratio: f32,
-    /// The slice's view distance and spacing (the slab `depth ± d/2` it stands for).
-    depth: f32,
-    spacing: f32,
+    /// Levels of the band's texture, their opacity weights for the whole slab
+    /// ([`billow_core::slicing::level_weights`]) and their opaque texels' optical depth
+    /// ([`billow_core::slicing::opaque_optical_depth`]).
+    weights: [(usize, f32, f32); 2],
+    /// The slab the slice stands for: from `slab0` (view distance), `thickness` deep.
+    slab0: f32,
+    thickness: f32,
     /// Index of the band (0 = the base texture) whose texture this polygon samples.
     band: usize,
     /// Normal frame → view space of the polygon's cell ([`normal_matrix`]), when it is
@@ -243,9 +263,22 @@ fn render_sliced(
         }
         _ => {}
     }
+    // Coverage samples per axis, and per pixel (contiguous in the working image).
+    let ns = coverage_samples(params.coverage_samples, camera);
+    let nn = (ns * ns) as usize;
     let mut image = match backdrop {
-        Some(b) => b.colour.clone(),
-        None => ImageF32::new(camera.width, camera.height),
+        Some(b) if nn == 1 => b.colour.clone(),
+        Some(b) => ImageF32 {
+            width: camera.width * nn as u32,
+            height: camera.height,
+            data: b
+                .colour
+                .data
+                .iter()
+                .flat_map(|&c| std::iter::repeat_n(c, nn))
+                .collect(),
+        },
+        None => ImageF32::new(camera.width * nn as u32, camera.height),
     };
     let mut stats = SliceStats::default();
     if vol.level_count() == 0 {
@@ -269,7 +302,10 @@ fn render_sliced(
         .reduce(f32::min);
     let Some(v0) = v0 else {
         stats.seconds = start.elapsed().as_secs_f64();
-        return Ok(SliceRender { image, stats });
+        return Ok(SliceRender {
+            image: resolve(image, nn),
+            stats,
+        });
     };
     stats.voxel_size = v0;
     let view = camera.view();
@@ -321,7 +357,10 @@ fn render_sliced(
     let z_max = z_max.min(camera.far);
     if !(z_min < z_max) {
         stats.seconds = start.elapsed().as_secs_f64();
-        return Ok(SliceRender { image, stats });
+        return Ok(SliceRender {
+            image: resolve(image, nn),
+            stats,
+        });
     }
     let mut slices = billow_core::slicing::slice_depths(
         |z| camera.pixel_size_at(z),
@@ -338,17 +377,41 @@ fn render_sliced(
     let last = parts.last().expect("the base part");
     let max_lod = (last.first_level as usize + last.vol.level_count() - 1) as f32;
     let vols: Vec<&DecodedVolume> = parts.iter().map(|p| p.vol).collect();
+    // Per part, the world size of a texel of each of its levels (the opacity correction's
+    // `s_l`); a level without one (degenerate cells) takes `v₀ · 2^level`.
+    let sizes: Vec<Vec<f32>> = parts
+        .iter()
+        .map(|p| {
+            (0..p.vol.level_count() as u32)
+                .map(|j| {
+                    level_texel_size(p.cells, p.dims0, j)
+                        .unwrap_or(v0 * ((p.first_level + j) as f32).exp2())
+                })
+                .collect()
+        })
+        .collect();
+    let far_z = slices.first().map(|&(z, d)| (z, far_slab(z, d, z_max)));
     let w = camera.width as usize;
     const BATCH: usize = 1 << 16;
     let mut polys: Vec<ScreenPoly> = Vec::new();
     let flush = |polys: &mut Vec<ScreenPoly>, image: &mut ImageF32| -> u64 {
         let frags = image
             .data
-            .par_chunks_mut(w)
+            .par_chunks_mut(w * nn)
             .enumerate()
             .map(|(y, row)| {
                 let depth = backdrop.map(|b| &b.depth[y * w..(y + 1) * w]);
-                raster_row(row, y, polys, &vols, params.mip_filter, light_view, depth)
+                let ctx = RowCtx {
+                    vols: &vols,
+                    filter: params.mip_filter,
+                    light: light_view,
+                    depth,
+                };
+                if nn == 1 {
+                    raster_row(row, y, polys, &ctx)
+                } else {
+                    raster_row_samples(row, ns, y, polys, &ctx)
+                }
             })
             .sum();
         polys.clear();
@@ -356,11 +419,11 @@ fn render_sliced(
     };
     for &(depth, d) in &slices {
         let lod = (d / v0).log2().clamp(0.0, max_lod);
-        let d0 = match params.mip_filter {
-            MipFilter::Nearest => v0 * lod.round().exp2(),
-            MipFilter::Linear => v0 * lod.exp2(),
+        // The slab this slice stands for; the farthest reaches the end of the range.
+        let thickness = match far_z {
+            Some((z, t)) if z == depth => t,
+            _ => d,
         };
-        let ratio = d / d0;
         let z = -depth;
         // The band this slice draws: the last one starting at or below `lod`.
         let band = parts
@@ -368,17 +431,24 @@ fn render_sliced(
             .rposition(|p| p.first_level as f32 <= lod)
             .unwrap_or(0);
         let part_lod = lod - parts[band].first_level as f32;
+        let weights = level_weights(
+            part_lod,
+            thickness,
+            &sizes[band],
+            params.mip_filter == MipFilter::Nearest,
+        )
+        .map(|(l, w)| (l, w, opaque_optical_depth(sizes[band][l], sizes[band][0])));
         for (ci, c) in cam_cells[band].iter().enumerate() {
             let poly = intersect_prism_plane(c, &parts[band].cells[ci].uvw, z);
             if poly.is_empty() {
                 continue;
             }
-            let sp = to_screen(camera, &poly.pos, &poly.uvw, poly.count, part_lod, ratio);
+            let sp = to_screen(camera, &poly.pos, &poly.uvw, poly.count, part_lod, weights);
             if let Some(mut sp) = sp {
                 sp.band = band;
                 sp.nmat = nmats[band].as_ref().map(|m| m[ci]);
-                sp.depth = depth;
-                sp.spacing = d;
+                sp.slab0 = depth - 0.5 * d;
+                sp.thickness = thickness;
                 polys.push(sp);
                 stats.polygons += 1;
             }
@@ -389,7 +459,38 @@ fn render_sliced(
     }
     stats.fragments += flush(&mut polys, &mut image);
     stats.seconds = start.elapsed().as_secs_f64();
-    Ok(SliceRender { image, stats })
+    Ok(SliceRender {
+        image: resolve(image, nn),
+        stats,
+    })
+}
+
+/// Coverage samples per axis for `camera`: `asked` clamped to
+/// `1..=`[`MAX_COVERAGE_SAMPLES`], then lowered until the image holds at most 2²⁴.
+pub fn coverage_samples(asked: u32, camera: &Camera) -> u32 {
+    let px = u64::from(camera.width) * u64::from(camera.height);
+    let mut n = asked.clamp(1, MAX_COVERAGE_SAMPLES);
+    while n > 1 && px * u64::from(n * n) > 1 << 24 {
+        n -= 1;
+    }
+    n
+}
+
+/// The pixels of an image of `nn` samples per pixel: their mean.
+fn resolve(image: ImageF32, nn: usize) -> ImageF32 {
+    if nn == 1 {
+        return image;
+    }
+    let k = 1.0 / nn as f32;
+    ImageF32 {
+        width: image.width / nn as u32,
+        height: image.height,
+        data: image
+            .data
+            .chunks_exact(nn)
+            .map(|s| s.iter().fold(Vec4::ZERO, |a, &b| a + b) * k)
+            .collect(),
+    }
 }
 
 fn to_screen(
@@ -398,7 +499,7 @@ fn to_screen(
     uvw: &[[f32; 3]; 5],
     n: usize,
     lod: f32,
-    ratio: f32,
+    weights: [(usize, f32, f32); 2],
 ) -> Option<ScreenPoly> {
     let mut xy = [[0.0f32; 2]; 5];
     for i in 0..n {
@@ -440,9 +541,9 @@ fn to_screen(
         gx,
         gy,
         lod,
-        ratio,
-        depth: 0.0,
-        spacing: 0.0,
+        weights,
+        slab0: 0.0,
+        thickness: 0.0,
         band: 0,
         nmat: None,
     })
@@ -469,40 +570,85 @@ pub fn depth_fade(z: f32, depth: f32, d: f32) -> f32 {
     ((z - (depth - 0.5 * d)) / d).clamp(0.0, 1.0)
 }
 
-/// Composites every polygon covering row `y` into `row`, in order; returns fragments.
-/// `depth`: the row of an opaque layer's view distances (slices fade at it).
-fn raster_row(
-    row: &mut [Vec4],
-    y: usize,
-    polys: &[ScreenPoly],
-    vols: &[&DecodedVolume],
+/// What every row of a batch reads: the volumes (per band), the MIP filter, the light in
+/// view space, and an opaque layer's view distances for the row (slices fade at it).
+struct RowCtx<'a> {
+    vols: &'a [&'a DecodedVolume],
     filter: MipFilter,
     light: Option<(Vec3, f32)>,
-    depth: Option<&[f32]>,
-) -> u64 {
+    depth: Option<&'a [f32]>,
+}
+
+impl RowCtx<'_> {
+    /// Polygon `p` shaded at `uvw`, for pixel `x`: `None` where its slab lies behind the
+    /// opaque layer.
+    #[inline]
+    fn shade(&self, p: &ScreenPoly, x: usize, uvw: Vec3) -> Option<Vec4> {
+        let fade = self
+            .depth
+            .map_or(1.0, |z| slab_fade(z[x], p.slab0, p.thickness));
+        if !(fade > 0.0) {
+            return None;
+        }
+        let w = p.weights.map(|(l, w, cap)| (l, w * fade, cap));
+        let mut s = self.vols[p.band].sample_weighted(w, uvw);
+        if let (Some(m), Some((l, ambient))) = (p.nmat, self.light) {
+            let n = self.vols[p.band]
+                .sample_normal(p.lod, uvw, self.filter)
+                .unwrap_or(Vec3::ZERO);
+            let k = volume_diffuse_factor(shade_normal(m, n), l, ambient, 1.0);
+            s = (s.truncate() * k).extend(s.w);
+        }
+        Some(s)
+    }
+}
+
+/// The part of a slab from `slab0`, `thickness` deep, in front of an opaque surface at
+/// view distance `z` (1 without a surface): [`depth_fade`] for a slab of any thickness.
+#[inline]
+fn slab_fade(z: f32, slab0: f32, thickness: f32) -> f32 {
+    if !(z < f32::INFINITY) {
+        return 1.0;
+    }
+    if !(thickness > 0.0) {
+        return if slab0 < z { 1.0 } else { 0.0 };
+    }
+    ((z - slab0) / thickness).clamp(0.0, 1.0)
+}
+
+/// The span `[x_l, x_r)` of polygon `p` on the horizontal line at `yc` (from canonically
+/// ordered edge end points: the same edge gives the same x in every polygon); empty
+/// (`x_l ≥ x_r`) where it does not cross it.
+#[inline]
+fn span(p: &ScreenPoly, yc: f32) -> (f32, f32) {
+    let (mut xl, mut xr) = (f32::INFINITY, f32::NEG_INFINITY);
+    if !(p.y_min <= yc && yc < p.y_max) {
+        return (xl, xr);
+    }
+    for i in 0..p.n {
+        let (a, b) = (p.xy[i], p.xy[(i + 1) % p.n]);
+        if (a[1] <= yc) == (b[1] <= yc) {
+            continue;
+        }
+        let (a, b) = if (a[1], a[0]) <= (b[1], b[0]) {
+            (a, b)
+        } else {
+            (b, a)
+        };
+        let x = a[0] + (yc - a[1]) * (b[0] - a[0]) / (b[1] - a[1]);
+        xl = xl.min(x);
+        xr = xr.max(x);
+    }
+    (xl, xr)
+}
+
+/// Composites every polygon covering row `y` into `row`, in order; returns fragments.
+fn raster_row(row: &mut [Vec4], y: usize, polys: &[ScreenPoly], ctx: &RowCtx) -> u64 {
     let yc = y as f32 + 0.5;
     let w = row.len() as i64;
     let mut frags = 0;
     for p in polys {
-        if !(p.y_min <= yc && yc < p.y_max) {
-            continue;
-        }
-        let (mut xl, mut xr) = (f32::INFINITY, f32::NEG_INFINITY);
-        for i in 0..p.n {
-            let (a, b) = (p.xy[i], p.xy[(i + 1) % p.n]);
-            if (a[1] <= yc) == (b[1] <= yc) {
-                continue;
-            }
-            // Canonical end-point order: the same edge gives the same x in every polygon.
-            let (a, b) = if (a[1], a[0]) <= (b[1], b[0]) {
-                (a, b)
-            } else {
-                (b, a)
-            };
-            let x = a[0] + (yc - a[1]) * (b[0] - a[0]) / (b[1] - a[1]);
-            xl = xl.min(x);
-            xr = xr.max(x);
-        }
+        let (xl, xr) = span(p, yc);
         if !(xl < xr) {
             continue;
         }
@@ -512,21 +658,100 @@ fn raster_row(
         for x in x0..x1 {
             let xc = x as f32 + 0.5;
             let uvw = p.base + p.gx * (xc - p.origin[0]) + p.gy * dy;
-            let fade = depth.map_or(1.0, |z| depth_fade(z[x as usize], p.depth, p.spacing));
-            if !(fade > 0.0) {
+            let Some(s) = ctx.shade(p, x as usize, uvw) else {
                 continue;
-            }
-            let s = vols[p.band].sample_opacity(p.lod, uvw, filter);
-            let mut s = correct_premultiplied(s, p.ratio * fade);
-            if let (Some(m), Some((l, ambient))) = (p.nmat, light) {
-                let n = vols[p.band]
-                    .sample_normal(p.lod, uvw, filter)
-                    .unwrap_or(Vec3::ZERO);
-                let k = volume_diffuse_factor(shade_normal(m, n), l, ambient, 1.0);
-                s = (s.truncate() * k).extend(s.w);
-            }
+            };
             let px = &mut row[x as usize];
             *px = over(s, *px);
+            frags += 1;
+        }
+    }
+    frags
+}
+
+/// [`raster_row`] with `n × n` coverage samples per pixel ([`SlicerParams::coverage_samples`];
+/// `row` holds `n²` samples per pixel, in the order of [`sample_offset`]'s `(sx, sy)`,
+/// x fastest). A sample is covered when it lies in the polygon's half-open span on its own
+/// horizontal line (so a sample on an edge two cells share is drawn once); the polygon is
+/// shaded once per pixel, at the centroid of the samples it covers (inside the convex
+/// polygon, so a pruned volume's cell never reads a neighbour's texels), or at the pixel
+/// centre when it covers the whole pixel, and composited into each covered sample.
+fn raster_row_samples(
+    row: &mut [Vec4],
+    n: u32,
+    y: usize,
+    polys: &[ScreenPoly],
+    ctx: &RowCtx,
+) -> u64 {
+    let nn = (n * n) as usize;
+    let w = (row.len() / nn) as i64;
+    let sampling = Sampling::Stratified { per_axis: n };
+    // The pattern of every pixel of the row: (x offset, y) per sample.
+    let offsets: Vec<Vec<(f32, f32)>> = (0..w as u32)
+        .map(|x| {
+            (0..nn as u32)
+                .map(|q| {
+                    let (ox, oy) = sample_offset(sampling, x, y as u32, q % n, q / n, n);
+                    (ox, y as f32 + oy)
+                })
+                .collect()
+        })
+        .collect();
+    let (top, bottom) = (y as f32, (y + 1) as f32);
+    let mut frags = 0;
+    let mut covered = vec![false; nn];
+    for p in polys {
+        if !(p.y_min < bottom && top < p.y_max) {
+            continue;
+        }
+        // Pixels fully inside: every point of [top, bottom] within the spans at both ends
+        // (the polygon is convex).
+        let (a, b) = (span(p, top), span(p, bottom));
+        let (inner_l, inner_r) = if p.y_min <= top && bottom < p.y_max {
+            (a.0.max(b.0), a.1.min(b.1))
+        } else {
+            (f32::INFINITY, f32::NEG_INFINITY)
+        };
+        // The pixels the polygon may touch: its x extent over the row.
+        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+        for v in &p.xy[..p.n] {
+            lo = lo.min(v[0]);
+            hi = hi.max(v[0]);
+        }
+        let x0 = (lo.floor() as i64).max(0);
+        let x1 = (hi.ceil() as i64 + 1).min(w);
+        for x in x0..x1 {
+            let xs = x as usize;
+            let px = &mut row[xs * nn..(xs + 1) * nn];
+            let whole = inner_l <= x as f32 && ((x + 1) as f32) < inner_r;
+            let (xc, yc) = if whole {
+                (x as f32 + 0.5, y as f32 + 0.5)
+            } else {
+                let (mut cx, mut cy, mut k) = (0.0f32, 0.0f32, 0u32);
+                for (c, &(ox, sy)) in covered.iter_mut().zip(&offsets[xs]) {
+                    let sx = x as f32 + ox;
+                    let (l, r) = span(p, sy);
+                    *c = l <= sx && sx < r;
+                    if *c {
+                        cx += sx;
+                        cy += sy;
+                        k += 1;
+                    }
+                }
+                if k == 0 {
+                    continue;
+                }
+                (cx / k as f32, cy / k as f32)
+            };
+            let uvw = p.base + p.gx * (xc - p.origin[0]) + p.gy * (yc - p.origin[1]);
+            let Some(s) = ctx.shade(p, xs, uvw) else {
+                continue;
+            };
+            for (v, &c) in px.iter_mut().zip(&covered) {
+                if whole || c {
+                    *v = over(s, *v);
+                }
+            }
             frags += 1;
         }
     }

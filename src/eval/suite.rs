@@ -10,7 +10,10 @@
 //!   Also rendered per view: the mesh with **one sample per pixel** at the pixel centre —
 //!   what a rasterizer without anti-aliasing shows — and compared with the same reference,
 //!   so the asset's error can be read against the aliasing error of drawing the mesh.
-//! - Asset: the CPU slicer ([`render_decoded`]) with the given [`SlicerParams`].
+//! - Asset: the CPU slicer ([`render_decoded`]) with the given [`SlicerParams`], its
+//!   coverage samples at the reference's stratified points
+//!   ([`SlicerParams::coverage_samples`] = `reference_per_axis`): the slicer shades once per
+//!   pixel and the cells' edges are anti-aliased as the reference's geometry is.
 //! - Metrics: [`compare`] (RMSE/PSNR on premultiplied linear RGBA, alpha coverage, SSIM,
 //!   FLIP). Means over views: RMSE, |Δα|, coverage difference, SSIM and FLIP are plain means;
 //!   the mean PSNR is the PSNR of the mean MSE (finite unless every view is exact).
@@ -392,12 +395,18 @@ impl<'a> Evaluator<'a> {
         asset: &PreparedAsset,
         reference: &ReferenceView,
     ) -> Result<(ViewResult, ImageF32), EvalError> {
+        // The reference's sample pattern, so the cells' edges are anti-aliased as the
+        // mesh's are (the cloud renderer does the same).
+        let params = SlicerParams {
+            coverage_samples: self.options.reference_per_axis,
+            ..self.options.slicer
+        };
         let r = render_decoded(
             &asset.volume,
             asset.dims0,
             &asset.cells,
             &reference.camera,
-            &self.options.slicer,
+            &params,
         )?;
         let err = compare(&reference.image, &r.image)?;
         let cam = &reference.camera;

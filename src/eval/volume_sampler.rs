@@ -189,13 +189,20 @@ impl DecodedVolume {
     /// in **extinction space** (see [`to_extinction`]): the result is `(σ·c, σ)`, the
     /// weighted sum of the eight texels' extinction-weighted straight colours.
     pub fn sample_level_extinction(&self, level: usize, uvw: Vec3) -> Vec4 {
+        self.sample_level_extinction_capped(level, uvw, MAX_OPTICAL_DEPTH)
+    }
+
+    /// [`DecodedVolume::sample_level_extinction`] with opaque texels given the optical
+    /// depth `cap` ([`to_extinction_capped`]).
+    pub fn sample_level_extinction_capped(&self, level: usize, uvw: Vec3, cap: f32) -> Vec4 {
         let l = &self.levels[level.min(self.levels.len() - 1)];
         let [w, h, d] = l.dims.map(|v| v as i64);
         let (x0, x1, tx) = texel_pair(uvw.x, w, self.repeat[0]);
         let (y0, y1, ty) = texel_pair(uvw.y, h, self.repeat[1]);
         let (z0, z1, tz) = texel_pair(uvw.z, d, self.repeat[2]);
         let (w, h) = (w as usize, h as usize);
-        let at = |x: usize, y: usize, z: usize| to_extinction(l.texels[x + w * (y + h * z)]);
+        let at =
+            |x: usize, y: usize, z: usize| to_extinction_capped(l.texels[x + w * (y + h * z)], cap);
         let lerp = |a: Vec4, b: Vec4, t: f32| a + (b - a) * t;
         let c00 = lerp(at(x0, y0, z0), at(x1, y0, z0), tx);
         let c10 = lerp(at(x0, y1, z0), at(x1, y1, z0), tx);
@@ -229,6 +236,30 @@ impl DecodedVolume {
             }
         };
         from_extinction(e)
+    }
+
+    /// The sample a slice composites with its opacity correction folded in: the levels'
+    /// extinction-space samples ([`DecodedVolume::sample_level_extinction_capped`], an
+    /// opaque texel given `cap`) weighted by `weights` (`(level, slab thickness / that
+    /// level's texel thickness, cap)`, from [`billow_core::slicing::level_weights`] and
+    /// [`billow_core::slicing::opaque_optical_depth`]) and summed, `α = 1 − e^(−Σ wᵢ σᵢ)`,
+    /// colour the weighted straight colour times `α` (premultiplied). Exactly 1 where every
+    /// texel under the filter is opaque (as [`from_extinction`]).
+    pub fn sample_weighted(&self, weights: [(usize, f32, f32); 2], uvw: Vec3) -> Vec4 {
+        let mut e = Vec4::ZERO;
+        let mut total = 0.0f32;
+        for (l, w, cap) in weights {
+            if w > 0.0 {
+                e += self.sample_level_extinction_capped(l, uvw, cap) * w;
+                total += w * (cap - 1e-4);
+            }
+        }
+        let s = e.w;
+        if !(s > 0.0) {
+            return Vec4::ZERO;
+        }
+        let a = if s >= total { 1.0 } else { -(-s).exp_m1() };
+        (e.truncate() * (a / s)).extend(a)
     }
 
     /// Sample at fractional level `lod` (clamped to the stored levels).
@@ -312,7 +343,9 @@ fn texel_pair(u: f32, n: i64, repeat: bool) -> (usize, usize, f32) {
     (i0 as usize, i1 as usize, t)
 }
 
-pub use billow_core::extinction::{from_extinction, to_extinction, MAX_OPTICAL_DEPTH};
+pub use billow_core::extinction::{
+    from_extinction, to_extinction, to_extinction_capped, MAX_OPTICAL_DEPTH,
+};
 
 #[cfg(test)]
 mod tests {

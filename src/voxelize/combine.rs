@@ -34,6 +34,7 @@ use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
 use super::bricks::{self, for_each_voxel, local, BrickAccum, Bricked, B3};
+use super::coverage::{scale_opacity, Columns};
 use super::expr::{Expr, ExprError};
 use super::mip::{Disjoint, Grid3, Texel};
 use super::quantize::encode_normal;
@@ -276,9 +277,28 @@ impl Accum {
         });
     }
 
-    /// The combined, clamped level, encoded RGBA8 (see [`super::quantize`]), dense; frees
+    /// The column optical depths of level `level` as it is finished
+    /// ([`super::coverage::Columns`]).
+    pub fn columns(&self, level: usize) -> Columns {
+        let (w, preset) = (self.width, self.preset);
+        let acc = &self.levels[level];
+        Columns::build(acc.dims, |bc, out| {
+            let slot = acc.slot[bc[0] + acc.nb[0] * (bc[1] + acc.nb[1] * bc[2])];
+            if slot == bricks::EMPTY {
+                return false;
+            }
+            let brick = &acc.data[slot as usize * B3 * w..(slot as usize + 1) * B3 * w];
+            for (o, a) in out.iter_mut().zip(brick.chunks_exact(w)) {
+                *o = finished_value(preset, a).map_or(0.0, |v| clamp_premultiplied(v).w);
+            }
+            true
+        })
+    }
+
+    /// The combined, clamped level with its optical depth scaled by `k`
+    /// ([`Accum::coverage_scale`]), encoded RGBA8 (see [`super::quantize`]), dense; frees
     /// the level's buffer.
-    pub fn finish_level(&mut self, level: usize) -> Vec<u8> {
+    pub fn finish_level(&mut self, level: usize, k: f32) -> Vec<u8> {
         let (w, preset) = (self.width, self.preset);
         let acc = std::mem::replace(&mut self.levels[level], BrickAccum::new([0; 3], w));
         let dims = acc.dims;
@@ -295,6 +315,7 @@ impl Accum {
                         return;
                     };
                     let i = p[0] + dims[0] * (p[1] + dims[1] * p[2]);
+                    let v = scale_opacity(clamp_premultiplied(v), k);
                     // SAFETY: every voxel lies in one brick, and each brick is one task.
                     unsafe { dst.slice_mut(4 * i, 4) }
                         .copy_from_slice(&enc.rgba8(clamp_premultiplied(v)));
@@ -308,7 +329,7 @@ impl Accum {
     /// [`Accum::finish_level`] kept brick-sparse: the accumulator's bricks (in its slot
     /// order) and their RGBA8 bytes (`4 · B3` per brick, x fastest inside it; zero
     /// outside the level); frees the level's buffer.
-    pub fn finish_level_bricks(&mut self, level: usize) -> (Vec<u32>, Vec<u8>) {
+    pub fn finish_level_bricks(&mut self, level: usize, k: f32) -> (Vec<u32>, Vec<u8>) {
         let (w, preset) = (self.width, self.preset);
         let acc = std::mem::replace(&mut self.levels[level], BrickAccum::new([0; 3], w));
         let dims = acc.dims;
@@ -323,6 +344,7 @@ impl Accum {
                     let Some(v) = finished_value(preset, a) else {
                         return;
                     };
+                    let v = scale_opacity(clamp_premultiplied(v), k);
                     o[4 * local(p)..4 * local(p) + 4]
                         .copy_from_slice(&enc.rgba8(clamp_premultiplied(v)));
                 });

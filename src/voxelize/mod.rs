@@ -47,6 +47,7 @@ pub mod asset;
 pub(crate) mod bricks;
 pub mod cells;
 pub mod combine;
+pub mod coverage;
 pub mod dense;
 pub mod expr;
 mod fragments;
@@ -71,6 +72,7 @@ pub use ao::{
 pub use asset::{bake_params, bake_params_for};
 pub use cells::{box_prisms, Prism};
 pub use combine::{clamp_premultiplied, Combine, CombineFn, CombineParseError, Preset};
+pub use coverage::CoverageScales;
 pub use expr::{Expr, ExprError};
 pub use grid::{fit_grid, GridError, GridSpec, Resolution, ResolutionError, MAX_AXIS, MAX_MARGIN};
 use memory::estimate_bytes;
@@ -221,6 +223,9 @@ pub struct Volume {
     /// Per MIP level, snorm8 `[x, y, z, 0]` shortened normals, when asked for.
     pub normals: Option<Vec<Vec<u8>>>,
     pub stats: VoxelizeStats,
+    /// The optical-depth scale of every level and what it matched
+    /// ([`coverage`]: coverage that holds at every distance).
+    pub coverage: CoverageScales,
 }
 
 impl Volume {
@@ -482,7 +487,7 @@ pub fn voxelize(
     opts: &VoxelizeOptions,
     progress: &dyn Fn(Stage, f32),
 ) -> Result<Volume, VoxelizeError> {
-    let (grid, out, stats) = voxelize_as(scene, opts, progress, false)?;
+    let (grid, out, stats, coverage) = voxelize_as(scene, opts, progress, false)?;
     let Output::Dense(levels, normals) = out else {
         unreachable!("a dense voxelize")
     };
@@ -491,6 +496,7 @@ pub fn voxelize(
         levels,
         normals,
         stats,
+        coverage,
     })
 }
 
@@ -506,7 +512,7 @@ fn voxelize_as(
     opts: &VoxelizeOptions,
     progress: &dyn Fn(Stage, f32),
     sparse: bool,
-) -> Result<(GridSpec, Output, VoxelizeStats), VoxelizeError> {
+) -> Result<(GridSpec, Output, VoxelizeStats, CoverageScales), VoxelizeError> {
     let t_all = Instant::now();
     let (grid, mips, estimated_peak_bytes) = check(scene, opts, sparse)?;
     let shader = shade::Shader::new(scene);
@@ -568,6 +574,8 @@ fn voxelize_as(
         .flat_map(|a| sides.iter().map(move |&p| (a, p)))
         .collect();
     let mut bufs = slices::SetupBufs::default();
+    let voxel = grid.voxel.as_dvec3().to_array();
+    let mut cover = CoverageScales::default();
     let levels: Vec<Vec<u8>> = match &opts.combine {
         CombineFn::Preset(p) => {
             // Level 0 is combined at the end from the six sparse stacks, plane by plane;
@@ -579,12 +587,15 @@ fn voxelize_as(
             let mut zero = Vec::with_capacity(6);
             // `--prune`: level 0 folded direction by direction, each stack then freed.
             let mut level0 = sparse.then(|| level0::Level0::new(*p, dims[0], opts.normals));
+            // Each direction's projected coverage at level 0 (the mesh's, as rasterized).
+            let mut seen = [0.0f64; 6];
             for &pass in &passes {
                 let stacks = raster(&mut bufs, ctx, pass, &mut times, baker.as_mut(), progress);
                 for s in stacks {
                     let dir = s.dir;
                     fragments += s.fragments;
                     let mut fold_secs = 0.0;
+                    seen[dir.index()] = coverage::stack_coverage(&s);
                     pyramid::<[f32; 4]>(&s, mips, &mut times.mip, |level, data| {
                         if let Level::Dense(c, n) = data {
                             let t = Instant::now();
@@ -610,12 +621,28 @@ fn voxelize_as(
             }
             drop(std::mem::take(&mut bufs)); // before the level-0 combine's peak
             let t = Instant::now();
+            cover.mesh = coverage::mesh_coverage(&seen);
+            // Level 0's scale (thinned to the mesh), then each coarser level's (to level 0).
+            let level0_scale = |cols: coverage::Columns, cover: &mut CoverageScales| {
+                let (k, before, after) = coverage::level0_scale(&cols, voxel, &cover.mesh, true);
+                (cover.level0_before, cover.level0_after) = (before, after);
+                cover.scales.push(k);
+                k
+            };
+            let coarse_scale = |acc: &combine::Accum, l: usize, cover: &mut CoverageScales| {
+                let k = coverage::level_scale(&acc.columns(l), dims[0], voxel, &cover.mesh);
+                cover.scales.push(k);
+                k
+            };
             if let Some(l0) = level0 {
-                let (level0, count) = l0.finish_sparse();
+                let (mut level0, count) = l0.finish_sparse();
+                let k = level0_scale(coverage::Columns::from_sparse(&level0), &mut cover);
+                coverage::scale_sparse_level(&mut level0, k);
                 progress(Stage::Combine, 1.0);
                 let mut out = vec![level0];
                 for (l, &d) in dims.iter().enumerate().skip(1) {
-                    let c = acc.finish_level_bricks(l);
+                    let k = coarse_scale(&acc, l, &mut cover);
+                    let c = acc.finish_level_bricks(l, k);
                     let n = nacc.as_mut().map(|na| na.finish_level_bricks(l));
                     out.push(sparse_level(d, c, n));
                 }
@@ -629,14 +656,19 @@ fn voxelize_as(
                     estimated_peak_bytes,
                     seconds: times,
                 };
-                return Ok((grid, Output::Sparse(out), stats));
+                return Ok((grid, Output::Sparse(out), stats, cover));
             }
-            let (level0, normals0, count) = combine::combine_level0(*p, &zero, opts.normals);
+            let (mut level0, normals0, count) = combine::combine_level0(*p, &zero, opts.normals);
             non_empty = Some(count);
             drop(zero);
+            let k = level0_scale(coverage::Columns::from_rgba8(dims[0], &level0), &mut cover);
+            coverage::scale_level_rgba8(&mut level0, k);
             progress(Stage::Combine, 1.0);
             let mut out = vec![level0];
-            out.extend((1..mips as usize).map(|l| acc.finish_level(l)));
+            for l in 1..mips as usize {
+                let k = coarse_scale(&acc, l, &mut cover);
+                out.push(acc.finish_level(l, k));
+            }
             if let (Some(na), Some(n0)) = (nacc.as_mut(), normals0) {
                 na.set_level0(n0);
             }
@@ -646,12 +678,14 @@ fn voxelize_as(
         f => {
             // Six brick-sparse f16 pyramids: only the bricks a direction's voxels reach.
             let mut pyrs: Vec<Vec<Option<bricks::Bricked<[f16; 4]>>>> = Vec::with_capacity(6);
+            let mut seen = [0.0f64; 6];
             for &pass in &passes {
                 let stacks = raster(&mut bufs, ctx, pass, &mut times, baker.as_mut(), progress);
                 for s in stacks {
                     // Stored in f16 (the arithmetic stays f32/f64).
                     let dir = s.dir;
                     fragments += s.fragments;
+                    seen[dir.index()] = coverage::stack_coverage(&s);
                     let mut levels = Vec::with_capacity(mips as usize);
                     pyramid::<[f16; 4]>(&s, mips, &mut times.mip, |level, data| match data {
                         Level::Zero(s) => {
@@ -672,6 +706,7 @@ fn voxelize_as(
                 }
             }
             drop(std::mem::take(&mut bufs));
+            cover.mesh = coverage::mesh_coverage(&seen);
             let t = Instant::now();
             let mut out = Vec::with_capacity(mips as usize);
             for l in 0..mips as usize {
@@ -684,6 +719,17 @@ fn voxelize_as(
                 ];
                 out.push(combine::combine_level_bricks(f, refs));
                 progress(Stage::Combine, (l + 1) as f32 / mips as f32);
+            }
+            // The function's level 0 is kept; the coarser levels keep its coverage.
+            let cols = coverage::Columns::from_rgba8(dims[0], &out[0]);
+            let (k, before, after) = coverage::level0_scale(&cols, voxel, &cover.mesh, false);
+            (cover.level0_before, cover.level0_after) = (before, after);
+            cover.scales.push(k);
+            for l in 1..out.len() {
+                let cols = coverage::Columns::from_rgba8(dims[l], &out[l]);
+                let k = coverage::level_scale(&cols, dims[0], voxel, &after);
+                coverage::scale_level_rgba8(&mut out[l], k);
+                cover.scales.push(k);
             }
             times.combine += t.elapsed().as_secs_f64();
             out
@@ -703,5 +749,5 @@ fn voxelize_as(
         estimated_peak_bytes,
         seconds: times,
     };
-    Ok((grid, Output::Dense(levels, normals), stats))
+    Ok((grid, Output::Dense(levels, normals), stats, cover))
 }

@@ -17,6 +17,8 @@ pub struct SparseVolume {
     pub grid: GridSpec,
     pub levels: Vec<SparseLevel>,
     pub stats: VoxelizeStats,
+    /// As [`Volume::coverage`].
+    pub coverage: super::CoverageScales,
 }
 
 impl SparseVolume {
@@ -71,6 +73,7 @@ impl SparseVolume {
                 .has_normals()
                 .then(|| vec![Vec::new(); self.levels.len()]),
             stats: self.stats,
+            coverage: self.coverage.clone(),
         };
         let mut a = empty.into_asset(tool, source, params);
         a.levels = Vec::new();
@@ -97,7 +100,7 @@ pub fn voxelize_sparse(
             ),
         });
     }
-    let (grid, out, stats) = voxelize_as(scene, opts, progress, true)?;
+    let (grid, out, stats, coverage) = voxelize_as(scene, opts, progress, true)?;
     let Output::Sparse(levels) = out else {
         unreachable!("a sparse voxelize")
     };
@@ -105,6 +108,7 @@ pub fn voxelize_sparse(
         grid,
         levels,
         stats,
+        coverage,
     })
 }
 

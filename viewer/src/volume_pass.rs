@@ -42,6 +42,7 @@
 
 use std::cell::OnceCell;
 
+use billow_core::slicing::level_size_ratio;
 use billow_format::{ColourSpace, VolumeAsset, VolumeBlocks};
 use bytemuck::{Pod, Zeroable};
 use glam::Mat3;
@@ -201,7 +202,8 @@ pub struct FrameUniform {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct GpuSlice {
-    /// view z (−depth), spacing d, 0, 0
+    /// view z (−depth), spacing d, the thickness of the slab the slice stands for (`d`,
+    /// more for the farthest: `billow_core::slicing::far_slab`), 0
     pub zd: [f32; 4],
 }
 
@@ -215,6 +217,11 @@ pub struct GpuSlice {
 pub struct GpuVolumeParams {
     pub p: [f32; 4],
     pub q: [f32; 4],
+    /// x: the world size of a level-0 texel of the band's texture
+    /// (`billow_core::slicing::voxel_size` on the instance's cells): the textures hold
+    /// optical depths per level-0 texel ([`extinction_levels`]), and a slab takes its
+    /// thickness over this of them.
+    pub r: [f32; 4],
 }
 
 /// One draw: slices `first_slice..first_slice + slice_count` × the `cell_count` cells at
@@ -615,7 +622,14 @@ fn upload_levels(
 ) -> Result<GpuVolume, ViewError> {
     let count = levels.len() as u32;
     check_3d(gpu, dims0, count)?;
-    let texels = extinction_levels(levels, colour_space == ColourSpace::SrgbPremultiplied);
+    let ratios: Vec<f32> = (0..count)
+        .map(|l| level_size_ratio(dims0, billow_format::mip_dims(dims0, l)))
+        .collect();
+    let texels = extinction_levels(
+        levels,
+        &ratios,
+        colour_space == ColourSpace::SrgbPremultiplied,
+    );
     let (texture, view) = texture_3d(
         gpu,
         "volume (extinction)",
@@ -642,9 +656,14 @@ pub const EXTINCTION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Fl
 
 /// RGBA8 levels (`srgb`: sRGB-encoded premultiplied colour) as little-endian `Rgba16Float`
 /// texels in extinction space, `(σ·c, σ)` ([`billow_core::extinction::extinction_texel`],
-/// through tables of its per-byte factors: the same f32 operations, so the same values).
-pub fn extinction_levels(levels: &[Vec<u8>], srgb: bool) -> Vec<Vec<u8>> {
-    use billow_core::extinction::{srgb8_to_linear, to_extinction};
+/// through tables of its per-byte factors: the same f32 operations, so the same values),
+/// each level's optical depth divided by the size of its texels in level-0 texels
+/// (`ratios[l]`, [`level_size_ratio`]): a density per level-0 texel, so that the texture
+/// unit's blend of two levels is the CPU slicer's (`billow_core::slicing::level_weights`),
+/// and opaque texels hold [`billow_core::extinction::MAX_OPTICAL_DEPTH`] at every level
+/// (`billow_core::slicing::opaque_optical_depth`). A ratio of 1 stores `extinction_texel`.
+pub fn extinction_levels(levels: &[Vec<u8>], ratios: &[f32], srgb: bool) -> Vec<Vec<u8>> {
+    use billow_core::extinction::{srgb8_to_linear, to_extinction_capped, MAX_OPTICAL_DEPTH};
     let lin: [f32; 256] = std::array::from_fn(|v| {
         if srgb {
             srgb8_to_linear(v as u8)
@@ -652,17 +671,23 @@ pub fn extinction_levels(levels: &[Vec<u8>], srgb: bool) -> Vec<Vec<u8>> {
             v as f32 / 255.0
         }
     });
-    // Per alpha byte: σ and the colour factor σ/α (0 where α = 0).
-    let sigma: [(f32, f32); 256] = std::array::from_fn(|a| {
-        let alpha = a as f32 / 255.0;
-        let s = to_extinction(glam::Vec4::new(0.0, 0.0, 0.0, alpha)).w;
-        (s, if a > 0 { s / alpha } else { 0.0 })
-    });
     levels
         .iter()
-        .map(|l| {
-            let mut out = Vec::with_capacity(l.len() * 2);
-            for t in l.chunks_exact(4) {
+        .enumerate()
+        .map(|(l, bytes)| {
+            let r = ratios.get(l).copied().filter(|r| *r > 0.0).unwrap_or(1.0);
+            // Per alpha byte: the density and the colour factor density/α (0 where α = 0).
+            let sigma: [(f32, f32); 256] = std::array::from_fn(|a| {
+                let alpha = a as f32 / 255.0;
+                let c = glam::Vec4::new(0.0, 0.0, 0.0, alpha);
+                let mut s = to_extinction_capped(c, MAX_OPTICAL_DEPTH * r).w;
+                if r != 1.0 {
+                    s /= r;
+                }
+                (s, if a > 0 { s / alpha } else { 0.0 })
+            });
+            let mut out = Vec::with_capacity(bytes.len() * 2);
+            for t in bytes.chunks_exact(4) {
                 let (s, k) = sigma[t[3] as usize];
                 for v in [
                     lin[t[0] as usize] * k,
@@ -778,7 +803,7 @@ mod tests {
                     level.extend_from_slice(&[c, c / 2, 255 - c, a]);
                 }
             }
-            let out = &extinction_levels(std::slice::from_ref(&level), srgb)[0];
+            let out = &extinction_levels(std::slice::from_ref(&level), &[1.0], srgb)[0];
             assert_eq!(out.len(), 2 * level.len());
             for (t, h) in level.chunks_exact(4).zip(out.chunks_exact(8)) {
                 let want = extinction_texel([t[0], t[1], t[2], t[3]], srgb).to_array();
@@ -787,6 +812,26 @@ mod tests {
                     assert_eq!(got, half::f16::from_f32(*w), "{t:?} srgb {srgb} [{k}]");
                 }
             }
+        }
+    }
+
+    /// A coarser level stores densities per level-0 voxel: half the optical depth of a
+    /// texel twice as large, and opaque texels the same as level 0's.
+    #[test]
+    fn coarse_levels_store_densities_per_level0_voxel() {
+        let level = vec![10u8, 20, 30, 128, 40, 50, 60, 255];
+        let one = &extinction_levels(std::slice::from_ref(&level), &[1.0], false)[0];
+        let two = &extinction_levels(std::slice::from_ref(&level), &[2.0], false)[0];
+        let h = |b: &[u8], k: usize| half::f16::from_le_bytes([b[2 * k], b[2 * k + 1]]).to_f32();
+        for k in 0..4 {
+            let (a, b) = (h(one, k), h(two, k));
+            assert!(
+                (b - a / 2.0).abs() <= 1e-3 * a.abs().max(1e-3),
+                "[{k}] {a} {b}"
+            );
+        }
+        for k in 4..8 {
+            assert_eq!(h(one, k), h(two, k), "opaque texel [{k}]");
         }
     }
 

@@ -20,6 +20,7 @@ use crate::volume_pass::{
     FrameUniform, GpuCell, GpuDraw, GpuSlice, GpuVolumeParams, VolumePass, VolumeStorage,
 };
 use crate::{Gpu, SliceParams, ViewCamera, ViewError};
+use billow_core::slicing::far_slab;
 
 /// One planned draw: its batch, the dynamic offset of its [`GpuDraw`], its instances.
 struct Draw {
@@ -292,6 +293,12 @@ pub fn plan(
                         ),
                     ],
                     q: [v0, v.max_lod as f32, lo, hi],
+                    r: [
+                        voxel_size(w, b.gpu.dims0).unwrap_or(v0 * (b.first_level as f32).exp2()),
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
                 });
                 for c in w {
                     let pos = c.pos.map(|p| camera.to_view(Vec3::from(p)).to_array());
@@ -413,10 +420,18 @@ pub fn plan(
         ],
         light: [l.x, l.y, l.z, ambient],
     };
+    // The farthest slice (the first, back to front) stands for the slab to the end of the
+    // depth range (billow_core::slicing::far_slab), as the CPU slicer's does.
     let gpu_slices: Vec<GpuSlice> = slices
         .iter()
-        .map(|&(depth, d)| GpuSlice {
-            zd: [-depth, d, 0.0, 0.0],
+        .enumerate()
+        .map(|(i, &(depth, d))| GpuSlice {
+            zd: [
+                -depth,
+                d,
+                if i == 0 { far_slab(depth, d, z_hi) } else { d },
+                0.0,
+            ],
         })
         .collect();
     draw_data.resize(draw_data.len().max(1), GpuDraw::default());

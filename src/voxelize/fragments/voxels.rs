@@ -129,15 +129,34 @@ impl Scratch {
         let mut out: [RowOut; 2] = [0, 1].map(|side| {
             let n = seen[side];
             let n_nrm = if normals { n as usize } else { 0 };
-            (Vec::with_capacity(n as usize), Vec::with_capacity(n_nrm), n)
+            (
+                Vec::with_capacity(n as usize),
+                Vec::with_capacity(n_nrm),
+                n,
+                0.0,
+            )
         });
         let mut transmit = [1.0f32; 64];
+        let mut column = [1.0f32; 64];
         let nrm = FragNormals {
             on: normals,
             n: frag_n,
         };
         for u in 0..width {
             let col = &order[start[u] as usize..start[u + 1] as usize];
+            // Per direction, whether what it sees of the column lies in one slice: then
+            // that voxel's alpha is the column's coverage (added below).
+            let one_slice = [0, 1].map(|side| {
+                let bit = 1u8 << side;
+                let mut seen = col.iter().filter(|e| frags[e.2 as usize].vis & bit != 0);
+                seen.next()
+                    .is_none_or(|f| seen.all(|g| g.0 >> 32 == f.0 >> 32))
+            });
+            for (side, o) in out.iter_mut().enumerate() {
+                if sides & (1u8 << side) != 0 && !one_slice[side] {
+                    o.3 += column_coverage::<K>(frags, col, side, &mut column);
+                }
+            }
             let mut g = 0;
             while g < col.len() {
                 let slice = (col[g].0 >> 32) as u32;
@@ -145,7 +164,7 @@ impl Scratch {
                 while end < col.len() && (col[end].0 >> 32) as u32 == slice {
                     end += 1;
                 }
-                for (side, (vox, vox_n, _)) in out.iter_mut().enumerate() {
+                for (side, (vox, vox_n, _, cover)) in out.iter_mut().enumerate() {
                     if sides & (1u8 << side) == 0 {
                         continue;
                     }
@@ -155,6 +174,10 @@ impl Scratch {
                     else {
                         continue;
                     };
+                    if one_slice[side] {
+                        // `out[side].3`, borrowed as `vox` and `vox_n` above.
+                        *cover += f64::from(c.w * inv_samples);
+                    }
                     if c.w > 0.0 {
                         vox.push(Vox {
                             u: u as u16,
@@ -171,6 +194,35 @@ impl Scratch {
         }
         out
     }
+}
+
+/// The projected coverage of one pixel column's `(key, triangle, fragment)` `entries` as
+/// direction `side` sees them: the mean over the `K²` samples of `1 − Π(1 − α)` over
+/// every fragment covering the sample, whatever its slice (the order does not matter).
+#[inline(always)]
+fn column_coverage<const K: usize>(
+    frags: &[Frag],
+    entries: &[(u64, u32, u32)],
+    side: usize,
+    transmit: &mut [f32; 64],
+) -> f64 {
+    let bit = 1u8 << side;
+    transmit[..K * K].fill(1.0);
+    for &(_, _, i) in entries {
+        let f = &frags[i as usize];
+        if f.vis & bit == 0 {
+            continue;
+        }
+        let keep = 1.0 - f.rgba.w;
+        let mut bits = f.mask;
+        while bits != 0 {
+            let b = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            transmit[b] *= keep;
+        }
+    }
+    let covered: f32 = transmit[..K * K].iter().map(|t| 1.0 - t).sum();
+    f64::from(covered) / (K * K) as f64
 }
 
 /// One voxel's `(key, triangle, fragment)` `entries` composited as direction `side` sees

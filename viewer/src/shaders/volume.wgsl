@@ -17,7 +17,8 @@ struct Frame {
 }
 
 struct Slice {
-    // x: view-space z of the plane (−depth), y: spacing d
+    // x: view-space z of the plane (−depth), y: spacing d, z: the thickness of the slab
+    // the slice stands for (d; more for the farthest, billow_core::slicing::far_slab)
     zd: vec4<f32>,
 }
 
@@ -27,6 +28,8 @@ struct VolumeParams {
     p: vec4<f32>,
     // The asset's: x: v0, y: largest LOD L, z..w: slice-LOD range [f_b, f_{b+1}) of the band
     q: vec4<f32>,
+    // x: the world size of a level-0 texel of the band's texture
+    r: vec4<f32>,
 }
 
 struct Draw {
@@ -48,7 +51,9 @@ struct Draw {
 struct VOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) uvw: vec3<f32>,
-    // x: lod, y: opacity-correction ratio d / d0, z: the slice's view distance, w: d
+    // x: lod, y: the slab's thickness in level-0 texels of the band's texture (the
+    // opacity correction), z: the view distance where the slab starts (depth − d/2),
+    // w: its thickness
     @location(1) @interpolate(flat) lod_ratio: vec4<f32>,
     // x: texture slot, y: flags (1 = repeat addressing, 2 = shaded from normals,
     // 4 = BC7 blocks filtered by loads)
@@ -92,12 +97,14 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
     out.clip = frame.proj * p;
     out.shadow_clip = frame.view_to_shadow * p;
     out.uvw = poly.uvw[k];
-    // MIP level from the spacing (the band's own LOD λ − f_b), opacity-correction ratio
-    // d / d0 with d0 = v0 · 2^λ (linear MIP filter).
+    // MIP level from the spacing (the band's own LOD λ − f_b); the opacity correction:
+    // the textures hold optical depths per level-0 texel (volume_pass.rs,
+    // extinction_levels), so the slab takes its thickness over that texel's size of them
+    // (billow_core::slicing::level_weights).
     let v0 = vol.x;
     let lod = clamp(log2(d / v0), 0.0, vol.y);
-    let d0 = params.q.x * exp2(lambda);
-    out.lod_ratio = vec4<f32>(lod, d / d0, -slice.zd.x, d);
+    let thickness = slice.zd.z;
+    out.lod_ratio = vec4<f32>(lod, thickness / params.r.x, -slice.zd.x - 0.5 * d, thickness);
     out.slot = vec2<u32>(u32(vol.z), u32(vol.w));
     // The normal matrix rows (volume_pass.rs, GpuCell::with_normal_matrix).
     out.n0 = vec3<f32>(c.uvw[0].w, c.uvw[1].w, c.uvw[2].w);
@@ -127,31 +134,12 @@ fn expm1_(x: f32) -> f32 {
     return um * x / log(u);
 }
 
-// α' = 1 − (1 − α)^ratio, premultiplied colour scaled by α'/α (core/src/compositing.rs).
-fn correct_premultiplied(c: vec4<f32>, ratio: f32) -> vec4<f32> {
-    if ratio == 1.0 {
-        return c;
-    }
-    let a = clamp(c.a, 0.0, 1.0);
-    var a2 = 0.0;
-    if ratio > 0.0 {
-        if a >= 1.0 {
-            a2 = 1.0;
-        } else {
-            a2 = clamp(-expm1_(ratio * log1p_(-a)), 0.0, 1.0);
-        }
-    }
-    var scale = max(ratio, 0.0);
-    if a > 0.0 {
-        scale = a2 / a;
-    }
-    return vec4<f32>(c.rgb * scale, a2);
-}
 
 // Extinction-space filtering (billow_core::extinction, src/eval/volume_sampler.rs): a
-// texel is (σ·c, σ), σ = −ln(1 − α) capped at ln 510, c its straight colour, filtered
-// trilinearly within a level and linearly between levels, and turned back into
-// premultiplied RGBA here. `sample_volume` (volume_pass.rs) returns the filtered sample:
+// texel is (σ·c, σ), σ = −ln(1 − α) capped at ln 510, c its straight colour, its optical
+// depth divided by the texel's size in level-0 voxels (a density; opaque texels hold
+// ln 510 at every level), filtered trilinearly within a level and linearly between
+// levels, and turned back into premultiplied RGBA here for the slab the slice stands for. `sample_volume` (volume_pass.rs) returns the filtered sample:
 // the texture unit's trilinear sample of a texture stored in extinction space
 // (Rgba16Float), or for BC7 block textures eight converted loads per level
 // (volume_loads.wgsl). Filtering α instead gives a one-voxel opaque layer an optical
@@ -162,21 +150,24 @@ const MAX_OPTICAL_DEPTH: f32 = 6.234411;
 // (6.234375) and filtered with the hardware's weights still gives α = 1.
 const OPAQUE_OPTICAL_DEPTH: f32 = 6.2304;
 
-fn from_extinction(e: vec4<f32>) -> vec4<f32> {
+// The filtered density e over a slab `ratio` level-0 voxels thick: α = 1 − e^(−σ·ratio),
+// colour (σ·c)/σ · α; opaque (α = 1) where every texel under the filter is
+// (src/eval/volume_sampler.rs, sample_weighted).
+fn slab_sample(e: vec4<f32>, ratio: f32) -> vec4<f32> {
     let s = e.a;
-    if !(s > 0.0) {
+    if !(s > 0.0) || !(ratio > 0.0) {
         return vec4<f32>(0.0);
     }
     var a = 1.0;
     if s < OPAQUE_OPTICAL_DEPTH {
-        a = -expm1_(-s);
+        a = -expm1_(-s * ratio);
     }
     return vec4<f32>(e.rgb * (a / s), a);
 }
 
 fn sample_corrected(in: VOut, ratio: f32) -> vec4<f32> {
     let e = sample_volume(in.slot.x, in.slot.y, in.uvw, in.lod_ratio.x);
-    return correct_premultiplied(from_extinction(e), ratio);
+    return slab_sample(e, ratio);
 }
 
 // View distance of the opaque surface under the fragment (3e38: none), inverting the
@@ -190,16 +181,16 @@ fn scene_distance(frag: vec2<f32>) -> f32 {
     return (p[3][2] - z * p[3][3]) / (p[2][2] - z * p[2][3]);
 }
 
-// The part of the slice's slab depth ± d/2 in front of the surface at distance z
-// (src/eval/slicer.rs depth_fade).
-fn depth_fade(z: f32, depth: f32, d: f32) -> f32 {
+// The part of the slice's slab, from view distance slab0 and `thickness` deep, in front
+// of the surface at distance z (src/eval/slicer.rs slab_fade).
+fn depth_fade(z: f32, slab0: f32, thickness: f32) -> f32 {
     if z >= 3.0e38 {
         return 1.0;
     }
-    if !(d > 0.0) {
-        return select(0.0, 1.0, depth < z);
+    if !(thickness > 0.0) {
+        return select(0.0, 1.0, slab0 < z);
     }
-    return clamp((z - (depth - 0.5 * d)) / d, 0.0, 1.0);
+    return clamp((z - slab0) / thickness, 0.0, 1.0);
 }
 
 // The Toksvig normal at the fragment in view space: the filtered (α·n̄, α) over α (the

@@ -1,17 +1,22 @@
 // The filter by loads of the volume pass (prepended by volume_pass.rs only when some
 // texture is BC7 blocks of premultiplied texels, flag 4): eight texel loads per level,
 // each taken to extinction space, weighted with the CPU's texel addressing
-// (src/eval/volume_sampler.rs, sample_level_extinction), linear between levels.
+// (src/eval/volume_sampler.rs, sample_level_extinction), linear between levels; each
+// level's optical depth divided by its texels' size in level-0 voxels, opaque texels at
+// ln 510 (volume_pass.rs, extinction_levels, does the same on upload).
 // MAX_OPTICAL_DEPTH and log1p_ come from volume.wgsl.
 
-fn to_extinction(c: vec4<f32>) -> vec4<f32> {
+fn to_extinction(c: vec4<f32>, ratio: f32) -> vec4<f32> {
     let a = min(c.a, 1.0);
     if !(a > 0.0) {
         return vec4<f32>(0.0);
     }
     var s = MAX_OPTICAL_DEPTH;
     if a < 1.0 {
-        s = min(-log1p_(-a), MAX_OPTICAL_DEPTH);
+        let own = -log1p_(-a);
+        if own < MAX_OPTICAL_DEPTH {
+            s = own / ratio;
+        }
     }
     return vec4<f32>(c.rgb * (s / a), s);
 }
@@ -46,17 +51,20 @@ fn texel_pair(u_in: f32, n: i32, rep: bool) -> TexelPair {
 
 fn extinction_level(t: texture_3d<f32>, rep: bool, uvw: vec3<f32>, level: i32) -> vec4<f32> {
     let n = vec3<i32>(textureDimensions(t, level));
+    // The texels' size in level-0 texels (billow_core::slicing::level_size_ratio).
+    let n0 = vec3<f32>(textureDimensions(t, 0));
+    let r = exp2(log2(n0.x * n0.y * n0.z / (f32(n.x) * f32(n.y) * f32(n.z))) / 3.0);
     let px = texel_pair(uvw.x, n.x, rep);
     let py = texel_pair(uvw.y, n.y, false);
     let pz = texel_pair(uvw.z, n.z, rep);
-    let e000 = to_extinction(textureLoad(t, vec3<i32>(px.i0, py.i0, pz.i0), level));
-    let e100 = to_extinction(textureLoad(t, vec3<i32>(px.i1, py.i0, pz.i0), level));
-    let e010 = to_extinction(textureLoad(t, vec3<i32>(px.i0, py.i1, pz.i0), level));
-    let e110 = to_extinction(textureLoad(t, vec3<i32>(px.i1, py.i1, pz.i0), level));
-    let e001 = to_extinction(textureLoad(t, vec3<i32>(px.i0, py.i0, pz.i1), level));
-    let e101 = to_extinction(textureLoad(t, vec3<i32>(px.i1, py.i0, pz.i1), level));
-    let e011 = to_extinction(textureLoad(t, vec3<i32>(px.i0, py.i1, pz.i1), level));
-    let e111 = to_extinction(textureLoad(t, vec3<i32>(px.i1, py.i1, pz.i1), level));
+    let e000 = to_extinction(textureLoad(t, vec3<i32>(px.i0, py.i0, pz.i0), level), r);
+    let e100 = to_extinction(textureLoad(t, vec3<i32>(px.i1, py.i0, pz.i0), level), r);
+    let e010 = to_extinction(textureLoad(t, vec3<i32>(px.i0, py.i1, pz.i0), level), r);
+    let e110 = to_extinction(textureLoad(t, vec3<i32>(px.i1, py.i1, pz.i0), level), r);
+    let e001 = to_extinction(textureLoad(t, vec3<i32>(px.i0, py.i0, pz.i1), level), r);
+    let e101 = to_extinction(textureLoad(t, vec3<i32>(px.i1, py.i0, pz.i1), level), r);
+    let e011 = to_extinction(textureLoad(t, vec3<i32>(px.i0, py.i1, pz.i1), level), r);
+    let e111 = to_extinction(textureLoad(t, vec3<i32>(px.i1, py.i1, pz.i1), level), r);
     let c00 = e000 + (e100 - e000) * px.t;
     let c10 = e010 + (e110 - e010) * px.t;
     let c01 = e001 + (e101 - e001) * px.t;
