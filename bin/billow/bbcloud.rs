@@ -163,6 +163,10 @@ struct Summary<'a> {
     atlas_fill_per_lod: Vec<f64>,
     texels: u64,
     bytes: u64,
+    /// Texture bytes `billow view` holds on a device that samples BC7 blocks, and on one
+    /// that does not (`billow_core::gpu_memory`; equal for `--compress none`).
+    gpu_bytes: u64,
+    gpu_bytes_no_bc: u64,
     mip_levels: u32,
     normal_map: bool,
     stats: &'a BbcloudStats,
@@ -456,6 +460,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         }),
     };
     let seconds_compress = compress_start.elapsed().as_secs_f64();
+    let gpu = billow_core::gpu_memory::cloud_gpu_bytes(&asset, blocks.is_some());
     let write_start = Instant::now();
     let bytes = asset
         .to_bytes_with(blocks.as_ref())
@@ -521,6 +526,8 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         atlas_fill_per_lod: stats.levels.iter().map(|l| l.fill).collect(),
         texels: stats.levels.iter().map(|l| l.texels).sum(),
         bytes: bytes.len() as u64,
+        gpu_bytes: gpu.with_bc,
+        gpu_bytes_no_bc: gpu.without_bc,
         stats: &stats,
         estimate: cost,
         seconds_import,
@@ -548,6 +555,10 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             stats.kept_triangles,
             bytes.len() as f64 / (1 << 20) as f64,
             summary.seconds_total
+        );
+        eprintln!(
+            "  {}",
+            crate::output::gpu_line(summary.gpu_bytes, summary.gpu_bytes_no_bc)
         );
     }
     Ok(())

@@ -6,6 +6,7 @@ use std::time::Instant;
 
 use billow::compress::{encode_volume, Compression};
 use billow::emptyspace::{prune, EmptySpaceOptions, EmptySpaceStats, DEFAULT_CELL_COST};
+use billow_core::gpu_memory::volume_gpu_bytes;
 use billow_format::{read_file, AssetKind, VolumeAsset};
 use serde::Serialize;
 
@@ -64,10 +65,13 @@ struct Summary {
     stats: EmptySpaceStats,
     file_bytes_before: u64,
     file_bytes_after: u64,
-    /// Texture memory a renderer uploads (dense: 4 bytes a texel raw, 16 a 4×4 BC7 block),
-    /// before and after.
+    /// Texture memory `billow view` holds on a device with BC7 support, before and after
+    /// (`billow_core::gpu_memory`).
     gpu_bytes_before: u64,
     gpu_bytes_after: u64,
+    /// The same on a device without it (every texture decoded).
+    gpu_bytes_before_no_bc: u64,
+    gpu_bytes_after_no_bc: u64,
     seconds_total: f64,
 }
 
@@ -114,7 +118,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         .header
         .params
         .contains_key(billow_format::param::COMPRESS);
-    let gpu_bytes_before = asset.gpu_bytes(input_compressed);
+    let gpu_before = volume_gpu_bytes(&asset, input_compressed);
     // The source is not read again: freed before the output is encoded and written.
     drop(asset);
     let compress = compression == Compression::Bc && (!pruned.stats.kept_whole || input_compressed);
@@ -145,14 +149,17 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         stage.stage(d, text.as_bytes()).map_err(|e| out_err(d, e))?;
     }
     stage.commit_or_fail()?;
+    let gpu_after = volume_gpu_bytes(&pruned.asset, blocks.is_some());
     let summary = Summary {
         input: shown,
         output: args.output.display().to_string(),
         stats: pruned.stats,
         file_bytes_before,
         file_bytes_after,
-        gpu_bytes_before,
-        gpu_bytes_after: pruned.asset.gpu_bytes(blocks.is_some()),
+        gpu_bytes_before: gpu_before.with_bc,
+        gpu_bytes_after: gpu_after.with_bc,
+        gpu_bytes_before_no_bc: gpu_before.without_bc,
+        gpu_bytes_after_no_bc: gpu_after.without_bc,
         seconds_total: start.elapsed().as_secs_f64(),
     };
     if args.json {
@@ -161,7 +168,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         let s = &summary.stats;
         let pct = |a: u64, b: u64| 100.0 * (b as f64 / a.max(1) as f64 - 1.0);
         eprintln!(
-            "{}: {} boxes, {} bands ({} cells), atlas {}x{}x{} from {}x{}x{}, voxels drawn {:.1}% of the source's, GPU textures {} -> {} bytes ({:+.1}%), file {} -> {} bytes ({:+.1}%){}",
+            "{}: {} boxes, {} bands ({} cells), atlas {}x{}x{} from {}x{}x{}, voxels drawn {:.1}% of the source's, GPU textures {} -> {} bytes ({:+.1}%; without BC7 {} -> {}), file {} -> {} bytes ({:+.1}%){}",
             summary.output,
             s.boxes,
             s.bands.len(),
@@ -176,6 +183,8 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             summary.gpu_bytes_before,
             summary.gpu_bytes_after,
             pct(summary.gpu_bytes_before, summary.gpu_bytes_after),
+            summary.gpu_bytes_before_no_bc,
+            summary.gpu_bytes_after_no_bc,
             summary.file_bytes_before,
             summary.file_bytes_after,
             pct(summary.file_bytes_before, summary.file_bytes_after),

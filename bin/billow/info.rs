@@ -2,7 +2,8 @@
 
 use std::path::PathBuf;
 
-use billow_format::{inspect_bytes, tag_str, AssetKind, Report, VolumeAsset};
+use billow_core::gpu_memory::{cloud_gpu_bytes, volume_gpu_bytes, GpuBytes};
+use billow_format::{inspect_bytes, tag_str, AssetKind, CloudAsset, Report, VolumeAsset};
 use serde::Serialize;
 
 use crate::exit::{CliError, Code};
@@ -37,6 +38,11 @@ struct InfoJson<'a> {
     checksums_ok: bool,
     header: Option<&'a billow_format::Header>,
     chunks: Vec<ChunkJson>,
+    /// Texture bytes `billow view` holds on a device that samples BC7 blocks, and on one
+    /// that does not (`billow_core::gpu_memory`).
+    /// `null` when the payload does not decode.
+    gpu_bytes: Option<u64>,
+    gpu_bytes_no_bc: Option<u64>,
 }
 
 pub fn run(args: Args, _ctx: &Ctx) -> Result<(), CliError> {
@@ -51,10 +57,15 @@ pub fn run(args: Args, _ctx: &Ctx) -> Result<(), CliError> {
     })?;
     let report = inspect_bytes(&bytes)
         .map_err(|e| CliError::new(Code::from(&e), format!("{shown}: {e}")))?;
+    // The typed payload, decoded when the structure is sound (so `info` vouches for all of
+    // it), and what a renderer holds for it.
+    let sound = report.chunks.iter().all(|c| c.crc_ok) && report.header.is_ok();
+    let decoded = sound.then(|| decode_gpu_bytes(&bytes, &report));
+    let gpu = decoded.as_ref().and_then(|d| d.as_ref().ok()).copied();
     if args.json {
-        print_json(&to_json(path, &report))?;
+        print_json(&to_json(path, &report, gpu))?;
     } else {
-        print_text(path, &report);
+        print_text(path, &report, gpu);
     }
     if let Some(bad) = report.chunks.iter().find(|c| !c.crc_ok) {
         return Err(CliError::new(
@@ -74,15 +85,30 @@ pub fn run(args: Args, _ctx: &Ctx) -> Result<(), CliError> {
             format!("{shown}: header: {e}"),
         ));
     }
-    // The structure is sound; also decode the typed payload so `info` vouches for all of it.
-    if report.kind == AssetKind::Volume {
-        VolumeAsset::from_bytes(&bytes)
-            .map_err(|e| CliError::new(Code::from(&e), format!("{shown}: {e}")))?;
+    if let Some(Err((code, e))) = decoded {
+        return Err(CliError::new(code, format!("{shown}: {e}")));
     }
     Ok(())
 }
 
-fn to_json<'a>(path: &std::path::Path, r: &'a Report) -> InfoJson<'a> {
+/// Decodes the asset's payload and counts its GPU texture bytes (`Err`: the exit code and
+/// the message of a payload that does not decode).
+fn decode_gpu_bytes(bytes: &[u8], r: &Report) -> Result<GpuBytes, (Code, String)> {
+    let compressed = r
+        .header
+        .as_ref()
+        .is_ok_and(|h| h.params.contains_key(billow_format::param::COMPRESS));
+    match r.kind {
+        AssetKind::Volume => VolumeAsset::from_bytes(bytes)
+            .map(|a| volume_gpu_bytes(&a, compressed))
+            .map_err(|e| (Code::from(&e), e.to_string())),
+        AssetKind::Cloud => CloudAsset::from_bytes(bytes)
+            .map(|a| cloud_gpu_bytes(&a, compressed))
+            .map_err(|e| (Code::from(&e), e.to_string())),
+    }
+}
+
+fn to_json<'a>(path: &std::path::Path, r: &'a Report, gpu: Option<GpuBytes>) -> InfoJson<'a> {
     InfoJson {
         file: path.display().to_string(),
         format_version: format!("{}.{}", r.major, r.minor),
@@ -102,10 +128,12 @@ fn to_json<'a>(path: &std::path::Path, r: &'a Report) -> InfoJson<'a> {
                 crc_ok: c.crc_ok,
             })
             .collect(),
+        gpu_bytes: gpu.map(|g| g.with_bc),
+        gpu_bytes_no_bc: gpu.map(|g| g.without_bc),
     }
 }
 
-fn print_text(path: &std::path::Path, r: &Report) {
+fn print_text(path: &std::path::Path, r: &Report, gpu: Option<GpuBytes>) {
     outln!("file:     {}", path.display());
     outln!(
         "format:   billow {}.{} ({} bytes)",
@@ -114,6 +142,12 @@ fn print_text(path: &std::path::Path, r: &Report) {
         r.file_len
     );
     outln!("kind:     {:?}", r.kind);
+    if let Some(g) = gpu {
+        outln!(
+            "gpu:      {}",
+            crate::output::gpu_line(g.with_bc, g.without_bc)
+        );
+    }
     outln!("header:");
     for line in r.header_ron.lines() {
         outln!("  {line}");

@@ -277,3 +277,17 @@ pub fn encode_image(kind: ImageOut, png: Vec<u8>, path: &Path) -> Result<Vec<u8>
         }
     }
 }
+
+/// The summary's line on what a renderer holds on the GPU (`billow_core::gpu_memory`).
+pub fn gpu_line(with_bc: u64, without_bc: u64) -> String {
+    let mib = |b: u64| b as f64 / (1 << 20) as f64;
+    if with_bc == without_bc {
+        format!("GPU textures: {:.2} MiB", mib(without_bc))
+    } else {
+        format!(
+            "GPU textures: {:.2} MiB where BC7 is sampled, {:.2} MiB decoded",
+            mib(with_bc),
+            mib(without_bc)
+        )
+    }
+}

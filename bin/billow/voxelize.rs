@@ -188,6 +188,10 @@ struct Summary {
     non_empty_voxels: u64,
     fragments: u64,
     bytes: u64,
+    /// Texture bytes `billow view` holds on a device that samples BC7 blocks, and on one
+    /// that does not (`billow_core::gpu_memory`; equal for `--compress none`).
+    gpu_bytes: u64,
+    gpu_bytes_no_bc: u64,
     /// With --prune: what the empty-space removal did (as `billow emptyspace --json`).
     #[serde(skip_serializing_if = "Option::is_none")]
     prune: Option<EmptySpaceStats>,
@@ -501,6 +505,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         notes,
     } = baked;
     warnings.extend(notes);
+    let gpu = billow_core::gpu_memory::volume_gpu_bytes(&asset, blocks.is_some());
     let write_start = Instant::now();
     // All outputs go to temporary files first and are renamed into place together, -o last
     // (see staged.rs): a failure or a kill leaves the old outputs as they were.
@@ -567,6 +572,8 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         non_empty_voxels: stats.non_empty_voxels,
         fragments: stats.fragments,
         bytes,
+        gpu_bytes: gpu.with_bc,
+        gpu_bytes_no_bc: gpu.without_bc,
         prune: pruned_stats,
         estimated_peak_memory_bytes: stats.estimated_peak_bytes,
         peak_memory_bytes: peak_rss_bytes(),
@@ -645,6 +652,7 @@ fn summary_lines(s: &Summary, normals: NormalsArg) -> Vec<String> {
         (_, true, _) => "normals: kept (--normals on)".to_string(),
         (_, false, _) => "normals: none (--normals off)".to_string(),
     });
+    lines.push(crate::output::gpu_line(s.gpu_bytes, s.gpu_bytes_no_bc));
     if let Some(p) = &s.prune {
         lines.push(if p.kept_whole {
             format!(

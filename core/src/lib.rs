@@ -31,6 +31,7 @@ pub mod camera;
 pub mod cells;
 pub mod compositing;
 pub mod extinction;
+pub mod gpu_memory;
 pub mod prism_plane;
 pub mod ray_triangle;
 pub mod shading;

@@ -159,32 +159,6 @@ impl VolumeAsset {
         n
     }
 
-    /// Bytes of the textures a renderer uploads (base and every band, colour and normals,
-    /// every MIP level): 4 per texel raw, or, `block_compressed`, 16 per 4×4 block of every
-    /// level — GPU block-compressed textures are dense, so the blocks a file omits (§12.1)
-    /// are uploaded as zero blocks.
-    pub fn gpu_bytes(&self, block_compressed: bool) -> u64 {
-        let chain = |dims: [u32; 3], levels: usize, streams: u64| -> u64 {
-            (0..levels as u32)
-                .map(|l| {
-                    let d = crate::mip_dims(dims, l);
-                    if block_compressed {
-                        crate::bc7_len(d[0], d[1], d[2])
-                    } else {
-                        4 * d.iter().map(|&v| u64::from(v)).product::<u64>()
-                    }
-                })
-                .sum::<u64>()
-                * streams
-        };
-        let streams = 1 + u64::from(self.normals.is_some());
-        let mut n = chain(self.level_dims(0), self.levels.len(), streams);
-        for b in &self.bands {
-            n += chain(b.dims, b.levels.len(), streams);
-        }
-        n
-    }
-
     fn with_chunks<R>(
         &self,
         blocks: Option<&VolumeBlocks>,

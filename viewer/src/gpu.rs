@@ -34,6 +34,8 @@ pub struct Gpu {
     pub sample_blocks: bool,
     /// Buffers, bind groups and textures made through this wrapper so far.
     created: AtomicU64,
+    /// Bytes of the assets' textures made so far ([`Gpu::asset_texture`]).
+    asset_texture_bytes: AtomicU64,
     record: Mutex<RenderRecord>,
 }
 
@@ -137,6 +139,7 @@ impl Gpu {
             sample_blocks: info.device_type != wgpu::DeviceType::Cpu,
             info,
             created: AtomicU64::new(0),
+            asset_texture_bytes: AtomicU64::new(0),
             record: Mutex::new(RenderRecord::default()),
         })
     }
@@ -229,6 +232,20 @@ impl Gpu {
     pub fn texture(&self, desc: &wgpu::TextureDescriptor<'_>) -> wgpu::Texture {
         self.count();
         self.device.create_texture(desc)
+    }
+
+    /// A texture of an asset (a volume's colour or normals, a cloud's atlas, normal map or
+    /// mesh texture), counted and its bytes added to [`Gpu::asset_texture_bytes`].
+    pub fn asset_texture(&self, desc: &wgpu::TextureDescriptor<'_>) -> wgpu::Texture {
+        self.asset_texture_bytes
+            .fetch_add(texture_bytes(desc), Ordering::Relaxed);
+        self.texture(desc)
+    }
+
+    /// Bytes of every asset texture made so far, all MIP levels (what
+    /// `billow_core::gpu_memory` predicts for the assets uploaded).
+    pub fn asset_texture_bytes(&self) -> u64 {
+        self.asset_texture_bytes.load(Ordering::Relaxed)
     }
 
     /// A buffer holding `contents`, for `usage`.
@@ -330,4 +347,22 @@ impl GrowBuffer {
         }
         grown
     }
+}
+
+/// Bytes of a texture made from `desc`, every MIP level (block formats by whole blocks).
+pub fn texture_bytes(desc: &wgpu::TextureDescriptor<'_>) -> u64 {
+    let (bw, bh) = desc.format.block_dimensions();
+    let block = u64::from(desc.format.block_copy_size(None).unwrap_or(4));
+    let s = desc.size;
+    (0..desc.mip_level_count)
+        .map(|l| {
+            let w = (s.width >> l).max(1);
+            let h = (s.height >> l).max(1);
+            let d = match desc.dimension {
+                wgpu::TextureDimension::D3 => (s.depth_or_array_layers >> l).max(1),
+                _ => s.depth_or_array_layers,
+            };
+            u64::from(w.div_ceil(bw)) * u64::from(h.div_ceil(bh)) * u64::from(d) * block
+        })
+        .sum()
 }

@@ -203,7 +203,7 @@ pub fn upload_rgba8_mips(gpu: &Gpu, t: &TextureData, label: &str) -> wgpu::Textu
     } else {
         (1 + t.mips.len() as u32).min(full)
     };
-    let tex = gpu.device.create_texture(&wgpu::TextureDescriptor {
+    let tex = gpu.asset_texture(&wgpu::TextureDescriptor {
         label: Some(label),
         size: wgpu::Extent3d {
             width: t.width,

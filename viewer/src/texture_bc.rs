@@ -21,7 +21,7 @@ pub fn upload_bc7(
     } else {
         wgpu::TextureFormat::Bc7RgbaUnorm
     };
-    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+    let texture = gpu.asset_texture(&wgpu::TextureDescriptor {
         label: Some(label),
         size: wgpu::Extent3d {
             width: dims0[0],

@@ -747,7 +747,7 @@ fn texture_3d<'a>(
 ) -> (wgpu::Texture, wgpu::TextureView) {
     let count = levels.len() as u32;
     let bpp = format.block_copy_size(None).unwrap_or(4);
-    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+    let texture = gpu.asset_texture(&wgpu::TextureDescriptor {
         label: Some(label),
         size: wgpu::Extent3d {
             width: dims0[0],

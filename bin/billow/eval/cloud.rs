@@ -50,6 +50,11 @@ struct CloudSummary {
     asset: String,
     kind: &'static str,
     asset_params: std::collections::BTreeMap<String, String>,
+    /// Texture bytes `billow view` holds for the whole cloud (every LOD, the kept mesh's
+    /// textures) on a device that samples BC7 blocks, and on one that does not
+    /// (`billow_core::gpu_memory`).
+    gpu_bytes: u64,
+    gpu_bytes_no_bc: u64,
     size: [u32; 2],
     fov_y_degrees: f32,
     reference_spp: u32,
@@ -213,11 +218,20 @@ pub(super) fn run(
             views: results,
         })
         .collect();
+    let gpu = billow_core::gpu_memory::cloud_gpu_bytes(
+        &asset,
+        asset
+            .header
+            .params
+            .contains_key(billow_format::param::COMPRESS),
+    );
     let summary = CloudSummary {
         source: source_shown,
         asset: asset_shown,
         kind: "cloud",
         asset_params: asset.header.params.clone(),
+        gpu_bytes: gpu.with_bc,
+        gpu_bytes_no_bc: gpu.without_bc,
         size: [width, height],
         fov_y_degrees: EVAL_FOV_Y.to_degrees(),
         reference_spp: args.spp,
@@ -258,6 +272,10 @@ fn print_table(s: &CloudSummary) {
         s.size[1],
         s.reference_spp,
         s.lighting.reference
+    );
+    outln!(
+        "{}",
+        crate::output::gpu_line(s.gpu_bytes, s.gpu_bytes_no_bc)
     );
     for n in &s.notes {
         outln!("note: {n}");

@@ -134,6 +134,10 @@ struct Summary {
     asset: String,
     asset_dims: [u32; 3],
     asset_params: std::collections::BTreeMap<String, String>,
+    /// Texture bytes `billow view` holds for the asset on a device that samples BC7
+    /// blocks, and on one that does not (`billow_core::gpu_memory`).
+    gpu_bytes: u64,
+    gpu_bytes_no_bc: u64,
     size: [u32; 2],
     fov_y_degrees: f32,
     reference_spp: u32,
@@ -656,11 +660,20 @@ fn run_volume(
 
     let notes: Vec<String> = mismatch.into_iter().chain(lighting_note).collect();
     let sum = |f: &dyn Fn(&ViewResult) -> f64| results.iter().map(f).sum::<f64>();
+    let gpu = billow_core::gpu_memory::volume_gpu_bytes(
+        &asset,
+        asset
+            .header
+            .params
+            .contains_key(billow_format::param::COMPRESS),
+    );
     let summary = Summary {
         source: source_shown,
         asset: asset_shown,
         asset_dims: prepared.dims0,
         asset_params: asset.header.params.clone(),
+        gpu_bytes: gpu.with_bc,
+        gpu_bytes_no_bc: gpu.without_bc,
         size: [width, height],
         fov_y_degrees: EVAL_FOV_Y.to_degrees(),
         reference_spp: args.spp,
@@ -728,6 +741,10 @@ fn print_table(s: &Summary) {
         s.size[1],
         s.reference_spp,
         s.spacing
+    );
+    outln!(
+        "{}",
+        crate::output::gpu_line(s.gpu_bytes, s.gpu_bytes_no_bc)
     );
     for n in &s.notes {
         outln!("note: {n}");

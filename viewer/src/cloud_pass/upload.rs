@@ -69,7 +69,7 @@ pub(super) fn linear_texture(
     height: u32,
     levels: &[Vec<u8>],
 ) -> wgpu::Texture {
-    let tex = gpu.device.create_texture(&wgpu::TextureDescriptor {
+    let tex = gpu.asset_texture(&wgpu::TextureDescriptor {
         label: Some("cloud normal map"),
         size: wgpu::Extent3d {
             width,
