@@ -315,7 +315,8 @@ fn an_edge_on_billboard_is_finite_and_covers_no_more_than_its_projection() {
 /// it (`cloud.wgsl`, `fs_billboard`): `ambient + (1 − ambient)·|N·L|` with N from the side's
 /// tangent frame (SPEC §9.4: T = U, B = −V, N = ±plane normal). A normal map tilted
 /// towards +x (tangent-space (s, 0, c)) is brightest under a light along that normal,
-/// on the front and the back alike (two-sided); a cloud with baked lighting is not relit.
+/// on the front and the back alike (two-sided); a cloud with baked lighting is not relit,
+/// nor one whose light was not recorded.
 #[test]
 fn normal_mapped_clouds_are_lit_by_the_scene_light() {
     // Tangent-space normal tilted 60° towards +T (= +x for this quad): (sin, 0, cos).
@@ -380,4 +381,23 @@ fn normal_mapped_clouds_are_lit_by_the_scene_light() {
         .image
         .get(n / 2, n / 2);
     assert_eq!(px.x, 1.0);
+    // No light key (a writer other than billow): final colours too (SPEC §9), as the viewer
+    // draws them (`BakedLight::Unknown`); eval relit them before 2026-12-05 (0.3 here).
+    asset.header.params.remove("light");
+    let unknown = PreparedCloud::new(&asset).unwrap();
+    let r = CloudRenderer::new(
+        &unknown,
+        Lighting::Scene {
+            light: Vec3::Y,
+            ambient: 0.3,
+            shadows: false,
+        },
+    )
+    .unwrap();
+    let px = r
+        .render(0, &camera(Vec3::new(0.5, 0.5, 3.0), n), Sampling::Centre)
+        .unwrap()
+        .image
+        .get(n / 2, n / 2);
+    assert_eq!(px.x, 1.0, "a cloud without a light key is not relit");
 }

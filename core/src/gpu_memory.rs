@@ -14,9 +14,8 @@
 //! - **Clouds.** Each atlas with its stored MIP levels: BC7 blocks, or RGBA8 (4 bytes per
 //!   texel); its normal map when the cloud is lit at runtime (baked unlit with normal
 //!   maps), the same way; each mesh texture RGBA8 with a full MIP chain (the viewer builds
-//!   it), whatever the device — twice when the cloud keeps a mesh (a trunk): the cloud
-//!   pass draws the foliage mesh with them, and the mesh pass gets its own copy of the
-//!   kept mesh with all of them, **once per instance** (counted here for one instance).
+//!   it), whatever the device, once: the foliage mesh and every instance's kept mesh (a
+//!   trunk) share it.
 //!
 //! Vertex, index and uniform buffers are not counted: they are small beside the textures
 //! (a cloud's billboards are 4 vertices each).
@@ -112,7 +111,7 @@ pub fn cloud_gpu_bytes(asset: &CloudAsset, compressed: bool) -> GpuBytes {
         out.add(bc, raw);
     }
     // Normal maps are drawn only by a cloud baked unlit (lit at runtime).
-    let runtime_lit = asset.header.light() == Some("unlit")
+    let runtime_lit = asset.header.baked_light().is_ok_and(|l| l.is_unlit())
         && !asset.atlases.is_empty()
         && asset.atlases.iter().all(|a| a.normals.is_some());
     if runtime_lit {
@@ -129,10 +128,9 @@ pub fn cloud_gpu_bytes(asset: &CloudAsset, compressed: bool) -> GpuBytes {
             );
         }
     }
-    let copies = 1 + u64::from(!asset.trunk.vertices.is_empty());
     for t in &asset.textures {
         let full = 32 - t.width.max(t.height).max(1).leading_zeros();
-        let b = copies * CLOUD_TEXEL_BYTES * chain_texels([t.width, t.height, 1], full as usize);
+        let b = CLOUD_TEXEL_BYTES * chain_texels([t.width, t.height, 1], full as usize);
         out.add(b, b);
     }
     out

@@ -114,15 +114,106 @@ pub enum NormalEncoding {
     Rgba8Snorm,
 }
 
+/// The ambient fraction of a baked directional light when the header does not say
+/// ([`param::AMBIENT`]); what billow's bakers write by default.
+pub const DEFAULT_AMBIENT: f32 = 0.3;
+
+/// The lighting baked into an asset's colours ([`Header::baked_light`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum BakedLight {
+    /// `light = "unlit"`: the colours are albedo. A renderer lights them at runtime where
+    /// the asset has normals (a cloud's `ANRM` normal maps), else draws them as they are.
+    Unlit,
+    /// `light = "x,y,z"`: the colours are final, lit by a directional light towards
+    /// `dir` (unit) with `ambient` the unshadowed fraction.
+    Directional { dir: [f32; 3], ambient: f32 },
+    /// No `light` key (a writer other than billow): the colours are final as stored,
+    /// under a light nobody recorded; drawn without runtime lighting.
+    Unknown,
+}
+
+impl BakedLight {
+    /// Whether a renderer lights the colours at runtime (given normals to do it with).
+    pub fn is_unlit(&self) -> bool {
+        matches!(self, BakedLight::Unlit)
+    }
+
+    /// The baked light of header `params` (`Err`: a `light` or `ambient` that is neither
+    /// of the forms of [`BakedLight`]; an `ambient` outside `0..=1`).
+    pub fn read(params: &BTreeMap<String, String>) -> Result<BakedLight, String> {
+        let Some(light) = params.get(param::LIGHT) else {
+            return Ok(BakedLight::Unknown);
+        };
+        let light = light.trim();
+        if light == "unlit" {
+            return Ok(BakedLight::Unlit);
+        }
+        let v: Vec<f32> = light
+            .split(',')
+            .map(|x| x.trim().parse::<f32>())
+            .collect::<Result<_, _>>()
+            .map_err(|e| format!("header parameter light='{light}': {e}"))?;
+        let [x, y, z] = v[..] else {
+            return Err(format!(
+                "header parameter light='{light}': expected x,y,z or unlit"
+            ));
+        };
+        let len = (x * x + y * y + z * z).sqrt();
+        if !(len.is_finite() && len > 1e-6) {
+            return Err(format!("header parameter light='{light}': not a direction"));
+        }
+        let ambient = match params.get(param::AMBIENT) {
+            None => DEFAULT_AMBIENT,
+            Some(a) => a
+                .trim()
+                .parse::<f32>()
+                .map_err(|e| format!("header parameter ambient='{a}': {e}"))?,
+        };
+        if !(0.0..=1.0).contains(&ambient) {
+            return Err(format!(
+                "header parameter ambient={ambient} is out of range (0 to 1)"
+            ));
+        }
+        Ok(BakedLight::Directional {
+            dir: [x / len, y / len, z / len],
+            ambient,
+        })
+    }
+
+    /// Writes the keys [`BakedLight::read`] reads into `params` (`Unknown` removes both).
+    pub fn write(&self, params: &mut BTreeMap<String, String>) {
+        match *self {
+            BakedLight::Unknown => {
+                params.remove(param::LIGHT);
+                params.remove(param::AMBIENT);
+            }
+            BakedLight::Unlit => {
+                // An `ambient` key is left as it is: unlit colours do not read it.
+                params.insert(param::LIGHT.into(), "unlit".into());
+            }
+            BakedLight::Directional { dir, ambient } => {
+                let [x, y, z] = dir;
+                params.insert(param::LIGHT.into(), format!("{x},{y},{z}"));
+                params.insert(param::AMBIENT.into(), ambient.to_string());
+            }
+        }
+    }
+}
+
 /// Names of the header `params` that a reader acts on (the baker writes them, the
 /// viewer and the evaluators read them; SPEC.md §8). Read them through the typed
-/// accessors on [`Header`] ([`Header::shell`], [`Header::light`]), not as string literals.
+/// accessors on [`Header`] ([`Header::shell`], [`Header::baked_light`]), not as string
+/// literals.
 pub mod param {
     /// Present on a shell asset (a volume on prism cells, tiled in x and z): the shell's
     /// description, e.g. `"height=0.1 ..."`.
     pub const SHELL: &str = "shell";
-    /// The light a billboard cloud's colours were baked under: `"x,y,z"` or `"unlit"`.
+    /// The light a billboard cloud's colours were baked under: `"x,y,z"` or `"unlit"`
+    /// ([`super::Header::baked_light`]).
     pub const LIGHT: &str = "light";
+    /// The ambient fraction of a baked directional light, `0..=1` (default
+    /// [`super::DEFAULT_AMBIENT`]).
+    pub const AMBIENT: &str = "ambient";
     /// Block compression of the texels, e.g. `"bc7"`.
     pub const COMPRESS: &str = "compress";
 }
@@ -144,10 +235,15 @@ impl Header {
         self.params.insert(param::SHELL.into(), description.into());
     }
 
-    /// The baked light (`params["light"]`) as written, if any. Readers choose the
-    /// default for a missing key.
-    pub fn light(&self) -> Option<&str> {
-        self.params.get(param::LIGHT).map(String::as_str)
+    /// The lighting baked into the colours (`params["light"]` and `params["ambient"]`,
+    /// SPEC §9): what every reader acts on, one rule for all ([`BakedLight::read`]).
+    pub fn baked_light(&self) -> Result<BakedLight, String> {
+        BakedLight::read(&self.params)
+    }
+
+    /// Records the lighting baked into the colours ([`BakedLight::write`]).
+    pub fn set_baked_light(&mut self, light: BakedLight) {
+        light.write(&mut self.params);
     }
 
     /// Records the texels' block compression (`params["compress"]`, e.g. `"bc7"`).
@@ -249,5 +345,53 @@ impl Header {
     /// Parse RON header text (unknown fields are ignored).
     pub fn from_ron(text: &str) -> Result<Header, FormatError> {
         ron::from_str(text).map_err(|e| FormatError::Header(format!("invalid RON: {e}")))
+    }
+}
+
+#[cfg(test)]
+mod baked_light_tests {
+    use super::*;
+
+    /// One rule for every reader: a missing key is a final colour under an unknown light,
+    /// `unlit` is albedo, `x,y,z` a directional light with the one default ambient; what
+    /// is written is read back; anything else is an error, never a silent unlit.
+    #[test]
+    fn baked_light_reads_what_it_writes_and_refuses_the_rest() {
+        let mut p = BTreeMap::new();
+        assert_eq!(BakedLight::read(&p), Ok(BakedLight::Unknown));
+        BakedLight::Unlit.write(&mut p);
+        assert_eq!(BakedLight::read(&p), Ok(BakedLight::Unlit));
+        let d = BakedLight::Directional {
+            dir: [0.0, 1.0, 0.0],
+            ambient: 0.25,
+        };
+        d.write(&mut p);
+        assert_eq!(p["light"], "0,1,0");
+        assert_eq!(BakedLight::read(&p), Ok(d));
+        p.remove(param::AMBIENT);
+        assert_eq!(
+            BakedLight::read(&p),
+            Ok(BakedLight::Directional {
+                dir: [0.0, 1.0, 0.0],
+                ambient: DEFAULT_AMBIENT
+            })
+        );
+        p.insert(param::LIGHT.into(), "0,2,0".into());
+        assert!(matches!(
+            BakedLight::read(&p),
+            Ok(BakedLight::Directional {
+                dir: [0.0, 1.0, 0.0],
+                ..
+            })
+        ));
+        for bad in ["", " ", "0,0", "0,0,0", "x,y,z", "sun"] {
+            p.insert(param::LIGHT.into(), bad.into());
+            assert!(BakedLight::read(&p).is_err(), "light={bad:?}");
+        }
+        p.insert(param::LIGHT.into(), "1,1,1".into());
+        p.insert(param::AMBIENT.into(), "1.5".into());
+        assert!(BakedLight::read(&p).is_err());
+        BakedLight::Unknown.write(&mut p);
+        assert!(p.is_empty());
     }
 }

@@ -40,8 +40,8 @@ pub use container::{
 };
 pub use error::{tag_str, FormatError};
 pub use header::{
-    param, AssetKind, Bounds, ColourSpace, Header, NormalEncoding, SourceInfo, TexelFormat,
-    VolumeHeader,
+    param, AssetKind, BakedLight, Bounds, ColourSpace, Header, NormalEncoding, SourceInfo,
+    TexelFormat, VolumeHeader, DEFAULT_AMBIENT,
 };
 pub use inspect::{inspect_bytes, ChunkInfo, Report};
 pub use volume::{

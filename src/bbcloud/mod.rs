@@ -34,7 +34,9 @@ pub mod view;
 use std::collections::BTreeMap;
 use std::time::Instant;
 
-use billow_format::{AssetKind, Bounds, CloudAsset, CloudError, ColourSpace, Header, SourceInfo};
+use billow_format::{
+    AssetKind, BakedLight, Bounds, CloudAsset, CloudError, ColourSpace, Header, SourceInfo,
+};
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -589,12 +591,6 @@ pub fn params(o: &BbcloudOptions) -> BTreeMap<String, String> {
         "texel_density",
         o.texel_density.map_or("budget".into(), |d| d.to_string()),
     );
-    put(
-        "light",
-        o.shading
-            .light
-            .map_or("unlit".into(), |l| format!("{},{},{}", l.x, l.y, l.z)),
-    );
     put("ambient", o.shading.ambient.to_string());
     put("supersample", o.supersample.to_string());
     put(
@@ -623,5 +619,14 @@ pub fn params(o: &BbcloudOptions) -> BTreeMap<String, String> {
         put("max_extent", r.to_string());
     }
     put("mip_align", align.to_string());
+    // The baked light, as every reader reads it (SPEC §9).
+    match o.shading.light {
+        Some(l) => BakedLight::Directional {
+            dir: l.to_array(),
+            ambient: o.shading.ambient,
+        },
+        None => BakedLight::Unlit,
+    }
+    .write(&mut p);
     p
 }

@@ -264,10 +264,7 @@ impl PreparedCloud {
             .iter()
             .map(|a| a.mips.iter().map(|m| m.len() as u64).sum())
             .collect();
-        let unlit = asset
-            .header
-            .light()
-            .is_none_or(|l| l.trim().is_empty() || l.trim() == "unlit");
+        let unlit = asset.header.baked_light().is_ok_and(|l| l.is_unlit());
         let normal_maps = asset
             .atlases
             .iter()

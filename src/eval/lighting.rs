@@ -333,36 +333,19 @@ impl Lighting {
         }
     }
 
-    /// The reference lighting of a billboard-cloud asset (header `light` = `x,y,z` or
-    /// `unlit`, `ambient`).
+    /// The reference lighting of a billboard-cloud asset: its baked light
+    /// ([`billow_format::BakedLight`], header `light` = `x,y,z` with `ambient`, or `unlit`);
+    /// unlit for an unlit bake and for one whose light was not recorded (SPEC §9: the
+    /// reference cannot reproduce a light nobody recorded).
     pub fn for_cloud(params: &BTreeMap<String, String>) -> Result<Lighting, String> {
-        let light = params
-            .get(billow_format::param::LIGHT)
-            .map_or("unlit", |l| l.trim());
-        if light == "unlit" || light.is_empty() {
-            return Ok(Lighting::Unlit);
-        }
-        let v: Vec<f32> = light
-            .split(',')
-            .map(|x| x.trim().parse::<f32>())
-            .collect::<Result<_, _>>()
-            .map_err(|e| format!("header parameter light='{light}': {e}"))?;
-        let l = match v[..] {
-            [x, y, z] => Vec3::new(x, y, z),
-            _ => return Err(format!("header parameter light='{light}': expected x,y,z")),
-        };
-        if !(l.is_finite() && l.length() > 1e-6) {
-            return Err(format!("header parameter light='{light}': not a direction"));
-        }
-        let ambient: f32 = num(params, "ambient")?.unwrap_or(0.35);
-        if !(0.0..=1.0).contains(&ambient) {
-            return Err(format!(
-                "header parameter ambient={ambient} is out of range (0 to 1)"
-            ));
-        }
-        Ok(Lighting::Diffuse {
-            light: l.normalize(),
-            ambient,
+        Ok(match billow_format::BakedLight::read(params)? {
+            billow_format::BakedLight::Directional { dir, ambient } => Lighting::Diffuse {
+                light: Vec3::from(dir),
+                ambient,
+            },
+            billow_format::BakedLight::Unlit | billow_format::BakedLight::Unknown => {
+                Lighting::Unlit
+            }
         })
     }
 }

@@ -84,6 +84,15 @@ pub struct GpuMesh {
     pub bounds: (Vec3, Vec3),
 }
 
+/// A mesh's materials, or one default material when it has none.
+fn mesh_materials(mesh: &MeshData) -> Vec<MeshMaterial> {
+    if mesh.materials.is_empty() {
+        vec![MeshMaterial::default()]
+    } else {
+        mesh.materials.clone()
+    }
+}
+
 /// Per-frame uniform of the mesh pipelines.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -173,6 +182,32 @@ impl MeshPass {
     }
 
     pub fn upload(&self, gpu: &Gpu, mesh: &MeshData) -> Result<GpuMesh, ViewError> {
+        let materials = mesh_materials(mesh);
+        let views: Vec<wgpu::TextureView> = mesh
+            .textures
+            .iter()
+            .enumerate()
+            .map(|(i, t)| {
+                let mut t = t.clone();
+                t.coverage_cutoff = materials
+                    .iter()
+                    .find(|m| m.texture == Some(i as u32) && m.alpha_cutoff.is_some())
+                    .and_then(|m| m.alpha_cutoff);
+                upload_rgba8_mips(gpu, &t, "mesh texture").create_view(&Default::default())
+            })
+            .collect();
+        self.upload_with_views(gpu, mesh, &views)
+    }
+
+    /// [`MeshPass::upload`] of a mesh whose textures are already on the GPU: `views[i]`
+    /// stands for `mesh.textures[i]` (which may be left empty), e.g. a cloud's kept mesh
+    /// drawn once per instance with the cloud's textures.
+    pub fn upload_with_views(
+        &self,
+        gpu: &Gpu,
+        mesh: &MeshData,
+        views: &[wgpu::TextureView],
+    ) -> Result<GpuMesh, ViewError> {
         let bad = |m: String| Err(ViewError::InvalidParam(m));
         if !mesh.vertices.len().is_multiple_of(3) {
             return bad(format!(
@@ -191,32 +226,15 @@ impl MeshPass {
         {
             return bad("mesh has a non-finite vertex".into());
         }
-        let materials = if mesh.materials.is_empty() {
-            vec![MeshMaterial::default()]
-        } else {
-            mesh.materials.clone()
-        };
+        let materials = mesh_materials(mesh);
         let mat_of = |t: usize| mesh.triangle_materials.get(t).copied().unwrap_or(0);
         if (0..tris).any(|t| mat_of(t) as usize >= materials.len())
             || materials
                 .iter()
-                .any(|m| m.texture.is_some_and(|i| i as usize >= mesh.textures.len()))
+                .any(|m| m.texture.is_some_and(|i| i as usize >= views.len()))
         {
             return bad("mesh: material or texture index out of range".into());
         }
-        let views: Vec<wgpu::TextureView> = mesh
-            .textures
-            .iter()
-            .enumerate()
-            .map(|(i, t)| {
-                let mut t = t.clone();
-                t.coverage_cutoff = materials
-                    .iter()
-                    .find(|m| m.texture == Some(i as u32) && m.alpha_cutoff.is_some())
-                    .and_then(|m| m.alpha_cutoff);
-                upload_rgba8_mips(gpu, &t, "mesh texture").create_view(&Default::default())
-            })
-            .collect();
         // Vertices sorted by material (stable: triangle order within a material).
         let mut order: Vec<usize> = (0..tris).collect();
         order.sort_by_key(|&t| mat_of(t));
@@ -229,7 +247,7 @@ impl MeshPass {
             if last {
                 let end = data.len() as u32;
                 let m = &materials[mat_of(t) as usize];
-                ranges.push((start..end, self.material_bind(gpu, m, &views)));
+                ranges.push((start..end, self.material_bind(gpu, m, views)));
                 start = end;
             }
         }

@@ -3,8 +3,10 @@
 //! the textures made while an asset is added, counted from their descriptors
 //! (`Gpu::asset_texture_bytes`), equal the prediction for a device without BC7 sampling
 //! (lavapipe: software adapters upload decoded), for a volume with normals, the same
-//! volume pruned into LOD bands, and a cloud baked unlit with normal maps and a kept mesh
-//! (whose textures the viewer uploads twice: `billow_core::gpu_memory` module docs).
+//! volume pruned into LOD bands, and a cloud baked unlit with normal maps and a kept mesh,
+//! drawn three times: its mesh textures are uploaded once for the foliage mesh and every
+//! instance's kept mesh (before 2026-12-05 the mesh pass uploaded them again for each
+//! instance: 24.1 MB for one instance of this cloud against 12.9 MB predicted).
 //!
 //! Needs a GPU adapter (lavapipe is enough): without one it prints `SKIP: …` on stderr,
 //! except under CI (env `CI` set) where it fails.
@@ -79,7 +81,8 @@ fn reported_gpu_bytes_are_what_the_viewer_allocates() {
     assert_eq!(p, volume_gpu_bytes(&pruned, false).without_bc, "pruned");
     // The second of two: the passes' own 1×1 dummies are made with the first.
     let add_cloud = |r: &mut Renderer| {
-        r.add_cloud(&cloud, vec![Mat4::IDENTITY], None, 0.25, 0.8)
+        let at = |x: f32| Mat4::from_translation(glam::Vec3::new(x, 0.0, 0.0));
+        r.add_cloud(&cloud, vec![at(0.0), at(100.0), at(200.0)], None, 0.25, 0.8)
             .unwrap()
     };
     added(&mut r, &add_cloud);

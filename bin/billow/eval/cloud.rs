@@ -10,7 +10,7 @@ use billow::eval::suite::{
     EVAL_FOV_Y,
 };
 use billow::import::Imported;
-use billow_format::{CloudAsset, Container};
+use billow_format::{BakedLight, CloudAsset, Container};
 use serde::Serialize;
 
 use super::{
@@ -101,8 +101,22 @@ pub(super) fn run(
         }
         None => (0..prepared.level_count()).collect(),
     };
-    let light = asset.header.light().map(str::to_owned);
-    let lit = light.as_deref().is_some_and(|l| l.trim() != "unlit");
+    let baked = asset
+        .header
+        .baked_light()
+        .map_err(|e| CliError::new(Code::InvalidInput, format!("{asset_shown}: {e}")))?;
+    // The colours are final (baked under a light, recorded or not) unless baked unlit.
+    let lit = !baked.is_unlit();
+    let light = match baked {
+        BakedLight::Unlit => "unlit".to_string(),
+        BakedLight::Directional { .. } => asset
+            .header
+            .params
+            .get(billow_format::param::LIGHT)
+            .cloned()
+            .unwrap_or_default(),
+        BakedLight::Unknown => "unknown (no light key: the colours are final)".to_string(),
+    };
     let (lighting, note) = match args.lighting {
         LightingArg::Auto => (
             Lighting::for_cloud(&asset.header.params)
@@ -236,7 +250,7 @@ pub(super) fn run(
         fov_y_degrees: EVAL_FOV_Y.to_degrees(),
         reference_spp: args.spp,
         lighting: LightingJson {
-            asset: light.unwrap_or_else(|| "unlit".into()),
+            asset: light,
             reference: lighting.name(),
             reference_details: lighting.describe(),
         },

@@ -41,8 +41,12 @@ pub struct GpuCloud {
     /// Object-space bounds centre and radius.
     pub centre: Vec3,
     pub radius: f32,
-    /// The kept mesh, for the mesh pass (object space).
+    /// The kept mesh, for the mesh pass (object space); its `textures` are left empty: the
+    /// mesh pass draws it with [`GpuCloud::mesh_textures`], uploaded once for the cloud
+    /// and all its instances.
     pub trunk: MeshData,
+    /// The asset's mesh textures (`MTEX`), as the foliage mesh and the kept mesh sample them.
+    pub mesh_textures: Vec<wgpu::TextureView>,
     /// Atlases and normal maps uploaded as BC7 blocks (format 1.2, [`Gpu::block_upload`]).
     pub block_textures: u32,
 }
@@ -247,7 +251,7 @@ impl CloudPass {
             })
             .collect();
         // Runtime lighting: every atlas has a normal map and the bake left lighting out.
-        let unlit = asset.header.light() == Some("unlit");
+        let unlit = asset.header.baked_light().is_ok_and(|l| l.is_unlit());
         let has_normals =
             !asset.atlases.is_empty() && asset.atlases.iter().all(|a| a.normals.is_some());
         let runtime_lit = unlit && has_normals;
@@ -447,6 +451,7 @@ impl CloudPass {
             centre: 0.5 * (lo + hi),
             radius: 0.5 * (hi - lo).length(),
             trunk: trunk_mesh(asset),
+            mesh_textures,
             block_textures,
         })
     }
@@ -456,11 +461,6 @@ impl CloudPass {
 fn trunk_mesh(asset: &CloudAsset) -> MeshData {
     let t = &asset.trunk;
     let mut out = MeshData {
-        textures: asset
-            .textures
-            .iter()
-            .map(|x| TextureData::straight(x.width, x.height, x.texels.clone()))
-            .collect(),
         materials: asset
             .materials
             .iter()

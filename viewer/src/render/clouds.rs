@@ -8,6 +8,7 @@ use billow_format::CloudAsset;
 use super::{check_transforms, default_lod_distances, CloudEntry, Renderer};
 use crate::camera::ViewCamera;
 use crate::cloud_pass::{choose_lod, CloudDraw, CloudPass, LodChoice, DEFAULT_DISSOLVE};
+use crate::mesh_pass::MeshPass;
 use crate::ViewError;
 
 impl Renderer {
@@ -65,13 +66,19 @@ impl Renderer {
             )));
         }
         if !gpu.trunk.vertices.is_empty() {
+            // One copy of the kept mesh per instance, all drawn with the cloud's textures
+            // (uploaded once, by the cloud pass).
+            let mesh_pass = self
+                .mesh_pass
+                .get_or_insert_with(|| MeshPass::new(&self.gpu, &self.shadows.receiver_layout));
             for m in &instances {
                 let mut t = gpu.trunk.clone();
                 for v in &mut t.vertices {
                     v.pos = m.transform_point3(Vec3::from(v.pos)).to_array();
                     v.normal = m.transform_vector3(Vec3::from(v.normal)).to_array();
                 }
-                self.add_mesh(&t)?;
+                let mesh = mesh_pass.upload_with_views(&self.gpu, &t, &gpu.mesh_textures)?;
+                self.meshes.push(mesh);
             }
         }
         self.clouds.push(CloudEntry {
