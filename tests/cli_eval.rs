@@ -535,6 +535,13 @@ fn eval_under_a_light_set_sees_an_unlit_volume_too_bright() {
     let lights = j["lights"].as_array().unwrap();
     let names: Vec<&str> = lights.iter().map(|l| l["name"].as_str().unwrap()).collect();
     assert_eq!(names, ["overhead", "sun-east", "sun-west", "below"]);
+    // The reference's lighting names the set, not the scene lighting's placeholder light
+    // (it said "light towards (0.000, 0.000, 0.000)" before 2026-12-05).
+    let details = j["lighting"]["reference_details"].as_str().unwrap();
+    assert!(
+        details.contains("4 light(s) in `lights`") && !details.contains("0.000"),
+        "{details}"
+    );
     assert_eq!(j["views"].as_array().unwrap().len(), 8);
     assert_eq!(j["mean"]["asset"]["views"], 8);
     for l in lights {

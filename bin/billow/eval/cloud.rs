@@ -252,7 +252,7 @@ pub(super) fn run(
         lighting: LightingJson {
             asset: light,
             reference: lighting.name(),
-            reference_details: lighting.describe(),
+            reference_details: super::reference_details(&lighting, lights.as_deref(), args),
         },
         notes: mismatch.into_iter().chain(note).collect(),
         raster_1spp: mean_errors(&raster),

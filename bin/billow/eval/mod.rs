@@ -686,7 +686,7 @@ fn run_volume(
                 .cloned()
                 .unwrap_or_else(|| "none".into()),
             reference: lighting.name(),
-            reference_details: lighting.describe(),
+            reference_details: reference_details(&lighting, lights.as_deref(), args),
         },
         notes,
         mean: Means {
@@ -857,4 +857,28 @@ pub(crate) fn print_rows(
         "mean over the lights"
     };
     row(name, &mean.asset, &mean.raster_1spp, t);
+}
+
+/// What the JSON says of the reference's lighting: its own description, or with
+/// `--light`/`--lights` the set's (the scene lighting's own light is a placeholder there:
+/// each light of the set is set in turn).
+pub(crate) fn reference_details(
+    lighting: &Lighting,
+    lights: Option<&[EvalLight]>,
+    args: &Args,
+) -> String {
+    match lights {
+        Some(l) => format!(
+            "the viewer's mesh lighting: ambient {} + two-sided diffuse{}, under each of the \
+             {} light(s) in `lights`",
+            args.ambient,
+            if args.shadows {
+                ", ray-traced shadows"
+            } else {
+                ""
+            },
+            l.len()
+        ),
+        None => lighting.describe(),
+    }
 }
