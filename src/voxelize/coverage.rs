@@ -39,16 +39,9 @@
 //!   oak), but only ever **thinned** (`k ≤ 1`): a combine that made it denser than any
 //!   view of the mesh (`opaque`, `max` on foliage) is brought back, and one that made it
 //!   thinner (`mean` on a closed one-sided surface, `min`) is kept as combined. Expressions
-//!   and custom functions keep their level 0, and so do **bakes with normals** (coherent
-//!   surfaces: `--normals auto` keeps normals for solids only): on a closed surface the
-//!   combine's excess lies at the silhouette, and one scale for every partial texel opens
-//!   the whole surface instead: spot's level 0 got `k = 0.14`, its partly covered surface
-//!   voxels kept a fifth of their opacity and the far side showed through (at 1×, eval's
-//!   RMSE 0.0841 thinned against 0.0718 as combined, coverage −0.2 % against +6.3 %).
-//! - **Levels 1 and up** are matched to the mesh's coverage (level 0's after its scale,
-//!   where level 0 is thinned), `k` in `[1/16, 16]`: a distant volume covers what the
-//!   mesh does. (Matching a solid's coarse levels to its unthinned level 0 instead was
-//!   measured on spot: coverage +10.4 % at 4× against +3.6 %, luminance unchanged.)
+//!   and custom functions keep their level 0.
+//! - **Levels 1 and up** are matched to level 0 as rendered (after its scale), `k` in
+//!   `[1/16, 16]`: a distant volume covers what the near one does.
 //!
 //! Fully opaque texels are unchanged by any `k`: a closed surface stays closed. The level-0
 //! scale is applied to its RGBA8 bytes (a non-empty texel stays non-empty, so what

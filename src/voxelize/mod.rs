@@ -624,10 +624,7 @@ fn voxelize_as(
             cover.mesh = coverage::mesh_coverage(&seen);
             // Level 0's scale (thinned to the mesh), then each coarser level's (to level 0).
             let level0_scale = |cols: coverage::Columns, cover: &mut CoverageScales| {
-                // A bake with normals (a coherent surface: `--normals auto` keeps them
-                // for solids only) keeps its level 0 as combined (`coverage` module docs).
-                let (k, before, after) =
-                    coverage::level0_scale(&cols, voxel, &cover.mesh, !opts.normals);
+                let (k, before, after) = coverage::level0_scale(&cols, voxel, &cover.mesh, true);
                 (cover.level0_before, cover.level0_after) = (before, after);
                 cover.scales.push(k);
                 k
