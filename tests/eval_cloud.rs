@@ -363,41 +363,32 @@ fn normal_mapped_clouds_are_lit_by_the_scene_light() {
         "back, along its normal"
     );
     assert!(centre(along, 3.0) > centre(Vec3::Y, 3.0) + 0.5);
+    // The centre pixel of `asset` drawn under an overhead light.
+    let overhead = |asset: &CloudAsset| {
+        let prepared = PreparedCloud::new(asset).unwrap();
+        let r = CloudRenderer::new(
+            &prepared,
+            Lighting::Scene {
+                light: Vec3::Y,
+                ambient: 0.3,
+                shadows: false,
+            },
+        )
+        .unwrap();
+        r.render(0, &camera(Vec3::new(0.5, 0.5, 3.0), n), Sampling::Centre)
+            .unwrap()
+            .image
+            .get(n / 2, n / 2)
+    };
     // Baked lit: the texels are final, whatever the light.
     asset.header.params.insert("light".into(), "0,1,0".into());
-    let baked = PreparedCloud::new(&asset).unwrap();
-    let r = CloudRenderer::new(
-        &baked,
-        Lighting::Scene {
-            light: Vec3::Y,
-            ambient: 0.3,
-            shadows: false,
-        },
-    )
-    .unwrap();
-    let px = r
-        .render(0, &camera(Vec3::new(0.5, 0.5, 3.0), n), Sampling::Centre)
-        .unwrap()
-        .image
-        .get(n / 2, n / 2);
-    assert_eq!(px.x, 1.0);
+    assert_eq!(overhead(&asset).x, 1.0);
     // No light key (a writer other than billow): final colours too (SPEC §9), as the viewer
     // draws them (`BakedLight::Unknown`); eval relit them before 2026-12-05 (0.3 here).
     asset.header.params.remove("light");
-    let unknown = PreparedCloud::new(&asset).unwrap();
-    let r = CloudRenderer::new(
-        &unknown,
-        Lighting::Scene {
-            light: Vec3::Y,
-            ambient: 0.3,
-            shadows: false,
-        },
-    )
-    .unwrap();
-    let px = r
-        .render(0, &camera(Vec3::new(0.5, 0.5, 3.0), n), Sampling::Centre)
-        .unwrap()
-        .image
-        .get(n / 2, n / 2);
-    assert_eq!(px.x, 1.0, "a cloud without a light key is not relit");
+    assert_eq!(
+        overhead(&asset).x,
+        1.0,
+        "a cloud without a light key is not relit"
+    );
 }
