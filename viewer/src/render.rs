@@ -57,6 +57,10 @@ pub struct FrameStats {
     pub cloud_dissolves: Vec<f32>,
     /// Slices of the volumes' shadow pass (0 without shadows).
     pub shadow_slices: usize,
+    /// Mesh draws and cloud instances rendered into the shadow cascades, summed over
+    /// the cascades, and those left out because they lie outside a cascade's window.
+    pub shadow_casters: usize,
+    pub shadow_casters_culled: usize,
     /// Billboard quads (sides) drawn.
     pub cloud_quads: usize,
     /// Bytes written to the GPU per frame for the clouds (instance data and frame
@@ -117,6 +121,9 @@ pub struct Renderer {
     /// Force every cloud's dissolve half-width (`Some(0.0)`: levels shown alone, as the
     /// LOD sweep's coverage frames need); `None`: each cloud's own.
     pub dissolve_override: Option<f32>,
+    /// Leave out of each shadow cascade the casters outside its window (on by default;
+    /// off only to check that it changes nothing).
+    pub shadow_culling: bool,
     /// The cell wireframe, when on ([`Renderer::set_wireframe`]).
     lines: Option<crate::lines::LinePass>,
     /// Scene time in seconds (animated cells, particles).
@@ -190,6 +197,7 @@ impl Renderer {
             ambient: 0.3,
             lod_distance_override: None,
             dissolve_override: None,
+            shadow_culling: true,
             lines: None,
             time: 0.0,
             texture_batch,
@@ -396,7 +404,7 @@ impl Renderer {
                 m.shadow_pipeline(&self.gpu);
             }
             if let Some(c) = &self.cloud_pass {
-                c.shadow_pipeline(&self.gpu);
+                c.shadow_pipelines(&self.gpu);
             }
         }
     }

@@ -227,6 +227,17 @@ pub fn cascades(
     }
 }
 
+/// Whether a caster inside the sphere (`centre`, `radius`) can reach `light`'s window
+/// (an orthographic cascade; a perspective camera holds everything). Only the window
+/// across the light is tested: every cascade's depth range covers all casters.
+pub fn sphere_in_window(light: &ViewCamera, centre: Vec3, radius: f32) -> bool {
+    let Some(hh) = light.ortho_half_height else {
+        return true;
+    };
+    let q = light.to_view(centre);
+    q.x.abs() <= hh * light.aspect() + radius && q.y.abs() <= hh + radius
+}
+
 /// Texels per world unit at `p` with `cascades`: those of the finest cascade whose map
 /// holds `p` (what the lookup uses), 0 outside every one.
 pub fn texel_density_at(cascades: &Cascades, p: Vec3) -> f32 {

@@ -8,6 +8,9 @@
 //!   cloud is hidden wherever the cloud is drawn;
 //! - the frame does not depend on the order of the instances (overlapping billboards
 //!   with partial-alpha texels) and is identical when rendered twice;
+//! - shadow cascades leave out the casters outside their windows and the frame stays
+//!   the same as with every caster drawn into every cascade; a billboard casts the same
+//!   shadow lit from either side (the shadow pass draws the quad facing the light);
 //! - an asset baked unlit with normal maps is lit at runtime like meshes: light along
 //!   the billboard normal, against it and at 60° gives `ambient + (1 − ambient)·|N·L|`
 //!   (1, 1, 0.65 for ambient 0.3); a tilted normal map turns the lit direction the way
@@ -506,5 +509,145 @@ fn the_oak_baked_unlit_with_normal_maps_is_lit_by_the_viewer() {
     assert!(
         la.data == ls.data,
         "baked lighting must not change with the light"
+    );
+}
+
+/// A row of upright billboards (4 units wide) every 5 units from 4 to 300 units down
+/// −z, alternately left and right of the axis, over a ground quad, seen along the row
+/// (a deep view: several cascades, instances across their windows' edges), and one
+/// wide billboard off to the side; shadows on.
+fn shadow_row(gpu: billow_view::Gpu, light: Vec3) -> (Renderer, ViewCamera) {
+    let instances = (0..60)
+        .map(|i| {
+            let x = if i % 2 == 0 { -3.0 } else { 3.0 };
+            Mat4::from_scale_rotation_translation(
+                Vec3::splat(2.0),
+                Quat::IDENTITY,
+                Vec3::new(x, 1.0, -4.0 - 5.0 * i as f32),
+            )
+        })
+        // A wide one whose centre lies outside the view and the near cascades' windows
+        // while its edge casts into view.
+        .chain([Mat4::from_scale_rotation_translation(
+            Vec3::splat(12.0),
+            Quat::IDENTITY,
+            Vec3::new(26.0, 11.0, -20.0),
+        )])
+        .collect();
+    let mut r = renderer(gpu, &asset(banded, None, false), instances);
+    r.add_mesh(&MeshData::quad(
+        Vec3::new(-200.0, -1.0, 50.0),
+        Vec3::new(0.0, 0.0, -450.0),
+        Vec3::new(400.0, 0.0, 0.0),
+        [0.6, 0.6, 0.6, 1.0],
+    ))
+    .expect("ground");
+    r.set_shadows(true);
+    r.light_dir = light.normalize();
+    let cam = ViewCamera::look_at(
+        Vec3::new(0.0, 1.5, 6.0),
+        Vec3::new(0.0, 0.0, -300.0),
+        Vec3::Y,
+        0.8,
+        128,
+        96,
+        0.5,
+        1000.0,
+    );
+    (r, cam)
+}
+
+#[test]
+fn shadow_cascades_leave_out_casters_outside_their_windows_and_nothing_changes() {
+    let name = "shadow_cascades_leave_out_casters_outside_their_windows_and_nothing_changes";
+    let Some(gpu) = common::gpu_or_skip(name) else {
+        return;
+    };
+    // From the right and behind the row: the shadows fall left, towards the camera.
+    let (mut r, cam) = shadow_row(gpu, Vec3::new(1.0, 1.0, -0.5));
+    let (culled, s) = r.render_image(&cam).expect("render");
+    r.shadow_culling = false;
+    let (all, s_all) = r.render_image(&cam).expect("render");
+    assert!(
+        s.shadow_casters_culled > 0 && s.shadow_casters < s_all.shadow_casters,
+        "casters drawn {} (culled {}) against {} without culling: nothing was left out",
+        s.shadow_casters,
+        s.shadow_casters_culled,
+        s_all.shadow_casters
+    );
+    assert_eq!(s_all.shadow_casters_culled, 0);
+    let differ = (0..culled.data.len())
+        .filter(|&i| culled.data[i] != all.data[i])
+        .count();
+    assert_eq!(
+        differ, 0,
+        "{differ} pixels changed when casters were culled"
+    );
+    // The shadows are there: darker ground pixels than the lit ground.
+    let ground = |img: &RgbaImage| {
+        img.data
+            .iter()
+            .filter(|p| p[3] > 0.0 && (p[0] - p[1]).abs() < 1e-3 && p[0] < 0.35)
+            .count()
+    };
+    assert!(
+        ground(&culled) > 20,
+        "shadowed ground pixels {}",
+        ground(&culled)
+    );
+}
+
+#[test]
+fn a_billboard_casts_the_same_shadow_lit_from_either_side() {
+    let name = "a_billboard_casts_the_same_shadow_lit_from_either_side";
+    let shadowed = |light: Vec3| {
+        let gpu = common::gpu_or_skip(name)?;
+        let mut r = renderer(gpu, &asset(banded, None, false), vec![Mat4::IDENTITY]);
+        r.add_mesh(&MeshData::quad(
+            Vec3::new(-6.0, -1.0, 6.0),
+            Vec3::new(0.0, 0.0, -12.0),
+            Vec3::new(12.0, 0.0, 0.0),
+            [0.6, 0.6, 0.6, 1.0],
+        ))
+        .expect("ground");
+        r.set_shadows(true);
+        r.light_dir = light.normalize();
+        // From straight above: the ground fills the frame, the billboard is a line.
+        let cam = ViewCamera::look_at(
+            Vec3::new(0.0, 8.0, 0.0),
+            Vec3::new(0.0, -1.0, 0.0),
+            Vec3::NEG_Z,
+            0.8,
+            96,
+            96,
+            1.0,
+            100.0,
+        );
+        let (img, _) = r.render_image(&cam).expect("render");
+        let grey = |p: &&[f32; 4]| (p[0] - p[1]).abs() < 1e-3;
+        let lit = img
+            .data
+            .iter()
+            .filter(grey)
+            .map(|p| p[0])
+            .fold(0.0, f32::max);
+        Some(
+            img.data
+                .iter()
+                .filter(grey)
+                .filter(|p| p[0] < 0.8 * lit)
+                .count(),
+        )
+    };
+    let Some(front) = shadowed(Vec3::new(0.0, 1.0, 0.6)) else {
+        return;
+    };
+    let Some(back) = shadowed(Vec3::new(0.0, 1.0, -0.6)) else {
+        return;
+    };
+    assert!(front > 100, "lit from the front: {front} shadowed pixels");
+    assert!(
+        front.abs_diff(back) * 20 <= front,
+        "shadowed pixels lit from the front {front}, from behind {back}"
     );
 }

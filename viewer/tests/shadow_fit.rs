@@ -12,6 +12,8 @@
 //!   scene within its depth range (casters outside the view still cast); every cascade
 //!   shares the base's depth, and the uniform's scale and offset take a point's base NDC
 //!   to its NDC in each cascade.
+//! - Culling a caster from a cascade: left out only when no point of its sphere lands in
+//!   the cascade's window.
 //! - Texel snapping: moving the camera a little moves every window by whole texels and
 //!   keeps its size, so shadow edges do not shimmer.
 //!
@@ -20,8 +22,8 @@
 //! tallest point y = 82; the oak volume's bounds, 64.7 tall, scaled ≤ 1.1).
 
 use billow_view::shadow::{
-    cascades, frustum_scene_points, light_camera, light_camera_for_view, texel_density,
-    texel_density_at,
+    cascades, frustum_scene_points, light_camera, light_camera_for_view, sphere_in_window,
+    texel_density, texel_density_at,
 };
 use billow_view::ViewCamera;
 use glam::Vec3;
@@ -223,4 +225,47 @@ fn the_fitted_windows_move_by_whole_texels() {
             }
         }
     }
+}
+
+/// `sphere_in_window` never leaves out a sphere of which some point lands in the
+/// cascade's window (random spheres around the oak_clouds cascades), and does leave
+/// out spheres that lie away from it.
+#[test]
+fn a_caster_is_culled_only_when_no_point_of_its_sphere_reaches_the_window() {
+    let (light, camera, bounds) = oak_clouds();
+    let cs = cascades(light, &camera, bounds, SIZE);
+    let mut rng = 0x2545_f491_4f6c_dd1d_u64;
+    let mut next = || {
+        rng ^= rng << 13;
+        rng ^= rng >> 7;
+        rng ^= rng << 17;
+        (rng >> 11) as f32 / (1u64 << 53) as f32
+    };
+    let (lo, hi) = bounds;
+    let (mut kept, mut left_out) = (0, 0);
+    for c in &cs.cameras {
+        for _ in 0..2000 {
+            let centre = lo + (hi - lo) * Vec3::new(next(), next(), next());
+            let radius = 1.0 + 60.0 * next();
+            let seen = sphere_in_window(c, centre, radius);
+            if seen {
+                kept += 1;
+                continue;
+            }
+            left_out += 1;
+            for _ in 0..64 {
+                let d = Vec3::new(next(), next(), next()) * 2.0 - 1.0;
+                let p = centre + d.normalize_or_zero() * radius * next().cbrt();
+                let q = light_clip(c, p);
+                assert!(
+                    q.x.abs() > 1.0 || q.y.abs() > 1.0,
+                    "sphere {centre} r {radius} left out, but its point {p} lands at {q}"
+                );
+            }
+        }
+    }
+    assert!(
+        kept > 100 && left_out > 100,
+        "kept {kept}, left out {left_out}"
+    );
 }

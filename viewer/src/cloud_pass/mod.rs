@@ -46,7 +46,7 @@
 use std::cell::{Cell, OnceCell, RefCell};
 
 use bytemuck::{Pod, Zeroable};
-use glam::Mat4;
+use glam::{Mat4, Vec3};
 
 use crate::layout::{entry, frame_layout, sampler, shader, texture, uniform, Pipeline};
 use crate::mesh_pass::MeshFrame;
@@ -196,14 +196,69 @@ pub struct CloudDraw<'a> {
 
 /// A frame's cloud work: the instance ranges of each (cloud, level) in the persistent
 /// instance buffer, written by [`CloudPass::frame`].
+#[derive(Clone)]
 pub struct CloudFrame<'a> {
     instances: wgpu::Buffer,
     /// (cloud, level, instance range).
     groups: Vec<(&'a GpuCloud, usize, std::ops::Range<u32>)>,
+    /// Per instance (buffer order): a world-space sphere holding everything it draws.
+    spheres: Vec<(Vec3, f32)>,
     /// Billboard quads (sides) drawn.
     pub quads: usize,
     /// Bytes written to the GPU for this frame's clouds (instances and frame uniforms).
     pub bytes_uploaded: usize,
+}
+
+impl<'a> CloudFrame<'a> {
+    /// The frame with only the instances whose sphere `keep` accepts (the same
+    /// instance buffer; each group split into its runs of kept instances), and how
+    /// many instances were left out.
+    pub fn culled(&self, keep: impl Fn(Vec3, f32) -> bool) -> (CloudFrame<'a>, usize) {
+        let mut groups = Vec::with_capacity(self.groups.len());
+        let mut dropped = 0;
+        for &(cloud, level, ref range) in &self.groups {
+            let mut run: Option<u32> = None;
+            for i in range.clone() {
+                let (c, r) = self.spheres[i as usize];
+                let kept = keep(c, r);
+                dropped += usize::from(!kept);
+                match (kept, run) {
+                    (true, None) => run = Some(i),
+                    (false, Some(s)) => {
+                        groups.push((cloud, level, s..i));
+                        run = None;
+                    }
+                    _ => {}
+                }
+            }
+            if let Some(s) = run {
+                groups.push((cloud, level, s..range.end));
+            }
+        }
+        let frame = CloudFrame {
+            groups,
+            ..self.clone()
+        };
+        (frame, dropped)
+    }
+
+    /// Instances drawn (a dissolving instance counts in both its levels).
+    pub fn instance_count(&self) -> usize {
+        self.groups.iter().map(|g| g.2.len()).sum()
+    }
+}
+
+/// The world-space sphere holding everything `cloud` draws under `model` (its
+/// [`GpuCloud::caster_radius`] scaled by the model's largest axis scale).
+fn instance_sphere(cloud: &GpuCloud, model: Mat4) -> (Vec3, f32) {
+    let scale = [model.x_axis, model.y_axis, model.z_axis]
+        .iter()
+        .map(|a| a.truncate().length())
+        .fold(0.0f32, f32::max);
+    (
+        model.transform_point3(cloud.centre),
+        cloud.caster_radius * scale,
+    )
 }
 
 /// Which persistent frame uniform a pass uses.
@@ -218,11 +273,14 @@ pub struct CloudPass {
     billboard: wgpu::RenderPipeline,
     /// Alpha-tested depth only, made by the first shadow pass
     /// ([`CloudPass::shadow_pipeline`]).
-    shadow: OnceCell<wgpu::RenderPipeline>,
+    /// (foliage mesh, billboards).
+    shadow: OnceCell<(wgpu::RenderPipeline, wgpu::RenderPipeline)>,
     layout: wgpu::PipelineLayout,
     module: wgpu::ShaderModule,
     draw_layout: wgpu::BindGroupLayout,
     sampler: wgpu::Sampler,
+    /// The shadow pass's alpha test: bilinear within the nearest MIP level.
+    shadow_sampler: wgpu::Sampler,
     white: wgpu::TextureView,
     /// The flat normal (128, 128, 255), bound where an asset has no normal map.
     flat_normal: wgpu::TextureView,
@@ -250,7 +308,8 @@ fn instance_buffer(gpu: &Gpu, capacity: u64) -> wgpu::Buffer {
 enum Kind {
     Foliage,
     Billboard,
-    Shadow,
+    FoliageShadow,
+    BillboardShadow,
 }
 
 impl CloudPass {
@@ -274,6 +333,7 @@ impl CloudPass {
                 entry(1, fs, texture(d2)),
                 entry(2, fs, sampler()),
                 entry(3, fs, texture(d2)),
+                entry(4, fs, sampler()),
             ],
         });
         let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -285,6 +345,15 @@ impl CloudPass {
         let billboard = build_pipeline(device, &pl, &module, Kind::Billboard);
         gpu.note_built("pipeline:cloud");
         let sampler = repeat_sampler(device, "cloud texture");
+        let shadow_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("cloud shadow alpha"),
+            address_mode_u: wgpu::AddressMode::Repeat,
+            address_mode_v: wgpu::AddressMode::Repeat,
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            mipmap_filter: wgpu::MipmapFilterMode::Nearest,
+            ..Default::default()
+        });
         let white =
             upload_rgba8_mips(gpu, &TextureData::white(), "white").create_view(&Default::default());
         let flat_normal = upload::linear_texture(gpu, 1, 1, &[vec![128, 128, 255, 255]])
@@ -317,6 +386,7 @@ impl CloudPass {
             module,
             draw_layout,
             sampler,
+            shadow_sampler,
             white,
             flat_normal,
             frames,
@@ -337,8 +407,9 @@ impl CloudPass {
     /// serves the shadow pass and the main pass: instance data does not depend on the
     /// view.
     pub fn frame<'a>(&self, gpu: &Gpu, draws: &[CloudDraw<'a>]) -> CloudFrame<'a> {
-        // (cloud, per level: its instances).
-        let mut clouds: Vec<(&'a GpuCloud, Vec<Vec<CloudInstance>>)> = Vec::new();
+        // (cloud, per level: its instances and their spheres).
+        type Level = Vec<(CloudInstance, (Vec3, f32))>;
+        let mut clouds: Vec<(&'a GpuCloud, Vec<Level>)> = Vec::new();
         for d in draws {
             let i = match clouds.iter().position(|(c, _)| std::ptr::eq(*c, d.cloud)) {
                 Some(i) => i,
@@ -349,16 +420,18 @@ impl CloudPass {
             };
             let dissolving = d.dissolve > 0.0 && d.level + 1 < d.cloud.level_count();
             let t = if dissolving { d.dissolve } else { 0.0 };
+            let sphere = instance_sphere(d.cloud, d.model);
             if let Some(level) = clouds[i].1.get_mut(d.level) {
-                level.push(instance_dissolving(d.model, d.morph, t, false));
+                level.push((instance_dissolving(d.model, d.morph, t, false), sphere));
             }
             if dissolving {
                 if let Some(next) = clouds[i].1.get_mut(d.level + 1) {
-                    next.push(instance_dissolving(d.model, d.next_morph, t, true));
+                    next.push((instance_dissolving(d.model, d.next_morph, t, true), sphere));
                 }
             }
         }
         let mut data: Vec<CloudInstance> = Vec::with_capacity(draws.len());
+        let mut spheres = Vec::with_capacity(draws.len());
         let mut groups = Vec::new();
         let mut quads = 0;
         for (cloud, levels) in clouds {
@@ -367,7 +440,8 @@ impl CloudPass {
                     continue;
                 }
                 let start = data.len() as u32;
-                data.extend_from_slice(&inst);
+                data.extend(inst.iter().map(|i| i.0));
+                spheres.extend(inst.iter().map(|i| i.1));
                 if level > 0 {
                     quads += cloud.quads(level) * inst.len();
                 }
@@ -388,6 +462,7 @@ impl CloudPass {
         CloudFrame {
             instances: held.0.clone(),
             groups,
+            spheres,
             quads,
             bytes_uploaded: std::mem::size_of_val(data.as_slice()),
         }
@@ -404,11 +479,20 @@ impl CloudPass {
 
     /// The alpha-tested depth-only pipeline of the shadow pass, made on first use
     /// (recorded as `pipeline:cloud-shadow`; only scenes with shadows make it).
-    pub fn shadow_pipeline(&self, gpu: &Gpu) -> &wgpu::RenderPipeline {
+    /// The foliage mesh's is drawn two-sided, the billboards' from the side facing the
+    /// light only: each billboard is two quads on one plane (SPEC §9.4), and the
+    /// light's depth needs one of them.
+    pub fn shadow_pipelines(&self, gpu: &Gpu) -> &(wgpu::RenderPipeline, wgpu::RenderPipeline) {
         self.shadow.get_or_init(|| {
-            let p = build_pipeline(&gpu.device, &self.layout, &self.module, Kind::Shadow);
+            let f = build_pipeline(&gpu.device, &self.layout, &self.module, Kind::FoliageShadow);
+            let b = build_pipeline(
+                &gpu.device,
+                &self.layout,
+                &self.module,
+                Kind::BillboardShadow,
+            );
             gpu.note_built("pipeline:cloud-shadow");
-            p
+            (f, b)
         })
     }
 
@@ -425,14 +509,14 @@ impl CloudPass {
         shadow: bool,
     ) -> usize {
         let mut n = 0;
-        let shadow_pipeline = shadow.then(|| self.shadow_pipeline(gpu));
+        let shadow_pipelines = shadow.then(|| self.shadow_pipelines(gpu));
         rp.set_bind_group(0, frame_bind, &[]);
         rp.set_bind_group(2, receiver, &[]);
         rp.set_vertex_buffer(1, f.instances.slice(..));
         for &(cloud, level, ref range) in &f.groups {
             rp.set_vertex_buffer(0, cloud.vertices.slice(..));
             if level == 0 {
-                rp.set_pipeline(shadow_pipeline.unwrap_or(&self.foliage));
+                rp.set_pipeline(shadow_pipelines.map_or(&self.foliage, |p| &p.0));
                 for r in &cloud.foliage {
                     rp.set_bind_group(1, &r.bind, &[]);
                     rp.draw(r.vertices.clone(), range.clone());
@@ -443,7 +527,7 @@ impl CloudPass {
             let Some(atlas_groups) = cloud.billboard_levels.get(level - 1) else {
                 continue;
             };
-            rp.set_pipeline(shadow_pipeline.unwrap_or(&self.billboard));
+            rp.set_pipeline(shadow_pipelines.map_or(&self.billboard, |p| &p.1));
             rp.set_index_buffer(cloud.indices.slice(..), wgpu::IndexFormat::Uint32);
             for g in atlas_groups {
                 rp.set_bind_group(1, &g.bind, &[]);
@@ -499,7 +583,12 @@ fn build_pipeline(
     let (label, fs, cull) = match kind {
         Kind::Foliage => ("cloud foliage", "fs_foliage", None),
         Kind::Billboard => ("cloud billboards", "fs_billboard", Some(wgpu::Face::Back)),
-        Kind::Shadow => ("cloud shadow", "fs_shadow", None),
+        Kind::FoliageShadow => ("cloud foliage shadow", "fs_shadow", None),
+        Kind::BillboardShadow => (
+            "cloud billboard shadow",
+            "fs_shadow",
+            Some(wgpu::Face::Back),
+        ),
     };
     Pipeline {
         fs,
@@ -507,7 +596,7 @@ fn build_pipeline(
         cull,
         depth: Some((true, wgpu::CompareFunction::Less)),
         target: match kind {
-            Kind::Shadow => None,
+            Kind::FoliageShadow | Kind::BillboardShadow => None,
             _ => Some(wgpu::ColorTargetState {
                 format: COLOR_FORMAT,
                 blend: None,

@@ -41,6 +41,9 @@ pub struct GpuCloud {
     /// Object-space bounds centre and radius.
     pub centre: Vec3,
     pub radius: f32,
+    /// Radius about `centre` of a sphere holding every vertex of every level at either
+    /// end of its morph (and the bounds): what a shadow cascade culls instances by.
+    pub caster_radius: f32,
     /// The kept mesh, for the mesh pass (object space); its `textures` are left empty: the
     /// mesh pass draws it with [`GpuCloud::mesh_textures`], uploaded once for the cloud
     /// and all its instances.
@@ -188,6 +191,10 @@ impl CloudPass {
                 wgpu::BindGroupEntry {
                     binding: 3,
                     resource: wgpu::BindingResource::TextureView(normals),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: wgpu::BindingResource::Sampler(&self.shadow_sampler),
                 },
             ],
         })
@@ -424,6 +431,14 @@ impl CloudPass {
             }
             billboard_levels.push(groups);
         }
+        let b = &asset.header.bounds;
+        let (lo, hi) = (Vec3::from(b.min), Vec3::from(b.max));
+        let centre = 0.5 * (lo + hi);
+        let radius = 0.5 * (hi - lo).length();
+        let caster_radius = verts.iter().fold(radius, |r, v| {
+            let d = (Vec3::from(v.pos) - centre).length();
+            r.max(d).max((Vec3::from(v.target) - centre).length())
+        });
         let n = verts.len();
         verts.resize(n.max(1), CloudVertex::default());
         let n = indices.len();
@@ -438,8 +453,6 @@ impl CloudPass {
             bytemuck::cast_slice(&indices),
             wgpu::BufferUsages::INDEX,
         );
-        let b = &asset.header.bounds;
-        let (lo, hi) = (Vec3::from(b.min), Vec3::from(b.max));
         Ok(GpuCloud {
             vertices,
             indices,
@@ -448,8 +461,9 @@ impl CloudPass {
             billboards,
             foliage_triangles: f.triangles.len() as u32,
             runtime_lit,
-            centre: 0.5 * (lo + hi),
-            radius: 0.5 * (hi - lo).length(),
+            centre,
+            radius,
+            caster_radius,
             trunk: trunk_mesh(asset),
             mesh_textures,
             block_textures,

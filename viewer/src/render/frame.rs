@@ -378,16 +378,27 @@ impl Renderer {
         let (x, y, side) = shadow::tile_rect(k, map.size);
         rp.set_viewport(x as f32, y as f32, side as f32, side as f32, 0.0, 1.0);
         rp.set_scissor_rect(x, y, side, side);
+        // Casters outside the cascade's window are left out (each cascade's depth range
+        // covers every caster, so only the window across the light decides).
+        let seen = |c: Vec3, r: f32| !self.shadow_culling || shadow::sphere_in_window(light, c, r);
         if let Some(pass) = &self.mesh_pass {
             let bind = pass.frame_bind_group(&self.gpu, View::Light, &frame);
             for m in &self.meshes {
-                pass.draw(&self.gpu, &mut rp, bind, none, m, true);
+                let (lo, hi) = m.bounds;
+                if seen(0.5 * (lo + hi), 0.5 * (hi - lo).length()) {
+                    stats.shadow_casters += pass.draw(&self.gpu, &mut rp, bind, none, m, true);
+                } else {
+                    stats.shadow_casters_culled += m.ranges.len();
+                }
             }
         }
         if let (Some(pass), Some(cf)) = (&self.cloud_pass, clouds) {
+            let (cf, culled) = cf.culled(seen);
+            stats.shadow_casters += cf.instance_count();
+            stats.shadow_casters_culled += culled;
             let bind = pass.frame_bind_group(&self.gpu, View::Light, &frame);
             stats.cloud_bytes_uploaded += std::mem::size_of::<MeshFrame>();
-            pass.draw(&self.gpu, &mut rp, bind, none, cf, true);
+            pass.draw(&self.gpu, &mut rp, bind, none, &cf, true);
         }
         if let (Some(pass), Some(plan)) = (&self.volumes.pass, &plan) {
             plan.draw(

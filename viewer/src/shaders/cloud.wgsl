@@ -25,6 +25,7 @@ struct Draw {
 @group(1) @binding(2) var smp: sampler;
 // Tangent-space normal map (linear RGBA8, SPEC §9.4); a flat 1×1 where there is none.
 @group(1) @binding(3) var nrm: texture_2d<f32>;
+@group(1) @binding(4) var alpha_smp: sampler;
 
 struct VIn {
     @location(0) pos: vec3<f32>,
@@ -145,7 +146,11 @@ fn fs_billboard(i: VOut) -> @location(0) vec4<f32> {
 
 @fragment
 fn fs_shadow(i: VOut) {
-    if texel(i).a < dr.params.x || dissolved(i) {
+    var a = dr.color.a;
+    if dr.params.w > 0.5 {
+        a = a * textureSample(tex, alpha_smp, i.uv).a;
+    }
+    if a < dr.params.x || dissolved(i) {
         discard;
     }
 }
