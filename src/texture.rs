@@ -14,6 +14,24 @@ use glam::{Vec2, Vec4};
 
 use crate::scene::{Texture, Wrap};
 
+/// Where a renderer's bilinear filter reads a row of `n` texels at `per_texel` regularly
+/// spaced points per texel (point `q` at `(q + ½) / per_texel` texels): per point, its
+/// two taps `(i0, i1)` clamped to the edge and the weight `t` of `i1`, texel centres at
+/// `i + ½`. The coverage models of the bakers (`bbcloud::atlas`, `voxelize::coverage`)
+/// sample this way; with a power-of-two `per_texel` every `t` is exact.
+pub fn clamp_edge_taps(n: usize, per_texel: usize) -> Vec<(usize, usize, f64)> {
+    let last = n as i64 - 1;
+    (0..n * per_texel)
+        .map(|q| {
+            let x = (q as f64 + 0.5) / per_texel as f64 - 0.5;
+            let x0 = x.floor();
+            let i0 = (x0 as i64).clamp(0, last) as usize;
+            let i1 = (x0 as i64 + 1).clamp(0, last) as usize;
+            (i0, i1, x - x0)
+        })
+        .collect()
+}
+
 /// sRGB-encoded byte → linear value, a 256-entry table built once.
 pub fn srgb_to_linear_lut() -> &'static [f32; 256] {
     static LUT: OnceLock<[f32; 256]> = OnceLock::new();

@@ -382,16 +382,11 @@ const RENDER_POINTS: usize = 4;
 /// (the allocation's gutter repeats its edge).
 fn over_points<T: Send>(img: &Image, f: impl Fn([(f32, f32); 4]) -> Option<T> + Sync) -> Vec<T> {
     let (w, h) = (img.width as usize, img.height as usize);
+    // Exact in f32 too: RENDER_POINTS is a power of two.
     let taps = |n: usize| -> Vec<(usize, usize, f32)> {
-        (0..n * RENDER_POINTS)
-            .map(|q| {
-                let x = (q as f32 + 0.5) / RENDER_POINTS as f32 - 0.5;
-                let x0 = x.floor();
-                let t = x - x0;
-                let i0 = (x0 as i64).clamp(0, n as i64 - 1) as usize;
-                let i1 = (x0 as i64 + 1).clamp(0, n as i64 - 1) as usize;
-                (i0, i1, t)
-            })
+        crate::texture::clamp_edge_taps(n, RENDER_POINTS)
+            .into_iter()
+            .map(|(i0, i1, t)| (i0, i1, t as f32))
             .collect()
     };
     let (tx, ty) = (taps(w), taps(h));

@@ -59,6 +59,7 @@ use super::bricks::{B, B3};
 use super::quantize::{srgb_eotf, Encoder};
 use super::slices::DirSlices;
 use crate::emptyspace::sparse::SparseLevel;
+use crate::texture::clamp_edge_taps;
 
 /// The largest optical depth a level-0 texel holds when the slicer filters it
 /// ([`billow_core::slicing::MAX_OPTICAL_DEPTH`], `ln 510`).
@@ -247,19 +248,7 @@ impl Model {
                 let m = along(c.dims, dims0, voxel, axis);
                 let cap = MAX_OPTICAL_DEPTH * opaque_scale(c.dims, dims0, voxel);
                 // Per point along one axis of n texels: (i0, i1, t), clamp-to-edge.
-                let taps = |n: usize| -> Vec<(usize, usize, f64)> {
-                    (0..n * S)
-                        .map(|q| {
-                            let x = (q as f64 + 0.5) / S as f64 - 0.5;
-                            let x0 = x.floor();
-                            let t = x - x0;
-                            let i0 = (x0 as i64).clamp(0, n as i64 - 1) as usize;
-                            let i1 = (x0 as i64 + 1).clamp(0, n as i64 - 1) as usize;
-                            (i0, i1, t)
-                        })
-                        .collect()
-                };
-                let (tu, tv) = (taps(nu), taps(nv));
+                let (tu, tv) = (clamp_edge_taps(nu, S), clamp_edge_taps(nv, S));
                 let (tau, op) = (&c.tau[axis], &c.opaque[axis]);
                 let lerp2 = |g: &dyn Fn(usize) -> f64, qu: usize, qv: usize| {
                     let (a0, a1, ta) = tu[qu];
