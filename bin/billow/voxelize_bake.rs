@@ -10,9 +10,9 @@ use billow::emptyspace::{prune, prune_sparse, EmptySpaceOptions, EmptySpaceStats
 use billow::presets::target::{search_volume, TargetOptions, Trial};
 use billow::presets::{VolumeFlags, VolumeSettings};
 use billow::provenance::tool_version;
-use billow::voxelize::toksvig::{judge_normals, keeps, NormalsJudgement};
 use billow::voxelize::{
-    bake_params, bake_params_for, voxelize, voxelize_sparse, CombineFn, Stage, VoxelizeOptions,
+    bake_params, bake_params_for, bake_with_normals, voxelize, voxelize_sparse, CombineFn,
+    MemoryRefusal, NormalsMode, NormalsOutcome, Stage, VoxelizeOptions,
 };
 
 use crate::exit::{voxelize_error, CliError, Code};
@@ -69,44 +69,26 @@ pub(crate) fn bake_once(
         report: &report,
         note: &note,
     };
-    // `--normals auto` decides before the bake, on a coarse one (docs/voxelize.md, "Normals").
-    let judge_start = Instant::now();
-    // Judging alone past the memory limit: without normals, said once the bake is done.
-    let mut unjudged = None;
-    let auto = match args.normals {
-        NormalsArg::Auto => Some(match judge_normals(scene, opts) {
-            Err(billow::voxelize::VoxelizeError::TooMuchMemory { limit_gib, .. }) => {
-                unjudged = Some(format!(
-                    "--normals auto: baked without normals, since even judging them would need more than --memory-limit {limit_gib:.1}"
-                ));
-                NormalsJudgement::Coarse(None)
-            }
-            r => r.map_err(|e| voxelize_error(input, &e))?,
-        }),
-        _ => None,
+    let mode = match args.normals {
+        NormalsArg::Auto => NormalsMode::Auto,
+        NormalsArg::On => NormalsMode::On,
+        NormalsArg::Off => NormalsMode::Off,
     };
-    if let Some(NormalsJudgement::Coarse(k)) = auto {
-        opts.normals = keeps(k);
-    }
-    let judge_s = judge_start.elapsed().as_secs_f64();
     let mut pruned = None;
-    let (mut asset, stats, dims, mip_count, coherence) = if args.prune {
-        let (asset, stats, dims, mips, coherence, ps) =
-            bake_pruned(scene, opts, auto, compression, hooks, input, source)?;
+    let (mut asset, stats, dims, mip_count, normals) = if args.prune {
+        let (asset, stats, dims, mips, normals, ps) =
+            bake_pruned(scene, opts, mode, compression, hooks, input, source)?;
         bar.finish();
         if let Some(n) = &ps.note {
             note(n);
         }
         pruned = Some(ps);
-        (asset, stats, dims, mips, coherence)
+        (asset, stats, dims, mips, normals)
     } else {
-        let baked = bake_dense(scene, opts, auto, hooks, input, source)?;
+        let baked = bake_dense(scene, opts, mode, hooks, input, source)?;
         bar.finish();
         baked
     };
-    if let Some(n) = unjudged {
-        note(&n);
-    }
     let compress_start = Instant::now();
     let blocks = (compression == Compression::Bc).then(|| {
         asset.header.set_compress("bc7");
@@ -122,9 +104,9 @@ pub(crate) fn bake_once(
         stats,
         dims,
         mip_count,
-        coherence,
+        coherence: normals.coherence,
         pruned,
-        judge_s,
+        judge_s: normals.judge_seconds,
         compress_s: compress_start.elapsed().as_secs_f64(),
         notes: notes.into_inner(),
     })
@@ -137,36 +119,19 @@ pub(crate) struct Hooks<'a> {
     pub(crate) note: &'a dyn Fn(&str),
 }
 
-/// The coherence a coarse `--normals auto` judgement found (the others are judged on the bake).
-fn judged(auto: Option<NormalsJudgement>) -> Option<f32> {
-    match auto {
-        Some(NormalsJudgement::Coarse(k)) => k,
-        _ => None,
-    }
-}
-
-/// `bake(opts)`; with `--normals auto`, a bake refused for memory is retried without
-/// normals (they are an option, not a requirement), with a warning that says so.
-fn normals_optional<T>(
-    auto: bool,
-    opts: &mut VoxelizeOptions,
-    note: &dyn Fn(&str),
-    bake: impl Fn(&VoxelizeOptions) -> Result<T, billow::voxelize::VoxelizeError>,
-) -> Result<T, billow::voxelize::VoxelizeError> {
-    use billow::voxelize::VoxelizeError;
-    match bake(opts) {
-        Err(VoxelizeError::TooMuchMemory {
+/// Warns of an `Auto` bake left without normals for memory.
+fn note_refusal(outcome: &NormalsOutcome, note: &dyn Fn(&str)) {
+    match outcome.refused {
+        Some(MemoryRefusal::Baking {
             needed_gib,
             limit_gib,
-            ..
-        }) if auto && opts.normals => {
-            opts.normals = false;
-            note(&format!(
-                "--normals auto: baked without normals, which would need about {needed_gib:.1} GiB, more than --memory-limit {limit_gib:.1}; raise it to keep them"
-            ));
-            bake(opts)
-        }
-        r => r,
+        }) => note(&format!(
+            "--normals auto: baked without normals, which would need about {needed_gib:.1} GiB, more than --memory-limit {limit_gib:.1}; raise it to keep them"
+        )),
+        Some(MemoryRefusal::Judging { limit_gib }) => note(&format!(
+            "--normals auto: baked without normals, since even judging them would need more than --memory-limit {limit_gib:.1}"
+        )),
+        None => {}
     }
 }
 
@@ -227,16 +192,14 @@ pub(crate) fn bake_to_target(
     Ok((baked, opts, summary))
 }
 
-/// The dense bake: [`voxelize`] (retried without normals when `--normals auto` and the
-/// estimate refuses them) and the asset; `auto`: `--normals auto`'s judgement, made on the
-/// bake itself at [`AUTO_NORMALS_LEVEL`] when it is [`NormalsJudgement::OnTheBake`].
-/// Returns the asset, the bake's statistics, the grid's dims and MIP count and the normal
-/// coherence `--normals auto` judged.
+/// The dense bake: [`voxelize`] with normals as `mode` says ([`bake_with_normals`]) and
+/// the asset. Returns the asset, the bake's statistics, the grid's dims and MIP count and
+/// what was decided about the normals.
 #[allow(clippy::type_complexity)]
 pub(crate) fn bake_dense(
     scene: &billow::scene::Scene,
     opts: &mut VoxelizeOptions,
-    auto: Option<NormalsJudgement>,
+    mode: NormalsMode,
     hooks: Hooks,
     input: &str,
     source: billow_format::SourceInfo,
@@ -246,31 +209,21 @@ pub(crate) fn bake_dense(
         billow::voxelize::VoxelizeStats,
         [u32; 3],
         u32,
-        Option<f32>,
+        NormalsOutcome,
     ),
     CliError,
 > {
-    use billow::voxelize::toksvig::{normal_coherence, AUTO_NORMALS_LEVEL};
     let Hooks { report, note } = hooks;
-    let mut volume = normals_optional(auto.is_some(), opts, note, |o| voxelize(scene, o, report))
-        .map_err(|e| voxelize_error(input, &e))?;
-    // auto: keep the normals only where one normal per voxel describes the surface.
-    let mut coherence = judged(auto);
-    if auto == Some(NormalsJudgement::OnTheBake) {
-        if let Some(n) = volume.normals.as_ref() {
-            let l = AUTO_NORMALS_LEVEL.min(volume.levels.len().saturating_sub(1));
-            let k = volume
-                .levels
-                .get(l)
-                .zip(n.get(l))
-                .and_then(|(c, n)| normal_coherence(c, n));
-            coherence = k;
-            if !keeps(k) {
-                volume.normals = None;
-                opts.normals = false;
-            }
-        }
-    }
+    let (volume, normals) = bake_with_normals(
+        scene,
+        opts,
+        mode,
+        |o| voxelize(scene, o, report),
+        |v| (v.normal_coherence, v.normals.is_some()),
+    )
+    .map_err(|e| voxelize_error(input, &e))?;
+    note_refusal(&normals, note);
+    let coherence = normals.coherence;
     let (stats, dims, mips) = (volume.stats, volume.dims(), volume.mip_count());
     let mut extra = BTreeMap::new();
     if let Some(k) = coherence {
@@ -278,19 +231,19 @@ pub(crate) fn bake_dense(
     }
     let params = bake_params(&volume, opts, &extra);
     let asset = volume.into_asset(&tool_version(), Some(source), params);
-    Ok((asset, stats, dims, mips, coherence))
+    Ok((asset, stats, dims, mips, normals))
 }
 
 /// `voxelize --prune`: the volume brick-sparse ([`voxelize_sparse`]), pruned by
 /// [`prune_sparse`] with `billow emptyspace`'s defaults; with an expression or custom
 /// combine (whose pyramids are dense anyway), the dense volume pruned by [`prune`]. Returns
-/// the pruned asset, the bake's statistics, the grid's dims and MIP count, the normal
-/// coherence `--normals auto` judged, and the prune's statistics.
+/// the pruned asset, the bake's statistics, the grid's dims and MIP count, what was
+/// decided about the normals, and the prune's statistics.
 #[allow(clippy::type_complexity)]
 fn bake_pruned(
     scene: &billow::scene::Scene,
     opts: &mut VoxelizeOptions,
-    auto: Option<NormalsJudgement>,
+    mode: NormalsMode,
     compression: Compression,
     hooks: Hooks,
     input: &str,
@@ -301,12 +254,11 @@ fn bake_pruned(
         billow::voxelize::VoxelizeStats,
         [u32; 3],
         u32,
-        Option<f32>,
+        NormalsOutcome,
         EmptySpaceStats,
     ),
     CliError,
 > {
-    use billow::voxelize::toksvig::AUTO_NORMALS_LEVEL;
     use billow::voxelize::VoxelizeError;
     let err = |e: VoxelizeError| voxelize_error(input, &e);
     let perr = |e: billow::emptyspace::EmptySpaceError| {
@@ -319,26 +271,22 @@ fn bake_pruned(
     };
     if !matches!(opts.combine, CombineFn::Preset(_)) {
         // Expressions and custom functions give dense levels: prune the dense volume.
-        let (asset, stats, dims, mips, coherence) =
-            bake_dense(scene, opts, auto, hooks, input, source)?;
+        let (asset, stats, dims, mips, normals) =
+            bake_dense(scene, opts, mode, hooks, input, source)?;
         let p = prune(&asset, &es).map_err(perr)?;
-        return Ok((p.asset, stats, dims, mips, coherence, p.stats));
+        return Ok((p.asset, stats, dims, mips, normals, p.stats));
     }
     let Hooks { report, note } = hooks;
-    let mut volume = normals_optional(auto.is_some(), opts, note, |o| {
-        voxelize_sparse(scene, o, report)
-    })
+    let (volume, normals) = bake_with_normals(
+        scene,
+        opts,
+        mode,
+        |o| voxelize_sparse(scene, o, report),
+        |v| (v.normal_coherence, v.has_normals()),
+    )
     .map_err(err)?;
-    let mut coherence = judged(auto);
-    if auto == Some(NormalsJudgement::OnTheBake) && volume.has_normals() {
-        let l = AUTO_NORMALS_LEVEL.min(volume.levels.len().saturating_sub(1));
-        let k = volume.normal_coherence(l);
-        coherence = k;
-        if !keeps(k) {
-            volume.drop_normals();
-            opts.normals = false;
-        }
-    }
+    note_refusal(&normals, note);
+    let coherence = normals.coherence;
     let (stats, dims, mips) = (volume.stats, volume.dims(), volume.mip_count());
     let mut extra = BTreeMap::new();
     if let Some(k) = coherence {
@@ -349,5 +297,5 @@ fn bake_pruned(
     // The bake freed its working set (dropped normals too): the prune's atlases come after.
     crate::alloc::release_free_memory();
     let p = prune_sparse(&shell, volume.levels, &es).map_err(perr)?;
-    Ok((p.asset, stats, dims, mips, coherence, p.stats))
+    Ok((p.asset, stats, dims, mips, normals, p.stats))
 }

@@ -56,6 +56,7 @@ mod lanes;
 mod level0;
 mod memory;
 pub mod mip;
+mod normals_mode;
 pub mod quantize;
 mod slices;
 mod sparse;
@@ -77,6 +78,7 @@ pub use expr::{Expr, ExprError};
 pub use grid::{fit_grid, GridError, GridSpec, Resolution, ResolutionError, MAX_AXIS, MAX_MARGIN};
 use memory::estimate_bytes;
 pub use memory::{estimate_peak_bytes, estimate_peak_bytes_pruned, estimate_peak_bytes_sparse};
+pub use normals_mode::{bake_with_normals, MemoryRefusal, NormalsMode, NormalsOutcome};
 pub use slices::MAX_SUPERSAMPLE;
 use sparse::sparse_level;
 pub use sparse::{voxelize_sparse, SparseVolume};
@@ -157,6 +159,9 @@ pub struct VoxelizeOptions {
     pub memory_limit: u64,
     /// Baked lighting multiplied into the level-0 colour (default none; see [`Bake`]).
     pub bake: Bake,
+    /// With `normals`: keep them only when the bake's [`Volume::normal_coherence`] passes
+    /// ([`toksvig::keeps`]; `--normals auto` judged on the bake).
+    pub judge_normals: bool,
 }
 
 impl Default for VoxelizeOptions {
@@ -172,6 +177,7 @@ impl Default for VoxelizeOptions {
             mip_levels: None,
             memory_limit: 16 << 30,
             bake: Bake::None,
+            judge_normals: false,
         }
     }
 }
@@ -226,6 +232,11 @@ pub struct Volume {
     /// The optical-depth scale of every level and what it matched
     /// ([`coverage`]: coverage that holds at every distance).
     pub coverage: CoverageScales,
+    /// For a bake with normals (kept or dropped by [`VoxelizeOptions::judge_normals`]):
+    /// [`toksvig::normal_coherence`] at level [`toksvig::AUTO_NORMALS_LEVEL`] (clamped).
+    /// When it passes ([`toksvig::keeps`]) the volume is a surface and its level 0 is not
+    /// thinned ([`CoverageScales`]).
+    pub normal_coherence: Option<f32>,
 }
 
 impl Volume {
@@ -487,16 +498,29 @@ pub fn voxelize(
     opts: &VoxelizeOptions,
     progress: &dyn Fn(Stage, f32),
 ) -> Result<Volume, VoxelizeError> {
-    let (grid, out, stats, coverage) = voxelize_as(scene, opts, progress, false)?;
-    let Output::Dense(levels, normals) = out else {
+    let (grid, out, stats, mut coverage) = voxelize_as(scene, opts, progress, false)?;
+    let Output::Dense(mut levels, mut normals) = out else {
         unreachable!("a dense voxelize")
     };
+    let l = toksvig::AUTO_NORMALS_LEVEL.min(levels.len().saturating_sub(1));
+    let normal_coherence = normals.as_ref().and_then(|n| {
+        levels
+            .get(l)
+            .zip(n.get(l))
+            .and_then(|(c, n)| toksvig::normal_coherence(c, n))
+    });
+    let surface = toksvig::keeps(normal_coherence);
+    if opts.judge_normals && !surface {
+        normals = None;
+    }
+    coverage.settle_level0(surface, |k| coverage::scale_level_rgba8(&mut levels[0], k));
     Ok(Volume {
         grid,
         levels,
         normals,
         stats,
         coverage,
+        normal_coherence,
     })
 }
 
@@ -634,10 +658,10 @@ fn voxelize_as(
                 cover.scales.push(k);
                 k
             };
+            // Level 0's scale is applied once the normals are settled (`settle_level0`).
             if let Some(l0) = level0 {
-                let (mut level0, count) = l0.finish_sparse();
-                let k = level0_scale(coverage::Columns::from_sparse(&level0), &mut cover);
-                coverage::scale_sparse_level(&mut level0, k);
+                let (level0, count) = l0.finish_sparse();
+                level0_scale(coverage::Columns::from_sparse(&level0), &mut cover);
                 progress(Stage::Combine, 1.0);
                 let mut out = vec![level0];
                 for (l, &d) in dims.iter().enumerate().skip(1) {
@@ -658,11 +682,10 @@ fn voxelize_as(
                 };
                 return Ok((grid, Output::Sparse(out), stats, cover));
             }
-            let (mut level0, normals0, count) = combine::combine_level0(*p, &zero, opts.normals);
+            let (level0, normals0, count) = combine::combine_level0(*p, &zero, opts.normals);
             non_empty = Some(count);
             drop(zero);
-            let k = level0_scale(coverage::Columns::from_rgba8(dims[0], &level0), &mut cover);
-            coverage::scale_level_rgba8(&mut level0, k);
+            level0_scale(coverage::Columns::from_rgba8(dims[0], &level0), &mut cover);
             progress(Stage::Combine, 1.0);
             let mut out = vec![level0];
             for l in 1..mips as usize {

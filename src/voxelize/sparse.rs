@@ -19,6 +19,8 @@ pub struct SparseVolume {
     pub stats: VoxelizeStats,
     /// As [`Volume::coverage`].
     pub coverage: super::CoverageScales,
+    /// As [`Volume::normal_coherence`].
+    pub normal_coherence: Option<f32>,
 }
 
 impl SparseVolume {
@@ -74,6 +76,7 @@ impl SparseVolume {
                 .then(|| vec![Vec::new(); self.levels.len()]),
             stats: self.stats,
             coverage: self.coverage.clone(),
+            normal_coherence: self.normal_coherence,
         };
         let mut a = empty.into_asset(tool, source, params);
         a.levels = Vec::new();
@@ -104,12 +107,26 @@ pub fn voxelize_sparse(
     let Output::Sparse(levels) = out else {
         unreachable!("a sparse voxelize")
     };
-    Ok(SparseVolume {
+    let mut v = SparseVolume {
         grid,
         levels,
         stats,
         coverage,
-    })
+        normal_coherence: None,
+    };
+    let l = super::toksvig::AUTO_NORMALS_LEVEL.min(v.levels.len().saturating_sub(1));
+    v.normal_coherence = v.normal_coherence(l);
+    let surface = super::toksvig::keeps(v.normal_coherence);
+    if opts.judge_normals && !surface {
+        v.drop_normals();
+    }
+    let level0 = v.levels.first_mut();
+    v.coverage.settle_level0(surface, |k| {
+        if let Some(l0) = level0 {
+            super::coverage::scale_sparse_level(l0, k)
+        }
+    });
+    Ok(v)
 }
 
 /// One sparse level from the colour and normal accumulators' bricks (each `(bricks,
