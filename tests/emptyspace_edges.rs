@@ -6,7 +6,7 @@
 
 use billow::emptyspace::occupancy::apply_threshold;
 use billow::emptyspace::synthetic::{set_normal_field, volume_from_fn};
-use billow::emptyspace::{prune, EmptySpaceError, EmptySpaceOptions, PARAM_KEY};
+use billow::emptyspace::{prune, EmptySpaceError, EmptySpaceOptions};
 use billow::eval::volume_sampler::DecodedVolume;
 use billow_format::{mip_dims, ColourSpace, Prism, VolumeAsset};
 use glam::{Mat3, Vec3};
@@ -171,7 +171,7 @@ fn an_all_empty_volume_gives_a_valid_asset_with_zero_cells() {
     assert_eq!((p.stats.boxes, p.stats.cells), (0, 0));
     assert!(p.asset.cells.is_empty() && p.asset.bands.is_empty());
     assert_eq!(p.asset.level_dims(0), [1, 1, 1]);
-    assert!(p.asset.header.params.contains_key(PARAM_KEY));
+    assert!(p.asset.header.pruned().is_some());
     assert!(p.stats.saving > 0.99);
     roundtrip(&p.asset);
 }
@@ -395,7 +395,10 @@ fn shells_pruned_and_banded_assets_and_bad_parameters_are_refused() {
         other => panic!("{other:?}"),
     }
     let mut unmarked = p.asset.clone();
-    unmarked.header.params.remove(PARAM_KEY);
+    unmarked
+        .header
+        .params
+        .remove(billow_format::param::EMPTYSPACE);
     if !unmarked.bands.is_empty() {
         assert_eq!(
             prune(&unmarked, &EmptySpaceOptions::default()),

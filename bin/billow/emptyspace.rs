@@ -114,10 +114,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     }
     // A volume kept whole is written as it came (apart from the marker): a raw input stays
     // raw, a compressed one is compressed again.
-    let input_compressed = asset
-        .header
-        .params
-        .contains_key(billow_format::param::COMPRESS);
+    let input_compressed = asset.header.compress().is_some();
     let gpu_before = volume_gpu_bytes(&asset, input_compressed);
     // The source is not read again: freed before the output is encoded and written.
     drop(asset);
@@ -128,11 +125,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         encode_volume(a)
     });
     if blocks.is_none() {
-        pruned
-            .asset
-            .header
-            .params
-            .remove(billow_format::param::COMPRESS);
+        pruned.asset.header.clear_compress();
     }
     let mut stage = Staged::new(&args.output);
     // Streamed from the texel data (no file-sized copy in memory).

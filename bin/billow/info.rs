@@ -94,10 +94,7 @@ pub fn run(args: Args, _ctx: &Ctx) -> Result<(), CliError> {
 /// Decodes the asset's payload and counts its GPU texture bytes (`Err`: the exit code and
 /// the message of a payload that does not decode).
 fn decode_gpu_bytes(bytes: &[u8], r: &Report) -> Result<GpuBytes, (Code, String)> {
-    let compressed = r
-        .header
-        .as_ref()
-        .is_ok_and(|h| h.params.contains_key(billow_format::param::COMPRESS));
+    let compressed = r.header.as_ref().is_ok_and(|h| h.compress().is_some());
     match r.kind {
         AssetKind::Volume => VolumeAsset::from_bytes(bytes)
             .map(|a| volume_gpu_bytes(&a, compressed))

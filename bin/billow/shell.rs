@@ -129,7 +129,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     // The shell's texture is the volume's: its blocks are reused, not encoded again.
     let blocks = match compression {
         Compression::None => {
-            asset.header.params.remove("compress");
+            asset.header.clear_compress();
             None
         }
         Compression::Bc => {

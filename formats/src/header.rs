@@ -200,6 +200,52 @@ impl BakedLight {
     }
 }
 
+/// The lighting baked into a volume's colours (`params["bake"]`, SPEC §8.4;
+/// [`Header::volume_bake`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum VolumeBake {
+    /// No key, `"none"` or blank: the colours are albedo (shaded at runtime where the
+    /// volume has normals).
+    None,
+    /// `"ao"`: ambient occlusion multiplied into the colours (how: `ao_rays`,
+    /// `ao_distance`, `ao_seed`).
+    Ao,
+    /// Any other value (a newer writer): lighting a reader cannot reproduce.
+    Other(String),
+}
+
+impl VolumeBake {
+    /// The bake of header `params`.
+    pub fn read(params: &BTreeMap<String, String>) -> VolumeBake {
+        match params.get(param::BAKE).map(|b| b.trim()) {
+            None | Some("" | "none") => VolumeBake::None,
+            Some("ao") => VolumeBake::Ao,
+            Some(other) => VolumeBake::Other(other.to_string()),
+        }
+    }
+
+    /// Writes the key [`VolumeBake::read`] reads (`None` removes it).
+    pub fn write(&self, params: &mut BTreeMap<String, String>) {
+        match self {
+            VolumeBake::None => {
+                params.remove(param::BAKE);
+            }
+            b => {
+                params.insert(param::BAKE.into(), b.name().into());
+            }
+        }
+    }
+
+    /// As written: `"none"`, `"ao"` or the other value.
+    pub fn name(&self) -> &str {
+        match self {
+            VolumeBake::None => "none",
+            VolumeBake::Ao => "ao",
+            VolumeBake::Other(s) => s,
+        }
+    }
+}
+
 /// Names of the header `params` that a reader acts on (the baker writes them, the
 /// viewer and the evaluators read them; SPEC.md §8). Read them through the typed
 /// accessors on [`Header`] ([`Header::shell`], [`Header::baked_light`]), not as string
@@ -214,8 +260,13 @@ pub mod param {
     /// The ambient fraction of a baked directional light, `0..=1` (default
     /// [`super::DEFAULT_AMBIENT`]).
     pub const AMBIENT: &str = "ambient";
-    /// Block compression of the texels, e.g. `"bc7"`.
+    /// Block compression of the texels, e.g. `"bc7"` ([`super::Header::compress`]).
     pub const COMPRESS: &str = "compress";
+    /// The lighting baked into a volume's colours ([`super::VolumeBake`]).
+    pub const BAKE: &str = "bake";
+    /// Present on a volume whose empty space was removed (`billow emptyspace`, `voxelize
+    /// --prune`): the prune's parameters ([`super::Header::pruned`]).
+    pub const EMPTYSPACE: &str = "emptyspace";
 }
 
 impl Header {
@@ -249,6 +300,37 @@ impl Header {
     /// Records the texels' block compression (`params["compress"]`, e.g. `"bc7"`).
     pub fn set_compress(&mut self, codec: impl Into<String>) {
         self.params.insert(param::COMPRESS.into(), codec.into());
+    }
+
+    /// The texels' block compression (`params["compress"]`), `None` when stored raw.
+    pub fn compress(&self) -> Option<&str> {
+        self.params.get(param::COMPRESS).map(String::as_str)
+    }
+
+    /// Records that the texels are stored raw (removes `params["compress"]`).
+    pub fn clear_compress(&mut self) {
+        self.params.remove(param::COMPRESS);
+    }
+
+    /// The lighting baked into a volume's colours ([`VolumeBake::read`]).
+    pub fn volume_bake(&self) -> VolumeBake {
+        VolumeBake::read(&self.params)
+    }
+
+    /// Records the lighting baked into a volume's colours ([`VolumeBake::write`]).
+    pub fn set_volume_bake(&mut self, bake: &VolumeBake) {
+        bake.write(&mut self.params);
+    }
+
+    /// The parameters of the prune that removed the volume's empty space
+    /// (`params["emptyspace"]`), `None` when it was not pruned.
+    pub fn pruned(&self) -> Option<&str> {
+        self.params.get(param::EMPTYSPACE).map(String::as_str)
+    }
+
+    /// Records the prune's parameters (see [`Header::pruned`]).
+    pub fn set_pruned(&mut self, params: impl Into<String>) {
+        self.params.insert(param::EMPTYSPACE.into(), params.into());
     }
 
     /// Check the rules a header must follow, independent of the chunks.
@@ -393,5 +475,44 @@ mod baked_light_tests {
         assert!(BakedLight::read(&p).is_err());
         BakedLight::Unknown.write(&mut p);
         assert!(p.is_empty());
+    }
+}
+
+#[cfg(test)]
+mod volume_bake_tests {
+    use super::*;
+
+    /// A missing, blank or `none` bake is albedo, `ao` is ambient occlusion, anything
+    /// else is kept by name; writing reads back (and `None` removes the key).
+    #[test]
+    fn volume_bake_reads_what_it_writes() {
+        let mut p = BTreeMap::new();
+        assert_eq!(VolumeBake::read(&p), VolumeBake::None);
+        for (v, want) in [
+            ("", VolumeBake::None),
+            (" none ", VolumeBake::None),
+            ("ao", VolumeBake::Ao),
+            ("gi", VolumeBake::Other("gi".into())),
+        ] {
+            p.insert(param::BAKE.into(), v.into());
+            assert_eq!(VolumeBake::read(&p), want, "{v:?}");
+        }
+        for b in [VolumeBake::Ao, VolumeBake::Other("gi".into()), VolumeBake::None] {
+            b.write(&mut p);
+            assert_eq!(VolumeBake::read(&p), b);
+        }
+        assert!(!p.contains_key(param::BAKE), "None removes the key");
+    }
+
+    /// The compression and prune markers read what their setters write.
+    #[test]
+    fn compress_and_pruned_markers_round_trip() {
+        let mut h = Header::volume("t", ColourSpace::SrgbPremultiplied, [1, 1, 1], 1, false);
+        assert_eq!((h.compress(), h.pruned()), (None, None));
+        h.set_compress("bc7");
+        h.set_pruned("threshold=0");
+        assert_eq!((h.compress(), h.pruned()), (Some("bc7"), Some("threshold=0")));
+        h.clear_compress();
+        assert_eq!(h.compress(), None);
     }
 }

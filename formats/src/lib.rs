@@ -41,7 +41,7 @@ pub use container::{
 pub use error::{tag_str, FormatError};
 pub use header::{
     param, AssetKind, BakedLight, Bounds, ColourSpace, Header, NormalEncoding, SourceInfo,
-    TexelFormat, VolumeHeader, DEFAULT_AMBIENT,
+    TexelFormat, VolumeBake, VolumeHeader, DEFAULT_AMBIENT,
 };
 pub use inspect::{inspect_bytes, ChunkInfo, Report};
 pub use volume::{

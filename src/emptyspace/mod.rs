@@ -43,9 +43,6 @@ use self::occupancy::{apply_threshold, TierSource, TierTexels};
 use self::sparse::{SparseLevel, SparseTier};
 use self::tier::{fill_tier, plan_tier, Tier, TierParams, TierPlan};
 
-/// Header `params` key that marks a pruned asset (its value records the parameters).
-pub const PARAM_KEY: &str = "emptyspace";
-
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum EmptySpaceError {
     #[error("the asset is invalid: {0}")]
@@ -342,15 +339,7 @@ pub fn prune(asset: &VolumeAsset, o: &EmptySpaceOptions) -> Result<Pruned, Empty
     asset
         .validate()
         .map_err(|e| EmptySpaceError::InvalidAsset(e.to_string()))?;
-    if asset.header.is_shell() {
-        return Err(EmptySpaceError::Shell);
-    }
-    if let Some(v) = asset.header.params.get(PARAM_KEY) {
-        return Err(EmptySpaceError::AlreadyPruned(v.clone()));
-    }
-    if !asset.bands.is_empty() {
-        return Err(EmptySpaceError::HasBands);
-    }
+    check_prunable(asset)?;
     check_options(o)?;
     // The source as it will be kept: faint texels dropped (in a copy; none without a
     // threshold).
@@ -363,6 +352,21 @@ pub fn prune(asset: &VolumeAsset, o: &EmptySpaceOptions) -> Result<Pruned, Empty
         }
     }
     prune_source(asset, Source::Dense { levels, normals }, o, start)
+}
+
+/// What a volume must be for [`prune`] and [`prune_sparse`] alike: not a shell (its
+/// texture tiles), not pruned already, without LOD bands.
+fn check_prunable(asset: &VolumeAsset) -> Result<(), EmptySpaceError> {
+    if asset.header.is_shell() {
+        return Err(EmptySpaceError::Shell);
+    }
+    if let Some(v) = asset.header.pruned() {
+        return Err(EmptySpaceError::AlreadyPruned(v.to_string()));
+    }
+    if !asset.bands.is_empty() {
+        return Err(EmptySpaceError::HasBands);
+    }
+    Ok(())
 }
 
 /// [`prune`] of a volume given brick-sparse: `asset` carries the header and cells (its
@@ -395,15 +399,7 @@ pub fn prune_sparse(
             return bad(format!("sparse level {l} is {:?}, expected {d:?}", s.dims));
         }
     }
-    if asset.header.params.contains_key("shell") {
-        return Err(EmptySpaceError::Shell);
-    }
-    if let Some(v) = asset.header.params.get(PARAM_KEY) {
-        return Err(EmptySpaceError::AlreadyPruned(v.clone()));
-    }
-    if !asset.bands.is_empty() {
-        return Err(EmptySpaceError::HasBands);
-    }
+    check_prunable(asset)?;
     for l in &mut levels {
         l.apply_threshold(o.threshold);
     }
@@ -523,9 +519,7 @@ fn prune_source(
         .unwrap_or(0);
     if tail == 0 {
         (out.levels, out.normals) = src.dense_from(0);
-        out.header
-            .params
-            .insert(PARAM_KEY.into(), params_text(o, 0, 0, dims0));
+        out.header.set_pruned(params_text(o, 0, 0, dims0));
         stats.kept_whole = true;
         stats.voxels_kept = stats.voxels_before;
         stats.note =
@@ -602,10 +596,8 @@ fn prune_source(
     out.bands.push(tail_band);
     stats.tail_level = k as u32;
     stats.cells = out.cells.len() + out.bands.iter().map(|b| b.cells.len()).sum::<usize>();
-    out.header.params.insert(
-        PARAM_KEY.into(),
-        params_text(o, k as u32, stats.boxes, dims0),
-    );
+    out.header
+        .set_pruned(params_text(o, k as u32, stats.boxes, dims0));
     Ok(finish(stats, out, start))
 }
 
@@ -620,9 +612,7 @@ fn empty_asset(out: &mut VolumeAsset, o: &EmptySpaceOptions, dims0: [u32; 3]) {
     let v = out.header.volume.as_mut().expect("volume header");
     v.dims = [1, 1, 1];
     v.mip_count = 1;
-    out.header
-        .params
-        .insert(PARAM_KEY.into(), params_text(o, 0, 0, dims0));
+    out.header.set_pruned(params_text(o, 0, 0, dims0));
 }
 
 fn finish(mut stats: EmptySpaceStats, out: VolumeAsset, start: Instant) -> Pruned {

@@ -33,6 +33,7 @@
 
 use std::collections::BTreeMap;
 
+use billow_format::VolumeBake;
 use glam::Vec3;
 
 use crate::voxelize::{
@@ -272,9 +273,8 @@ impl Lighting {
         dims: [u32; 3],
         normals: bool,
     ) -> Result<(Lighting, Option<String>), String> {
-        let bake = params.get("bake").map_or("none", |b| b.trim());
-        match bake {
-            "" | "none" if normals => {
+        match billow_format::VolumeBake::read(params) {
+            VolumeBake::None if normals => {
                 let l = VolumeLight::default();
                 Ok((
                     Lighting::Volume {
@@ -284,8 +284,8 @@ impl Lighting {
                     None,
                 ))
             }
-            "" | "none" => Ok((Lighting::Unlit, None)),
-            "ao" => {
+            VolumeBake::None => Ok((Lighting::Unlit, None)),
+            VolumeBake::Ao => {
                 if dims.contains(&0)
                     || !(min.is_finite() && max.is_finite())
                     || !(max.cmpgt(min).all())
@@ -322,7 +322,7 @@ impl Lighting {
                     None,
                 ))
             }
-            other => Ok((
+            VolumeBake::Other(other) => Ok((
                 Lighting::Unlit,
                 Some(format!(
                     "the asset has baked lighting (bake={other}) that the reference does not \

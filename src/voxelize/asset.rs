@@ -46,7 +46,7 @@ pub fn bake_params_for(
         p.insert("align".into(), opts.align.to_string());
     }
     if let Bake::Ao { rays, .. } = opts.bake {
-        p.insert("bake".into(), "ao".into());
+        billow_format::VolumeBake::Ao.write(&mut p);
         p.insert("ao_rays".into(), rays.to_string());
         p.insert(
             "ao_distance".into(),

@@ -232,13 +232,7 @@ pub(super) fn run(
             views: results,
         })
         .collect();
-    let gpu = billow_core::gpu_memory::cloud_gpu_bytes(
-        &asset,
-        asset
-            .header
-            .params
-            .contains_key(billow_format::param::COMPRESS),
-    );
+    let gpu = billow_core::gpu_memory::cloud_gpu_bytes(&asset, asset.header.compress().is_some());
     let summary = CloudSummary {
         source: source_shown,
         asset: asset_shown,

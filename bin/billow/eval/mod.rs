@@ -574,11 +574,9 @@ fn run_volume(
         LightingArg::Auto => reference_lighting(&asset)
             .map_err(|e| CliError::new(Code::from(&e), format!("{asset_shown}: {e}")))?,
         LightingArg::Unlit => {
-            let note = asset
-                .header
-                .params
-                .get("bake")
-                .filter(|b| !matches!(b.trim(), "" | "none"))
+            let bake = asset.header.volume_bake();
+            let note = (bake != billow_format::VolumeBake::None)
+                .then(|| bake.name().to_string())
                 .map(|b| {
                     format!(
                         "the asset has baked lighting (bake={b}) but --lighting unlit: the \
@@ -660,13 +658,7 @@ fn run_volume(
 
     let notes: Vec<String> = mismatch.into_iter().chain(lighting_note).collect();
     let sum = |f: &dyn Fn(&ViewResult) -> f64| results.iter().map(f).sum::<f64>();
-    let gpu = billow_core::gpu_memory::volume_gpu_bytes(
-        &asset,
-        asset
-            .header
-            .params
-            .contains_key(billow_format::param::COMPRESS),
-    );
+    let gpu = billow_core::gpu_memory::volume_gpu_bytes(&asset, asset.header.compress().is_some());
     let summary = Summary {
         source: source_shown,
         asset: asset_shown,
@@ -679,12 +671,7 @@ fn run_volume(
         reference_spp: args.spp,
         spacing: args.spacing.clone(),
         lighting: LightingJson {
-            asset: asset
-                .header
-                .params
-                .get("bake")
-                .cloned()
-                .unwrap_or_else(|| "none".into()),
+            asset: asset.header.volume_bake().name().to_string(),
             reference: lighting.name(),
             reference_details: reference_details(&lighting, lights.as_deref(), args),
         },
