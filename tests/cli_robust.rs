@@ -385,11 +385,12 @@ fn help_gives_ranges_and_keys() {
         assert!(entry.contains(range), "bbcloud {flag}: {entry}");
     }
     let vx = help("voxelize");
+    let margin = format!("0–{}", billow::voxelize::MAX_MARGIN);
     for (flag, range) in [
         ("--res", "1–2048"),
         ("--supersample", "1–8"),
         ("--mips", "1–"),
-        ("--margin", "0–16"),
+        ("--margin", margin.as_str()),
         ("--align", "1–2048"),
         ("--ao-rays", "1–4096"),
         ("--ao-distance", "> 0"),

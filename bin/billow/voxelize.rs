@@ -65,8 +65,9 @@ pub struct Args {
     /// Number of MIP levels, 1–the full chain (default: the full chain down to 1×1×1).
     #[arg(long)]
     pub(crate) mips: Option<u32>,
-    /// Empty border around the mesh, in voxels, 0–16.
-    #[arg(long, default_value_t = 0.5)]
+    // The range is the library's (`MAX_MARGIN`), said once.
+    #[arg(long, default_value_t = 0.5,
+          help = format!("Empty border around the mesh, in voxels, 0–{}", billow::voxelize::MAX_MARGIN))]
     pub(crate) margin: f32,
     /// Round every side of the grid up to a multiple of N voxels, 1–2048 (the box grows evenly with
     /// empty voxels). `billow emptyspace` needs even sides, and sides that are multiples of
@@ -227,15 +228,7 @@ pub fn options(
     let combine: CombineFn = combine
         .parse()
         .map_err(|e| CliError::new(Code::from(&e), format!("--combine: {e}")))?;
-    if !(margin.is_finite() && (0.0..=billow::voxelize::MAX_MARGIN).contains(&margin)) {
-        return Err(bad(
-            "--margin",
-            format!(
-                "{margin} is out of range (0 to {} voxels)",
-                billow::voxelize::MAX_MARGIN
-            ),
-        ));
-    }
+    billow::voxelize::grid::check_margin(margin).map_err(|e| bad("--margin", e))?;
     Ok(VoxelizeOptions {
         resolution,
         supersample,

@@ -497,7 +497,11 @@ mod volume_bake_tests {
             p.insert(param::BAKE.into(), v.into());
             assert_eq!(VolumeBake::read(&p), want, "{v:?}");
         }
-        for b in [VolumeBake::Ao, VolumeBake::Other("gi".into()), VolumeBake::None] {
+        for b in [
+            VolumeBake::Ao,
+            VolumeBake::Other("gi".into()),
+            VolumeBake::None,
+        ] {
             b.write(&mut p);
             assert_eq!(VolumeBake::read(&p), b);
         }
@@ -511,7 +515,10 @@ mod volume_bake_tests {
         assert_eq!((h.compress(), h.pruned()), (None, None));
         h.set_compress("bc7");
         h.set_pruned("threshold=0");
-        assert_eq!((h.compress(), h.pruned()), (Some("bc7"), Some("threshold=0")));
+        assert_eq!(
+            (h.compress(), h.pruned()),
+            (Some("bc7"), Some("threshold=0"))
+        );
         h.clear_compress();
         assert_eq!(h.compress(), None);
     }

@@ -83,6 +83,16 @@ const AXES: [char; 3] = ['x', 'y', 'z'];
 /// Largest empty border around the mesh, in voxels (`VoxelizeOptions::margin`, `--margin`).
 pub const MAX_MARGIN: f32 = 16.0;
 
+/// A margin (empty voxels around the bounds) is `0..=`[`MAX_MARGIN`]: the one check, which
+/// the grid fit and the CLI's early refusal share.
+pub fn check_margin(margin: f32) -> Result<(), GridError> {
+    if margin.is_finite() && (0.0..=MAX_MARGIN).contains(&margin) {
+        Ok(())
+    } else {
+        Err(GridError::BadMargin(margin))
+    }
+}
+
 fn check_axis(axis: char, value: u64) -> Result<u32, ResolutionError> {
     if value == 0 {
         Err(ResolutionError::Zero { axis })
@@ -219,7 +229,7 @@ pub fn full_mip_count(dims: [u32; 3]) -> u32 {
 pub enum GridError {
     #[error("bounds are empty or not finite ({min:?} .. {max:?})")]
     BadBounds { min: [f32; 3], max: [f32; 3] },
-    #[error("margin must be a number of voxels from 0 to {MAX_MARGIN}, got {0}")]
+    #[error("margin {0} is out of range (0 to {MAX_MARGIN} voxels)")]
     BadMargin(f32),
     #[error(transparent)]
     Resolution(#[from] ResolutionError),
@@ -269,9 +279,7 @@ pub fn fit_grid(bounds: &Aabb, res: Resolution, margin: f32) -> Result<GridSpec,
     if bounds.is_empty() || !bounds.min.is_finite() || !bounds.max.is_finite() {
         return Err(bad());
     }
-    if !(margin.is_finite() && (0.0..=MAX_MARGIN).contains(&margin)) {
-        return Err(GridError::BadMargin(margin));
-    }
+    check_margin(margin)?;
     res.validate()?;
     let ext = bounds.size().to_array().map(|e| e as f64);
     let longest = ext.iter().copied().fold(0.0, f64::max);
