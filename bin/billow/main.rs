@@ -24,6 +24,7 @@ mod view;
 mod view_load;
 mod view_steps;
 mod voxelize;
+mod voxelize_args;
 mod voxelize_bake;
 
 use std::process::ExitCode;
@@ -56,7 +57,7 @@ enum Command {
     Info(info::Args),
     /// Bake a mesh into a volumetric billboard: six-direction slices, composited MIPs, combined.
     #[command(allow_negative_numbers = true)]
-    Voxelize(voxelize::Args),
+    Voxelize(voxelize_args::Args),
     /// Cover a surface mesh with a tileable volume: one prism cell per triangle (volumetric textures).
     #[command(allow_negative_numbers = true)]
     Shell(shell::Args),

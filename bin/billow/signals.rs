@@ -3,7 +3,7 @@
 //! [`install`] blocks the three signals in the main thread before any other thread exists
 //! (every thread billow starts inherits the mask) and starts one thread that waits for
 //! them. On a signal that thread removes this process's staging temporaries
-//! (`.<name>.<pid>-<n>.billow.tmp`, [`crate::staged`]) from every folder registered with
+//! (`.<name>.<pid>-<n>.billow.tmp`, [`temp_owner`]; written by `crate::staged`) from every folder registered with
 //! [`watch`] and the empty folders registered with [`watch_created`], then ends the process
 //! by the same signal (its default action), so the parent sees a process killed by it
 //! (exit status 128 + the signal in a shell). Only `kill -9` (or a power cut) can still
@@ -11,6 +11,18 @@
 
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
+
+/// The end of every staging temporary's name: `.<name>.<pid>-<n>.billow.tmp`.
+pub const TEMP_SUFFIX: &str = ".billow.tmp";
+
+/// `(destination name, pid)` of a temporary file name `.<name>.<pid>-<rest>.billow.tmp`
+/// (ours and [`billow_format::write_atomic`]'s).
+pub fn temp_owner(temp_name: &str) -> Option<(&str, u32)> {
+    let inner = temp_name.strip_prefix('.')?.strip_suffix(TEMP_SUFFIX)?;
+    let (name, tail) = inner.rsplit_once('.')?;
+    let (pid, _) = tail.split_once('-')?;
+    Some((name, pid.parse().ok()?))
+}
 
 /// Folders this process writes temporaries into, and folders it created.
 static FOLDERS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
@@ -44,7 +56,7 @@ fn clean_up() {
         for e in entries.flatten() {
             let name = e.file_name();
             let Some(name) = name.to_str() else { continue };
-            if crate::staged::temp_owner(name).is_some_and(|(_, pid)| pid == me) {
+            if temp_owner(name).is_some_and(|(_, pid)| pid == me) {
                 let _ = std::fs::remove_file(e.path());
             }
         }

@@ -28,9 +28,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::exit::{CliError, Code};
-
-/// Suffix of every temporary output file.
-const SUFFIX: &str = ".billow.tmp";
+use crate::signals::{temp_owner, TEMP_SUFFIX};
 
 /// Files staged so far, and folders created for them.
 pub struct Staged {
@@ -62,15 +60,6 @@ pub fn out_err(path: &Path, e: impl std::fmt::Display) -> CliError {
         Code::OutputIo,
         format!("cannot write output: {}: {e}", path.display()),
     )
-}
-
-/// `(destination name, pid)` of a temporary file name `.<name>.<pid>-<rest>.billow.tmp`
-/// (ours and [`billow_format::write_atomic`]'s).
-pub fn temp_owner(temp_name: &str) -> Option<(&str, u32)> {
-    let inner = temp_name.strip_prefix('.')?.strip_suffix(SUFFIX)?;
-    let (name, tail) = inner.rsplit_once('.')?;
-    let (pid, _) = tail.split_once('-')?;
-    Some((name, pid.parse().ok()?))
 }
 
 /// Whether process `pid` may still be running: `false` only when the OS says it is gone.
@@ -163,7 +152,7 @@ impl Staged {
         crate::signals::watch(folder(dest));
         let n = COUNTER.fetch_add(1, Ordering::Relaxed);
         let tmp = folder(dest).join(format!(
-            ".{}.{}-{n}{SUFFIX}",
+            ".{}.{}-{n}{TEMP_SUFFIX}",
             file_name(dest),
             std::process::id()
         ));

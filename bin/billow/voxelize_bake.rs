@@ -11,15 +11,15 @@ use billow::presets::target::{search_volume, TargetOptions, Trial};
 use billow::presets::{VolumeFlags, VolumeSettings};
 use billow::provenance::tool_version;
 use billow::voxelize::{
-    bake_params, bake_params_for, bake_with_normals, voxelize, voxelize_sparse, CombineFn,
-    MemoryRefusal, NormalsMode, NormalsOutcome, Stage, VoxelizeOptions,
+    bake_params, bake_params_for, bake_with_normals, default_align, voxelize, voxelize_sparse,
+    CombineFn, MemoryRefusal, NormalsMode, NormalsOutcome, Stage, VoxelizeOptions,
 };
 
 use crate::exit::{voxelize_error, CliError, Code};
 use crate::output::{progress, warn};
 use crate::progress::{self, Monotone};
 use crate::target::{search_failed, trial_line, TargetSummary};
-use crate::voxelize::{default_align, Args, NormalsArg};
+use crate::voxelize_args::{Args, NormalsArg};
 use crate::Ctx;
 
 /// One bake, compressed as asked: what is written and what the summary reports.
@@ -168,7 +168,7 @@ pub(crate) fn bake_to_target(
         o.supersample = s.supersample;
         o.align = args
             .align
-            .unwrap_or_else(|| default_align(&o.resolution, &args.bounds));
+            .unwrap_or_else(|| default_align(&o.resolution, args.bounds.is_some()));
         let baked = bake_once(scene, &mut o, args, compression, ctx, input, source.clone())?;
         let bytes = baked
             .asset

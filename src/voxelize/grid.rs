@@ -83,6 +83,18 @@ const AXES: [char; 3] = ['x', 'y', 'z'];
 /// Largest empty border around the mesh, in voxels (`VoxelizeOptions::margin`, `--margin`).
 pub const MAX_MARGIN: f32 = 16.0;
 
+/// `VoxelizeOptions::align` when the caller gives none: with a [`Resolution::Longest`]
+/// `N` and no explicit bounds, the largest of 8, 4, 2, 1 that divides `N`, so that
+/// `emptyspace` can prune the output (it needs even sides; 8 lets it brick MIP levels
+/// 0–2, and keeps levels 0 and 1 in whole 4×4 blocks for block compression) while the
+/// longest axis stays `N`; 1 for an exact size or explicit bounds (the grid as asked).
+pub fn default_align(res: &Resolution, explicit_bounds: bool) -> u32 {
+    match res {
+        Resolution::Longest(n) if !explicit_bounds => 1 << n.trailing_zeros().min(3),
+        _ => 1,
+    }
+}
+
 /// A margin (empty voxels around the bounds) is `0..=`[`MAX_MARGIN`]: the one check, which
 /// the grid fit and the CLI's early refusal share.
 pub fn check_margin(margin: f32) -> Result<(), GridError> {
