@@ -33,7 +33,7 @@ use rayon::prelude::*;
 
 use crate::rng::Pcg32;
 use crate::voxelize::dense::pyramid_from_dense;
-use crate::voxelize::mip::Grid3;
+use crate::voxelize::grid3::Grid3;
 use crate::voxelize::{CombineFn, Preset};
 use billow_core::cells::box_prisms;
 

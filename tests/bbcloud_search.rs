@@ -4,7 +4,8 @@
 mod bbcloud_common;
 
 use bbcloud_common::{leafy_scene, oak_leaves};
-use billow::bbcloud::plane_search::{search, Element, SearchParams};
+use billow::bbcloud::plane_search::{search, SearchParams};
+use billow::bbcloud::Element;
 use billow::bbcloud::{bake, BbcloudOptions};
 use billow::rng::Pcg32;
 use billow::scene::Scene;

@@ -18,7 +18,8 @@
 mod bbcloud_common;
 
 use bbcloud_common::oak_leaves;
-use billow::bbcloud::plane_search::{search, Element, Found, SearchParams};
+use billow::bbcloud::plane_search::{search, Found, SearchParams};
+use billow::bbcloud::Element;
 
 /// A round's outcome with members as original indices: (plane bits, seed, members).
 type Round = ([u32; 4], u32, Vec<u32>);

@@ -3,7 +3,8 @@
 
 use std::str::FromStr;
 
-use billow::voxelize::mip::{downsample, over, taps, Grid3};
+use billow::voxelize::grid3::Grid3;
+use billow::voxelize::mip::{downsample, over, taps};
 use billow::voxelize::quantize::{decode_rgba8, encode_normal, encode_rgba8, srgb_eotf, srgb_oetf};
 use billow::voxelize::toksvig::{average_normal, toksvig_factor};
 use billow::voxelize::{

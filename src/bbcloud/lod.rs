@@ -13,7 +13,8 @@
 
 use glam::Vec3;
 
-use super::plane_search::{search, Element, Plane, SearchParams, SearchStats};
+use super::element::{Element, Plane};
+use super::plane_search::{search, SearchParams, SearchStats};
 use super::rect::{trim, PlaneRect};
 use super::view::ViewPreference;
 use crate::scene::Scene;

@@ -20,6 +20,7 @@
 pub mod assemble;
 pub mod atlas;
 pub mod bake;
+pub mod element;
 pub mod foliage;
 pub mod lod;
 pub mod plane_search;
@@ -41,7 +42,8 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 pub use bake::Shading;
-pub use plane_search::{Element, Found, Plane, SearchParams, SearchStats};
+pub use element::{Element, Plane};
+pub use plane_search::{Found, SearchParams, SearchStats};
 pub use view::{ViewDirs, ViewPreference};
 
 use crate::scene::Scene;

@@ -8,7 +8,7 @@
 
 use glam::{DVec2, Vec3};
 
-use super::plane_search::Plane;
+use super::element::Plane;
 
 /// A rectangle in a plane: `origin + s·u + t·v` for `s in [0, width]`, `t in [0, height]`,
 /// with `u × v = normal` (right-handed) and `width >= height` is not required.

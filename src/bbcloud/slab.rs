@@ -21,7 +21,7 @@
 
 use glam::Vec3;
 
-use super::plane_search::{Element, Plane};
+use super::element::{Element, Plane};
 
 /// Elements per culling run.
 pub const CHUNK: usize = 32;

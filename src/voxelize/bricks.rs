@@ -12,8 +12,8 @@
 use rayon::prelude::*;
 
 #[cfg(test)]
-use super::mip::Grid3;
-use super::mip::Texel;
+use super::grid3::Grid3;
+use super::grid3::Texel;
 
 /// Brick side in voxels.
 pub const B: usize = 8;
@@ -248,7 +248,7 @@ impl<T: Copy + Default + Send + Sync> BrickAccum<T> {
     pub fn for_each_brick(&mut self, layout: &Layout, f: impl Fn(&mut [T], usize) + Sync) {
         let per = B3 * self.width;
         let slot = &self.slot;
-        let base = super::mip::Disjoint::new(&mut self.data);
+        let base = super::grid3::Disjoint::new(&mut self.data);
         layout.bricks.par_iter().enumerate().for_each(|(i, &b)| {
             let s = slot[b as usize] as usize;
             // SAFETY: the bricks of a layout are distinct, so their accumulator slots are.

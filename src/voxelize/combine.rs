@@ -36,8 +36,8 @@ use rayon::prelude::*;
 use super::bricks::{self, for_each_voxel, local, BrickAccum, Bricked, B3};
 use super::coverage::{scale_opacity, Columns};
 use super::expr::{Expr, ExprError};
-use super::mip::{Disjoint, Grid3, Texel};
-use super::quantize::encode_normal;
+use super::grid3::{Disjoint, Grid3, Texel};
+use super::quantize::{clamp_premultiplied, encode_normal};
 use super::slices::DirSlices;
 use super::toksvig::average_normal;
 
@@ -45,18 +45,6 @@ use super::toksvig::average_normal;
 /// `+X, −X, +Y, −Y, +Z, −Z`. The result is clamped by [`clamp_premultiplied`].
 pub trait Combine: Sync {
     fn combine(&self, s: &[Vec4; 6]) -> Vec4;
-}
-
-/// Makes any value a valid premultiplied colour: NaN → 0, `0 ≤ a ≤ 1`, `0 ≤ rgb ≤ a`.
-pub fn clamp_premultiplied(v: Vec4) -> Vec4 {
-    let f = |x: f32| if x.is_nan() { 0.0 } else { x };
-    let a = f(v.w).clamp(0.0, 1.0);
-    Vec4::new(
-        f(v.x).clamp(0.0, a),
-        f(v.y).clamp(0.0, a),
-        f(v.z).clamp(0.0, a),
-        a,
-    )
 }
 
 /// The built-in functions.
@@ -598,4 +586,10 @@ pub(super) fn plane_table(s: &DirSlices, dims: [usize; 3]) -> Table {
         }
     }
     (start, list)
+}
+
+impl Combine for Expr {
+    fn combine(&self, s: &[Vec4; 6]) -> Vec4 {
+        self.eval(s)
+    }
 }

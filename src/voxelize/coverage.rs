@@ -366,7 +366,7 @@ pub fn scale_rgba8(px: [u8; 4], k: f32, enc: &Encoder) -> [u8; 4] {
         srgb_eotf(f32::from(px[2]) / 255.0),
         a,
     );
-    let mut out = enc.rgba8(super::combine::clamp_premultiplied(scale_opacity(c, k)));
+    let mut out = enc.rgba8(super::quantize::clamp_premultiplied(scale_opacity(c, k)));
     out[3] = out[3].max(1);
     out
 }

@@ -7,7 +7,8 @@
 use rayon::prelude::*;
 
 use super::combine::{combine_level, Combine};
-use super::mip::{downsample, Grid3};
+use super::grid3::Grid3;
+use super::mip::downsample;
 use super::Dir;
 
 /// Every MIP level of `level0` (premultiplied linear RGBA), RGBA8 `SrgbPremultiplied`,

@@ -11,7 +11,7 @@
 //!   just the four values).
 //!
 //! The result is clamped to a valid premultiplied colour
-//! ([`super::combine::clamp_premultiplied`]): NaN → 0, `0 ≤ a ≤ 1`, `0 ≤ rgb ≤ a`.
+//! ([`super::quantize::clamp_premultiplied`]): NaN → 0, `0 ≤ a ≤ 1`, `0 ≤ rgb ≤ a`.
 //! The source is parsed once into an AST and evaluated per voxel. Errors give the 1-based
 //! column (in characters) of the offending token. An expression is at most
 //! [`MAX_TOKENS`] tokens long and nested at most [`MAX_DEPTH`] levels deep, which bounds the
@@ -20,8 +20,6 @@
 use std::fmt;
 
 use glam::Vec4;
-
-use super::combine::Combine;
 
 /// A parse error at `column` (1-based, in characters).
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -393,11 +391,5 @@ impl std::str::FromStr for Expr {
     type Err = ExprError;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         Expr::parse(s)
-    }
-}
-
-impl Combine for Expr {
-    fn combine(&self, s: &[Vec4; 6]) -> Vec4 {
-        self.eval(s)
     }
 }

@@ -14,12 +14,54 @@ use glam::{Vec2, Vec3, Vec4};
 
 use super::grid::GridSpec;
 use super::lanes::{at_least, negative};
-use super::slices::{RowOut, TriSetup, SUB};
 use super::Dir;
 use crate::scene::{AlphaMode, Material, Scene};
 use crate::shade::Shader;
 
 mod voxels;
+
+/// Sub-sample precision: vertices snap to 1/(2·K·SUB) of a voxel.
+pub(crate) const SUB: i64 = 16;
+
+/// One non-empty level-0 voxel of a direction: pixel column `u` of its image row, slice `s`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Vox {
+    pub u: u16,
+    pub s: u16,
+    /// Premultiplied linear RGBA.
+    pub rgba: [f32; 4],
+}
+
+/// Everything the row loop needs of one triangle seen from one direction (the scene's
+/// triangle is not read again, except for normals).
+#[derive(Clone, Copy)]
+pub(crate) struct TriSetup {
+    /// Fixed-point (u, v) of the vertices, counter-clockwise.
+    pub p: [[i64; 2]; 3],
+    /// Depth of each vertex in voxels.
+    pub t: [f64; 3],
+    pub area: i64,
+    /// 1 or 0 subtracted from each edge function (tie rule).
+    pub bias: [i64; 3],
+    /// Texture coordinates and vertex colours of the slots.
+    pub uv: [Vec2; 3],
+    pub col: [Vec4; 3],
+    pub tri: u32,
+    pub material: u32,
+    /// Original vertex index of each slot.
+    pub perm: [u8; 3],
+    /// Whether the + direction of the axis sees the triangle's back (the − direction then
+    /// sees its front, and the other way round).
+    pub back: bool,
+    /// Which of the axis's two directions see it: bit 0 the + one, bit 1 the − one.
+    pub vis: u8,
+    pub rows: [u32; 2],
+    pub cols: [u32; 2],
+}
+
+/// A row's non-empty voxels, their weighted normals (when asked for), its fragment count
+/// and its projected coverage (see [`DirSlices::coverage`]).
+pub(crate) type RowOut = (Vec<Vox>, Vec<[f32; 3]>, u64, f64);
 
 /// A fragment: one triangle in one voxel, covering the samples of `mask`.
 struct Frag {

@@ -17,8 +17,8 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::bricks::{local, B, B3};
-use super::combine::{clamp_premultiplied, finished_value, plane_table, Accum, Preset};
-use super::quantize::{encode_normal, Encoder};
+use super::combine::{finished_value, plane_table, Accum, Preset};
+use super::quantize::{clamp_premultiplied, encode_normal, Encoder};
 use super::slices::DirSlices;
 use super::toksvig::average_normal;
 use crate::emptyspace::sparse::{BrickMask, SparseLevel};

@@ -27,64 +27,13 @@ use half::f16;
 use rayon::prelude::*;
 
 use super::bricks::{local, Bricked, Layout, B, B3, EMPTY};
+use super::grid3::{Disjoint, Grid3, Texel};
 use super::slices::DirSlices;
 use super::Dir;
 
 /// Premultiplied `front over back`: the shared core's one `over`
 /// ([`billow_core::compositing::over`]), re-exported here.
 pub use billow_core::compositing::over;
-
-/// Storage of one RGBA (or normal) voxel; the arithmetic is always f32/f64.
-pub trait Texel: Copy + Send + Sync + Default + 'static {
-    fn load(self) -> [f32; 4];
-    fn store(v: [f32; 4]) -> Self;
-}
-
-impl Texel for [f32; 4] {
-    #[inline]
-    fn load(self) -> [f32; 4] {
-        self
-    }
-    #[inline]
-    fn store(v: [f32; 4]) -> Self {
-        v
-    }
-}
-
-impl Texel for [f16; 4] {
-    #[inline]
-    fn load(self) -> [f32; 4] {
-        self.map(f16::to_f32)
-    }
-    #[inline]
-    fn store(v: [f32; 4]) -> Self {
-        v.map(f16::from_f32)
-    }
-}
-
-/// A dense 3D array, x fastest, then y, then z.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Grid3<T> {
-    pub dims: [usize; 3],
-    pub data: Vec<T>,
-}
-
-impl<T: Texel> Grid3<T> {
-    pub fn new(dims: [usize; 3]) -> Self {
-        Grid3 {
-            dims,
-            data: vec![T::default(); dims[0] * dims[1] * dims[2]],
-        }
-    }
-    #[inline]
-    pub fn index(&self, p: [usize; 3]) -> usize {
-        p[0] + self.dims[0] * (p[1] + self.dims[1] * p[2])
-    }
-    #[inline]
-    pub fn get(&self, p: [usize; 3]) -> [f32; 4] {
-        self.data[self.index(p)].load()
-    }
-}
 
 /// The children a parent covers along one axis: `(child index, fraction of it inside)`.
 pub type Taps = Vec<Vec<(usize, f32)>>;
@@ -603,41 +552,5 @@ fn gather<T: Texel>(g: &Bricked<T>, lo: [usize; 3], ext: [usize; 3], out: &mut V
                 }
             }
         }
-    }
-}
-
-/// A slice that parallel tasks write at indices no two tasks share.
-pub(crate) struct Disjoint<T> {
-    ptr: *mut T,
-    len: usize,
-}
-
-// SAFETY: writers promise disjoint indices (see `write`).
-unsafe impl<T: Send> Sync for Disjoint<T> {}
-unsafe impl<T: Send> Send for Disjoint<T> {}
-
-impl<T> Disjoint<T> {
-    pub(crate) fn new(data: &mut [T]) -> Self {
-        Disjoint {
-            ptr: data.as_mut_ptr(),
-            len: data.len(),
-        }
-    }
-    /// # Safety
-    /// No other task may write or read index `i` at the same time, and the slice given
-    /// to [`Disjoint::new`] must outlive every write.
-    #[inline]
-    pub(crate) unsafe fn write(&self, i: usize, v: T) {
-        assert!(i < self.len);
-        unsafe { self.ptr.add(i).write(v) };
-    }
-    /// # Safety
-    /// No other task may write or read `[start, start + len)` at the same time, and the
-    /// slice given to [`Disjoint::new`] must outlive the returned one.
-    #[inline]
-    #[allow(clippy::mut_from_ref)]
-    pub(crate) unsafe fn slice_mut(&self, start: usize, len: usize) -> &mut [T] {
-        assert!(start + len <= self.len);
-        unsafe { std::slice::from_raw_parts_mut(self.ptr.add(start), len) }
     }
 }

@@ -52,6 +52,7 @@ pub mod dense;
 pub mod expr;
 mod fragments;
 pub mod grid;
+pub mod grid3;
 mod lanes;
 mod level0;
 mod memory;
@@ -72,13 +73,16 @@ pub use ao::{
 };
 pub use asset::{bake_params, bake_params_for};
 pub use cells::{box_prisms, Prism};
-pub use combine::{clamp_premultiplied, Combine, CombineFn, CombineParseError, Preset};
+pub use combine::{Combine, CombineFn, CombineParseError, Preset};
 pub use coverage::CoverageScales;
 pub use expr::{Expr, ExprError};
-pub use grid::{fit_grid, GridError, GridSpec, Resolution, ResolutionError, MAX_AXIS, MAX_MARGIN};
+pub use grid::{
+    default_align, fit_grid, GridError, GridSpec, Resolution, ResolutionError, MAX_AXIS, MAX_MARGIN,
+};
 use memory::estimate_bytes;
 pub use memory::{estimate_peak_bytes, estimate_peak_bytes_pruned, estimate_peak_bytes_sparse};
 pub use normals_mode::{bake_with_normals, MemoryRefusal, NormalsMode, NormalsOutcome};
+pub use quantize::clamp_premultiplied;
 pub use slices::MAX_SUPERSAMPLE;
 use sparse::sparse_level;
 pub use sparse::{voxelize_sparse, SparseVolume};
@@ -86,7 +90,7 @@ pub use sparse::{voxelize_sparse, SparseVolume};
 use crate::emptyspace::sparse::SparseLevel;
 use crate::scene::{Aabb, Scene};
 use crate::shade;
-use mip::Texel;
+use grid3::Texel;
 
 /// A view direction: the camera on that side of the object, looking at it.
 /// `PosX` is the camera on the +X side looking towards −X.

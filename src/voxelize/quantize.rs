@@ -10,6 +10,18 @@
 
 use glam::{Vec3, Vec4};
 
+/// Makes any value a valid premultiplied colour: NaN → 0, `0 ≤ a ≤ 1`, `0 ≤ rgb ≤ a`.
+pub fn clamp_premultiplied(v: Vec4) -> Vec4 {
+    let f = |x: f32| if x.is_nan() { 0.0 } else { x };
+    let a = f(v.w).clamp(0.0, 1.0);
+    Vec4::new(
+        f(v.x).clamp(0.0, a),
+        f(v.y).clamp(0.0, a),
+        f(v.z).clamp(0.0, a),
+        a,
+    )
+}
+
 /// The sRGB opto-electronic transfer function (linear → encoded), input clamped to [0, 1].
 pub fn srgb_oetf(x: f32) -> f32 {
     let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) } as f64;

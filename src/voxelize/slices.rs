@@ -34,32 +34,22 @@
 //!   taken at its shading point.
 //! - The result is sparse ([`DirSlices`]): the non-empty voxels of each image row.
 
-use glam::{Vec2, Vec4};
 use half::f16;
 use rayon::prelude::*;
 
-use super::fragments::{cross2, row_fn, simd_available, RowCtx, Scratch};
+use super::fragments::{
+    cross2, row_fn, simd_available, RowCtx, RowOut, Scratch, TriSetup, Vox, SUB,
+};
 use super::grid::GridSpec;
-use super::mip::{Grid3, Texel};
+use super::grid3::{Grid3, Texel};
 use super::Dir;
 use crate::scene::Scene;
 use crate::shade::Shader;
 
-/// Sub-sample precision: vertices snap to 1/(2·K·SUB) of a voxel.
-pub(crate) const SUB: i64 = 16;
 /// Largest projected coordinate kept, in voxels (keeps edge functions in i64).
 const MAX_COORD: f64 = (1u64 << 20) as f64;
 /// Largest supersampling factor.
 pub const MAX_SUPERSAMPLE: u32 = 8;
-
-/// One non-empty level-0 voxel of a direction: pixel column `u` of its image row, slice `s`.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Vox {
-    pub u: u16,
-    pub s: u16,
-    /// Premultiplied linear RGBA.
-    pub rgba: [f32; 4],
-}
 
 /// One direction's slices at level 0, sparse: the non-empty voxels of every image row.
 pub(crate) struct DirSlices {
@@ -130,33 +120,6 @@ impl DirSlices {
     }
 }
 
-/// Everything the row loop needs of one triangle seen from one direction (the scene's
-/// triangle is not read again, except for normals).
-#[derive(Clone, Copy)]
-pub(crate) struct TriSetup {
-    /// Fixed-point (u, v) of the vertices, counter-clockwise.
-    pub p: [[i64; 2]; 3],
-    /// Depth of each vertex in voxels.
-    pub t: [f64; 3],
-    pub area: i64,
-    /// 1 or 0 subtracted from each edge function (tie rule).
-    pub bias: [i64; 3],
-    /// Texture coordinates and vertex colours of the slots.
-    pub uv: [Vec2; 3],
-    pub col: [Vec4; 3],
-    pub tri: u32,
-    pub material: u32,
-    /// Original vertex index of each slot.
-    pub perm: [u8; 3],
-    /// Whether the + direction of the axis sees the triangle's back (the − direction then
-    /// sees its front, and the other way round).
-    pub back: bool,
-    /// Which of the axis's two directions see it: bit 0 the + one, bit 1 the − one.
-    pub vis: u8,
-    pub rows: [u32; 2],
-    pub cols: [u32; 2],
-}
-
 /// The triangle set-up buffers of [`rasterize`], kept from one pass to the next so
 /// that the passes write the same memory (≈ 200 bytes a triangle twice) instead of
 /// asking the system for fresh, zeroed pages each time. Contents do not carry over.
@@ -165,10 +128,6 @@ pub(crate) struct SetupBufs {
     unsorted: Vec<Option<TriSetup>>,
     sorted: Vec<TriSetup>,
 }
-
-/// A row's non-empty voxels, their weighted normals (when asked for), its fragment count
-/// and its projected coverage (see [`DirSlices::coverage`]).
-pub(crate) type RowOut = (Vec<Vox>, Vec<[f32; 3]>, u64, f64);
 
 /// The set-up of triangle `tri_index` for both directions of the axis of `dir` (`dir` is
 /// the + one): the projection, coverage and depth do not depend on the side the camera

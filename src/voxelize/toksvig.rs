@@ -24,7 +24,8 @@ use half::f16;
 use rayon::prelude::*;
 
 use super::bricks::{for_each_voxel, local, BrickAccum, Bricked, Layout, B3};
-use super::mip::{downsample_bricks, Disjoint, Texel};
+use super::grid3::{Disjoint, Texel};
+use super::mip::downsample_bricks;
 use super::slices::DirSlices;
 use super::Dir;
 
@@ -328,7 +329,7 @@ mod tests {
     //! Toksvig filtering through the real MIP path ([`downsample_normals`], the
     //! level-by-level step of every direction's pyramid, then [`NormalAccum`]).
 
-    use super::super::mip::Grid3;
+    use super::super::grid3::Grid3;
     use super::*;
 
     /// A 2×2×2 direction volume, opaque, whose weighted normals are `left` in the x = 0

@@ -1,7 +1,7 @@
 //! Shared by the bbcloud tests: a synthetic leafy scene and the oak.
 #![allow(dead_code)]
 
-use billow::bbcloud::plane_search::Element;
+use billow::bbcloud::Element;
 use billow::rng::Pcg32;
 use billow::scene::{Aabb, AlphaMode, Material, Scene, Triangle, Vertex};
 use glam::{Vec2, Vec3, Vec4};

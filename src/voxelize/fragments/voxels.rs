@@ -4,9 +4,8 @@
 
 use glam::{Vec3, Vec4};
 
-use super::{Frag, Scratch};
+use super::{Frag, RowOut, Scratch, Vox};
 use crate::shade::Shader;
-use crate::voxelize::slices::{RowOut, Vox};
 
 /// The shading normals of a row's fragments, as a direction sees them.
 struct FragNormals<'a> {
