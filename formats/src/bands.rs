@@ -10,8 +10,7 @@
 //! - `BCEL` × number of bands, element `F32`: each band's prisms ([`PRISM_BYTES`] each).
 
 use crate::blocks::{check_block_levels, decode_levels, unorm_to_snorm_in_place, BandBlocks};
-use crate::volume::mip_dims;
-use crate::volume::{check_level_sizes, full_mip_count, Prism, MAX_DIM, PRISM_BYTES};
+use crate::grid::{check_level_sizes, full_mip_count, mip_dims, Prism, MAX_DIM, PRISM_BYTES};
 use crate::FormatError;
 
 /// Tag of the band table chunk.
@@ -148,14 +147,6 @@ pub(crate) fn band_table(bands: &[LodBand]) -> Vec<u8> {
         ] {
             out.extend_from_slice(&v.to_le_bytes());
         }
-    }
-    out
-}
-
-pub(crate) fn prism_bytes(cells: &[Prism]) -> Vec<u8> {
-    let mut out = Vec::with_capacity(cells.len() * PRISM_BYTES);
-    for p in cells {
-        p.write_le(&mut out);
     }
     out
 }

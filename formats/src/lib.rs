@@ -17,6 +17,7 @@ mod blocks;
 mod cloud;
 mod container;
 mod error;
+mod grid;
 mod header;
 mod inspect;
 mod volume;
@@ -39,15 +40,13 @@ pub use container::{
     Chunk, Container, ElemType, CHUNK_HEADER_LEN, MAX_ASSET_BYTES, TAG_END, TAG_HEAD,
 };
 pub use error::{tag_str, FormatError};
+pub use grid::{full_mip_count, mip_dims, Prism, MAX_DIM, PRISM_BYTES, TEXEL_BYTES};
 pub use header::{
     param, AssetKind, BakedLight, Bounds, ColourSpace, Header, NormalEncoding, SourceInfo,
     TexelFormat, VolumeBake, VolumeHeader, DEFAULT_AMBIENT,
 };
 pub use inspect::{inspect_bytes, ChunkInfo, Report};
-pub use volume::{
-    full_mip_count, mip_dims, Prism, VolumeAsset, MAX_DIM, PRISM_BYTES, TAG_CELL, TAG_VLEV,
-    TAG_VNRM, TEXEL_BYTES,
-};
+pub use volume::{VolumeAsset, TAG_CELL, TAG_VLEV, TAG_VNRM};
 
 /// Major format version: a reader refuses files with a different major.
 pub const FORMAT_MAJOR: u16 = 1;

@@ -9,13 +9,16 @@
 
 use std::path::Path;
 
-use crate::bands::{band_table, prism_bytes, validate_bands, LodBand, RawBands};
+use crate::bands::{band_table, validate_bands, LodBand, RawBands};
 use crate::bands::{TAG_BCEL, TAG_BLEV, TAG_BNRM, TAG_VBND};
 use crate::blocks::{
     check_block_levels, decode_levels, unorm_to_snorm_in_place, VolumeBlocks, TAG_VLB7, TAG_VNB7,
 };
 use crate::blocks::{TAG_BLB7, TAG_BNB7};
 use crate::container::{encode_with_minor, with_parts_minor, write_with_minor, ChunkRef};
+use crate::grid::{
+    check_level_sizes, full_mip_count, mip_dims, prism_bytes, Prism, MAX_DIM, PRISM_BYTES,
+};
 use crate::{
     from_bytes, AssetKind, Chunk, Container, ElemType, FormatError, Header, NormalEncoding,
     TexelFormat, VolumeHeader,
@@ -27,45 +30,6 @@ pub const TAG_VLEV: [u8; 4] = *b"VLEV";
 pub const TAG_VNRM: [u8; 4] = *b"VNRM";
 /// Tag of the prism cell chunk (exactly one).
 pub const TAG_CELL: [u8; 4] = *b"CELL";
-/// Largest allowed size of level 0 along any axis.
-pub const MAX_DIM: u32 = 4096;
-/// Bytes per colour or normal texel.
-pub const TEXEL_BYTES: u64 = 4;
-/// Bytes per prism in a `CELL` chunk: 36 little-endian f32.
-pub const PRISM_BYTES: usize = 144;
-
-/// A triangular prism cell mapping a slab of the volume texture into the world.
-/// Vertices 0,1,2 are the bottom triangle, 3,4,5 the top one, vertex 3 above
-/// 0, 4 above 1, 5 above 2. Seen from the top, 0→1→2 is counter-clockwise
-/// (the bottom triangle's right-handed normal points towards the top). A box
-/// is two prisms.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Prism {
-    /// World-space vertex positions.
-    pub pos: [[f32; 3]; 6],
-    /// Texture coordinates in `[0,1]³` of the volume (u along x, v along y, w along z).
-    pub uvw: [[f32; 3]; 6],
-}
-
-impl Prism {
-    pub(crate) fn write_le(&self, out: &mut Vec<u8>) {
-        for v in self.pos.iter().chain(self.uvw.iter()) {
-            for c in v {
-                out.extend_from_slice(&c.to_le_bytes());
-            }
-        }
-    }
-
-    pub(crate) fn read_le(b: &[u8]) -> Prism {
-        let f = |i: usize| f32::from_le_bytes(b[4 * i..4 * i + 4].try_into().expect("4 bytes"));
-        let v = |k: usize| [f(3 * k), f(3 * k + 1), f(3 * k + 2)];
-        Prism {
-            pos: std::array::from_fn(v),
-            uvw: std::array::from_fn(|k| v(6 + k)),
-        }
-    }
-}
-
 /// A volumetric billboard asset.
 #[derive(Clone, Debug, PartialEq)]
 pub struct VolumeAsset {
@@ -78,21 +42,6 @@ pub struct VolumeAsset {
     pub cells: Vec<Prism>,
     /// Extra LOD bands (format 1.1, SPEC §8.6), finest first; empty for an ordinary volume.
     pub bands: Vec<LodBand>,
-}
-
-/// Size of MIP level `level`: `max(1, d >> level)` per axis.
-pub fn mip_dims(dims0: [u32; 3], level: u32) -> [u32; 3] {
-    dims0.map(|d| d.checked_shr(level).unwrap_or(0).max(1))
-}
-
-/// Number of levels from `dims0` down to 1×1×1 inclusive: `floor(log2(max d)) + 1`.
-pub fn full_mip_count(dims0: [u32; 3]) -> u32 {
-    let m = dims0.iter().copied().max().unwrap_or(1).max(1);
-    32 - m.leading_zeros()
-}
-
-fn level_bytes(dims: [u32; 3]) -> u64 {
-    dims.iter().map(|&d| u64::from(d)).product::<u64>() * TEXEL_BYTES
 }
 
 fn bad<T>(m: String) -> Result<T, FormatError> {
@@ -584,26 +533,4 @@ fn check_levels(tag: &str, levels: &[Vec<u8>], v: VolumeHeader) -> Result<(), Fo
         ));
     }
     check_level_sizes(tag, levels, v.dims)
-}
-
-/// Each level `i` of `levels` holds exactly `mip_dims(dims, i)` texels.
-pub(crate) fn check_level_sizes(
-    tag: &str,
-    levels: &[Vec<u8>],
-    dims: [u32; 3],
-) -> Result<(), FormatError> {
-    for (i, l) in levels.iter().enumerate() {
-        let d = mip_dims(dims, i as u32);
-        let want = level_bytes(d);
-        if l.len() as u64 != want {
-            return bad(format!(
-                "{tag} level {i} is {} bytes, expected {want} ({}x{}x{} texels x 4)",
-                l.len(),
-                d[0],
-                d[1],
-                d[2]
-            ));
-        }
-    }
-    Ok(())
 }
