@@ -18,6 +18,7 @@ pub mod camera;
 pub mod cloud_pass;
 pub mod content;
 pub mod error;
+pub mod frame_stats;
 pub mod gpu;
 pub mod layout;
 pub mod lines;
@@ -43,7 +44,8 @@ pub mod window;
 
 pub use camera::ViewCamera;
 pub use error::ViewError;
+pub use frame_stats::FrameStats;
 pub use gpu::Gpu;
-pub use render::{FrameStats, Renderer};
+pub use render::Renderer;
 pub use slice_plan::{SliceParams, Spacing};
 pub use target::RgbaImage;

@@ -12,7 +12,6 @@ use std::cell::OnceCell;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-use crate::cloud_pass::View;
 use crate::layout::{color_target, frame_layout, material_layout, shader, Pipeline};
 use crate::target::COLOR_FORMAT;
 use crate::texture::{repeat_sampler, upload_rgba8_mips, TextureData};
@@ -91,6 +90,14 @@ fn mesh_materials(mesh: &MeshData) -> Vec<MeshMaterial> {
     } else {
         mesh.materials.clone()
     }
+}
+
+/// Which persistent frame uniform a pass uses (the mesh and the cloud passes keep one
+/// per view, written before each submission).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum View {
+    Camera,
+    Light,
 }
 
 /// Per-frame uniform of the mesh pipelines.

@@ -14,84 +14,22 @@
 
 use std::cell::{OnceCell, RefCell};
 
-use billow_format::{Prism, VolumeAsset};
+use billow_format::VolumeAsset;
 use glam::{Mat4, Vec3};
 
 use crate::cloud_pass::{CloudPass, GpuCloud};
+use crate::frame_stats::FrameStats;
 use crate::mesh_pass::{GpuMesh, MeshData, MeshPass};
 use crate::particle_pass::{LayerTargets, ParticleLayerDesc, ParticlePass};
 use crate::particles::ParticleSystemDesc;
 use crate::shadow::{self, ShadowMap};
 use crate::target::{RgbaImage, Target};
-use crate::volume_pass::{GpuVolume, VolumePass, VolumeStorage};
-use crate::volume_plan::{self, PlanBuffers};
+use crate::volume_pass::{VolumePass, VolumeStorage};
+use crate::volume_plan::{self, PlanBuffers, VolumeBand, VolumeEntry};
 use crate::{Gpu, SliceParams, ViewCamera, ViewError};
 
 mod clouds;
 mod frame;
-
-/// Vertices per cell × slice instance: a fan of 3 triangles covers the ≤ 5-gon.
-pub const VERTICES_PER_INSTANCE: u32 = 9;
-
-/// What a frame drew.
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
-pub struct FrameStats {
-    pub slices: usize,
-    /// Slabs drawn, and slabs skipped because no cell meets them.
-    pub slabs: usize,
-    pub empty_slabs: usize,
-    /// Cells of all volume instances.
-    pub cells: usize,
-    /// Cell × slice instances drawn (each up to a pentagon).
-    pub instances: u64,
-    pub draw_calls: usize,
-    pub mesh_triangles: usize,
-    /// World size of a level-0 voxel `v₀` (the finest over the volumes).
-    pub voxel_size: f32,
-    pub min_spacing: f32,
-    pub max_spacing: f32,
-    /// Per cloud instance: its level (0 = foliage mesh) and morph factor.
-    pub cloud_lods: Vec<(usize, f32)>,
-    /// Per cloud instance: how far it has dissolved into the next level (0: not
-    /// dissolving; `cloud_pass` module docs).
-    pub cloud_dissolves: Vec<f32>,
-    /// Slices of the volumes' shadow pass (0 without shadows).
-    pub shadow_slices: usize,
-    /// Mesh draws and cloud instances rendered into the shadow cascades, summed over
-    /// the cascades, and those left out because they lie outside a cascade's window.
-    pub shadow_casters: usize,
-    pub shadow_casters_culled: usize,
-    /// Billboard quads (sides) drawn.
-    pub cloud_quads: usize,
-    /// Bytes written to the GPU per frame for the clouds (instance data and frame
-    /// uniforms; the per-asset buffers are uploaded once).
-    pub cloud_bytes_uploaded: usize,
-    /// Particles drawn (at the frame's time).
-    pub particles: usize,
-}
-
-/// One texture of a volume asset and the cells that sample it: band 0 is the base, the
-/// others are its LOD bands (SPEC §8.6).
-pub struct VolumeBand {
-    /// Object space.
-    pub cells: Vec<Prism>,
-    pub gpu: GpuVolume,
-    /// The slice LOD from which this band is drawn.
-    pub first_level: u32,
-    /// Index among all volume textures (batch `texture / 8`, slot `texture % 8`).
-    pub texture: usize,
-}
-
-/// A volume asset on the GPU with its instance transforms.
-pub struct VolumeEntry {
-    pub bands: Vec<VolumeBand>,
-    pub instances: Vec<Mat4>,
-    /// The asset's largest LOD `L` (the last band's `first_level + mip_count − 1`).
-    pub max_lod: u32,
-    /// Object-space bounds (the asset header's).
-    pub bounds: (Vec3, Vec3),
-    pub animation: Option<crate::animate::Sway>,
-}
 
 struct CloudEntry {
     gpu: GpuCloud,

@@ -13,14 +13,42 @@
 use glam::{Mat3, Mat4, Vec3};
 
 use crate::gpu::GrowBuffer;
-use crate::render::{FrameStats, VolumeEntry, VERTICES_PER_INSTANCE};
+use billow_format::Prism;
+
+use crate::frame_stats::FrameStats;
 use crate::slab::partition;
 use crate::slice_plan::{slice_depths, voxel_size};
 use crate::volume_pass::{
-    FrameUniform, GpuCell, GpuDraw, GpuSlice, GpuVolumeParams, VolumePass, VolumeStorage,
+    FrameUniform, GpuCell, GpuDraw, GpuSlice, GpuVolume, GpuVolumeParams, VolumePass, VolumeStorage,
 };
 use crate::{Gpu, SliceParams, ViewCamera, ViewError};
 use billow_core::slicing::far_slab;
+
+/// Vertices per cell × slice instance: a fan of 3 triangles covers the ≤ 5-gon.
+pub const VERTICES_PER_INSTANCE: u32 = 9;
+
+/// One texture of a volume asset and the cells that sample it: band 0 is the base, the
+/// others are its LOD bands (SPEC §8.6).
+pub struct VolumeBand {
+    /// Object space.
+    pub cells: Vec<Prism>,
+    pub gpu: GpuVolume,
+    /// The slice LOD from which this band is drawn.
+    pub first_level: u32,
+    /// Index among all volume textures (batch `texture / 8`, slot `texture % 8`).
+    pub texture: usize,
+}
+
+/// A volume asset on the GPU with its instance transforms.
+pub struct VolumeEntry {
+    pub bands: Vec<VolumeBand>,
+    pub instances: Vec<Mat4>,
+    /// The asset's largest LOD `L` (the last band's `first_level + mip_count − 1`).
+    pub max_lod: u32,
+    /// Object-space bounds (the asset header's).
+    pub bounds: (Vec3, Vec3),
+    pub animation: Option<crate::animate::Sway>,
+}
 
 /// One planned draw: its batch, the dynamic offset of its [`GpuDraw`], its instances.
 struct Draw {

@@ -49,7 +49,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
 use crate::layout::{entry, frame_layout, sampler, shader, texture, uniform, Pipeline};
-use crate::mesh_pass::MeshFrame;
+use crate::mesh_pass::{MeshFrame, View};
 use crate::target::COLOR_FORMAT;
 use crate::texture::{repeat_sampler, upload_rgba8_mips, TextureData};
 use crate::Gpu;
@@ -259,13 +259,6 @@ fn instance_sphere(cloud: &GpuCloud, model: Mat4) -> (Vec3, f32) {
         model.transform_point3(cloud.centre),
         cloud.caster_radius * scale,
     )
-}
-
-/// Which persistent frame uniform a pass uses.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum View {
-    Camera,
-    Light,
 }
 
 pub struct CloudPass {

@@ -8,8 +8,8 @@ use std::cell::Ref;
 use glam::{Mat4, Vec3};
 
 use super::{FrameStats, Renderer};
-use crate::cloud_pass::{CloudFrame, View};
-use crate::mesh_pass::MeshFrame;
+use crate::cloud_pass::CloudFrame;
+use crate::mesh_pass::{MeshFrame, View};
 use crate::particle_pass::LayerTargets;
 use crate::shadow::{self, ShadowMap, SHADOW_MAP_SIZE};
 use crate::target::Target;
