@@ -8,9 +8,10 @@
 //!   4×4 block of every level: GPU block textures are dense, so the blocks a file omits
 //!   are uploaded as zero blocks), else `Rgba16Float` texels in extinction space, 8 bytes
 //!   each ([`VOLUME_TEXEL_BYTES`]). Normals, where stored, are `(α·n̄, α)` in
-//!   `Rgba16Float` ([`VOLUME_NORMAL_TEXEL_BYTES`]) with or without BC: the alpha-weighted
-//!   filter divides by a filtered alpha that can be small, which 8-bit channels would
-//!   leave too coarse.
+//!   `Rgba8Snorm` ([`VOLUME_NORMAL_TEXEL_BYTES`]) with or without BC: the file's normals
+//!   are snorm8 already; the alpha-weighted filter's division by a small filtered alpha
+//!   is coarse only where the texel is faint (measured in docs/viewer.md, "Runtime
+//!   shading").
 //! - **Clouds.** Each atlas with its stored MIP levels: BC7 blocks, or RGBA8 (4 bytes per
 //!   texel); its normal map when the cloud is lit at runtime (baked unlit with normal
 //!   maps), the same way; each mesh texture RGBA8 with a full MIP chain (the viewer builds
@@ -25,8 +26,8 @@ use billow_format::{bc7_len, mip_dims, CloudAsset, VolumeAsset};
 /// Bytes per texel of a volume's colour texture when it is not uploaded as BC7 blocks
 /// (`Rgba16Float`, extinction space).
 pub const VOLUME_TEXEL_BYTES: u64 = 8;
-/// Bytes per texel of a volume's normal texture (`Rgba16Float`, `(α·n̄, α)`).
-pub const VOLUME_NORMAL_TEXEL_BYTES: u64 = 8;
+/// Bytes per texel of a volume's normal texture (`Rgba8Snorm`, `(α·n̄, α)`).
+pub const VOLUME_NORMAL_TEXEL_BYTES: u64 = 4;
 /// Bytes per texel of an uncompressed cloud texture (RGBA8).
 pub const CLOUD_TEXEL_BYTES: u64 = 4;
 
@@ -140,8 +141,7 @@ pub fn cloud_gpu_bytes(asset: &CloudAsset, compressed: bool) -> GpuBytes {
 mod tests {
     use super::*;
 
-    /// A 12×8×4 volume with 3 levels and normals: 8 bytes per colour and per normal
-    /// texel; with blocks, the colour is 16 bytes per 4×4 block of every level.
+    /// A 12×8×4 volume with 3 levels: its texels and 4×4 blocks over every level.
     #[test]
     fn volume_bytes_count_every_level() {
         let dims = [12u32, 8, 4];

@@ -33,7 +33,7 @@
 //!
 //! **Runtime shading** (VB §3.2 "Reflectance"): an asset that stores normals (SPEC §8.4)
 //! gets a second 3D texture per band, in the normal slot of the same batch slot, holding
-//! `(α·n̄, α)` in `Rgba16Float` (the Toksvig normal weighted by the texel's colour alpha,
+//! `(α·n̄, α)` in `Rgba8Snorm` (the Toksvig normal weighted by the texel's colour alpha,
 //! so the sampler's filtering is the alpha-weighted mean the voxelizer's MIP levels use;
 //! src/eval/volume_sampler.rs decodes the same texels). The fragment shader multiplies
 //! the albedo by `ambient + (1 − ambient) · shadow · max(n̄·L, 0)` with the normal taken to
@@ -703,8 +703,9 @@ pub fn extinction_levels(levels: &[Vec<u8>], ratios: &[f32], srgb: bool) -> Vec<
         .collect()
 }
 
-/// The `(α·n̄, α)` normal texture of a volume that stores normals (module docs), f16: the
-/// colour alpha weights the stored snorm8 normal.
+/// The `(α·n̄, α)` normal texture of a volume that stores normals (module docs), in
+/// [`NORMAL_FORMAT`]: the colour alpha weights the stored snorm8 normal, and the product is
+/// rounded to the nearest 1/127 (an opaque texel's normal exactly as stored).
 fn normal_texture(
     gpu: &Gpu,
     dims0: [u32; 3],
@@ -716,13 +717,11 @@ fn normal_texture(
             .iter()
             .zip(levels)
             .map(|(n, c)| {
-                let mut out = Vec::with_capacity(n.len() * 2);
+                let mut out = Vec::with_capacity(n.len());
                 for (t, c) in n.chunks_exact(4).zip(c.chunks_exact(4)) {
                     let a = f32::from(c[3]) / 255.0;
                     let d = |b: u8| (b as i8 as f32 / 127.0).max(-1.0) * a;
-                    for v in [d(t[0]), d(t[1]), d(t[2]), a] {
-                        out.extend_from_slice(&half::f16::from_f32(v).to_le_bytes());
-                    }
+                    out.extend([d(t[0]), d(t[1]), d(t[2]), a].map(snorm8));
                 }
                 out
             })
@@ -731,10 +730,20 @@ fn normal_texture(
             gpu,
             "volume normals",
             dims0,
-            wgpu::TextureFormat::Rgba16Float,
+            NORMAL_FORMAT,
             texels.iter().map(|b| &b[..]),
         )
     })
+}
+
+/// The format of a volume's normal texture, `(α·n̄, α)`: every component is in
+/// [−1, 1], and the file's normals are snorm8 already, so four bytes a texel hold them
+/// (`billow_core::gpu_memory::VOLUME_NORMAL_TEXEL_BYTES`).
+pub const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Snorm;
+
+/// `v` in [−1, 1] as a snorm8 byte (round to nearest; the GPU reads `max(b / 127, −1)`).
+fn snorm8(v: f32) -> u8 {
+    (v.clamp(-1.0, 1.0) * 127.0).round() as i8 as u8
 }
 
 /// A 3D texture of `format` with one MIP level per item of `levels` (tightly packed).
