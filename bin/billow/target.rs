@@ -2,11 +2,12 @@
 //! parsing, the per-trial lines and the JSON. The search and the judge are the library's
 //! (`billow::presets::target`).
 
-use billow::eval::lighting::{parse_light_set, LightSetError, DEFAULT_AMBIENT};
+use billow::eval::lighting::{parse_light_set, LightSetError};
 use billow::presets::target::{
     DistanceError, Found, SearchError, TargetError, TargetOptions, Trial, Weighting,
 };
 use billow::presets::Preset;
+use billow_core::shading::DEFAULT_AMBIENT;
 use serde::Serialize;
 
 use crate::exit::{usage, CliError, Code};

@@ -5,6 +5,13 @@
 
 use glam::Vec3;
 
+/// Direction towards the light (not normalised) where no scene names one: the viewer's
+/// default scene light, the reference's and the CPU slicer's, and the billboard bake's.
+pub const DEFAULT_LIGHT: Vec3 = Vec3::new(0.3, 1.0, 0.5);
+
+/// Ambient fraction of [`DEFAULT_LIGHT`] (the unshadowed part of the light).
+pub const DEFAULT_AMBIENT: f32 = 0.3;
+
 /// `ambient + (1 − ambient) · |n·light|`: the one lighting model of billow — the
 /// billboard bake's factor, the reference's, and the viewer's mesh pass (two-sided Lambert;
 /// `viewer/src/shaders/mesh.wgsl`, which also multiplies the diffuse term by shadow

@@ -98,8 +98,8 @@ impl Default for BbcloudOptions {
             atlas_size: 2048,
             texel_density: None,
             shading: Shading {
-                light: Some(Vec3::new(0.3, 1.0, 0.5).normalize()),
-                ambient: 0.3,
+                light: Some(billow_core::shading::DEFAULT_LIGHT.normalize()),
+                ambient: billow_core::shading::DEFAULT_AMBIENT,
             },
             supersample: 3,
             foliage: Vec::new(),

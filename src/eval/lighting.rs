@@ -42,11 +42,7 @@ use crate::voxelize::{
 
 pub use crate::voxelize::voxel_stream;
 
-/// Direction towards the light (not normalised) when no scene names one: the viewer's default.
-pub const DEFAULT_LIGHT: Vec3 = Vec3::new(0.3, 1.0, 0.5);
-
-/// Ambient fraction when no scene names one: the viewer's default.
-pub const DEFAULT_AMBIENT: f32 = 0.3;
+use billow_core::shading::{DEFAULT_AMBIENT, DEFAULT_LIGHT};
 
 /// The scene light a volume is shaded with: unit direction towards the light, ambient.
 #[derive(Clone, Copy, Debug, PartialEq)]

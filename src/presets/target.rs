@@ -50,7 +50,7 @@ use super::{resolve_cloud, resolve_volume, CloudFlags, CloudSettings, Preset};
 use super::{VolumeFlags, VolumeSettings};
 use crate::camera::{view_directions, views_of, ViewDirections, ViewSpec};
 use crate::eval::cloud_render::{CloudRenderer, PreparedCloud};
-use crate::eval::lighting::{light_set, EvalLight, Lighting, DEFAULT_AMBIENT};
+use crate::eval::lighting::{light_set, EvalLight, Lighting};
 use crate::eval::metrics::{compare, ImageError};
 use crate::eval::suite::{
     mean_errors, reference_lighting, EvalOptions, Evaluator, PreparedAsset, ReferenceView,
@@ -59,6 +59,7 @@ use crate::eval::suite::{
 use crate::eval::EvalError;
 use crate::scene::Scene;
 use crate::voxelize::{Resolution, MAX_AXIS};
+use billow_core::shading::DEFAULT_AMBIENT;
 
 /// Reference samples per pixel per axis: 4 × 4 = 16, `billow eval`'s default `--spp`.
 pub const TARGET_SPP_PER_AXIS: u32 = 4;

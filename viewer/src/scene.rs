@@ -84,8 +84,8 @@ fn ambient03() -> f32 {
 impl Default for LightDesc {
     fn default() -> Self {
         LightDesc {
-            direction: [0.3, 1.0, 0.5],
-            ambient: 0.3,
+            direction: billow_core::shading::DEFAULT_LIGHT.to_array(),
+            ambient: billow_core::shading::DEFAULT_AMBIENT,
         }
     }
 }

@@ -11,18 +11,19 @@
 //! - Baking normals changes the picture: a torus voxelized with and without normals
 //!   renders differently (it was pixel-identical when the viewer ignored normals).
 //! - The viewer's default light is the one the CPU side uses without a scene
-//!   (`billow::eval::lighting::{DEFAULT_LIGHT, DEFAULT_AMBIENT}`).
+//!   (`billow_core::shading::{DEFAULT_LIGHT, DEFAULT_AMBIENT}`).
 
 mod common;
 
 use billow::camera::{to_view, Camera};
 use billow::eval::image::write_comparison_png;
-use billow::eval::lighting::{VolumeLight, DEFAULT_AMBIENT, DEFAULT_LIGHT};
+use billow::eval::lighting::VolumeLight;
 use billow::eval::metrics::compare;
 use billow::eval::slicer::{render_volume, SlicerParams};
 use billow::eval::ImageF32;
 use billow::noise_volume::{asteroid, sphere};
 use billow::scene::Aabb;
+use billow_core::shading::{DEFAULT_AMBIENT, DEFAULT_LIGHT};
 use billow_format::VolumeAsset;
 use billow_view::{Renderer, ViewCamera};
 use glam::{Mat4, Vec3, Vec4};

@@ -79,7 +79,7 @@ pub struct Args {
     )]
     lights: Option<String>,
     /// Ambient fraction of --light/--lights, 0–1.
-    #[arg(long, value_name = "A", default_value_t = billow::eval::lighting::DEFAULT_AMBIENT)]
+    #[arg(long, value_name = "A", default_value_t = billow_core::shading::DEFAULT_AMBIENT)]
     ambient: f32,
     /// With --light/--lights: shadows in the reference (ray traced towards the light) and in
     /// the cloud's kept mesh; volumes are drawn unshadowed (noted).
