@@ -246,8 +246,57 @@ pub fn shade_normal(nmat: Mat3, n: Vec3) -> Vec3 {
     }
 }
 
+/// The part of a slice's slab `depth ± d/2` in front of an opaque surface at view
+/// distance `z`: `clamp((z − (depth − d/2))/d, 0, 1)` (1 without a surface).
+#[inline]
+pub fn depth_fade(z: f32, depth: f32, d: f32) -> f32 {
+    if !(z < f32::INFINITY) {
+        return 1.0;
+    }
+    if !(d > 0.0) {
+        return if depth < z { 1.0 } else { 0.0 };
+    }
+    ((z - (depth - 0.5 * d)) / d).clamp(0.0, 1.0)
+}
+
+/// The part of a slab from `slab0`, `thickness` deep, in front of an opaque surface at
+/// view distance `z` (1 without a surface): [`depth_fade`] for a slab of any thickness
+/// (the viewer's `depth_fade` in `volume.wgsl`, and the CPU slicer's).
+#[inline]
+pub fn slab_fade(z: f32, slab0: f32, thickness: f32) -> f32 {
+    if !(z < f32::INFINITY) {
+        return 1.0;
+    }
+    if !(thickness > 0.0) {
+        return if slab0 < z { 1.0 } else { 0.0 };
+    }
+    ((z - slab0) / thickness).clamp(0.0, 1.0)
+}
+
 #[cfg(test)]
 mod tests {
+
+    /// A slice's slab fade is the general slab fade of its slab, `depth ± d/2`; no
+    /// surface keeps everything, a slab behind the surface nothing.
+    #[test]
+    fn depth_fade_is_the_fade_of_the_slices_slab() {
+        for (z, depth, d) in [
+            (5.0, 4.0, 2.0),
+            (4.2, 4.0, 1.0),
+            (1.0, 4.0, 2.0),
+            (9.0, 4.0, 0.0),
+        ] {
+            assert_eq!(
+                depth_fade(z, depth, d),
+                slab_fade(z, depth - 0.5 * d, d),
+                "{z} {depth} {d}"
+            );
+        }
+        assert_eq!(slab_fade(f32::INFINITY, 3.0, 1.0), 1.0);
+        assert_eq!(slab_fade(2.0, 3.0, 1.0), 0.0);
+        assert_eq!(slab_fade(3.25, 3.0, 1.0), 0.25);
+    }
+
     use super::*;
 
     /// Uniform spacing: `z₀ = z_min + d/2`, then steps of `d`, front to back, below

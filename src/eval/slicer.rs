@@ -32,7 +32,7 @@
 //!   RGBA f32.
 //! - Over an opaque layer ([`render_decoded_over`], the viewer's mesh depth): each slice
 //!   stands for the slab `depth ± d/2` and is faded by the part of it in front of the
-//!   surface ([`depth_fade`], the ratio becomes `fade · d/d₀`), as spherical billboards
+//!   surface ([`billow_core::slicing::depth_fade`], the ratio becomes `fade · d/d₀`), as spherical billboards
 //!   clip a particle's path at the scene depth; a hard depth test leaves terraces.
 //! - Rows are processed in parallel; every pixel sees the same sequence of fragments,
 //!   so the result is deterministic.
@@ -54,6 +54,8 @@ use std::time::Instant;
 use billow_format::{Prism, VolumeAsset};
 use glam::{Mat3, Vec3, Vec4};
 use rayon::prelude::*;
+
+use billow_core::slicing::slab_fade;
 
 use super::compositing::over;
 use super::lighting::{volume_diffuse_factor, VolumeLight};
@@ -557,19 +559,6 @@ fn cross2(a: [f32; 2], b: [f32; 2]) -> f32 {
     a[0] * b[1] - a[1] * b[0]
 }
 
-/// The part of a slice's slab `depth ± d/2` in front of an opaque surface at view
-/// distance `z`: `clamp((z − (depth − d/2))/d, 0, 1)` (1 without a surface).
-#[inline]
-pub fn depth_fade(z: f32, depth: f32, d: f32) -> f32 {
-    if !(z < f32::INFINITY) {
-        return 1.0;
-    }
-    if !(d > 0.0) {
-        return if depth < z { 1.0 } else { 0.0 };
-    }
-    ((z - (depth - 0.5 * d)) / d).clamp(0.0, 1.0)
-}
-
 /// What every row of a batch reads: the volumes (per band), the MIP filter, the light in
 /// view space, and an opaque layer's view distances for the row (slices fade at it).
 struct RowCtx<'a> {
@@ -601,19 +590,6 @@ impl RowCtx<'_> {
         }
         Some(s)
     }
-}
-
-/// The part of a slab from `slab0`, `thickness` deep, in front of an opaque surface at
-/// view distance `z` (1 without a surface): [`depth_fade`] for a slab of any thickness.
-#[inline]
-fn slab_fade(z: f32, slab0: f32, thickness: f32) -> f32 {
-    if !(z < f32::INFINITY) {
-        return 1.0;
-    }
-    if !(thickness > 0.0) {
-        return if slab0 < z { 1.0 } else { 0.0 };
-    }
-    ((z - slab0) / thickness).clamp(0.0, 1.0)
 }
 
 /// The span `[x_l, x_r)` of polygon `p` on the horizontal line at `yc` (from canonically
