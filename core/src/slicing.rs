@@ -246,22 +246,10 @@ pub fn shade_normal(nmat: Mat3, n: Vec3) -> Vec3 {
     }
 }
 
-/// The part of a slice's slab `depth ± d/2` in front of an opaque surface at view
-/// distance `z`: `clamp((z − (depth − d/2))/d, 0, 1)` (1 without a surface).
-#[inline]
-pub fn depth_fade(z: f32, depth: f32, d: f32) -> f32 {
-    if !(z < f32::INFINITY) {
-        return 1.0;
-    }
-    if !(d > 0.0) {
-        return if depth < z { 1.0 } else { 0.0 };
-    }
-    ((z - (depth - 0.5 * d)) / d).clamp(0.0, 1.0)
-}
-
 /// The part of a slab from `slab0`, `thickness` deep, in front of an opaque surface at
-/// view distance `z` (1 without a surface): [`depth_fade`] for a slab of any thickness
-/// (the viewer's `depth_fade` in `volume.wgsl`, and the CPU slicer's).
+/// view distance `z`: `clamp((z − slab0)/thickness, 0, 1)` (1 without a surface). A slice
+/// stands for its slab, so it fades as the slab meets the surface (the CPU slicer's, and
+/// the viewer's `depth_fade` in `volume.wgsl`).
 #[inline]
 pub fn slab_fade(z: f32, slab0: f32, thickness: f32) -> f32 {
     if !(z < f32::INFINITY) {
@@ -275,29 +263,21 @@ pub fn slab_fade(z: f32, slab0: f32, thickness: f32) -> f32 {
 
 #[cfg(test)]
 mod tests {
+    use super::*;
 
-    /// A slice's slab fade is the general slab fade of its slab, `depth ± d/2`; no
-    /// surface keeps everything, a slab behind the surface nothing.
+    /// No surface keeps the whole slab, a slab behind the surface none of it, one that
+    /// straddles it the part in front; a flat slab is in front or not.
     #[test]
-    fn depth_fade_is_the_fade_of_the_slices_slab() {
-        for (z, depth, d) in [
-            (5.0, 4.0, 2.0),
-            (4.2, 4.0, 1.0),
-            (1.0, 4.0, 2.0),
-            (9.0, 4.0, 0.0),
-        ] {
-            assert_eq!(
-                depth_fade(z, depth, d),
-                slab_fade(z, depth - 0.5 * d, d),
-                "{z} {depth} {d}"
-            );
-        }
+    fn a_slab_fades_by_the_part_in_front_of_the_surface() {
         assert_eq!(slab_fade(f32::INFINITY, 3.0, 1.0), 1.0);
         assert_eq!(slab_fade(2.0, 3.0, 1.0), 0.0);
         assert_eq!(slab_fade(3.25, 3.0, 1.0), 0.25);
+        assert_eq!(slab_fade(9.0, 3.0, 1.0), 1.0);
+        assert_eq!(
+            (slab_fade(3.5, 3.0, 0.0), slab_fade(2.5, 3.0, 0.0)),
+            (1.0, 0.0)
+        );
     }
-
-    use super::*;
 
     /// Uniform spacing: `z₀ = z_min + d/2`, then steps of `d`, front to back, below
     /// `z_max`; the limit is an error naming more than it.

@@ -32,7 +32,7 @@
 //!   RGBA f32.
 //! - Over an opaque layer ([`render_decoded_over`], the viewer's mesh depth): each slice
 //!   stands for the slab `depth ± d/2` and is faded by the part of it in front of the
-//!   surface ([`billow_core::slicing::depth_fade`], the ratio becomes `fade · d/d₀`), as spherical billboards
+//!   surface ([`slab_fade`], the ratio becomes `fade · d/d₀`), as spherical billboards
 //!   clip a particle's path at the scene depth; a hard depth test leaves terraces.
 //! - Rows are processed in parallel; every pixel sees the same sequence of fragments,
 //!   so the result is deterministic.

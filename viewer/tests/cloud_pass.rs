@@ -512,6 +512,20 @@ fn the_oak_baked_unlit_with_normal_maps_is_lit_by_the_viewer() {
     );
 }
 
+/// A grey ground quad at y = −1 from corner `(x, z)`, `size` = (along +x, along −z),
+/// with shadows on under the light towards `light`.
+fn shadowed_on_ground(r: &mut Renderer, (x, z): (f32, f32), size: (f32, f32), light: Vec3) {
+    r.add_mesh(&MeshData::quad(
+        Vec3::new(x, -1.0, z),
+        Vec3::new(0.0, 0.0, -size.1),
+        Vec3::new(size.0, 0.0, 0.0),
+        [0.6, 0.6, 0.6, 1.0],
+    ))
+    .expect("ground");
+    r.set_shadows(true);
+    r.light_dir = light.normalize();
+}
+
 /// A row of upright billboards (4 units wide) every 5 units from 4 to 300 units down
 /// −z, alternately left and right of the axis, over a ground quad, seen along the row
 /// (a deep view: several cascades, instances across their windows' edges), and one
@@ -535,15 +549,7 @@ fn shadow_row(gpu: billow_view::Gpu, light: Vec3) -> (Renderer, ViewCamera) {
         )])
         .collect();
     let mut r = renderer(gpu, &asset(banded, None, false), instances);
-    r.add_mesh(&MeshData::quad(
-        Vec3::new(-200.0, -1.0, 50.0),
-        Vec3::new(0.0, 0.0, -450.0),
-        Vec3::new(400.0, 0.0, 0.0),
-        [0.6, 0.6, 0.6, 1.0],
-    ))
-    .expect("ground");
-    r.set_shadows(true);
-    r.light_dir = light.normalize();
+    shadowed_on_ground(&mut r, (-200.0, 50.0), (400.0, 450.0), light);
     let cam = ViewCamera::look_at(
         Vec3::new(0.0, 1.5, 6.0),
         Vec3::new(0.0, 0.0, -300.0),
@@ -603,15 +609,7 @@ fn a_billboard_casts_the_same_shadow_lit_from_either_side() {
     let shadowed = |light: Vec3| {
         let gpu = common::gpu_or_skip(name)?;
         let mut r = renderer(gpu, &asset(banded, None, false), vec![Mat4::IDENTITY]);
-        r.add_mesh(&MeshData::quad(
-            Vec3::new(-6.0, -1.0, 6.0),
-            Vec3::new(0.0, 0.0, -12.0),
-            Vec3::new(12.0, 0.0, 0.0),
-            [0.6, 0.6, 0.6, 1.0],
-        ))
-        .expect("ground");
-        r.set_shadows(true);
-        r.light_dir = light.normalize();
+        shadowed_on_ground(&mut r, (-6.0, 6.0), (12.0, 12.0), light);
         // From straight above: the ground fills the frame, the billboard is a line.
         let cam = ViewCamera::look_at(
             Vec3::new(0.0, 8.0, 0.0),

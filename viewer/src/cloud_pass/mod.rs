@@ -264,9 +264,8 @@ fn instance_sphere(cloud: &GpuCloud, model: Mat4) -> (Vec3, f32) {
 pub struct CloudPass {
     foliage: wgpu::RenderPipeline,
     billboard: wgpu::RenderPipeline,
-    /// Alpha-tested depth only, made by the first shadow pass
-    /// ([`CloudPass::shadow_pipeline`]).
-    /// (foliage mesh, billboards).
+    /// Alpha-tested depth only, (foliage mesh, billboards), made by the first shadow
+    /// pass ([`CloudPass::shadow_pipelines`]).
     shadow: OnceCell<(wgpu::RenderPipeline, wgpu::RenderPipeline)>,
     layout: wgpu::PipelineLayout,
     module: wgpu::ShaderModule,
