@@ -6,12 +6,15 @@
 //! - `VBND` × 1, element `U32`: one 32-byte record per band, in band order:
 //!   `first_level, dims.x, dims.y, dims.z, mip_count, 0, 0, 0`;
 //! - `BLEV` × Σ `mip_count`, element `U8`: band 1's colour levels 0.., then band 2's, …;
-//! - `BNRM` × Σ `mip_count`, element `I8`, iff `volume.normals`: normals likewise;
+//! - `BNRM` × Σ `mip_count`, element `I8`, iff `volume.normals`: normals likewise
+//!   (`BMOM`, format 1.4, iff `volume.moments`: normal moments likewise);
 //! - `BCEL` × number of bands, element `F32`: each band's prisms ([`PRISM_BYTES`] each).
 
 use crate::blocks::{check_block_levels, decode_levels, unorm_to_snorm_in_place, BandBlocks};
+use crate::error::tag_str;
 use crate::grid::{check_level_sizes, full_mip_count, mip_dims, Prism, MAX_DIM, PRISM_BYTES};
-use crate::FormatError;
+use crate::volume::NormalTags;
+use crate::{FormatError, NormalKind};
 
 /// Tag of the band table chunk.
 pub const TAG_VBND: [u8; 4] = *b"VBND";
@@ -19,6 +22,9 @@ pub const TAG_VBND: [u8; 4] = *b"VBND";
 pub const TAG_BLEV: [u8; 4] = *b"BLEV";
 /// Tag of a band normal level chunk.
 pub const TAG_BNRM: [u8; 4] = *b"BNRM";
+/// Tag of a band normal-moment level chunk (format 1.4, SPEC §8.4a; replaces `BNRM` in a
+/// volume with `volume.moments`).
+pub const TAG_BMOM: [u8; 4] = *b"BMOM";
 /// Tag of a band's prism chunk.
 pub const TAG_BCEL: [u8; 4] = *b"BCEL";
 /// Bytes per `VBND` record: 8 little-endian u32.
@@ -37,7 +43,8 @@ pub struct LodBand {
     pub dims: [u32; 3],
     /// Colour levels, `mip_dims(dims, i)` each; `mip_count = levels.len()`.
     pub levels: Vec<Vec<u8>>,
-    /// Normal levels, present iff the header's `volume.normals` is set.
+    /// Normal levels, present iff the header's `volume.normals` (mean normals) or
+    /// `volume.moments` (normal moments, format 1.4) is set.
     pub normals: Option<Vec<Vec<u8>>>,
     pub cells: Vec<Prism>,
 }
@@ -52,13 +59,15 @@ fn bad<T>(m: String) -> Result<T, FormatError> {
     Err(FormatError::Volume(m))
 }
 
-/// Checks `bands` after a base texture of `base_mips` levels (`normals`: whether the
-/// header declares normals).
+/// Checks `bands` after a base texture of `base_mips` levels (`kind`: the normal texels
+/// the header declares).
 pub(crate) fn validate_bands(
     bands: &[LodBand],
     base_mips: u32,
-    normals: bool,
+    kind: Option<NormalKind>,
 ) -> Result<(), FormatError> {
+    let normals = kind.is_some();
+    let nrm = tag_str(&NormalTags::of(kind).band);
     let (mut prev_first, mut prev_mips) = (0u32, base_mips);
     for (i, b) in bands.iter().enumerate() {
         let n = i + 1;
@@ -96,21 +105,22 @@ pub(crate) fn validate_bands(
             (Some(l), true) => {
                 if l.len() != b.levels.len() {
                     return bad(format!(
-                        "band {n}: {} BNRM levels but {m} BLEV levels",
+                        "band {n}: {} {nrm} levels but {m} BLEV levels",
                         l.len()
                     ));
                 }
-                check_level_sizes(&format!("band {n} BNRM"), l, b.dims)?;
+                check_level_sizes(&format!("band {n} {nrm}"), l, b.dims)?;
             }
             (None, false) => {}
             (Some(_), false) => {
                 return bad(format!(
-                    "band {n} has normals but header.volume.normals is None"
-                ))
+                "band {n} has normals but neither header.volume.normals nor volume.moments is set"
+            ))
             }
             (None, true) => {
                 return bad(format!(
-                    "band {n} has no normals but header.volume.normals is set"
+                    "band {n} has no normals but header.{} is set",
+                    NormalTags::field(kind.expect("normals"))
                 ))
             }
         }
@@ -158,7 +168,7 @@ pub(crate) struct RawBands {
     pub levels: Vec<Vec<u8>>,
     pub normals: Vec<Vec<u8>>,
     pub cells: Vec<Vec<u8>>,
-    /// `BLB7` and `BNB7` payloads (format 1.3), instead of `BLEV`/`BNRM`.
+    /// `BLB7` and `BNB7` (or `BMB7`) payloads (format 1.3), instead of `BLEV`/`BNRM`.
     pub bc_levels: Vec<Vec<u8>>,
     pub bc_normals: Vec<Vec<u8>>,
 }
@@ -175,31 +185,36 @@ impl RawBands {
 
     /// Splits the collected chunks into bands (sizes are checked by [`validate_bands`]),
     /// decoding compressed levels (`BLB7`/`BNB7`); returns their blocks too, if any.
+    /// `kind`: the normal texels the header declares (which names the normal chunks).
     pub(crate) fn into_bands(
         mut self,
-        normals: bool,
+        kind: Option<NormalKind>,
     ) -> Result<(Vec<LodBand>, Option<Vec<BandBlocks>>), FormatError> {
         if self.is_empty() {
             return Ok((Vec::new(), None));
         }
+        let normals = kind.is_some();
+        let tags = NormalTags::of(kind);
+        let (band, band_bc) = (tag_str(&tags.band), tag_str(&tags.band_bc));
         let compressed = !self.bc_levels.is_empty() || !self.bc_normals.is_empty();
         if compressed {
             if !self.levels.is_empty() || !self.normals.is_empty() {
-                return bad(
-                    "both raw (BLEV/BNRM) and compressed (BLB7/BNB7) band levels: compressed bands store all their levels as blocks"
-                        .into(),
-                );
+                return bad(format!(
+                    "both raw (BLEV/{band}) and compressed (BLB7/{band_bc}) band levels: compressed bands store all their levels as blocks"
+                ));
             }
             self.levels = std::mem::take(&mut self.bc_levels);
             self.normals = std::mem::take(&mut self.bc_normals);
         }
         let (lev_tag, nrm_tag) = if compressed {
-            ("BLB7", "BNB7")
+            ("BLB7", band_bc.as_str())
         } else {
-            ("BLEV", "BNRM")
+            ("BLEV", band.as_str())
         };
         let Some(table) = self.table else {
-            return bad("BLEV/BNRM/BLB7/BNB7/BCEL chunks without a VBND band table".into());
+            return bad(format!(
+                "BLEV/{band}/BLB7/{band_bc}/BCEL chunks without a VBND band table"
+            ));
         };
         if table.is_empty() || !table.len().is_multiple_of(BAND_RECORD_BYTES) {
             return bad(format!(
@@ -282,7 +297,7 @@ impl RawBands {
                 band_levels = decode_levels(&colour, dims_of, 0);
                 let nb = match band_normals.take() {
                     Some(nb) => {
-                        let what = format!("band {} BNB7", n + 1);
+                        let what = format!("band {} {nrm_tag}", n + 1);
                         check_block_levels(&what, &nb, dims_of).map_err(FormatError::Volume)?;
                         let mut dec = decode_levels(&nb, dims_of, 0x80);
                         dec.iter_mut().for_each(|l| unorm_to_snorm_in_place(l));

@@ -270,6 +270,7 @@ const TAGS_SINCE_MINOR: [&[&[u8; 4]]; FORMAT_MINOR as usize] = [
     &[b"ANRM", b"VBND", b"BLEV", b"BNRM", b"BCEL"],
     &[b"VLB7", b"VNB7", b"ATB7", b"ANB7", b"MTB7"],
     &[b"BLB7", b"BNB7"],
+    &[b"VMOM", b"BMOM", b"VMB7", b"BMB7"],
 ];
 
 /// The lowest minor version that defines every chunk tag in `chunks` (SPEC §5): files that

@@ -93,8 +93,51 @@ pub struct VolumeHeader {
     /// Number of MIP levels stored, `1..=full_mip_count(dims)`.
     pub mip_count: u32,
     pub texel: TexelFormat,
-    /// Per-texel normals, if baked.
+    /// Per-texel mean normals, if baked (`VNRM`/`BNRM`/`VNB7`/`BNB7`, SPEC §8.4).
+    /// Exclusive with [`VolumeHeader::moments`].
     pub normals: Option<NormalEncoding>,
+    /// Per-texel second moments of the normals instead of mean normals (format 1.4:
+    /// `VMOM`/`BMOM`/`VMB7`/`BMB7`, SPEC §8.4a), if baked. Exclusive with
+    /// [`VolumeHeader::normals`]. Not written when `None`, so the header of every file
+    /// without moments is the bytes it was before 1.4. The texels are the same
+    /// `Rgba8Snorm` bytes, held where mean normals are ([`crate::VolumeAsset::normals`],
+    /// [`crate::LodBand::normals`]); [`VolumeHeader::normal_kind`] says which they are.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub moments: Option<NormalEncoding>,
+}
+
+/// What a volume's normal texels hold ([`VolumeHeader::normal_kind`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum NormalKind {
+    /// The Toksvig mean normal (`volume.normals`; chunks `VNRM`, `BNRM`, `VNB7`, `BNB7`).
+    Mean,
+    /// The diagonal of the normals' second moment E\[n nᵀ\] (`volume.moments`, format
+    /// 1.4; chunks `VMOM`, `BMOM`, `VMB7`, `BMB7`, SPEC §8.4a).
+    Moments,
+}
+
+impl VolumeHeader {
+    /// Which normal texels the volume has: `Mean` when `normals` is set, `Moments` when
+    /// `moments` is, `None` when neither (both set is invalid: [`Header::validate`]
+    /// refuses it; this says `Mean` then).
+    pub fn normal_kind(&self) -> Option<NormalKind> {
+        match (self.normals, self.moments) {
+            (Some(_), _) => Some(NormalKind::Mean),
+            (None, Some(_)) => Some(NormalKind::Moments),
+            (None, None) => None,
+        }
+    }
+
+    /// Sets `normals` and `moments` for `kind` (`Rgba8Snorm`, the only encoding); `None`
+    /// clears both.
+    pub fn set_normal_kind(&mut self, kind: Option<NormalKind>) {
+        let enc = Some(NormalEncoding::Rgba8Snorm);
+        (self.normals, self.moments) = match kind {
+            None => (None, None),
+            Some(NormalKind::Mean) => (enc, None),
+            Some(NormalKind::Moments) => (None, enc),
+        };
+    }
 }
 
 /// Colour texel format.
@@ -363,6 +406,14 @@ impl Header {
                 ));
             }
         }
+        if let Some(v) = &self.volume {
+            if v.normals.is_some() && v.moments.is_some() {
+                return bad(
+                    "volume.normals and volume.moments are both set: a volume stores mean normals or normal moments, not both"
+                        .into(),
+                );
+            }
+        }
         match (self.kind, self.volume.is_some()) {
             (AssetKind::Volume, false) => bad("kind is Volume but `volume` is missing".into()),
             (AssetKind::Cloud, true) => bad("kind is Cloud but `volume` is present".into()),
@@ -397,6 +448,7 @@ impl Header {
                 mip_count,
                 texel: TexelFormat::Rgba8Unorm,
                 normals: normals.then_some(NormalEncoding::Rgba8Snorm),
+                moments: None,
             }),
         }
     }

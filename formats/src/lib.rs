@@ -23,13 +23,13 @@ mod inspect;
 mod volume;
 
 pub use bands::{
-    LodBand, BAND_RECORD_BYTES, MAX_FIRST_LEVEL, TAG_BCEL, TAG_BLEV, TAG_BNRM, TAG_VBND,
+    LodBand, BAND_RECORD_BYTES, MAX_FIRST_LEVEL, TAG_BCEL, TAG_BLEV, TAG_BMOM, TAG_BNRM, TAG_VBND,
 };
 pub use blocks::{
     bc7_len, block_count, decode_bc7, decode_bc7_block, expand_blocks, mask_len, pack_blocks,
     snorm_to_unorm, sparse_len, unorm_to_snorm_in_place, BandBlocks, CloudBlocks, VolumeBlocks,
-    BC7_BLOCK_BYTES, TAG_ANB7, TAG_ATB7, TAG_BLB7, TAG_BNB7, TAG_MTB7, TAG_VLB7, TAG_VNB7,
-    ZERO_BLOCK,
+    BC7_BLOCK_BYTES, TAG_ANB7, TAG_ATB7, TAG_BLB7, TAG_BMB7, TAG_BNB7, TAG_MTB7, TAG_VLB7,
+    TAG_VMB7, TAG_VNB7, ZERO_BLOCK,
 };
 pub use cloud::{
     Atlas, AtlasRect, Billboard, CloudAsset, CloudError, CloudLevel, Mesh, MeshMaterial,
@@ -42,19 +42,20 @@ pub use container::{
 pub use error::{tag_str, FormatError};
 pub use grid::{full_mip_count, mip_dims, Prism, MAX_DIM, PRISM_BYTES, TEXEL_BYTES};
 pub use header::{
-    param, AssetKind, BakedLight, Bounds, ColourSpace, Header, NormalEncoding, SourceInfo,
-    TexelFormat, VolumeBake, VolumeHeader, DEFAULT_AMBIENT,
+    param, AssetKind, BakedLight, Bounds, ColourSpace, Header, NormalEncoding, NormalKind,
+    SourceInfo, TexelFormat, VolumeBake, VolumeHeader, DEFAULT_AMBIENT,
 };
 pub use inspect::{inspect_bytes, ChunkInfo, Report};
-pub use volume::{VolumeAsset, TAG_CELL, TAG_VLEV, TAG_VNRM};
+pub use volume::{VolumeAsset, TAG_CELL, TAG_VLEV, TAG_VMOM, TAG_VNRM};
 
 /// Major format version: a reader refuses files with a different major.
 pub const FORMAT_MAJOR: u16 = 1;
 /// Minor format version implemented: additive changes (new chunks, new optional header
 /// fields). 1.1 added LOD bands to Volume assets (SPEC §8.6) and normal maps to Cloud
-/// atlases (`ANRM`, §9); 1.2 block-compressed (BC7) texel chunks (§12); 1.3 BC7 chunks for LOD bands (`BLB7`/`BNB7`, §12.4). A writer writes
-/// the lowest minor version whose features the file uses (SPEC §5).
-pub const FORMAT_MINOR: u16 = 3;
+/// atlases (`ANRM`, §9); 1.2 block-compressed (BC7) texel chunks (§12); 1.3 BC7 chunks for LOD bands (`BLB7`/`BNB7`, §12.4); 1.4 volumes of normal moments
+/// (`volume.moments`, chunks `VMOM`/`BMOM`/`VMB7`/`BMB7`, §8.4a). A writer writes the lowest
+/// minor version whose features the file uses (SPEC §5).
+pub const FORMAT_MINOR: u16 = 4;
 /// The minor version written for files that use no 1.1 feature (SPEC §5).
 pub const FORMAT_MINOR_BASE: u16 = 0;
 /// The first 8 bytes of every billow asset.

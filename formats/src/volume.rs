@@ -2,25 +2,31 @@
 //!
 //! Chunks, in the order the writer emits them:
 //! - `VLEV` × `mip_count`, element `U8`: colour texels of level 0, 1, …
-//! - `VNRM` × `mip_count`, element `I8`, iff `volume.normals` is set: normals per level.
+//! - `VNRM` × `mip_count`, element `I8`, iff `volume.normals` is set: normals per level;
+//!   `VMOM` instead iff `volume.moments` is set (format 1.4): normal moments per level.
 //! - `CELL` × 1, element `F32`: the prisms, [`PRISM_BYTES`] each.
 //! - LOD bands, format 1.1, only when [`VolumeAsset::bands`] is not empty: `VBND`,
-//!   `BLEV`…, `BNRM`…, `BCEL`… ([`crate::bands`]).
+//!   `BLEV`…, `BNRM`… (or `BMOM`…), `BCEL`… ([`crate::bands`]).
+//!
+//! [`VolumeAsset::normals`] holds the normal texels whichever kind the header declares
+//! ([`VolumeHeader::normal_kind`]); the reader and writer pick the tags from it
+//! ([`NormalTags`]).
 
 use std::path::Path;
 
 use crate::bands::{band_table, validate_bands, LodBand, RawBands};
-use crate::bands::{TAG_BCEL, TAG_BLEV, TAG_BNRM, TAG_VBND};
+use crate::bands::{TAG_BCEL, TAG_BLEV, TAG_BMOM, TAG_BNRM, TAG_VBND};
 use crate::blocks::{
-    check_block_levels, decode_levels, unorm_to_snorm_in_place, VolumeBlocks, TAG_VLB7, TAG_VNB7,
+    check_block_levels, decode_levels, unorm_to_snorm_in_place, VolumeBlocks, TAG_VLB7, TAG_VMB7,
+    TAG_VNB7,
 };
-use crate::blocks::{TAG_BLB7, TAG_BNB7};
+use crate::blocks::{TAG_BLB7, TAG_BMB7, TAG_BNB7};
 use crate::container::{encode_with_minor, with_parts_minor, write_with_minor, ChunkRef};
 use crate::grid::{
     check_level_sizes, full_mip_count, mip_dims, prism_bytes, Prism, MAX_DIM, PRISM_BYTES,
 };
 use crate::{
-    from_bytes, AssetKind, Chunk, Container, ElemType, FormatError, Header, NormalEncoding,
+    from_bytes, AssetKind, Chunk, Container, ElemType, FormatError, Header, NormalKind,
     TexelFormat, VolumeHeader,
 };
 
@@ -28,8 +34,95 @@ use crate::{
 pub const TAG_VLEV: [u8; 4] = *b"VLEV";
 /// Tag of a normal MIP level chunk (one per level, in level order).
 pub const TAG_VNRM: [u8; 4] = *b"VNRM";
+/// Tag of a normal-moment MIP level chunk (format 1.4, SPEC §8.4a; one per level, in level
+/// order): what a volume with `volume.moments` stores instead of `VNRM`.
+pub const TAG_VMOM: [u8; 4] = *b"VMOM";
 /// Tag of the prism cell chunk (exactly one).
 pub const TAG_CELL: [u8; 4] = *b"CELL";
+/// The chunk tags of one kind of normal texels ([`NormalKind`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct NormalTags {
+    /// Base texture levels, raw (`VNRM`/`VMOM`, element `I8`).
+    pub base: [u8; 4],
+    /// Base texture levels, BC7 (`VNB7`/`VMB7`, element `U8`).
+    pub base_bc: [u8; 4],
+    /// LOD band levels, raw (`BNRM`/`BMOM`, element `I8`).
+    pub band: [u8; 4],
+    /// LOD band levels, BC7 (`BNB7`/`BMB7`, element `U8`).
+    pub band_bc: [u8; 4],
+}
+
+impl NormalTags {
+    pub(crate) const MEAN: NormalTags = NormalTags {
+        base: TAG_VNRM,
+        base_bc: TAG_VNB7,
+        band: TAG_BNRM,
+        band_bc: TAG_BNB7,
+    };
+    pub(crate) const MOMENTS: NormalTags = NormalTags {
+        base: TAG_VMOM,
+        base_bc: TAG_VMB7,
+        band: TAG_BMOM,
+        band_bc: TAG_BMB7,
+    };
+
+    /// The tags of a volume whose normal texels are `kind` (those of mean normals for a
+    /// volume without normals: named in messages only).
+    pub(crate) fn of(kind: Option<NormalKind>) -> NormalTags {
+        match kind {
+            Some(NormalKind::Moments) => NormalTags::MOMENTS,
+            Some(NormalKind::Mean) | None => NormalTags::MEAN,
+        }
+    }
+
+    fn all(&self) -> [[u8; 4]; 4] {
+        [self.base, self.base_bc, self.band, self.band_bc]
+    }
+
+    /// The kind of normal texels `tag` holds, `None` for a tag of no normal texels.
+    pub(crate) fn kind_of_tag(tag: &[u8; 4]) -> Option<NormalKind> {
+        if NormalTags::MEAN.all().contains(tag) {
+            Some(NormalKind::Mean)
+        } else if NormalTags::MOMENTS.all().contains(tag) {
+            Some(NormalKind::Moments)
+        } else {
+            None
+        }
+    }
+
+    /// The header field that declares `kind`: `volume.normals` or `volume.moments`.
+    pub(crate) fn field(kind: NormalKind) -> &'static str {
+        match kind {
+            NormalKind::Mean => "volume.normals",
+            NormalKind::Moments => "volume.moments",
+        }
+    }
+}
+
+/// Refuses normal chunk `tag` in a volume whose header declares normal texels `declared`:
+/// a chunk of the other kind (`VNRM` in a moments volume, `VMOM` in one of mean normals)
+/// or of either kind when the header declares none.
+fn check_normal_tag(tag: &[u8; 4], declared: Option<NormalKind>) -> Result<(), FormatError> {
+    let Some(kind) = NormalTags::kind_of_tag(tag) else {
+        return Ok(());
+    };
+    if declared == Some(kind) {
+        return Ok(());
+    }
+    let t = crate::error::tag_str(tag);
+    match declared {
+        None => bad(format!(
+            "{t} chunks present but header.{} is None",
+            NormalTags::field(kind)
+        )),
+        Some(d) => bad(format!(
+            "{t} chunk in a volume whose header sets {} (its normal texels are {} chunks, not {t})",
+            NormalTags::field(d),
+            crate::error::tag_str(&NormalTags::of(Some(d)).base)
+        )),
+    }
+}
+
 /// A volumetric billboard asset.
 #[derive(Clone, Debug, PartialEq)]
 pub struct VolumeAsset {
@@ -37,7 +130,9 @@ pub struct VolumeAsset {
     pub header: Header,
     /// MIP level i: RGBA8 texels, x fastest then y then z, `mip_dims(dims, i)`.
     pub levels: Vec<Vec<u8>>,
-    /// Normals per level, same layout, 4 bytes (i8) per texel.
+    /// Normals per level, same layout, 4 bytes (i8) per texel: mean normals (`VNRM`) or
+    /// normal moments (`VMOM`, format 1.4) as the header says
+    /// ([`VolumeHeader::normal_kind`]).
     pub normals: Option<Vec<Vec<u8>>>,
     pub cells: Vec<Prism>,
     /// Extra LOD bands (format 1.1, SPEC §8.6), finest first; empty for an ordinary volume.
@@ -67,12 +162,22 @@ impl VolumeAsset {
         };
         validate_volume_header(&v)?;
         check_levels("VLEV", &self.levels, v)?;
-        match (&self.normals, v.normals) {
-            (Some(n), Some(NormalEncoding::Rgba8Snorm)) => check_levels("VNRM", n, v)?,
+        let kind = v.normal_kind();
+        let base_tag = crate::error::tag_str(&NormalTags::of(kind).base);
+        match (&self.normals, kind) {
+            (Some(n), Some(_)) => check_levels(&base_tag, n, v)?,
             (None, None) => {}
-            (Some(_), None) => return bad("normals given but header.volume.normals is None".into()),
-            (None, Some(_)) => {
-                return bad("header.volume.normals is set but no normals given".into())
+            (Some(_), None) => {
+                return bad(
+                    "normals given but neither header.volume.normals nor volume.moments is set"
+                        .into(),
+                )
+            }
+            (None, Some(k)) => {
+                return bad(format!(
+                    "header.{} is set but no normals given",
+                    NormalTags::field(k)
+                ))
             }
         }
         for (i, p) in self.cells.iter().enumerate() {
@@ -86,7 +191,7 @@ impl VolumeAsset {
                 return bad(format!("CELL prism {i} has a non-finite coordinate"));
             }
         }
-        validate_bands(&self.bands, v.mip_count, v.normals.is_some())
+        validate_bands(&self.bands, v.mip_count, kind)
     }
 
     /// The largest slice LOD a renderer uses (SPEC §8.6): `mip_count − 1` for an ordinary
@@ -121,9 +226,10 @@ impl VolumeAsset {
             Some(b) => (&b.colour, TAG_VLB7),
             None => (&self.levels, TAG_VLEV),
         };
+        let tags = NormalTags::of(self.header.volume.and_then(|v| v.normal_kind()));
         let (normals, normal_tag) = match blocks {
-            Some(b) => (&b.normals, TAG_VNB7),
-            None => (&self.normals, TAG_VNRM),
+            Some(b) => (&b.normals, tags.base_bc),
+            None => (&self.normals, tags.base),
         };
         let cells = prism_bytes(&self.cells);
         let table = band_table(&self.bands);
@@ -169,7 +275,7 @@ impl VolumeAsset {
                     }
                     for l in b.bands.iter().flat_map(|b| b.normals.iter().flatten()) {
                         refs.push(ChunkRef {
-                            tag: TAG_BNB7,
+                            tag: tags.band_bc,
                             elem: ElemType::U8,
                             data: l,
                         });
@@ -185,7 +291,7 @@ impl VolumeAsset {
                     }
                     for l in self.bands.iter().flat_map(|b| b.normals.iter().flatten()) {
                         refs.push(ChunkRef {
-                            tag: TAG_BNRM,
+                            tag: tags.band,
                             elem: ElemType::I8,
                             data: l,
                         });
@@ -227,7 +333,8 @@ impl VolumeAsset {
     /// SPEC §12) instead of raw texels when given. `blocks` must decode to `levels` and
     /// `normals` (what a reader gets back); only their sizes are checked here.
     pub fn to_bytes_with(&self, blocks: Option<&VolumeBlocks>) -> Result<Vec<u8>, FormatError> {
-        // The minor follows from the chunk tags (SPEC §5: 1.1 for bands, 1.2 for blocks).
+        // The minor follows from the chunk tags (SPEC §5: 1.1 for bands, 1.2 for blocks, 1.3
+        // for band blocks, 1.4 for normal moments).
         self.with_chunks(blocks, |refs| encode_with_minor(&self.header, refs, 0))?
     }
 
@@ -243,9 +350,15 @@ impl VolumeAsset {
         }
         check_block_levels("VLB7", &b.colour, |i| mip_dims(dims, i))
             .map_err(FormatError::Volume)?;
+        let tags = NormalTags::of(self.header.volume.and_then(|v| v.normal_kind()));
+        let (base_bc, band_bc) = (
+            crate::error::tag_str(&tags.base_bc),
+            crate::error::tag_str(&tags.band_bc),
+        );
         match (&b.normals, &self.normals) {
             (Some(n), Some(l)) if n.len() == l.len() => {
-                check_block_levels("VNB7", n, |i| mip_dims(dims, i)).map_err(FormatError::Volume)?
+                check_block_levels(&base_bc, n, |i| mip_dims(dims, i))
+                    .map_err(FormatError::Volume)?
             }
             (None, None) => {}
             _ => return bad("normal blocks do not match the asset's normals".into()),
@@ -274,7 +387,7 @@ impl VolumeAsset {
                 .map_err(FormatError::Volume)?;
             match (&bb.normals, &band.normals) {
                 (Some(nb), Some(l)) if nb.len() == l.len() => {
-                    check_block_levels(&format!("band {} BNB7", n + 1), nb, dims_of)
+                    check_block_levels(&format!("band {} {band_bc}", n + 1), nb, dims_of)
                         .map_err(FormatError::Volume)?
                 }
                 (None, None) => {}
@@ -309,16 +422,21 @@ impl VolumeAsset {
             return bad("header has no `volume` section".into());
         };
         validate_volume_header(&v)?;
+        let kind = v.normal_kind();
+        let tags = NormalTags::of(kind);
         let (mut levels, mut normals, mut cells) = (Vec::new(), Vec::new(), None);
         let (mut bc_colour, mut bc_normals) = (Vec::new(), Vec::new());
         let mut raw = RawBands::default();
         for (i, ch) in chunks.into_iter().enumerate() {
+            // A normal chunk of the kind the header does not declare is an error (SPEC
+            // §8.4a), not an unknown chunk to skip.
+            check_normal_tag(&ch.tag, kind)?;
             let band_chunk = match &ch.tag {
                 b"VBND" => Some((ElemType::U32, None)),
                 b"BLEV" => Some((ElemType::U8, Some(&mut raw.levels))),
-                b"BNRM" => Some((ElemType::I8, Some(&mut raw.normals))),
+                b"BNRM" | b"BMOM" => Some((ElemType::I8, Some(&mut raw.normals))),
                 b"BLB7" => Some((ElemType::U8, Some(&mut raw.bc_levels))),
-                b"BNB7" => Some((ElemType::U8, Some(&mut raw.bc_normals))),
+                b"BNB7" | b"BMB7" => Some((ElemType::U8, Some(&mut raw.bc_normals))),
                 b"BCEL" => Some((ElemType::F32, Some(&mut raw.cells))),
                 _ => None,
             };
@@ -339,9 +457,9 @@ impl VolumeAsset {
             }
             let (want, list) = match &ch.tag {
                 b"VLEV" => (ElemType::U8, &mut levels),
-                b"VNRM" => (ElemType::I8, &mut normals),
+                b"VNRM" | b"VMOM" => (ElemType::I8, &mut normals),
                 b"VLB7" => (ElemType::U8, &mut bc_colour),
-                b"VNB7" => (ElemType::U8, &mut bc_normals),
+                b"VNB7" | b"VMB7" => (ElemType::U8, &mut bc_normals),
                 b"CELL" => {
                     if ch.elem != ElemType::F32 {
                         return bad(format!(
@@ -379,14 +497,17 @@ impl VolumeAsset {
                 cells.len()
             ));
         }
+        let (nrm_tag, nb7_tag) = (
+            crate::error::tag_str(&tags.base),
+            crate::error::tag_str(&tags.base_bc),
+        );
         let blocks = if bc_colour.is_empty() && bc_normals.is_empty() {
             None
         } else {
             if !levels.is_empty() || !normals.is_empty() {
-                return bad(
-                    "both raw (VLEV/VNRM) and compressed (VLB7/VNB7) levels: a compressed volume stores all its levels as blocks"
-                        .into(),
-                );
+                return bad(format!(
+                    "both raw (VLEV/{nrm_tag}) and compressed (VLB7/{nb7_tag}) levels: a compressed volume stores all its levels as blocks"
+                ));
             }
             let dims_of = |i| mip_dims(v.dims, i);
             let count = |tag: &str, n: usize| {
@@ -399,12 +520,16 @@ impl VolumeAsset {
             count("VLB7", bc_colour.len())?;
             check_block_levels("VLB7", &bc_colour, dims_of).map_err(FormatError::Volume)?;
             levels = decode_levels(&bc_colour, dims_of, 0);
-            let bc_normals = match v.normals {
+            let bc_normals = match kind {
                 None if bc_normals.is_empty() => None,
-                None => return bad("VNB7 chunks present but header.volume.normals is None".into()),
+                None => {
+                    return bad(format!(
+                        "{nb7_tag} chunks present but header.volume.normals is None"
+                    ))
+                }
                 Some(_) => {
-                    count("VNB7", bc_normals.len())?;
-                    check_block_levels("VNB7", &bc_normals, dims_of)
+                    count(&nb7_tag, bc_normals.len())?;
+                    check_block_levels(&nb7_tag, &bc_normals, dims_of)
                         .map_err(FormatError::Volume)?;
                     normals = decode_levels(&bc_normals, dims_of, 0x80);
                     normals.iter_mut().for_each(|l| unorm_to_snorm_in_place(l));
@@ -417,23 +542,25 @@ impl VolumeAsset {
                 bands: Vec::new(),
             })
         };
-        let normals = match (v.normals, normals.is_empty()) {
+        let normals = match (kind, normals.is_empty()) {
             (None, true) => None,
             (None, false) => {
-                return bad("VNRM chunks present but header.volume.normals is None".into())
+                return bad(format!(
+                    "{nrm_tag} chunks present but header.volume.normals is None"
+                ))
             }
             (Some(_), _) => Some(normals),
         };
-        let (bands, band_blocks) = raw.into_bands(v.normals.is_some())?;
+        let (bands, band_blocks) = raw.into_bands(kind)?;
         let mut blocks = blocks;
         match (&mut blocks, band_blocks) {
             (_, None) => {}
             (Some(b), Some(bb)) => b.bands = bb,
             (None, Some(_)) => {
-                return bad(
-                    "compressed band levels (BLB7/BNB7) but a raw base texture: a file with BLB7 stores its base texture as VLB7/VNB7"
-                        .into(),
-                )
+                return bad(format!(
+                    "compressed band levels (BLB7/{}) but a raw base texture: a file with BLB7 stores its base texture as VLB7/{nb7_tag}",
+                    crate::error::tag_str(&tags.band_bc)
+                ))
             }
         }
         let asset = VolumeAsset {

@@ -52,6 +52,7 @@ fn banded() -> VolumeAsset {
             mip_count: 2,
             texel: TexelFormat::Rgba8Unorm,
             normals: Some(NormalEncoding::Rgba8Snorm),
+            moments: None,
         }),
     };
     let ramp = |n: usize, k: u8| {

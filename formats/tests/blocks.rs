@@ -108,6 +108,7 @@ fn volume_source() -> VolumeAsset {
             mip_count: 2,
             texel: TexelFormat::Rgba8Unorm,
             normals: Some(NormalEncoding::Rgba8Snorm),
+            moments: None,
         }),
     };
     let colour = |n: usize, s: usize| -> Vec<u8> {

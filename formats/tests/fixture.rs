@@ -38,6 +38,7 @@ fn generator_asset() -> VolumeAsset {
             mip_count: 2,
             texel: TexelFormat::Rgba8Unorm,
             normals: Some(NormalEncoding::Rgba8Snorm),
+            moments: None,
         }),
     };
     let level0 = vec![

@@ -89,6 +89,7 @@ fn volume_asset() -> impl Strategy<Value = VolumeAsset> {
                         mip_count: mips,
                         texel: TexelFormat::Rgba8Unorm,
                         normals: normals.as_ref().map(|_| NormalEncoding::Rgba8Snorm),
+                        moments: None,
                     });
                     VolumeAsset {
                         header,

@@ -395,7 +395,7 @@ pub fn prune_sparse(
     }
     for (l, s) in levels.iter().enumerate() {
         let d = mip_dims(vh.dims, l as u32).map(|d| d as usize);
-        if s.dims != d || s.has_normals() != vh.normals.is_some() {
+        if s.dims != d || s.has_normals() != vh.normal_kind().is_some() {
             return bad(format!("sparse level {l} is {:?}, expected {d:?}", s.dims));
         }
     }
@@ -406,7 +406,7 @@ pub fn prune_sparse(
     let shell = VolumeAsset {
         header: asset.header.clone(),
         levels: Vec::new(),
-        normals: vh.normals.map(|_| Vec::new()),
+        normals: vh.normal_kind().map(|_| Vec::new()),
         bands: Vec::new(),
         cells: asset.cells.clone(),
     };

@@ -84,6 +84,7 @@ impl Volume {
                 mip_count: self.mip_count(),
                 texel: TexelFormat::Rgba8Unorm,
                 normals: self.normals.as_ref().map(|_| NormalEncoding::Rgba8Snorm),
+                moments: None,
             }),
         }
     }
