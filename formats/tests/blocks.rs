@@ -305,6 +305,71 @@ fn compressed_bands_round_trip_as_1_3() {
     assert!(a.to_bytes_with(Some(&two)).is_err());
 }
 
+/// Normal texels made moment-like (format 1.4, SPEC §8.4a): each texel's |x|, |y|, |z|
+/// scaled to sum to 127, w = 0; all-zero texels (empty) stay zero.
+fn as_moments(texels: &mut [u8]) {
+    for t in texels.chunks_exact_mut(4) {
+        let a = [0, 1, 2].map(|i| u32::from((t[i] as i8).unsigned_abs()));
+        let s: u32 = a.iter().sum();
+        if s == 0 {
+            t.fill(0);
+            continue;
+        }
+        let x = (a[0] * 127 + s / 2) / s;
+        let y = ((a[0] + a[1]) * 127 + s / 2) / s - x;
+        t.copy_from_slice(&[x as u8, y as u8, (127 - x - y) as u8, 0]);
+    }
+}
+
+/// Normal moments (format 1.4) compress like mean normals, the bytes XOR 0x80: stored as
+/// VMB7 (base) and BMB7 (bands) instead of VNB7/BNB7, read back as the same blocks and
+/// texels; with raw bands, BMOM.
+#[test]
+fn compressed_moments_round_trip_as_vmb7_and_bmb7() {
+    let mut a = bands_source();
+    a.header
+        .volume
+        .as_mut()
+        .unwrap()
+        .set_normal_kind(Some(NormalKind::Moments));
+    a.normals.iter_mut().flatten().for_each(|l| as_moments(l));
+    for band in &mut a.bands {
+        band.normals
+            .iter_mut()
+            .flatten()
+            .for_each(|l| as_moments(l));
+    }
+    let b = compress_volume_bands(&mut a);
+    let bytes = a.to_bytes_with(Some(&b)).unwrap();
+    assert_eq!(u16::from_le_bytes([bytes[10], bytes[11]]), 4);
+    assert_eq!(
+        tags(&bytes),
+        "HEAD VLB7 VLB7 VMB7 VMB7 CELL VBND BLB7 BLB7 BMB7 BMB7 BCEL END "
+    );
+    let (back, bb) = VolumeAsset::from_bytes_with_blocks(&bytes).unwrap();
+    assert_eq!(back, a);
+    assert_eq!(bb.as_ref(), Some(&b));
+    // The empty texel (4, 3, 1) of the source decodes to exactly zero moments.
+    assert_eq!(&back.normals.as_ref().unwrap()[0][156..160], &[0; 4]);
+    let base_only = VolumeBlocks {
+        bands: Vec::new(),
+        ..b.clone()
+    };
+    let raw_bands = a.to_bytes_with(Some(&base_only)).unwrap();
+    assert_eq!(u16::from_le_bytes([raw_bands[10], raw_bands[11]]), 4);
+    assert!(tags(&raw_bands).contains("VMB7 VMB7 CELL VBND BLEV BLEV BMOM BMOM BCEL"));
+    assert_eq!(VolumeAsset::from_bytes(&raw_bands).unwrap(), a);
+    // Mean-normal blocks in a moments volume are refused, not skipped.
+    let mut chunks = split_chunks(&bytes);
+    for c in chunks.iter_mut().filter(|c| &c.0 == b"VMB7") {
+        c.0 = *b"VNB7";
+    }
+    let e = VolumeAsset::from_bytes(&join_chunks(1, 4, 1, &chunks))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("VNB7") && e.contains("volume.moments"), "{e}");
+}
+
 /// FROZEN: the 1.3 fixture: the 1.2 volume fixture's source with one compressed band.
 #[test]
 fn decodes_frozen_v1_3_bands_fixture() {
