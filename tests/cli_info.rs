@@ -52,6 +52,36 @@ fn describes_the_frozen_fixture() {
         chunks,
         ["HEAD", "VLEV", "VLEV", "VNRM", "VNRM", "CELL", "END "]
     );
+    assert_eq!(v["normals"], "mean");
+    assert!(text.stdout.contains("normals:  mean"), "{}", text.stdout);
+}
+
+/// The 1.4 fixture: a volume of normal moments (SPEC §8.4a), named as such.
+#[test]
+fn describes_the_moments_fixture() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = repo().join("fixtures/format/v1_4_volume_moments.billow");
+    let text = run(&["info", path.to_str().unwrap()], dir.path());
+    assert_eq!(text.code, Some(0), "{}", text.stderr);
+    for needle in [
+        "billow 1.4",
+        "normals:  moments",
+        "VMOM",
+        "moments: Some(Rgba8Snorm)",
+    ] {
+        assert!(
+            text.stdout.contains(needle),
+            "missing {needle:?} in:\n{}",
+            text.stdout
+        );
+    }
+    let json = run(&["info", "--json", path.to_str().unwrap()], dir.path());
+    assert_eq!(json.code, Some(0), "{}", json.stderr);
+    let v: serde_json::Value = serde_json::from_str(&json.stdout).unwrap();
+    assert_eq!(v["format_version"], "1.4");
+    assert_eq!(v["normals"], "moments");
+    assert_eq!(v["header"]["volume"]["moments"], "Rgba8Snorm");
+    assert_eq!(v["header"]["volume"]["normals"], serde_json::Value::Null);
 }
 
 fn assert_rejected(dir: &Path, name: &str, bytes: &[u8], what: &str) {

@@ -1,10 +1,11 @@
 //! `formats/SPEC.md` is enough to write a reader: `tests/spec_reader/read_billow.py` was
 //! written from it alone (its author read no Rust), and here it must agree with the Rust
-//! reader — kind, version, chunk sequence, volume dimensions and MIP count, cloud level
-//! and billboard counts — on the four frozen fixtures and on real assets the binary bakes
-//! now (a volume with normals, its pruned copy with LOD bands, a billboard cloud with
-//! normal maps, a shell), and refuse what the Rust reader refuses (a truncated file, a
-//! flipped payload byte, a newer major version).
+//! reader — kind, version, chunk sequence, volume dimensions and MIP count, mean normals
+//! or normal moments, cloud level and billboard counts — on the frozen fixtures (the 1.4
+//! moments volume among them) and on real assets the binary bakes now (a volume with
+//! normals, its pruned copy with LOD bands, a billboard cloud with normal maps, a shell),
+//! and refuse what the Rust reader refuses (a truncated file, a flipped payload byte, a
+//! newer major version, a moments volume with a VNRM chunk or with both header fields).
 //!
 //! Needs `python3` (standard library only); without it the test says it skips.
 
@@ -13,7 +14,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use billow_format::{read_file, tag_str, CloudAsset};
+use billow_format::{read_file, tag_str, CloudAsset, VolumeAsset};
 use common::{repo, run};
 use serde_json::Value;
 
@@ -69,6 +70,9 @@ fn read_rust(path: &Path) -> Value {
     if let Some(vol) = &c.header.volume {
         v["dims"] = serde_json::json!(vol.dims);
         v["mip_levels"] = serde_json::json!(vol.mip_count);
+        // Mean normals or normal moments (format 1.4, SPEC §8.4a).
+        v["normals"] = serde_json::json!(vol.normals.is_some());
+        v["moments"] = serde_json::json!(vol.moments.is_some());
     } else {
         let cloud = CloudAsset::read(path).unwrap_or_else(|e| panic!("{e}"));
         v["levels"] = serde_json::json!(cloud.levels.len());
@@ -163,7 +167,10 @@ fn independent_reader_agrees_with_the_rust_reader() {
         .filter(|p| p.extension().is_some_and(|e| e == "billow"))
         .collect();
     paths.sort();
-    assert_eq!(paths.len(), 7, "{paths:?}");
+    assert_eq!(paths.len(), 8, "{paths:?}");
+    assert!(paths
+        .iter()
+        .any(|p| p.ends_with("v1_4_volume_moments.billow")));
     let f = paths.len();
     paths.extend(
         ["vol", "pruned", "cloud", "shell", "raw", "pruned_bc"]
@@ -174,6 +181,15 @@ fn independent_reader_agrees_with_the_rust_reader() {
         assert_agree(line, path);
     }
     assert_eq!(code, 0);
+    let moments = &lines[paths
+        .iter()
+        .position(|p| p.ends_with("v1_4_volume_moments.billow"))
+        .unwrap()];
+    assert_eq!(
+        (&moments["moments"], &moments["normals"], &moments["minor"]),
+        (&Value::from(true), &Value::from(false), &Value::from(4)),
+        "{moments}"
+    );
     // The baked assets exercise what the fixtures are too small to: normals, bands, ANRM,
     // block compression (`--compress bc`, the default) and raw texels (--compress none).
     assert_eq!(lines[f]["normals"], true, "{}", lines[f]);
@@ -214,6 +230,21 @@ fn independent_reader_refuses_what_the_rust_reader_refuses() {
     let mut major = good.clone();
     major[8] = 2;
     cases.push(("major2", major));
+    // Format 1.4 (SPEC §8.4a): a moments volume with a mean-normal chunk, and a header
+    // with both `normals` and `moments`.
+    let moments = std::fs::read(repo().join("fixtures/format/v1_4_volume_moments.billow")).unwrap();
+    let mut chunks = split(&moments);
+    for c in chunks.iter_mut().filter(|c| &c.0 == b"VMOM") {
+        c.0 = *b"VNRM";
+    }
+    cases.push(("moments_vnrm", join(4, &chunks)));
+    let mut chunks = split(&moments);
+    let head = String::from_utf8(chunks[0].2.clone()).unwrap();
+    assert!(head.contains("normals: None,"), "{head}");
+    chunks[0].2 = head
+        .replace("normals: None,", "normals: Some(Rgba8Snorm),")
+        .into_bytes();
+    cases.push(("both_set", join(4, &chunks)));
     let paths: Vec<PathBuf> = cases
         .iter()
         .map(|(name, bytes)| {
@@ -228,10 +259,72 @@ fn independent_reader_refuses_what_the_rust_reader_refuses() {
         assert_eq!(line["ok"], false, "{}: {line}", path.display());
         let err = line["error"].as_str().unwrap();
         assert!(!err.is_empty() && !err.contains('\n'), "{err:?}");
-        assert!(read_file(path).is_err(), "{}", path.display());
+        let refused = read_file(path).is_err() || VolumeAsset::read(path).is_err();
+        assert!(refused, "{}", path.display());
     }
     let errors: Vec<&str> = lines.iter().map(|l| l["error"].as_str().unwrap()).collect();
     assert!(errors[0].contains("truncated"), "{errors:?}");
     assert!(errors[1].contains("CRC"), "{errors:?}");
     assert!(errors[2].contains("newer"), "{errors:?}");
+    assert!(errors[3].contains("VNRM"), "{errors:?}");
+    assert!(errors[4].contains("both set"), "{errors:?}");
+}
+
+/// A file's chunks, HEAD to END: (tag, element type, payload).
+fn split(f: &[u8]) -> Vec<([u8; 4], u32, Vec<u8>)> {
+    let mut out = Vec::new();
+    let mut off = 32;
+    while off < f.len() {
+        let tag: [u8; 4] = f[off..off + 4].try_into().unwrap();
+        let elem = u32::from_le_bytes(f[off + 4..off + 8].try_into().unwrap());
+        let len = u64::from_le_bytes(f[off + 8..off + 16].try_into().unwrap()) as usize;
+        out.push((tag, elem, f[off + 24..off + 24 + len].to_vec()));
+        off += 24 + len.div_ceil(8) * 8;
+    }
+    out
+}
+
+/// CRC-32/ISO-HDLC (SPEC §1), bit by bit.
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut c = !0u32;
+    for &b in bytes {
+        c ^= u32::from(b);
+        for _ in 0..8 {
+            c = if c & 1 != 0 {
+                (c >> 1) ^ 0xEDB8_8320
+            } else {
+                c >> 1
+            };
+        }
+    }
+    !c
+}
+
+/// A Volume file of format 1.`minor` with `chunks` (HEAD to END), laid out as SPEC §3–§4
+/// says, with correct CRCs and length: a file the crate's writer would never write.
+fn join(minor: u16, chunks: &[([u8; 4], u32, Vec<u8>)]) -> Vec<u8> {
+    let mut body = Vec::new();
+    for (tag, elem, payload) in chunks {
+        let mut c = Vec::new();
+        c.extend_from_slice(tag);
+        c.extend_from_slice(&elem.to_le_bytes());
+        c.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+        c.extend_from_slice(&0u32.to_le_bytes());
+        c.extend_from_slice(payload);
+        let crc = crc32(&c);
+        body.extend_from_slice(&c[..20]);
+        body.extend_from_slice(&crc.to_le_bytes());
+        body.extend_from_slice(payload);
+        body.resize(body.len().next_multiple_of(8), 0);
+    }
+    let mut f = b"\x89BLW\r\n\x1a\n".to_vec();
+    f.extend_from_slice(&1u16.to_le_bytes());
+    f.extend_from_slice(&minor.to_le_bytes());
+    f.extend_from_slice(&1u32.to_le_bytes());
+    f.extend_from_slice(&(32 + body.len() as u64).to_le_bytes());
+    f.extend_from_slice(&0u32.to_le_bytes());
+    let crc = crc32(&f);
+    f.extend_from_slice(&crc.to_le_bytes());
+    f.extend(body);
+    f
 }

@@ -3,7 +3,9 @@
 use std::path::PathBuf;
 
 use billow_core::gpu_memory::{cloud_gpu_bytes, volume_gpu_bytes, GpuBytes};
-use billow_format::{inspect_bytes, tag_str, AssetKind, CloudAsset, Report, VolumeAsset};
+use billow_format::{
+    inspect_bytes, tag_str, AssetKind, CloudAsset, NormalKind, Report, VolumeAsset,
+};
 use serde::Serialize;
 
 use crate::exit::{CliError, Code};
@@ -37,6 +39,9 @@ struct InfoJson<'a> {
     file_bytes: u64,
     checksums_ok: bool,
     header: Option<&'a billow_format::Header>,
+    /// A volume's normal texels: `"mean"` (mean normals, `VNRM`), `"moments"` (normal
+    /// moments, `VMOM`, format 1.4) or `null` (none, a cloud, or an undecodable header).
+    normals: Option<&'static str>,
     chunks: Vec<ChunkJson>,
     /// Texture bytes `billow view` holds on a device that samples BC7 blocks, and on one
     /// that does not (`billow_core::gpu_memory`).
@@ -105,6 +110,15 @@ fn decode_gpu_bytes(bytes: &[u8], r: &Report) -> Result<GpuBytes, (Code, String)
     }
 }
 
+/// What a volume's normal texels are, by the header ([`InfoJson::normals`]).
+fn normal_kind(r: &Report) -> Option<&'static str> {
+    let v = r.header.as_ref().ok()?.volume?;
+    v.normal_kind().map(|k| match k {
+        NormalKind::Mean => "mean",
+        NormalKind::Moments => "moments",
+    })
+}
+
 fn to_json<'a>(path: &std::path::Path, r: &'a Report, gpu: Option<GpuBytes>) -> InfoJson<'a> {
     InfoJson {
         file: path.display().to_string(),
@@ -113,6 +127,7 @@ fn to_json<'a>(path: &std::path::Path, r: &'a Report, gpu: Option<GpuBytes>) -> 
         file_bytes: r.file_len,
         checksums_ok: r.chunks.iter().all(|c| c.crc_ok),
         header: r.header.as_ref().ok(),
+        normals: normal_kind(r),
         chunks: r
             .chunks
             .iter()
@@ -139,6 +154,9 @@ fn print_text(path: &std::path::Path, r: &Report, gpu: Option<GpuBytes>) {
         r.file_len
     );
     outln!("kind:     {:?}", r.kind);
+    if r.header.as_ref().is_ok_and(|h| h.volume.is_some()) {
+        outln!("normals:  {}", normal_kind(r).unwrap_or("none"));
+    }
     if let Some(g) = gpu {
         outln!(
             "gpu:      {}",

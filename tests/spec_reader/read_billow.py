@@ -37,7 +37,7 @@ whole value (rather than regex-extracting a few fields) is what lets unknown
 fields with arbitrary values be ignored robustly (section 5).  The parsed
 tree is then checked against the section 6 schema: kind, tool, source,
 bounds, colour_space, seed, params, volume (dims, mip_count, texel,
-normals).  Unknown fields are ignored; Option fields may be omitted;
+normals, and moments from format 1.4).  Unknown fields are ignored; Option fields may be omitted;
 duplicate fields/keys are rejected (the spec is silent; see SPEC_GAPS.md).
 """
 
@@ -302,7 +302,14 @@ def check_header(text):
         nrm = as_option(vf["normals"], "header.volume.normals", ext) if "normals" in vf else None
         if nrm is not None:
             as_enum(nrm, "header.volume.normals", ("Rgba8Snorm",))
-        h["volume"] = {"dims": dims, "mip_count": mc, "normals": nrm is not None}
+        # SPEC 6 / 8.4a (format 1.4): normal moments instead of mean normals, never both.
+        mom = as_option(vf["moments"], "header.volume.moments", ext) if "moments" in vf else None
+        if mom is not None:
+            as_enum(mom, "header.volume.moments", ("Rgba8Snorm",))
+        if nrm is not None and mom is not None:
+            vfail("header.volume: normals and moments are both set (SPEC 6: one or the other)")
+        h["volume"] = {"dims": dims, "mip_count": mc, "normals": nrm is not None,
+                       "moments": mom is not None}
     else:
         h["volume"] = None
     if (h["kind"] == "Volume") != (h["volume"] is not None):
@@ -478,9 +485,24 @@ def level_len_check(ch, w, h, d, compressed, what):
 
 def decode_volume(header, by_tag, out):
     vol = header["volume"]
-    dims, mc, has_n = vol["dims"], vol["mip_count"], vol["normals"]
+    dims, mc, has_mean, has_mom = vol["dims"], vol["mip_count"], vol["normals"], vol["moments"]
+    has_n = has_mean or has_mom
+    # SPEC 8.1 / 8.4a (format 1.4): a volume with `moments` stores VMOM/BMOM/VMB7/BMB7
+    # where one with `normals` stores VNRM/BNRM/VNB7/BNB7, under the same rules; a
+    # chunk of the family the header does not declare is an error, not skipped.
+    mean_tags = (b"VNRM", b"VNB7", b"BNRM", b"BNB7")
+    mom_tags = (b"VMOM", b"VMB7", b"BMOM", b"BMB7")
+    if has_mom:
+        own, other, field = mom_tags, mean_tags, "moments"
+    else:
+        own, other, field = mean_tags, mom_tags, "normals"
+    for t in other + (() if has_n else own):
+        if by_tag.get(t):
+            fail("Volume: %s chunk but the header %s (SPEC 8.1)"
+                 % (tag_str(t), "sets volume.%s" % field if has_n else "has neither normals nor moments"))
+    t_raw, t_bc, t_braw, t_bbc = own
     vlev, vbc = raw_or_blocks(by_tag, b"VLEV", b"VLB7")
-    vnrm, nbc = raw_or_blocks(by_tag, b"VNRM", b"VNB7")
+    vnrm, nbc = raw_or_blocks(by_tag, t_raw, t_bc)
     if vnrm and has_n and vbc != nbc:
         fail("Volume: colour and normals must both be raw or both compressed (SPEC 8.1)")
     out["compressed"] = vbc
@@ -488,21 +510,23 @@ def decode_volume(header, by_tag, out):
     vbnd = by_tag.get(b"VBND", [])
     # SPEC 12.1 (format 1.3): BLB7/BNB7 replace BLEV/BNRM one for one.
     blev, blbc = raw_or_blocks(by_tag, b"BLEV", b"BLB7")
-    bnrm, bnbc = raw_or_blocks(by_tag, b"BNRM", b"BNB7")
+    bnrm, bnbc = raw_or_blocks(by_tag, t_braw, t_bbc)
     if bnrm and blbc != bnbc:
         fail("Volume: band colour and normals must both be raw or both compressed (SPEC 12.1)")
     if blbc and not vbc:
         fail("Volume: BLB7 chunks but a raw base texture (SPEC 12.1: BLB7 needs VLB7)")
     out["compressed_bands"] = blbc
     bcel = by_tag.get(b"BCEL", [])
-    for tag, lst, elem in ((b"VLEV", vlev, E_U8), (b"VNRM", vnrm, E_U8 if nbc else E_I8),
+    for tag, lst, elem in ((b"VLEV", vlev, E_U8), (t_bc if nbc else t_raw, vnrm, E_U8 if nbc else E_I8),
                            (b"CELL", cell, E_F32),
-                           (b"VBND", vbnd, E_U32), (b"BLEV", blev, E_U8), (b"BNRM", bnrm, E_U8 if bnbc else E_I8),
+                           (b"VBND", vbnd, E_U32), (b"BLEV", blev, E_U8),
+                           (t_bbc if bnbc else t_braw, bnrm, E_U8 if bnbc else E_I8),
                            (b"BCEL", bcel, E_F32)):
         for ch in lst:
             need_elem(ch, elem, tag_str(tag))
     ctag = "VLB7" if vbc else "VLEV"
-    ntag = "VNB7" if nbc else "VNRM"
+    ntag = tag_str(t_bc if nbc else t_raw)
+    bntag = tag_str(t_bbc if bnbc else t_braw)
     if len(vlev) != mc:
         fail("Volume: %d %s chunks, header mip_count is %d" % (len(vlev), ctag, mc))
     level_sizes = []
@@ -513,7 +537,7 @@ def decode_volume(header, by_tag, out):
     want_n = mc if has_n else 0
     if len(vnrm) != want_n:
         fail("Volume: %d %s chunks, expected %d (%s)"
-             % (len(vnrm), ntag, want_n, "normals set" if has_n else "header has no normals"))
+             % (len(vnrm), ntag, want_n, "%s set" % field if has_n else "header has no normals"))
     for i, ch in enumerate(vnrm):
         w, h, d = mip_dims(dims, i)
         level_len_check(ch, w, h, d, nbc, "%s level %d" % (ntag, i))
@@ -524,7 +548,8 @@ def decode_volume(header, by_tag, out):
     bands = []
     if not vbnd:
         if blev or bnrm or bcel:
-            fail("Volume: BLEV/BNRM/BLB7/BNB7/BCEL chunk without a VBND chunk")
+            fail("Volume: BLEV/%s/BLB7/%s/BCEL chunk without a VBND chunk"
+                 % (tag_str(t_braw), tag_str(t_bbc)))
     else:
         if len(vbnd) > 1:
             fail("Volume: %d VBND chunks, at most 1 allowed" % len(vbnd))
@@ -558,7 +583,7 @@ def decode_volume(header, by_tag, out):
                  % (len(blev), "BLB7" if blbc else "BLEV", total))
         want = total if has_n else 0
         if len(bnrm) != want:
-            fail("Volume: %d %s chunks, expected %d" % (len(bnrm), "BNB7" if bnbc else "BNRM", want))
+            fail("Volume: %d %s chunks, expected %d" % (len(bnrm), bntag, want))
         if len(bcel) != len(bands):
             fail("Volume: %d BCEL chunks, expected %d (one per band)" % (len(bcel), len(bands)))
         k = 0
@@ -569,7 +594,7 @@ def decode_volume(header, by_tag, out):
             if has_n:
                 for j in range(b["mip_levels"]):
                     band_level_check(bnrm[k + j], b["dims"], j, bnbc,
-                                     "band %d %s" % (bi, "BNB7" if bnbc else "BNRM"))
+                                     "band %d %s" % (bi, bntag))
             k += b["mip_levels"]
             b["cells"] = check_cells(bcel[bi - 1], "band %d BCEL" % bi)
     out.update({
@@ -577,7 +602,8 @@ def decode_volume(header, by_tag, out):
         "mip_levels": mc,
         "level_sizes": level_sizes,
         "level_bytes": [w * h * d * 4 for w, h, d in level_sizes],
-        "normals": has_n,
+        "normals": has_mean,
+        "moments": has_mom,
         "colour_space": header["colour_space"],
         "cells": cells,
         "bands": len(bands),
@@ -820,7 +846,8 @@ def decode_cloud(header, by_tag, out):
 
 # ------------------------------------------------------------------ main
 
-VOLUME_TAGS = {b"VLEV", b"VNRM", b"CELL", b"VBND", b"BLEV", b"BNRM", b"BCEL", b"VLB7", b"VNB7", b"BLB7", b"BNB7"}
+VOLUME_TAGS = {b"VLEV", b"VNRM", b"CELL", b"VBND", b"BLEV", b"BNRM", b"BCEL", b"VLB7", b"VNB7", b"BLB7", b"BNB7",
+               b"VMOM", b"BMOM", b"VMB7", b"BMB7"}
 
 
 def read_billow(data):
