@@ -64,6 +64,7 @@ fn ao_next_to_a_wall_matches_the_analytic_fraction() {
             rays,
             grid,
             shaded: None,
+            two_sided: false,
         })
         .unwrap();
     for h in [0.25f32, 0.5, 1.0, 1.5, 1.9, 2.5] {

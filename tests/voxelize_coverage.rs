@@ -21,7 +21,10 @@ use billow::rng::Pcg32;
 use billow::scene::{Aabb, Material, Scene, SceneBuilder};
 use billow::voxelize::coverage::{Columns, Model};
 use billow::voxelize::toksvig::AUTO_NORMALS_MIN_COHERENCE;
-use billow::voxelize::{voxelize, voxelize_sparse, CombineFn, Preset, Resolution, VoxelizeOptions};
+use billow::voxelize::{
+    bake_with_normals, voxelize, voxelize_sparse, CombineFn, NormalsMode, Preset, Resolution,
+    VoxelizeOptions,
+};
 use glam::{Vec3, Vec4};
 
 /// A foliage-like cloud: `n` small double-sided opaque quads of random orientation in a
@@ -291,14 +294,21 @@ fn the_mesh_coverage_of_a_tilted_surface_is_its_projected_area() {
     }
 }
 
-/// Level 0's scale and the judged coherence of `scene` at 32³, dense and brick-sparse
-/// (which must agree), with `normals` and `judge`; and whether normals were stored.
-fn level0(scene: &Scene, normals: bool, judge: bool) -> (f32, Option<f32>, bool) {
+/// Level 0's scale and the coherence of `scene` at 32³, dense and brick-sparse (which
+/// must agree), baked with `normals` (`moments` or the mean) and the `surface` verdict
+/// given; and whether normals were stored.
+fn level0(
+    scene: &Scene,
+    normals: bool,
+    moments: bool,
+    surface: Option<bool>,
+) -> (f32, Option<f32>, bool) {
     let opts = VoxelizeOptions {
         resolution: Resolution::Longest(32),
         combine: CombineFn::Preset(Preset::Opaque),
         normals,
-        judge_normals: judge,
+        moments,
+        surface,
         ..VoxelizeOptions::default()
     };
     let quiet = |_: billow::voxelize::Stage, _: f32| {};
@@ -317,6 +327,7 @@ fn level0(scene: &Scene, normals: bool, judge: bool) -> (f32, Option<f32>, bool)
         s.has_normals(),
         "dense and sparse normals"
     );
+    assert_eq!(d.moments, s.moments, "dense and sparse moments");
     (
         d.coverage.scales[0],
         d.normal_coherence,
@@ -324,41 +335,74 @@ fn level0(scene: &Scene, normals: bool, judge: bool) -> (f32, Option<f32>, bool)
     )
 }
 
+/// What `--normals auto` decides for `scene` at 32³: the judged coherence, the surface
+/// verdict it hands the bake, and whether the stored normals are moments.
+fn auto(scene: &Scene) -> (Option<f32>, Option<bool>, bool) {
+    let mut opts = VoxelizeOptions {
+        resolution: Resolution::Longest(32),
+        combine: CombineFn::Preset(Preset::Opaque),
+        ..VoxelizeOptions::default()
+    };
+    let quiet = |_: billow::voxelize::Stage, _: f32| {};
+    let (v, out) = bake_with_normals(
+        scene,
+        &mut opts,
+        NormalsMode::Auto,
+        |o| voxelize(scene, o, &quiet),
+        |v| (v.normal_coherence, v.normals.is_some()),
+    )
+    .expect("auto bake");
+    assert!(out.kept && out.moments && v.moments, "{out:?}");
+    (out.coherence, opts.surface, v.moments)
+}
+
 #[test]
 fn a_surface_with_coherent_normals_keeps_its_level_0_and_foliage_is_thinned() {
     let torus = billow::procgen::torus(1.0, 0.35, 48, 24);
     // Without normals the torus's partly covered voxels are thinned (its silhouette
     // covers more than the mesh)...
-    let (k_off, c_off, _) = level0(&torus, false, false);
+    let (k_off, c_off, _) = level0(&torus, false, false, None);
     assert!(
         c_off.is_none() && k_off < 1.0,
         "torus without normals: k = {k_off}"
     );
-    // ... with coherent normals, kept or judged, it is a surface: level 0 as combined.
-    for judge in [false, true] {
-        let (k, c, stored) = level0(&torus, true, judge);
-        let c = c.expect("coherence of a bake with normals");
-        assert!(c >= AUTO_NORMALS_MIN_COHERENCE, "torus coherence {c}");
-        assert!(
-            stored,
-            "judge {judge}: a coherent surface keeps its normals"
-        );
-        assert_eq!(
-            k, 1.0,
-            "judge {judge}: the surface's level 0 was scaled by {k}"
-        );
-    }
-    // Foliage: incoherent normals, thinned with them, judged away, or without.
+    // ... with coherent mean normals it is a surface: level 0 as combined.
+    let (k, c, stored) = level0(&torus, true, false, None);
+    let c = c.expect("coherence of a bake with mean normals");
+    assert!(
+        c >= AUTO_NORMALS_MIN_COHERENCE && stored,
+        "torus coherence {c}"
+    );
+    assert_eq!(k, 1.0, "the surface's level 0 was scaled by {k}");
+    // Moments carry no coherence: a surface only where judged one before the bake, which
+    // `--normals auto` does.
+    let (k, c, stored) = level0(&torus, true, true, None);
+    assert!(
+        c.is_none() && stored && k == k_off,
+        "moments, unjudged: k = {k}"
+    );
+    let (k, _, _) = level0(&torus, true, true, Some(true));
+    assert_eq!(k, 1.0, "moments judged a surface: k = {k}");
+    let (c, surface, _) = auto(&torus);
+    assert!(
+        surface == Some(true) && c.is_some_and(|c| c >= AUTO_NORMALS_MIN_COHERENCE),
+        "auto on the torus: {c:?} {surface:?}"
+    );
+    // Foliage: incoherent normals, thinned whatever is stored.
     let leaves = foliage(400, 5);
-    let (k_off, _, _) = level0(&leaves, false, false);
-    for judge in [false, true] {
-        let (k, c, stored) = level0(&leaves, true, judge);
-        let c = c.expect("coherence of a bake with normals");
-        assert!(c < AUTO_NORMALS_MIN_COHERENCE, "foliage coherence {c}");
-        assert_eq!(stored, !judge, "judge {judge}: normals stored {stored}");
-        assert!(
-            k < 1.0 && k == k_off,
-            "judge {judge}: k = {k}, without normals {k_off}"
-        );
-    }
+    let (k_off, _, _) = level0(&leaves, false, false, None);
+    let (k, c, _) = level0(&leaves, true, false, None);
+    let c = c.expect("coherence of a bake with mean normals");
+    assert!(c < AUTO_NORMALS_MIN_COHERENCE, "foliage coherence {c}");
+    assert!(
+        k < 1.0 && k == k_off,
+        "mean normals: k = {k}, without {k_off}"
+    );
+    let (k, _, _) = level0(&leaves, true, true, Some(false));
+    assert_eq!(k, k_off, "moments judged foliage: k = {k}");
+    let (c, surface, _) = auto(&leaves);
+    assert!(
+        surface == Some(false) && c.is_some_and(|c| c < AUTO_NORMALS_MIN_COHERENCE),
+        "auto on the leaves: {c:?} {surface:?}"
+    );
 }

@@ -70,6 +70,9 @@ struct Summary {
     combine: String,
     supersample: u32,
     normals: bool,
+    /// The stored normals are the diagonal of their second moment (`--normals moments`, or
+    /// `auto` on a thin or fuzzy surface).
+    normal_moments: bool,
     /// `--normals auto`: the coherence the choice was made on (see docs/voxelize.md).
     normal_coherence: Option<f32>,
     compress: String,
@@ -436,6 +439,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         combine: opts.combine.to_string(),
         supersample: opts.supersample,
         normals: opts.normals,
+        normal_moments: opts.normals && opts.moments,
         normal_coherence: coherence,
         compress: args.compress.clone(),
         triangles: stats.triangles,
@@ -507,19 +511,26 @@ fn summary_lines(s: &Summary, normals: NormalsArg) -> Vec<String> {
         s.combine,
         s.compress
     )];
+    const LIT: &str = "viewers light the albedo two-sided, like its mesh";
     lines.push(match (normals, s.normals, s.normal_coherence) {
+        (NormalsArg::Auto, true, Some(k)) if k >= AUTO_NORMALS_MIN_COHERENCE => format!(
+            "normals: moments (--normals auto; coherence {k:.2} ≥ {AUTO_NORMALS_MIN_COHERENCE}: \
+             a closed surface, level 0 kept as baked; {LIT})"
+        ),
         (NormalsArg::Auto, true, Some(k)) => format!(
-            "normals: kept (--normals auto: coherence {k:.2} ≥ {AUTO_NORMALS_MIN_COHERENCE}, a \
-             smooth surface; viewers shade the albedo under the scene light)"
+            "normals: moments (--normals auto; coherence {k:.2} < {AUTO_NORMALS_MIN_COHERENCE}: \
+             thin or fuzzy, such as foliage, level 0 thinned to the mesh's coverage; {LIT})"
         ),
-        (NormalsArg::Auto, false, Some(k)) => format!(
-            "normals: dropped (--normals auto: coherence {k:.2} < {AUTO_NORMALS_MIN_COHERENCE}, \
-             a thin or fuzzy surface such as foliage; the colour is shown as baked)"
-        ),
-        (NormalsArg::Auto, _, None) => {
-            "normals: dropped (--normals auto: not judged, see the warning above)".to_string()
+        (NormalsArg::Auto, true, None) => {
+            format!("normals: moments (--normals auto; nothing at the judged level; {LIT})")
         }
-        (_, true, _) => "normals: kept (--normals on)".to_string(),
+        (NormalsArg::Auto, false, _) => {
+            "normals: none (--normals auto: given up, see the warning above)".to_string()
+        }
+        (_, true, _) if s.normal_moments => format!("normals: moments (--normals moments; {LIT})"),
+        (_, true, _) => {
+            "normals: mean (--normals on: Toksvig's mean normal, lit one-sided)".to_string()
+        }
         (_, false, _) => "normals: none (--normals off)".to_string(),
     });
     lines.push(crate::output::gpu_line(s.gpu_bytes, s.gpu_bytes_no_bc));

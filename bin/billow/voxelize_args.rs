@@ -32,10 +32,11 @@ pub struct Args {
     /// expr:<expression over px nx py ny pz nz> (see docs/voxelize.md).
     #[arg(long, default_value = "opaque")]
     pub(crate) combine: String,
-    /// Normals (Toksvig-filtered MIPs) for runtime shading: auto (bake them, keep them only
-    /// for a smooth solid surface, drop them for thin or fuzzy ones such as foliage and fur;
-    /// see docs/voxelize.md), on (a bare --normals), or off. With normals the colour is
-    /// albedo and viewers shade it under the scene light.
+    /// Normals for runtime shading: auto (the mean normal for a smooth solid surface, their
+    /// second moments for thin or fuzzy ones such as foliage and fur; see docs/voxelize.md),
+    /// on (the mean, Toksvig-filtered; a bare --normals), moments (the diagonal of the
+    /// normals' second moment, lit two-sided), or off (the colour is shown as baked). With
+    /// normals the colour is albedo and viewers shade it under the scene light.
     #[arg(long, value_enum, value_name = "WHEN", default_value_t = NormalsArg::Auto,
           num_args = 0..=1, default_missing_value = "on")]
     pub(crate) normals: NormalsArg,
@@ -115,5 +116,6 @@ pub struct Args {
 pub enum NormalsArg {
     Auto,
     On,
+    Moments,
     Off,
 }

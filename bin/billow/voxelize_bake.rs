@@ -72,6 +72,7 @@ pub(crate) fn bake_once(
     let mode = match args.normals {
         NormalsArg::Auto => NormalsMode::Auto,
         NormalsArg::On => NormalsMode::On,
+        NormalsArg::Moments => NormalsMode::Moments,
         NormalsArg::Off => NormalsMode::Off,
     };
     let mut pruned = None;

@@ -33,7 +33,7 @@
 
 use std::collections::BTreeMap;
 
-use billow_format::VolumeBake;
+use billow_format::{NormalKind, VolumeBake};
 use glam::Vec3;
 
 use crate::voxelize::{
@@ -73,6 +73,9 @@ pub enum Lighting {
         rays: AoRays,
         grid: GridSpec,
         shaded: Option<VolumeLight>,
+        /// With `shaded`: the volume stores normal moments (SPEC §8.4a), lit two-sided like
+        /// the mesh ([`Lighting::Diffuse`]'s factor) instead of [`Lighting::Volume`]'s.
+        two_sided: bool,
     },
     /// Ambient + diffuse with `light` the unit direction towards the light.
     Diffuse { light: Vec3, ambient: f32 },
@@ -267,15 +270,18 @@ impl Lighting {
         min: Vec3,
         max: Vec3,
         dims: [u32; 3],
-        normals: bool,
+        normals: Option<NormalKind>,
     ) -> Result<(Lighting, Option<String>), String> {
         match billow_format::VolumeBake::read(params) {
-            VolumeBake::None if normals => {
+            VolumeBake::None if normals.is_some() => {
                 let l = VolumeLight::default();
+                let (light, ambient) = (l.dir, l.ambient);
                 Ok((
-                    Lighting::Volume {
-                        light: l.dir,
-                        ambient: l.ambient,
+                    if normals == Some(NormalKind::Moments) {
+                        // Moments light two-sided: the mesh's own model.
+                        Lighting::Diffuse { light, ambient }
+                    } else {
+                        Lighting::Volume { light, ambient }
                     },
                     None,
                 ))
@@ -313,7 +319,8 @@ impl Lighting {
                     Lighting::Ao {
                         rays: ao,
                         grid,
-                        shaded: normals.then(VolumeLight::default),
+                        shaded: normals.map(|_| VolumeLight::default()),
+                        two_sided: normals == Some(NormalKind::Moments),
                     },
                     None,
                 ))
@@ -355,7 +362,7 @@ mod tests {
         let mut p = BTreeMap::new();
         let (min, max) = (Vec3::ZERO, Vec3::new(2.0, 4.0, 8.0));
         assert_eq!(
-            Lighting::for_volume(&p, min, max, [2, 4, 8], false)
+            Lighting::for_volume(&p, min, max, [2, 4, 8], None)
                 .unwrap()
                 .0,
             Lighting::Unlit
@@ -363,16 +370,20 @@ mod tests {
         p.insert("bake".into(), "ao".into());
         p.insert("ao_rays".into(), "7".into());
         p.insert("ao_distance".into(), "1.5".into());
-        let (l, note) = Lighting::for_volume(&p, min, max, [2, 4, 8], false).unwrap();
+        let (l, note) = Lighting::for_volume(&p, min, max, [2, 4, 8], None).unwrap();
         assert!(note.is_none());
-        let Lighting::Ao { rays, grid, shaded } = l else {
+        let Lighting::Ao {
+            rays, grid, shaded, ..
+        } = l
+        else {
             panic!("{l:?}")
         };
         assert_eq!((rays.rays, rays.t_max, rays.seed), (7, 1.5, AO_SEED));
         assert_eq!(grid.voxel, Vec3::ONE);
         assert_eq!(shaded, None);
         assert!((rays.t_min - 0.5 * 3f32.sqrt()).abs() < 1e-6);
-        let (l, note) = Lighting::for_volume(&p, min, max, [2, 4, 8], true).unwrap();
+        let (l, note) =
+            Lighting::for_volume(&p, min, max, [2, 4, 8], Some(NormalKind::Mean)).unwrap();
         assert!(
             matches!(
                 l,
@@ -383,9 +394,9 @@ mod tests {
             ) && note.is_none()
         );
         p.insert("ao_rays".into(), "many".into());
-        assert!(Lighting::for_volume(&p, min, max, [2, 4, 8], false).is_err());
+        assert!(Lighting::for_volume(&p, min, max, [2, 4, 8], None).is_err());
         p.insert("bake".into(), "gi".into());
-        let (l, note) = Lighting::for_volume(&p, min, max, [2, 4, 8], false).unwrap();
+        let (l, note) = Lighting::for_volume(&p, min, max, [2, 4, 8], None).unwrap();
         assert_eq!(l, Lighting::Unlit);
         assert!(note.unwrap().contains("bake=gi"));
     }
@@ -393,7 +404,9 @@ mod tests {
     #[test]
     fn volumes_with_normals_are_lit_one_sided() {
         let p = BTreeMap::new();
-        let (l, note) = Lighting::for_volume(&p, Vec3::ZERO, Vec3::ONE, [2, 2, 2], true).unwrap();
+        let (l, note) =
+            Lighting::for_volume(&p, Vec3::ZERO, Vec3::ONE, [2, 2, 2], Some(NormalKind::Mean))
+                .unwrap();
         assert!(note.is_none());
         assert_eq!(
             l,

@@ -255,14 +255,23 @@ impl<'a> ReferenceRenderer<'a> {
                 two_sided(n, light, ambient, visibility)
             }
             Lighting::Unlit => return c,
-            Lighting::Ao { rays, grid, shaded } => {
+            Lighting::Ao {
+                rays,
+                grid,
+                shaded,
+                two_sided: moments,
+            } => {
                 let (Some(bvh), Some(shader)) = (&self.bvh, &self.shader) else {
                     return c;
                 };
                 let p = origin + dir * t;
                 let ao = rays.ambient_occlusion(self.scene, shader, bvh, p, voxel_stream(&grid, p));
                 ao * shaded.map_or(1.0, |l| {
-                    one_sided(self.volume_normal(tri, bary, dir), l.dir, l.ambient)
+                    if moments {
+                        two_sided(self.shading_normal(tri, bary), l.dir, l.ambient, 1.0)
+                    } else {
+                        one_sided(self.volume_normal(tri, bary, dir), l.dir, l.ambient)
+                    }
                 })
             }
             Lighting::Diffuse { light, ambient } => {

@@ -64,6 +64,7 @@ use super::reference::{sample_offset, validate_camera, Sampling};
 use super::volume_sampler::{DecodedVolume, MipFilter};
 use super::{EvalError, ImageF32};
 use crate::camera::Camera;
+use billow_core::shading::moments_diffuse_factor;
 
 /// Slice spacing mode, [`voxel_size`], the per-cell [`normal_matrix`] and
 /// [`shade_normal`]: the shared slice planning of the rendering core
@@ -582,10 +583,17 @@ impl RowCtx<'_> {
         let w = p.weights.map(|(l, w, cap)| (l, w * fade, cap));
         let mut s = self.vols[p.band].sample_weighted(w, uvw);
         if let (Some(m), Some((l, ambient))) = (p.nmat, self.light) {
-            let n = self.vols[p.band]
+            let vol = &self.vols[p.band];
+            let n = vol
                 .sample_normal(p.lod, uvw, self.filter)
                 .unwrap_or(Vec3::ZERO);
-            let k = volume_diffuse_factor(shade_normal(m, n), l, ambient, 1.0);
+            let k = if vol.moments {
+                // The light in the volume's own axes: n_view·L = n·(Mᵀ L).
+                let light = (m.transpose() * l).normalize_or_zero();
+                moments_diffuse_factor(n, light, ambient, 1.0)
+            } else {
+                volume_diffuse_factor(shade_normal(m, n), l, ambient, 1.0)
+            };
             s = (s.truncate() * k).extend(s.w);
         }
         Some(s)

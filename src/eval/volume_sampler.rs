@@ -54,6 +54,10 @@ pub struct DecodedVolume {
     /// Per level (parallel to `levels`), the normals as `(α·n̄, α)` (module docs); empty
     /// when the asset stores no normals.
     pub normals: Vec<Level>,
+    /// `normals` holds the diagonal of the normals' second moment (`(α·E[n∘n], α)`,
+    /// SPEC §8.4a) instead of their mean: lit two-sided
+    /// ([`billow_core::shading::moments_diffuse_factor`]).
+    pub moments: bool,
     /// The asset's extra LOD bands (formats/SPEC.md §8.6), decoded; empty for an
     /// ordinary volume. The slicer draws them instead of the base levels on the slices
     /// whose LOD falls in their band.
@@ -85,7 +89,7 @@ impl DecodedVolume {
         let srgb = asset.header.colour_space == ColourSpace::SrgbPremultiplied;
         let repeat = repeat_axes(asset);
         let dims0 = asset.level_dims(0);
-        let bands = asset
+        let bands: Vec<DecodedBand> = asset
             .bands
             .iter()
             .map(|b| DecodedBand {
@@ -95,8 +99,20 @@ impl DecodedVolume {
                 cells: b.cells.clone(),
             })
             .collect();
+        let moments = asset
+            .header
+            .volume
+            .is_some_and(|v| v.normal_kind() == Some(billow_format::NormalKind::Moments));
+        let bands: Vec<DecodedBand> = bands
+            .into_iter()
+            .map(|mut b: DecodedBand| {
+                b.volume.moments = moments;
+                b
+            })
+            .collect();
         Ok(DecodedVolume {
             bands,
+            moments,
             ..Self::decode_levels(&asset.levels, asset.normals.as_deref(), dims0, srgb, repeat)
         })
     }
@@ -150,6 +166,7 @@ impl DecodedVolume {
         DecodedVolume {
             levels,
             normals,
+            moments: false,
             repeat,
             bands: Vec::new(),
         }
@@ -371,6 +388,7 @@ mod tests {
             levels: vec![Level { dims, texels }],
             normals: Vec::new(),
             repeat,
+            moments: false,
             bands: Vec::new(),
         }
     }

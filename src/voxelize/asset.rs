@@ -3,7 +3,7 @@
 use std::collections::BTreeMap;
 
 use billow_format::{
-    AssetKind, Bounds, ColourSpace, Header, NormalEncoding, SourceInfo, TexelFormat, VolumeAsset,
+    AssetKind, Bounds, ColourSpace, Header, NormalKind, SourceInfo, TexelFormat, VolumeAsset,
     VolumeHeader,
 };
 
@@ -33,7 +33,12 @@ pub fn bake_params_for(
     p.insert("dims".into(), format!("{}x{}x{}", d[0], d[1], d[2]));
     p.insert("combine".into(), opts.combine.to_string());
     p.insert("supersample".into(), opts.supersample.to_string());
-    p.insert("normals".into(), opts.normals.to_string());
+    let normals = if opts.normals && opts.moments {
+        "moments".to_string()
+    } else {
+        opts.normals.to_string()
+    };
+    p.insert("normals".into(), normals);
     p.insert(
         "margin".into(),
         if opts.bounds.is_some() {
@@ -79,12 +84,22 @@ impl Volume {
             colour_space: ColourSpace::SrgbPremultiplied,
             seed: None,
             params,
-            volume: Some(VolumeHeader {
-                dims: self.dims(),
-                mip_count: self.mip_count(),
-                texel: TexelFormat::Rgba8Unorm,
-                normals: self.normals.as_ref().map(|_| NormalEncoding::Rgba8Snorm),
-                moments: None,
+            volume: Some({
+                let mut v = VolumeHeader {
+                    dims: self.dims(),
+                    mip_count: self.mip_count(),
+                    texel: TexelFormat::Rgba8Unorm,
+                    normals: None,
+                    moments: None,
+                };
+                v.set_normal_kind(self.normals.as_ref().map(|_| {
+                    if self.moments {
+                        NormalKind::Moments
+                    } else {
+                        NormalKind::Mean
+                    }
+                }));
+                v
             }),
         }
     }

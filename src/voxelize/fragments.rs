@@ -401,7 +401,7 @@ fn triangle_row<const K: usize, const AVX: bool>(
             let Some((f, bw)) = fragment::<K>(ctx.shader, &t, e, &smp.off, slice, gmask, i) else {
                 continue;
             };
-            if ctx.normals {
+            if ctx.normals.on() {
                 scratch.normals.push(shading_normal(ctx.scene, s, bw));
             }
             scratch.frags.push(f);
@@ -601,6 +601,32 @@ fn fragment<const K: usize>(
     Some((f, bw))
 }
 
+/// What a bake sums per voxel besides the colour: nothing, the alpha-weighted unit normals
+/// (Toksvig's mean, [`super::toksvig`]) or the alpha-weighted squares of their components
+/// (the diagonal of the normals' second moment, [`super::toksvig`] "Moments").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum NormalSums {
+    #[default]
+    Off,
+    Mean,
+    Moments,
+}
+
+impl NormalSums {
+    /// Whether any normal sum is wanted.
+    pub fn on(self) -> bool {
+        self != NormalSums::Off
+    }
+    /// The sums a bake with these options wants.
+    pub fn of(normals: bool, moments: bool) -> Self {
+        match (normals, moments) {
+            (false, _) => NormalSums::Off,
+            (true, false) => NormalSums::Mean,
+            (true, true) => NormalSums::Moments,
+        }
+    }
+}
+
 /// What every row of one axis's two slice stacks reads.
 #[derive(Clone, Copy)]
 pub(crate) struct RowCtx<'a> {
@@ -609,8 +635,8 @@ pub(crate) struct RowCtx<'a> {
     pub grid: &'a GridSpec,
     /// The + direction of the axis.
     pub dir: Dir,
-    /// Whether weighted normals are wanted.
-    pub normals: bool,
+    /// Which weighted normal sums are wanted.
+    pub normals: NormalSums,
     /// Which directions this pass rasterizes (bit 0: +, bit 1: −).
     pub sides: u8,
     /// The axis's triangle set-ups, sorted by first row.

@@ -76,6 +76,7 @@ pub use cells::{box_prisms, Prism};
 pub use combine::{Combine, CombineFn, CombineParseError, Preset};
 pub use coverage::CoverageScales;
 pub use expr::{Expr, ExprError};
+use fragments::NormalSums;
 pub use grid::{
     default_align, fit_grid, GridError, GridSpec, Resolution, ResolutionError, MAX_AXIS, MAX_MARGIN,
 };
@@ -150,6 +151,10 @@ pub struct VoxelizeOptions {
     pub combine: CombineFn,
     /// Capture normals (Toksvig-filtered, see [`toksvig`]).
     pub normals: bool,
+    /// With `normals`: store the diagonal of the normals' second moment `E[n∘n]` instead of
+    /// Toksvig's mean (lit two-sided at runtime, SPEC §8.4a; [`toksvig`], "Moments"). What
+    /// `--normals auto` stores where the mean normals are incoherent (foliage).
+    pub moments: bool,
     /// Empty space around the scene's bounds, in voxels (default ½; see [`grid`]).
     pub margin: f32,
     /// Use exactly this box for the grid instead of the scene's bounds plus margin.
@@ -163,9 +168,11 @@ pub struct VoxelizeOptions {
     pub memory_limit: u64,
     /// Baked lighting multiplied into the level-0 colour (default none; see [`Bake`]).
     pub bake: Bake,
-    /// With `normals`: keep them only when the bake's [`Volume::normal_coherence`] passes
-    /// ([`toksvig::keeps`]; `--normals auto` judged on the bake).
-    pub judge_normals: bool,
+    /// Whether the volume is a closed surface, whose level 0 keeps its opacity
+    /// ([`CoverageScales::settle_level0`]), as judged before the bake (`--normals auto`:
+    /// [`toksvig::judge_normals`]); `None`: judged on the bake's own mean normals, and
+    /// not a surface without them.
+    pub surface: Option<bool>,
 }
 
 impl Default for VoxelizeOptions {
@@ -175,13 +182,14 @@ impl Default for VoxelizeOptions {
             supersample: 4,
             combine: CombineFn::default(),
             normals: false,
+            moments: false,
             margin: 0.5,
             bounds: None,
             align: 1,
             mip_levels: None,
             memory_limit: 16 << 30,
             bake: Bake::None,
-            judge_normals: false,
+            surface: None,
         }
     }
 }
@@ -230,13 +238,16 @@ pub struct Volume {
     pub grid: GridSpec,
     /// Per MIP level, RGBA8 `SrgbPremultiplied` (see [`quantize`]), x fastest, then y, then z.
     pub levels: Vec<Vec<u8>>,
-    /// Per MIP level, snorm8 `[x, y, z, 0]` shortened normals, when asked for.
+    /// Per MIP level, snorm8 `[x, y, z, 0]` shortened normals, when asked for (with
+    /// `moments`: the diagonal of their second moment).
     pub normals: Option<Vec<Vec<u8>>>,
+    /// Whether `normals` holds second moments ([`VoxelizeOptions::moments`]).
+    pub moments: bool,
     pub stats: VoxelizeStats,
     /// The optical-depth scale of every level and what it matched
     /// ([`coverage`]: coverage that holds at every distance).
     pub coverage: CoverageScales,
-    /// For a bake with normals (kept or dropped by [`VoxelizeOptions::judge_normals`]):
+    /// For a bake with mean normals:
     /// [`toksvig::normal_coherence`] at level [`toksvig::AUTO_NORMALS_LEVEL`] (clamped).
     /// When it passes ([`toksvig::keeps`]) the volume is a surface and its level 0 is not
     /// thinned ([`CoverageScales`]).
@@ -412,7 +423,7 @@ pub fn slice_stack(
         dir.axis(),
         side,
         opts.supersample,
-        opts.normals,
+        NormalSums::of(opts.normals, opts.moments),
         &mut |_| {},
     )
     .pop()
@@ -503,25 +514,25 @@ pub fn voxelize(
     progress: &dyn Fn(Stage, f32),
 ) -> Result<Volume, VoxelizeError> {
     let (grid, out, stats, mut coverage) = voxelize_as(scene, opts, progress, false)?;
-    let Output::Dense(mut levels, mut normals) = out else {
+    let Output::Dense(mut levels, normals) = out else {
         unreachable!("a dense voxelize")
     };
-    let l = toksvig::AUTO_NORMALS_LEVEL.min(levels.len().saturating_sub(1));
-    let normal_coherence = normals.as_ref().and_then(|n| {
-        levels
-            .get(l)
-            .zip(n.get(l))
-            .and_then(|(c, n)| toksvig::normal_coherence(c, n))
-    });
-    let surface = toksvig::keeps(normal_coherence);
-    if opts.judge_normals && !surface {
-        normals = None;
-    }
+    let (normal_coherence, surface) = toksvig::judge_baked(
+        levels.len(),
+        normals.is_some() && !opts.moments,
+        opts.surface,
+        |l| {
+            let n = normals.as_ref()?;
+            toksvig::normal_coherence(levels.get(l)?, n.get(l)?)
+        },
+    );
     coverage.settle_level0(surface, |k| coverage::scale_level_rgba8(&mut levels[0], k));
+    let moments = opts.moments && normals.is_some();
     Ok(Volume {
         grid,
         levels,
         normals,
+        moments,
         stats,
         coverage,
         normal_coherence,
@@ -563,7 +574,7 @@ fn voxelize_as(
     /// The directions of `axis` in `sides` (see `slices::passes`), + first.
     fn raster(
         bufs: &mut slices::SetupBufs,
-        ctx: (&Scene, &shade::Shader, &GridSpec, u32, bool),
+        ctx: (&Scene, &shade::Shader, &GridSpec, u32, NormalSums),
         (axis, sides): (usize, u8),
         times: &mut StageTimes,
         baker: Option<&mut ao::AoBaker>,
@@ -595,7 +606,13 @@ fn voxelize_as(
         }
         stacks
     }
-    let ctx = (scene, &shader, &grid, k, opts.normals);
+    let ctx = (
+        scene,
+        &shader,
+        &grid,
+        k,
+        NormalSums::of(opts.normals, opts.moments),
+    );
     // (axis, sides) in the order the directions are combined: +X, −X, +Y, …
     let sides = slices::passes(scene);
     let passes: Vec<(usize, u8)> = (0..3)

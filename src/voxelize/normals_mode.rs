@@ -1,6 +1,9 @@
-//! Whether a bake stores normals: `on`, `off`, or `auto` — judged on how coherent they
-//! are ([`toksvig::normal_coherence`] at level [`toksvig::AUTO_NORMALS_LEVEL`]; docs/voxelize.md,
-//! "Normals"), and given up, with a reason, when they alone would exceed the memory limit.
+//! Which normals a bake stores: `on` (Toksvig's mean, lit one-sided), `moments` (the
+//! diagonal of their second moment, lit two-sided like the viewer's meshes), `off`, or
+//! `auto` — the moments, with the mean normals' coherence ([`toksvig::normal_coherence`] at
+//! level [`toksvig::AUTO_NORMALS_LEVEL`]) judged before the bake to tell a closed surface,
+//! which keeps its level 0 unthinned, from foliage (docs/voxelize.md, "Normals"); given up,
+//! with a reason, when they alone would exceed the memory limit.
 //! The one place this rule lives: `billow voxelize` (dense and `--prune`d) and any Rust
 //! caller bake through [`bake_with_normals`].
 
@@ -10,13 +13,16 @@ use super::toksvig::{self, NormalsJudgement};
 use super::{VoxelizeError, VoxelizeOptions};
 use crate::scene::Scene;
 
-/// Whether a bake stores normals.
+/// Which normals a bake stores.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum NormalsMode {
-    /// Kept where one normal per voxel describes the surface (the default).
+    /// The moments, with the surface judged by the mean's coherence (the default).
     #[default]
     Auto,
+    /// Toksvig's mean normals (one-sided lighting).
     On,
+    /// The diagonal of the normals' second moment (two-sided lighting).
+    Moments,
     Off,
 }
 
@@ -33,11 +39,15 @@ pub enum MemoryRefusal {
 /// What a bake decided about its normals.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct NormalsOutcome {
-    /// The normals were stored.
+    /// Normals were stored (the mean, or with `moments` their second moments).
     pub kept: bool,
-    /// `Auto`: the coherence judged — on a coarse bake for grids of at least
-    /// [`toksvig::AUTO_NORMALS_COARSE_MIN_VOXELS`], else on the bake itself; `None` when
-    /// nothing was judged (`On`, `Off`, a memory refusal) or the judged level was empty.
+    /// The stored normals are second moments ([`super::VoxelizeOptions::moments`]).
+    pub moments: bool,
+    /// `Auto`: the coherence judged (on a coarse bake, or for a volume of one MIP level on a
+    /// bake with mean normals); at least [`toksvig::AUTO_NORMALS_MIN_COHERENCE`] makes the
+    /// volume a surface that keeps its level 0 ([`VoxelizeOptions::surface`]). `None` when
+    /// nothing was judged (`On`, `Moments`, `Off`, a memory refusal) or the judged level was
+    /// empty.
     pub coherence: Option<f32>,
     /// `Auto` without normals for memory.
     pub refused: Option<MemoryRefusal>,
@@ -46,12 +56,14 @@ pub struct NormalsOutcome {
 }
 
 /// Bakes `scene` with `bake` (a dense or brick-sparse voxelize of it, given the options to
-/// use), storing normals as `mode` says. `Auto` judges before the bake on a coarse one
-/// ([`toksvig::judge_normals`]) for big grids and on the bake itself otherwise
-/// ([`VoxelizeOptions::judge_normals`]), and bakes without normals when they alone take
-/// the bake past `opts.memory_limit`. `judged` reads a finished bake's coherence and
-/// whether it stored normals. `opts` is left as the bake used it (`normals` false once
-/// they were dropped), so that the header records what was done.
+/// use), storing normals as `mode` says. `Auto` stores the moments, and judges before the
+/// bake whether the volume is a closed surface whose level 0 keeps its opacity
+/// ([`VoxelizeOptions::surface`]): on a coarse bake ([`toksvig::judge_normals`]), or for a
+/// volume of one MIP level on a bake with mean normals of its own. It bakes without normals
+/// when they alone take the bake past `opts.memory_limit`. `judged` reads a finished bake's
+/// coherence and whether it stored normals. `opts` is left as the last bake used it
+/// (`normals` false where they were given up, `moments` when they are moments), so that the
+/// header records what was done.
 pub fn bake_with_normals<T>(
     scene: &Scene,
     opts: &mut VoxelizeOptions,
@@ -61,47 +73,58 @@ pub fn bake_with_normals<T>(
 ) -> Result<(T, NormalsOutcome), VoxelizeError> {
     let mut out = NormalsOutcome::default();
     opts.normals = mode != NormalsMode::Off;
-    opts.judge_normals = false;
-    let mut coarse = None;
+    opts.moments = matches!(mode, NormalsMode::Auto | NormalsMode::Moments);
+    opts.surface = None;
+    let mut on_the_bake = false;
     if mode == NormalsMode::Auto {
         let start = Instant::now();
         match toksvig::judge_normals(scene, opts) {
             Err(VoxelizeError::TooMuchMemory { limit_gib, .. }) => {
                 out.refused = Some(MemoryRefusal::Judging { limit_gib });
                 opts.normals = false;
+                opts.moments = false;
             }
             Err(e) => return Err(e),
             Ok(NormalsJudgement::Coarse(k)) => {
-                coarse = Some(k);
-                opts.normals = toksvig::keeps(k);
+                out.coherence = k;
+                opts.surface = Some(toksvig::keeps(k));
             }
-            Ok(NormalsJudgement::OnTheBake) => opts.judge_normals = true,
+            Ok(NormalsJudgement::OnTheBake) => {
+                // One MIP level: judged on a bake with mean normals, then baked with moments.
+                on_the_bake = true;
+                opts.moments = false;
+            }
         }
         out.judge_seconds = start.elapsed().as_secs_f64();
     }
-    let baked = match bake(opts) {
+    let bake_or_refuse = |opts: &mut VoxelizeOptions, out: &mut NormalsOutcome| match bake(opts) {
         Err(VoxelizeError::TooMuchMemory {
             needed_gib,
             limit_gib,
             ..
         }) if mode == NormalsMode::Auto && opts.normals => {
             opts.normals = false;
-            opts.judge_normals = false;
+            opts.moments = false;
             out.refused = Some(MemoryRefusal::Baking {
                 needed_gib,
                 limit_gib,
             });
-            bake(opts)?
+            bake(opts)
         }
-        r => r?,
+        r => r,
     };
-    let (coherence, stored) = judged(&baked);
+    let mut baked = bake_or_refuse(opts, &mut out)?;
+    if on_the_bake && opts.normals {
+        let (k, _) = judged(&baked);
+        out.coherence = k;
+        opts.surface = Some(toksvig::keeps(k));
+        opts.moments = true;
+        baked = bake_or_refuse(opts, &mut out)?;
+    }
+    let (_, stored) = judged(&baked);
     out.kept = stored;
-    out.coherence = match coarse {
-        Some(k) => k,
-        None if opts.judge_normals => coherence,
-        None => None,
-    };
     opts.normals &= stored;
+    opts.moments &= stored;
+    out.moments = opts.moments;
     Ok((baked, out))
 }

@@ -38,7 +38,7 @@ use half::f16;
 use rayon::prelude::*;
 
 use super::fragments::{
-    cross2, row_fn, simd_available, RowCtx, RowOut, Scratch, TriSetup, Vox, SUB,
+    cross2, row_fn, simd_available, NormalSums, RowCtx, RowOut, Scratch, TriSetup, Vox, SUB,
 };
 use super::grid::GridSpec;
 use super::grid3::{Grid3, Texel};
@@ -255,7 +255,7 @@ pub(crate) fn rasterize(
     axis: usize,
     sides: u8,
     k: u32,
-    normals: bool,
+    normals: NormalSums,
     progress: &mut dyn FnMut(f32),
 ) -> Vec<DirSlices> {
     let simd = simd_available();
@@ -280,7 +280,7 @@ pub(crate) fn rasterize_with(
     axis: usize,
     sides: u8,
     k: u32,
-    normals: bool,
+    normals: NormalSums,
     simd: bool,
     progress: &mut dyn FnMut(f32),
 ) -> Vec<DirSlices> {
@@ -349,7 +349,7 @@ pub(crate) fn rasterize_with(
     }
     (0..2)
         .filter(|side| sides >> side & 1 == 1)
-        .map(|side| concat(Dir::ALL[2 * axis + side], dims, normals, &outs, side))
+        .map(|side| concat(Dir::ALL[2 * axis + side], dims, normals.on(), &outs, side))
         .collect()
 }
 
@@ -524,7 +524,7 @@ mod tests {
                         axis,
                         sides,
                         k,
-                        true,
+                        NormalSums::Mean,
                         simd,
                         &mut |_| {},
                     )

@@ -21,6 +21,8 @@ pub struct SparseVolume {
     pub coverage: super::CoverageScales,
     /// As [`Volume::normal_coherence`].
     pub normal_coherence: Option<f32>,
+    /// As [`Volume::moments`].
+    pub moments: bool,
 }
 
 impl SparseVolume {
@@ -74,6 +76,7 @@ impl SparseVolume {
             normals: self
                 .has_normals()
                 .then(|| vec![Vec::new(); self.levels.len()]),
+            moments: self.moments,
             stats: self.stats,
             coverage: self.coverage.clone(),
             normal_coherence: self.normal_coherence,
@@ -113,13 +116,16 @@ pub fn voxelize_sparse(
         stats,
         coverage,
         normal_coherence: None,
+        moments: false,
     };
-    let l = super::toksvig::AUTO_NORMALS_LEVEL.min(v.levels.len().saturating_sub(1));
-    v.normal_coherence = v.normal_coherence(l);
-    let surface = super::toksvig::keeps(v.normal_coherence);
-    if opts.judge_normals && !surface {
-        v.drop_normals();
-    }
+    let (k, surface) = super::toksvig::judge_baked(
+        v.levels.len(),
+        v.has_normals() && !opts.moments,
+        opts.surface,
+        |l| v.normal_coherence(l),
+    );
+    v.normal_coherence = k;
+    v.moments = opts.moments && v.has_normals();
     let level0 = v.levels.first_mut();
     v.coverage.settle_level0(surface, |k| {
         if let Some(l0) = level0 {

@@ -88,20 +88,13 @@ pub const AUTO_NORMALS_LEVEL: usize = 2;
 /// How `--normals auto` decides, before the bake ([`judge_normals`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum NormalsJudgement {
-    /// Judged on the bake itself: bake with normals, then keep them only if level
-    /// [`AUTO_NORMALS_LEVEL`] (clamped) is coherent enough. For volumes of one MIP level
-    /// (no coarser level) and grids under [`AUTO_NORMALS_COARSE_MIN_VOXELS`].
+    /// Judged on the bake itself: bake with mean normals, then judge level
+    /// [`AUTO_NORMALS_LEVEL`] (clamped). For volumes of one MIP level (no coarser level).
     OnTheBake,
     /// The coherence of a bake at the judged level's size ([`coarse_normal_coherence`];
     /// `None`: it saw nothing).
     Coarse(Option<f32>),
 }
-
-/// Grids of at least this many voxels (256³) are judged on a coarse bake; smaller ones on
-/// the bake itself, where the coarse bake would cost about what the normals do: on the
-/// 200k-triangle bench tree at 128³ it took 0.24 s, against about 0.16 s the normals cost
-/// there (1.12 s against 1.04 s the whole run); at 256³ it saves 0.46 s of 3.11 s.
-pub const AUTO_NORMALS_COARSE_MIN_VOXELS: u64 = 1 << 24;
 
 /// Whether a coherence keeps the normals (at least [`AUTO_NORMALS_MIN_COHERENCE`]; an
 /// empty level does not).
@@ -109,9 +102,26 @@ pub fn keeps(coherence: Option<f32>) -> bool {
     coherence.is_some_and(|k| k >= AUTO_NORMALS_MIN_COHERENCE)
 }
 
+/// A finished bake's judgement: the coherence of its judged level ([`AUTO_NORMALS_LEVEL`]
+/// clamped to its `mip_count` levels; `coherence_at` reads it), `None` where the bake has no
+/// mean normals (none, or moments), and whether the volume is a surface, whose level 0
+/// keeps its opacity ([`super::CoverageScales::settle_level0`]) and whose normals a judged
+/// bake keeps: `surface` where it was judged before the bake
+/// ([`super::VoxelizeOptions::surface`]), else whether that coherence passes.
+pub(crate) fn judge_baked(
+    mip_count: usize,
+    mean_normals: bool,
+    surface: Option<bool>,
+    coherence_at: impl FnOnce(usize) -> Option<f32>,
+) -> (Option<f32>, bool) {
+    let l = AUTO_NORMALS_LEVEL.min(mip_count.saturating_sub(1));
+    let k = if mean_normals { coherence_at(l) } else { None };
+    (k, surface.unwrap_or_else(|| keeps(k)))
+}
+
 /// `--normals auto`'s judgement, before the bake: on a coarse bake
 /// ([`coarse_normal_coherence`] at level [`AUTO_NORMALS_LEVEL`], clamped to the last
-/// level) for grids of at least [`AUTO_NORMALS_COARSE_MIN_VOXELS`], else on the bake itself.
+/// level), or on the bake itself for a volume of one MIP level.
 pub fn judge_normals(
     scene: &crate::scene::Scene,
     opts: &super::VoxelizeOptions,
@@ -119,7 +129,7 @@ pub fn judge_normals(
     let grid = super::grid_for(scene, opts)?;
     let mips = opts.mip_levels.unwrap_or_else(|| grid.full_mip_count());
     let level = AUTO_NORMALS_LEVEL.min(mips.saturating_sub(1) as usize) as u32;
-    if level == 0 || grid.voxel_count() < AUTO_NORMALS_COARSE_MIN_VOXELS {
+    if level == 0 {
         return Ok(NormalsJudgement::OnTheBake);
     }
     Ok(NormalsJudgement::Coarse(coarse_normal_coherence(
@@ -153,19 +163,17 @@ pub fn coarse_normal_coherence(
         align: 1,
         mip_levels: Some(1),
         normals: true,
+        moments: false,
+        surface: None,
         bake: super::Bake::None,
         ..opts.clone()
     };
     let quiet = |_: super::Stage, _: f32| {};
+    // One level: the bake records its level 0's coherence ([`judge_baked`]).
     Ok(if matches!(o.combine, super::CombineFn::Preset(_)) {
-        super::voxelize_sparse(scene, &o, &quiet)?.normal_coherence(0)
+        super::voxelize_sparse(scene, &o, &quiet)?.normal_coherence
     } else {
-        let v = super::voxelize(scene, &o, &quiet)?;
-        let n = v.normals.as_ref().and_then(|n| n.first());
-        v.levels
-            .first()
-            .zip(n)
-            .and_then(|(c, n)| normal_coherence(c, n))
+        super::voxelize(scene, &o, &quiet)?.normal_coherence
     })
 }
 

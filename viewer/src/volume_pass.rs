@@ -209,7 +209,8 @@ pub struct GpuSlice {
 
 /// Per (volume instance, LOD band): `p` = (the band's `v₀·2^f`, its max lod, texture
 /// slot, flags: 1 = repeat addressing in x and z, + 2 = shaded from normals, + 4 = BC7
-/// blocks filtered by loads, [`VolumeStorage::Blocks`]); `q` = (the instance's asset-wide `v₀`, the
+/// blocks filtered by loads, [`VolumeStorage::Blocks`], + 8 = the normals are moments,
+/// [`GpuVolume::moments`]); `q` = (the instance's asset-wide `v₀`, the
 /// asset's largest LOD `L`, and the slice-LOD range `[f_b, f_{b+1})` the band draws).
 /// Without bands: `q = (v₀, levels − 1, −∞, ∞)` (SPEC §8.6).
 #[repr(C)]
@@ -251,6 +252,9 @@ pub struct GpuVolume {
     pub view: wgpu::TextureView,
     /// The `(α·n̄, α)` normal texture (module docs), when the asset stores normals.
     pub normals: Option<(wgpu::Texture, wgpu::TextureView)>,
+    /// `normals` holds `(α·E[n∘n], α)`, the diagonal of the normals' second moment (SPEC
+    /// §8.4a), lit two-sided (`volume.wgsl`'s `moments_cosine`).
+    pub moments: bool,
     /// Extinction-space texels, or BC7 blocks (format 1.2, [`Gpu::block_upload`],
     /// [`Gpu::sample_blocks`]).
     pub storage: VolumeStorage,
@@ -548,6 +552,7 @@ impl VolumePass {
                     texture,
                     view,
                     normals: normal_texture(gpu, dims0, &asset.levels, asset.normals.as_deref()),
+                    moments: false,
                     storage: VolumeStorage::Blocks,
                 }
             }
@@ -588,12 +593,18 @@ impl VolumePass {
                         texture,
                         view,
                         normals: normal_texture(gpu, b.dims, &b.levels, b.normals.as_deref()),
+                        moments: false,
                         storage: VolumeStorage::Blocks,
                     }
                 }
                 None => upload_levels(gpu, b.dims, &b.levels, b.normals.as_deref(), cs, false)?,
             });
         }
+        let moments = asset
+            .header
+            .volume
+            .is_some_and(|v| v.normal_kind() == Some(billow_format::NormalKind::Moments));
+        out.iter_mut().for_each(|g| g.moments = moments);
         Ok(out)
     }
 }
@@ -645,6 +656,7 @@ fn upload_levels(
         texture,
         view,
         normals,
+        moments: false,
         storage: VolumeStorage::Extinction,
     })
 }

@@ -317,7 +317,8 @@ pub fn plan(
                         f32::from(
                             u8::from(b.gpu.repeat)
                                 + 2 * u8::from(shaded)
-                                + 4 * u8::from(b.gpu.storage == VolumeStorage::Blocks),
+                                + 4 * u8::from(b.gpu.storage == VolumeStorage::Blocks)
+                                + 8 * u8::from(shaded && b.gpu.moments),
                         ),
                     ],
                     q: [v0, v.max_lod as f32, lo, hi],

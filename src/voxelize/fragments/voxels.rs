@@ -4,26 +4,26 @@
 
 use glam::{Vec3, Vec4};
 
-use super::{Frag, RowOut, Scratch, Vox};
+use super::{Frag, NormalSums, RowOut, Scratch, Vox};
 use crate::shade::Shader;
 
 /// The shading normals of a row's fragments, as a direction sees them.
 struct FragNormals<'a> {
-    on: bool,
+    sums: NormalSums,
     n: &'a [Vec3],
 }
 
 impl FragNormals<'_> {
-    /// Fragment `i`'s normal from direction `side` (zero when normals are off).
+    /// Fragment `i`'s normal from direction `side` (zero when normals are off), or with
+    /// [`NormalSums::Moments`] the squares of its components (the same from either side).
     #[inline(always)]
     fn get(&self, i: u32, side: usize) -> Vec3 {
-        if !self.on {
-            Vec3::ZERO
-        } else if side == 0 {
-            self.n[i as usize]
-        } else {
+        match self.sums {
+            NormalSums::Off => Vec3::ZERO,
+            NormalSums::Moments => self.n[i as usize] * self.n[i as usize],
+            NormalSums::Mean if side == 0 => self.n[i as usize],
             // The − direction sees the other face: the shading normal flipped (exactly).
-            -self.n[i as usize]
+            NormalSums::Mean => -self.n[i as usize],
         }
     }
 }
@@ -111,7 +111,7 @@ impl Scratch {
     pub(super) fn composite<const K: usize>(
         &mut self,
         sides: u8,
-        normals: bool,
+        sums: NormalSums,
         seen: [u64; 2],
         width: usize,
     ) -> [RowOut; 2] {
@@ -123,6 +123,7 @@ impl Scratch {
             voxel,
             ..
         } = self;
+        let normals = sums.on();
         let inv_samples = 1.0 / (K * K) as f32;
         // A direction has at most as many voxels as fragments: sized once, no regrowing.
         let mut out: [RowOut; 2] = [0, 1].map(|side| {
@@ -137,10 +138,7 @@ impl Scratch {
         });
         let mut transmit = [1.0f32; 64];
         let mut column = [1.0f32; 64];
-        let nrm = FragNormals {
-            on: normals,
-            n: frag_n,
-        };
+        let nrm = FragNormals { sums, n: frag_n };
         for u in 0..width {
             let col = &order[start[u] as usize..start[u + 1] as usize];
             // Per direction, whether what it sees of the column lies in one slice: then

@@ -24,7 +24,8 @@ struct Slice {
 
 struct VolumeParams {
     // The band's: x: v0 · 2^first_level, y: its max lod, z: texture slot,
-    // w: flags (1 = repeat, + 2 = shaded from normals, + 4 = BC7 blocks filtered by loads)
+    // w: flags (1 = repeat, + 2 = shaded from normals, + 4 = BC7 blocks filtered by loads,
+    // + 8 = the normals are moments)
     p: vec4<f32>,
     // The asset's: x: v0, y: largest LOD L, z..w: slice-LOD range [f_b, f_{b+1}) of the band
     q: vec4<f32>,
@@ -55,7 +56,7 @@ struct VOut {
     // opacity correction), z: the view distance where the slab starts (depth − d/2),
     // w: its thickness
     @location(1) @interpolate(flat) lod_ratio: vec4<f32>,
-    // x: texture slot, y: flags (1 = repeat addressing, 2 = shaded from normals,
+    // x: texture slot, y: flags (1 = repeat addressing, 2 = shaded from normals, 8 = moments,
     // 4 = BC7 blocks filtered by loads)
     @location(2) @interpolate(flat) slot: vec2<u32>,
     @location(3) shadow_clip: vec4<f32>,
@@ -214,6 +215,26 @@ fn toksvig_normal(in: VOut) -> vec3<f32> {
     return v * (min(len, 1.0) / lv);
 }
 
+// The two-sided cosine of a volume storing normal moments (flag 8; SPEC §8.4a;
+// core/src/shading.rs::moments_diffuse_factor): √(m·(L∘L) / tr m), m the filtered
+// (α·E[n∘n], α) (α cancels in the ratio), L in the volume's own axes (Mᵀ·L, M the normal
+// matrix whose rows are n0, n1, n2).
+fn moments_cosine(in: VOut) -> f32 {
+    let s = sample_normals(in.slot.x, (in.slot.y & 1u) != 0u, in.uvw, in.lod_ratio.x);
+    let tr = s.x + s.y + s.z;
+    if !(tr > 1e-6) {
+        return 0.0;
+    }
+    let l = frame.light.xyz;
+    let ll = in.n0 * l.x + in.n1 * l.y + in.n2 * l.z;
+    let len = length(ll);
+    if !(len > 0.0) {
+        return 0.0;
+    }
+    let u = ll / len;
+    return sqrt(clamp(dot(s.xyz, u * u) / tr, 0.0, 1.0));
+}
+
 @fragment
 fn fs_main(in: VOut) -> @location(0) vec4<f32> {
     let fade = depth_fade(scene_distance(in.clip.xy), in.lod_ratio.z, in.lod_ratio.w);
@@ -225,7 +246,11 @@ fn fs_main(in: VOut) -> @location(0) vec4<f32> {
     if frame.flags.x > 0.5 {
         vis = shadow_visibility(in.shadow_clip, frame.flags.z);
     }
-    if (in.slot.y & 2u) != 0u {
+    if (in.slot.y & 10u) == 10u {
+        // Normal moments: two-sided (core/src/shading.rs::moments_diffuse_factor).
+        let k = frame.light.w + (1.0 - frame.light.w) * vis * moments_cosine(in);
+        c = vec4<f32>(c.rgb * k, c.a);
+    } else if (in.slot.y & 2u) != 0u {
         // Runtime shading (src/eval/lighting.rs::volume_diffuse_factor, one-sided).
         let d = max(dot(toksvig_normal(in), frame.light.xyz), 0.0);
         let k = frame.light.w + (1.0 - frame.light.w) * vis * d;
