@@ -116,6 +116,7 @@ fn generate(dir: &Path) -> String {
     row(vol, "combine", text(&v["combine"]));
     row(vol, "supersample", text(&v["supersample"]));
     row(vol, "normals kept", text(&v["normals"]));
+    row(vol, "normals are moments", text(&v["normal_moments"]));
     row(vol, "compress", text(&v["compress"]));
     row(vol, "non-empty voxels", text(&v["non_empty_voxels"]));
     row(vol, "bytes (reported)", text(&v["bytes"]));

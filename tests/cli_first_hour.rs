@@ -241,7 +241,8 @@ fn voxelize_summary_says_what_was_chosen() {
         "{e}"
     );
     assert!(
-        e.contains("normals: dropped (--normals auto: coherence 0."),
+        e.contains("normals: moments (--normals auto; coherence 0.")
+            && e.contains("thin or fuzzy, such as foliage"),
         "{e}"
     );
     assert!(e.contains("prune: "), "{e}");
@@ -260,7 +261,7 @@ fn voxelize_summary_says_what_was_chosen() {
         d,
     );
     assert!(
-        r.stderr.contains("normals: kept (--normals on)"),
+        r.stderr.contains("normals: mean (--normals on"),
         "{}",
         r.stderr
     );

@@ -13,18 +13,14 @@
 use crate::blocks::{check_block_levels, decode_levels, unorm_to_snorm_in_place, BandBlocks};
 use crate::error::tag_str;
 use crate::grid::{check_level_sizes, full_mip_count, mip_dims, Prism, MAX_DIM, PRISM_BYTES};
-use crate::volume::NormalTags;
+use crate::normal_tags::NormalTags;
+pub use crate::normal_tags::{TAG_BMOM, TAG_BNRM};
 use crate::{FormatError, NormalKind};
 
 /// Tag of the band table chunk.
 pub const TAG_VBND: [u8; 4] = *b"VBND";
 /// Tag of a band colour level chunk.
 pub const TAG_BLEV: [u8; 4] = *b"BLEV";
-/// Tag of a band normal level chunk.
-pub const TAG_BNRM: [u8; 4] = *b"BNRM";
-/// Tag of a band normal-moment level chunk (format 1.4, SPEC §8.4a; replaces `BNRM` in a
-/// volume with `volume.moments`).
-pub const TAG_BMOM: [u8; 4] = *b"BMOM";
 /// Tag of a band's prism chunk.
 pub const TAG_BCEL: [u8; 4] = *b"BCEL";
 /// Bytes per `VBND` record: 8 little-endian u32.

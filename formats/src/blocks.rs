@@ -16,13 +16,9 @@
 
 /// Bytes of one BC7 block (4×4 texels).
 pub const BC7_BLOCK_BYTES: usize = 16;
+pub use crate::normal_tags::{TAG_BMB7, TAG_BNB7, TAG_VMB7, TAG_VNB7};
 /// Volume colour level, BC7 (replaces `VLEV`).
 pub const TAG_VLB7: [u8; 4] = *b"VLB7";
-/// Volume normal level, BC7 of the normal bytes XOR 0x80 (replaces `VNRM`).
-pub const TAG_VNB7: [u8; 4] = *b"VNB7";
-/// Volume normal-moment level (format 1.4, SPEC §8.4a), BC7 of the moment bytes XOR 0x80
-/// (replaces `VMOM`, as `VNB7` replaces `VNRM`).
-pub const TAG_VMB7: [u8; 4] = *b"VMB7";
 /// Cloud atlas MIP level, BC7 (replaces `ATEX`).
 pub const TAG_ATB7: [u8; 4] = *b"ATB7";
 /// Cloud atlas normal-map MIP level, BC7 (replaces `ANRM`).
@@ -31,11 +27,6 @@ pub const TAG_ANB7: [u8; 4] = *b"ANB7";
 pub const TAG_MTB7: [u8; 4] = *b"MTB7";
 /// LOD band colour level, BC7 (format 1.3; replaces `BLEV`).
 pub const TAG_BLB7: [u8; 4] = *b"BLB7";
-/// LOD band normal level, BC7 of the normal bytes XOR 0x80 (format 1.3; replaces `BNRM`).
-pub const TAG_BNB7: [u8; 4] = *b"BNB7";
-/// LOD band normal-moment level (format 1.4), BC7 of the moment bytes XOR 0x80 (replaces
-/// `BMOM`).
-pub const TAG_BMB7: [u8; 4] = *b"BMB7";
 
 /// A BC7 block that decodes to 16 zero texels (mode 6, every endpoint, p-bit and index
 /// zero): what an omitted block of a colour stream is, for a renderer that needs every

@@ -20,6 +20,7 @@ mod error;
 mod grid;
 mod header;
 mod inspect;
+mod normal_tags;
 mod volume;
 
 pub use bands::{

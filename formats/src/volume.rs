@@ -15,16 +15,17 @@
 use std::path::Path;
 
 use crate::bands::{band_table, validate_bands, LodBand, RawBands};
-use crate::bands::{TAG_BCEL, TAG_BLEV, TAG_BMOM, TAG_BNRM, TAG_VBND};
+use crate::bands::{TAG_BCEL, TAG_BLEV, TAG_VBND};
+use crate::blocks::TAG_BLB7;
 use crate::blocks::{
-    check_block_levels, decode_levels, unorm_to_snorm_in_place, VolumeBlocks, TAG_VLB7, TAG_VMB7,
-    TAG_VNB7,
+    check_block_levels, decode_levels, unorm_to_snorm_in_place, VolumeBlocks, TAG_VLB7,
 };
-use crate::blocks::{TAG_BLB7, TAG_BMB7, TAG_BNB7};
 use crate::container::{encode_with_minor, with_parts_minor, write_with_minor, ChunkRef};
 use crate::grid::{
     check_level_sizes, full_mip_count, mip_dims, prism_bytes, Prism, MAX_DIM, PRISM_BYTES,
 };
+use crate::normal_tags::NormalTags;
+pub use crate::normal_tags::{TAG_VMOM, TAG_VNRM};
 use crate::{
     from_bytes, AssetKind, Chunk, Container, ElemType, FormatError, Header, NormalKind,
     TexelFormat, VolumeHeader,
@@ -32,72 +33,8 @@ use crate::{
 
 /// Tag of a colour MIP level chunk (one per level, in level order).
 pub const TAG_VLEV: [u8; 4] = *b"VLEV";
-/// Tag of a normal MIP level chunk (one per level, in level order).
-pub const TAG_VNRM: [u8; 4] = *b"VNRM";
-/// Tag of a normal-moment MIP level chunk (format 1.4, SPEC §8.4a; one per level, in level
-/// order): what a volume with `volume.moments` stores instead of `VNRM`.
-pub const TAG_VMOM: [u8; 4] = *b"VMOM";
 /// Tag of the prism cell chunk (exactly one).
 pub const TAG_CELL: [u8; 4] = *b"CELL";
-/// The chunk tags of one kind of normal texels ([`NormalKind`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) struct NormalTags {
-    /// Base texture levels, raw (`VNRM`/`VMOM`, element `I8`).
-    pub base: [u8; 4],
-    /// Base texture levels, BC7 (`VNB7`/`VMB7`, element `U8`).
-    pub base_bc: [u8; 4],
-    /// LOD band levels, raw (`BNRM`/`BMOM`, element `I8`).
-    pub band: [u8; 4],
-    /// LOD band levels, BC7 (`BNB7`/`BMB7`, element `U8`).
-    pub band_bc: [u8; 4],
-}
-
-impl NormalTags {
-    pub(crate) const MEAN: NormalTags = NormalTags {
-        base: TAG_VNRM,
-        base_bc: TAG_VNB7,
-        band: TAG_BNRM,
-        band_bc: TAG_BNB7,
-    };
-    pub(crate) const MOMENTS: NormalTags = NormalTags {
-        base: TAG_VMOM,
-        base_bc: TAG_VMB7,
-        band: TAG_BMOM,
-        band_bc: TAG_BMB7,
-    };
-
-    /// The tags of a volume whose normal texels are `kind` (those of mean normals for a
-    /// volume without normals: named in messages only).
-    pub(crate) fn of(kind: Option<NormalKind>) -> NormalTags {
-        match kind {
-            Some(NormalKind::Moments) => NormalTags::MOMENTS,
-            Some(NormalKind::Mean) | None => NormalTags::MEAN,
-        }
-    }
-
-    fn all(&self) -> [[u8; 4]; 4] {
-        [self.base, self.base_bc, self.band, self.band_bc]
-    }
-
-    /// The kind of normal texels `tag` holds, `None` for a tag of no normal texels.
-    pub(crate) fn kind_of_tag(tag: &[u8; 4]) -> Option<NormalKind> {
-        if NormalTags::MEAN.all().contains(tag) {
-            Some(NormalKind::Mean)
-        } else if NormalTags::MOMENTS.all().contains(tag) {
-            Some(NormalKind::Moments)
-        } else {
-            None
-        }
-    }
-
-    /// The header field that declares `kind`: `volume.normals` or `volume.moments`.
-    pub(crate) fn field(kind: NormalKind) -> &'static str {
-        match kind {
-            NormalKind::Mean => "volume.normals",
-            NormalKind::Moments => "volume.moments",
-        }
-    }
-}
 
 /// Refuses normal chunk `tag` in a volume whose header declares normal texels `declared`:
 /// a chunk of the other kind (`VNRM` in a moments volume, `VMOM` in one of mean normals)

@@ -103,8 +103,11 @@ pub fn bake_with_normals<T>(
             limit_gib,
             ..
         }) if mode == NormalsMode::Auto && opts.normals => {
+            // Given up: baked exactly as `Off` would bake it.
             opts.normals = false;
             opts.moments = false;
+            opts.surface = None;
+            out.coherence = None;
             out.refused = Some(MemoryRefusal::Baking {
                 needed_gib,
                 limit_gib,
