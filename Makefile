@@ -79,10 +79,11 @@ demo: $(BILLOW)
 	$(BILLOW) info $(OUT)/oak_pruned.billow
 	$(BILLOW) eval $(SAMPLE) $(OUT)/oak.billow --views=+x+y+z,+x --distances 1,4 --size 256x256 --out $(OUT)/oak_eval
 	$(BILLOW) eval $(SAMPLE) $(OUT)/oak_cloud.billow --views=+x+y+z --distances 1,4 --size 256x256 --out $(OUT)/oak_cloud_eval
-	printf '%s\n' '(camera: Some((eye: (0.0, 45.0, 150.0), target: (0.0, 28.0, 0.0), fov_deg: 45.0)),' \
-		' volumes: [(asset: "oak_pruned.billow", instances: [(translate: (-30.0, 0.0, 0.0))])],' \
-		' clouds: [(asset: "oak_cloud.billow", instances: [(translate: (30.0, 0.0, 0.0))])],' \
-		' ground: Some((size: 160.0, color: (0.30, 0.36, 0.22))), shadows: true)' > $(OUT)/demo.ron
+	printf '%s\n' '(camera: Some((eye: (0.0, 50.0, 190.0), target: (0.0, 28.0, 0.0), fov_deg: 45.0)),' \
+		' volumes: [(asset: "oak_pruned.billow", instances: [(translate: (-60.0, 0.0, 0.0))])],' \
+		' meshes: [(path: "$(CURDIR)/$(SAMPLE)")],' \
+		' clouds: [(asset: "oak_cloud.billow", instances: [(translate: (60.0, 0.0, 0.0))])],' \
+		' ground: Some((size: 240.0, color: (0.30, 0.36, 0.22))), shadows: true)' > $(OUT)/demo.ron
 	sh .ci/ensure-vulkan
 	$(BILLOW) view $(OUT)/demo.ron --headless --screenshot $(OUT)/oak_view.png --size 640x480 --background 0.55,0.62,0.72
 

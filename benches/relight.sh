@@ -1,13 +1,16 @@
 #!/bin/sh
 # How the oak's stand-ins respond to the light, as the viewer draws them (issue 38):
 # the mesh, the billboard cloud baked lit (the default) and baked unlit with normal maps,
-# the volume at the defaults (no normals: unlit albedo) and with --normals on, each drawn
-# headless by `billow view` under four lights (billow eval's standard set) from +x-y-z at
-# 192x192, and compared with the mesh's picture by `billow compare` (coverage and mean
-# covered luminance). Usage: sh benches/relight.sh [BILLOW] [OUT_DIR]
+# the volume at the defaults (normal moments, lit two-sided) and with --normals on (the
+# mean normal, one-sided), each drawn headless by `billow view` under four lights (billow
+# eval's standard set) from +x-y-z at 192x192, and compared with the mesh's picture by
+# `billow compare` (coverage and mean covered luminance); then how each one's mean covered
+# luminance changes from the overhead light to each other light, beside the mesh's.
+# Usage: [SHADOWS=true] sh benches/relight.sh [BILLOW] [OUT_DIR]
 set -e
 B=${1:-target/release/billow}
 D=${2:-out/relight}
+SHADOWS=${SHADOWS:-false} # SHADOWS=true: the viewer's shadow maps on, for every picture
 O=$(pwd)/fixtures/oak/eztree_oak_medium.gltf
 mkdir -p "$D"
 $B bbcloud "$O" -o "$D/lit.billow" -q
@@ -24,14 +27,26 @@ for light in "overhead 0,1,0" "sun-east 0.94,0.34,0.1" "sun-west -0.94,0.34,0.25
       vol|voln) content="volumes: [(asset: \"$(cd "$D" && pwd)/$what.billow\")],";;
       *) content="clouds: [(asset: \"$(cd "$D" && pwd)/$what.billow\", lod_distances: Some([0.001, 1000000.0, 2000000.0]), dissolve: 0.0)],";;
     esac
-    printf '(light: (direction: (%s), ambient: 0.3), %s shadows: false)\n' "$dir" "$content" > "$D/s_$what.ron"
+    printf '(light: (direction: (%s), ambient: 0.3), %s shadows: %s)\n' "$dir" "$content" "$SHADOWS" > "$D/s_$what.ron"
     $B view "$D/s_$what.ron" --headless --screenshot "$D/${name}_$what.png" --size 192x192 --view +x-y-z -q
   done
   for what in lit nm vol voln; do
     $B compare "$D/${name}_mesh.png" "$D/${name}_$what.png" --json | python3 -c "
 import json, sys
 e = json.load(sys.stdin)['error']
-names = {'lit': 'cloud, baked lit', 'nm': 'cloud, unlit + normal maps', 'vol': 'volume, defaults', 'voln': 'volume, --normals on'}
+names = {'lit': 'cloud, baked lit', 'nm': 'cloud, unlit + normal maps', 'vol': 'volume, defaults (moments)', 'voln': 'volume, --normals on (mean)'}
 print('| $name | %s | %.4f | %+.1f %% | %+.1f %% |' % (names['$what'], e['rmse'], 100 * e['coverage_rel_diff'], 100 * e['luminance_rel_diff']))"
   done
+done
+echo
+echo "| light | mesh | cloud, baked lit | cloud, normal maps | volume, moments | volume, mean |"
+echo "|---|---:|---:|---:|---:|---:|"
+for name in sun-east sun-west below; do
+  row="| overhead → $name"
+  for what in mesh lit nm vol voln; do
+    c=$($B compare "$D/overhead_mesh.png" "$D/overhead_$what.png" --json | python3 -c "import json, sys; print(json.load(sys.stdin)['error']['luminance_test'])")
+    n=$($B compare "$D/overhead_mesh.png" "$D/${name}_$what.png" --json | python3 -c "import json, sys; print(json.load(sys.stdin)['error']['luminance_test'])")
+    row="$row | $(python3 -c "print('%+.1f %%' % (100 * ($n / $c - 1)))")"
+  done
+  echo "$row |"
 done
