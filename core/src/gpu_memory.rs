@@ -71,6 +71,12 @@ fn chain_blocks(dims0: [u32; 3], levels: usize) -> u64 {
 /// format 1.3, for the LOD bands).
 pub fn volume_gpu_bytes(asset: &VolumeAsset, compressed: bool) -> GpuBytes {
     let mut out = GpuBytes::default();
+    // Normal moments are sampled as the file's BC7 blocks where the colour is (mean normals
+    // are weighted by alpha on upload, so they are decoded).
+    let moments = asset
+        .header
+        .volume
+        .is_some_and(|v| v.normal_kind() == Some(billow_format::NormalKind::Moments));
     let mut texture = |dims: [u32; 3], levels: usize, has_normals: bool, compressed: bool| {
         let raw = VOLUME_TEXEL_BYTES * chain_texels(dims, levels);
         let colour = if compressed {
@@ -78,12 +84,13 @@ pub fn volume_gpu_bytes(asset: &VolumeAsset, compressed: bool) -> GpuBytes {
         } else {
             raw
         };
-        let normals = if has_normals {
-            VOLUME_NORMAL_TEXEL_BYTES * chain_texels(dims, levels)
-        } else {
-            0
+        let decoded = VOLUME_NORMAL_TEXEL_BYTES * chain_texels(dims, levels);
+        let (with_bc, without) = match (has_normals, moments && compressed) {
+            (false, _) => (0, 0),
+            (true, true) => (chain_blocks(dims, levels), decoded),
+            (true, false) => (decoded, decoded),
         };
-        out.add(colour + normals, raw + normals);
+        out.add(colour + with_bc, raw + without);
     };
     texture(
         asset.level_dims(0),

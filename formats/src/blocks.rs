@@ -33,6 +33,14 @@ pub const TAG_BLB7: [u8; 4] = *b"BLB7";
 /// block ([`expand_blocks`]).
 pub const ZERO_BLOCK: [u8; 16] = [0x40, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0];
 
+/// A BC7 block that decodes to 16 texels `80 80 80 80` (mode 6, every 7-bit endpoint 64,
+/// p-bits and indices zero): what an omitted block of a normal or normal-moment stream is
+/// (`VNB7`, `BNB7`, `VMB7`, `BMB7`: the signed zero, SPEC §12.2), for a renderer that
+/// samples those blocks as they are.
+pub const SIGNED_ZERO_BLOCK: [u8; 16] = [
+    0x40, 0x20, 0x10, 0x08, 0x04, 0x02, 0x81, 0x40, 0, 0, 0, 0, 0, 0, 0, 0,
+];
+
 /// Bytes of all the BC7 blocks of a `w`×`h`×`d` level, dense.
 pub fn bc7_len(w: u32, h: u32, d: u32) -> u64 {
     block_count([w, h, d]) * BC7_BLOCK_BYTES as u64
@@ -214,4 +222,15 @@ pub(crate) fn decode_levels(
         .enumerate()
         .map(|(i, l)| decode_bc7(l, dims_of(i as u32), omitted))
         .collect()
+}
+
+#[cfg(test)]
+mod zero_block_tests {
+    use super::*;
+
+    #[test]
+    fn the_zero_blocks_decode_to_their_zeros() {
+        assert_eq!(decode_bc7_block(&ZERO_BLOCK), [0u8; 64]);
+        assert_eq!(decode_bc7_block(&SIGNED_ZERO_BLOCK), [0x80u8; 64]);
+    }
 }

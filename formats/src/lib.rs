@@ -29,8 +29,8 @@ pub use bands::{
 pub use blocks::{
     bc7_len, block_count, decode_bc7, decode_bc7_block, expand_blocks, mask_len, pack_blocks,
     snorm_to_unorm, sparse_len, unorm_to_snorm_in_place, BandBlocks, CloudBlocks, VolumeBlocks,
-    BC7_BLOCK_BYTES, TAG_ANB7, TAG_ATB7, TAG_BLB7, TAG_BMB7, TAG_BNB7, TAG_MTB7, TAG_VLB7,
-    TAG_VMB7, TAG_VNB7, ZERO_BLOCK,
+    BC7_BLOCK_BYTES, SIGNED_ZERO_BLOCK, TAG_ANB7, TAG_ATB7, TAG_BLB7, TAG_BMB7, TAG_BNB7, TAG_MTB7,
+    TAG_VLB7, TAG_VMB7, TAG_VNB7, ZERO_BLOCK,
 };
 pub use cloud::{
     Atlas, AtlasRect, Billboard, CloudAsset, CloudError, CloudLevel, Mesh, MeshMaterial,

@@ -54,8 +54,8 @@ pub struct DecodedVolume {
     /// Per level (parallel to `levels`), the normals as `(α·n̄, α)` (module docs); empty
     /// when the asset stores no normals.
     pub normals: Vec<Level>,
-    /// `normals` holds the diagonal of the normals' second moment (`(α·E[n∘n], α)`,
-    /// SPEC §8.4a) instead of their mean: lit two-sided
+    /// `normals` holds the diagonal of the normals' second moment (`(E[n∘n], tr)`,
+    /// [`moments_texel`], SPEC §8.4a) instead of their mean: lit two-sided
     /// ([`billow_core::shading::moments_diffuse_factor`]).
     pub moments: bool,
     /// The asset's extra LOD bands (formats/SPEC.md §8.6), decoded; empty for an
@@ -89,20 +89,26 @@ impl DecodedVolume {
         let srgb = asset.header.colour_space == ColourSpace::SrgbPremultiplied;
         let repeat = repeat_axes(asset);
         let dims0 = asset.level_dims(0);
+        let moments = asset
+            .header
+            .volume
+            .is_some_and(|v| v.normal_kind() == Some(billow_format::NormalKind::Moments));
         let bands: Vec<DecodedBand> = asset
             .bands
             .iter()
             .map(|b| DecodedBand {
                 first_level: b.first_level,
                 dims0: b.dims,
-                volume: Self::decode_levels(&b.levels, b.normals.as_deref(), b.dims, srgb, repeat),
+                volume: Self::decode_levels(
+                    &b.levels,
+                    (b.normals.as_deref(), moments),
+                    b.dims,
+                    srgb,
+                    repeat,
+                ),
                 cells: b.cells.clone(),
             })
             .collect();
-        let moments = asset
-            .header
-            .volume
-            .is_some_and(|v| v.normal_kind() == Some(billow_format::NormalKind::Moments));
         let bands: Vec<DecodedBand> = bands
             .into_iter()
             .map(|mut b: DecodedBand| {
@@ -113,13 +119,19 @@ impl DecodedVolume {
         Ok(DecodedVolume {
             bands,
             moments,
-            ..Self::decode_levels(&asset.levels, asset.normals.as_deref(), dims0, srgb, repeat)
+            ..Self::decode_levels(
+                &asset.levels,
+                (asset.normals.as_deref(), moments),
+                dims0,
+                srgb,
+                repeat,
+            )
         })
     }
 
     fn decode_levels(
         levels: &[Vec<u8>],
-        normals: Option<&[Vec<u8>]>,
+        (normals, moments): (Option<&[Vec<u8>]>, bool),
         dims0: [u32; 3],
         srgb: bool,
         repeat: [bool; 3],
@@ -157,7 +169,14 @@ impl DecodedVolume {
                         texels: bytes
                             .chunks_exact(4)
                             .zip(&l.texels)
-                            .map(|(t, c)| normal_texel([t[0], t[1], t[2], t[3]], c.w))
+                            .map(|(t, c)| {
+                                let t = [t[0], t[1], t[2], t[3]];
+                                if moments {
+                                    moments_texel(t)
+                                } else {
+                                    normal_texel(t, c.w)
+                                }
+                            })
                             .collect(),
                     })
                     .collect()
@@ -166,7 +185,7 @@ impl DecodedVolume {
         DecodedVolume {
             levels,
             normals,
-            moments: false,
+            moments,
             repeat,
             bands: Vec::new(),
         }
@@ -326,6 +345,15 @@ impl DecodedVolume {
 #[inline]
 pub fn normal_texel(snorm: [u8; 4], alpha: f32) -> Vec4 {
     (crate::voxelize::quantize::decode_normal(snorm) * alpha).extend(alpha)
+}
+
+/// A normal-moment texel (SPEC §8.4a) as the slicer filters it: `(m, tr m)`, the moments
+/// as stored, unweighted, with their trace, so that [`normal_from_weighted`] of a filtered
+/// sample is the filtered moments over their filtered trace — what `volume.wgsl`'s
+/// `moments_cosine` computes from the stored texels.
+pub fn moments_texel(snorm: [u8; 4]) -> Vec4 {
+    let m = crate::voxelize::quantize::decode_normal(snorm);
+    m.extend(m.x + m.y + m.z)
 }
 
 /// A filtered `(α·n̄, α)` sample → the alpha-weighted mean normal (length clamped to 1,

@@ -266,10 +266,11 @@ impl Renderer {
         for t in &textures {
             pass.note_storage(t.storage);
         }
+        // Colour textures, and normal moments, uploaded as their BC7 blocks.
         let block_textures = textures
             .iter()
-            .filter(|t| t.storage == VolumeStorage::Blocks)
-            .count();
+            .map(|t| usize::from(t.storage == VolumeStorage::Blocks) + usize::from(t.moments_bc))
+            .sum::<usize>();
         self.block_textures += block_textures as u32;
         let first_texture: usize = self.volumes.entries.iter().map(|v| v.bands.len()).sum();
         let b = &asset.header.bounds;

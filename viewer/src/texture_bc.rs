@@ -16,6 +16,28 @@ pub fn upload_bc7(
     levels: &[Vec<u8>],
     srgb: bool,
 ) -> wgpu::Texture {
+    upload_bc7_filled(
+        gpu,
+        label,
+        dims0,
+        dimension,
+        levels,
+        srgb,
+        billow_format::ZERO_BLOCK,
+    )
+}
+
+/// [`upload_bc7`] with `fill` for the omitted blocks: [`billow_format::ZERO_BLOCK`] for
+/// colour, [`billow_format::SIGNED_ZERO_BLOCK`] for normal moments (SPEC §12.2).
+pub fn upload_bc7_filled(
+    gpu: &Gpu,
+    label: &str,
+    dims0: [u32; 3],
+    dimension: wgpu::TextureDimension,
+    levels: &[Vec<u8>],
+    srgb: bool,
+    fill: [u8; 16],
+) -> wgpu::Texture {
     let format = if srgb {
         wgpu::TextureFormat::Bc7RgbaUnormSrgb
     } else {
@@ -37,7 +59,7 @@ pub fn upload_bc7(
     });
     for (l, payload) in levels.iter().enumerate() {
         let d = billow_format::mip_dims(dims0, l as u32);
-        let blocks = billow_format::expand_blocks(payload, d, billow_format::ZERO_BLOCK);
+        let blocks = billow_format::expand_blocks(payload, d, fill);
         let (bw, bh) = (d[0].div_ceil(4), d[1].div_ceil(4));
         gpu.queue.write_texture(
             wgpu::TexelCopyTextureInfo {

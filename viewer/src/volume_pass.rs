@@ -51,7 +51,7 @@ use crate::layout::{
     color_target, depth_texture, entry, sampler, shader, storage, texture, uniform, Pipeline,
 };
 use crate::target::COLOR_FORMAT;
-use crate::texture_bc::upload_bc7;
+use crate::texture_bc::{upload_bc7, upload_bc7_filled};
 use crate::{Gpu, ViewError};
 
 /// Most textures bound at once (the shaders switch over this many slots at most).
@@ -252,9 +252,13 @@ pub struct GpuVolume {
     pub view: wgpu::TextureView,
     /// The `(α·n̄, α)` normal texture (module docs), when the asset stores normals.
     pub normals: Option<(wgpu::Texture, wgpu::TextureView)>,
-    /// `normals` holds `(α·E[n∘n], α)`, the diagonal of the normals' second moment (SPEC
-    /// §8.4a), lit two-sided (`volume.wgsl`'s `moments_cosine`).
+    /// `normals` holds the normals' moments as stored, `(E[n∘n], 0)` (SPEC §8.4a; not
+    /// weighted by alpha: the shader divides by their trace), lit two-sided
+    /// (`volume.wgsl`'s `moments_cosine`).
     pub moments: bool,
+    /// The moments are the file's BC7 blocks, sampled as `Bc7RgbaUnorm` of the snorm
+    /// bytes XOR 0x80 (SPEC §12.2): one byte a texel where the colour is sampled as blocks.
+    pub moments_bc: bool,
     /// Extinction-space texels, or BC7 blocks (format 1.2, [`Gpu::block_upload`],
     /// [`Gpu::sample_blocks`]).
     pub storage: VolumeStorage,
@@ -531,6 +535,10 @@ impl VolumePass {
         let repeat = rep[0] || rep[2];
         let cs = asset.header.colour_space;
         let dims0 = asset.level_dims(0);
+        let moments = asset
+            .header
+            .volume
+            .is_some_and(|v| v.normal_kind() == Some(billow_format::NormalKind::Moments));
         let direct = blocks
             .filter(|b| b.colour.len() == asset.levels.len() && gpu.block_upload(dims0, true));
         let mut out = vec![match direct {
@@ -545,14 +553,22 @@ impl VolumePass {
                     cs == ColourSpace::SrgbPremultiplied,
                 );
                 let view = texture.create_view(&Default::default());
+                let (normals, moments_bc) = normal_slot(
+                    gpu,
+                    dims0,
+                    &asset.levels,
+                    asset.normals.as_deref(),
+                    moments.then_some(b.normals.as_deref()).flatten(),
+                );
                 GpuVolume {
                     dims0,
                     levels: b.colour.len() as u32,
                     repeat,
                     texture,
                     view,
-                    normals: normal_texture(gpu, dims0, &asset.levels, asset.normals.as_deref()),
-                    moments: false,
+                    normals,
+                    moments,
+                    moments_bc,
                     storage: VolumeStorage::Blocks,
                 }
             }
@@ -560,7 +576,7 @@ impl VolumePass {
                 gpu,
                 dims0,
                 &asset.levels,
-                asset.normals.as_deref(),
+                (asset.normals.as_deref(), moments),
                 cs,
                 repeat,
             )?,
@@ -586,25 +602,35 @@ impl VolumePass {
                         cs == ColourSpace::SrgbPremultiplied,
                     );
                     let view = texture.create_view(&Default::default());
+                    let (normals, moments_bc) = normal_slot(
+                        gpu,
+                        b.dims,
+                        &b.levels,
+                        b.normals.as_deref(),
+                        moments.then_some(bb.normals.as_deref()).flatten(),
+                    );
                     GpuVolume {
                         dims0: b.dims,
                         levels: bb.colour.len() as u32,
                         repeat: false,
                         texture,
                         view,
-                        normals: normal_texture(gpu, b.dims, &b.levels, b.normals.as_deref()),
-                        moments: false,
+                        normals,
+                        moments,
+                        moments_bc,
                         storage: VolumeStorage::Blocks,
                     }
                 }
-                None => upload_levels(gpu, b.dims, &b.levels, b.normals.as_deref(), cs, false)?,
+                None => upload_levels(
+                    gpu,
+                    b.dims,
+                    &b.levels,
+                    (b.normals.as_deref(), moments),
+                    cs,
+                    false,
+                )?,
             });
         }
-        let moments = asset
-            .header
-            .volume
-            .is_some_and(|v| v.normal_kind() == Some(billow_format::NormalKind::Moments));
-        out.iter_mut().for_each(|g| g.moments = moments);
         Ok(out)
     }
 }
@@ -627,7 +653,7 @@ fn upload_levels(
     gpu: &Gpu,
     dims0: [u32; 3],
     levels: &[Vec<u8>],
-    normals: Option<&[Vec<u8>]>,
+    (normals, moments): (Option<&[Vec<u8>]>, bool),
     colour_space: ColourSpace,
     repeat: bool,
 ) -> Result<GpuVolume, ViewError> {
@@ -648,7 +674,11 @@ fn upload_levels(
         EXTINCTION_FORMAT,
         texels.iter().map(|b| &b[..]),
     );
-    let normals = normal_texture(gpu, dims0, levels, normals);
+    let normals = if moments {
+        moments_texture(gpu, dims0, normals)
+    } else {
+        normal_texture(gpu, dims0, levels, normals)
+    };
     Ok(GpuVolume {
         dims0,
         levels: count,
@@ -656,7 +686,8 @@ fn upload_levels(
         texture,
         view,
         normals,
-        moments: false,
+        moments,
+        moments_bc: false,
         storage: VolumeStorage::Extinction,
     })
 }
@@ -744,6 +775,53 @@ fn normal_texture(
             dims0,
             NORMAL_FORMAT,
             texels.iter().map(|b| &b[..]),
+        )
+    })
+}
+
+/// The normal slot of a BC7-sampled volume whose normals are `moments` given (its `VMB7`
+/// blocks; `None` for mean normals): the blocks themselves, sampled as they are
+/// (`volume.wgsl` undoes the XOR 0x80: `v = (255·u − 128)/127`, affine, so it commutes
+/// with filtering), and `true`; else [`normal_texture`] of the decoded normals.
+fn normal_slot(
+    gpu: &Gpu,
+    dims0: [u32; 3],
+    levels: &[Vec<u8>],
+    normals: Option<&[Vec<u8>]>,
+    moments: Option<&[Vec<u8>]>,
+) -> (Option<(wgpu::Texture, wgpu::TextureView)>, bool) {
+    match moments {
+        Some(blocks) => {
+            let texture = upload_bc7_filled(
+                gpu,
+                "volume moments (BC7)",
+                dims0,
+                wgpu::TextureDimension::D3,
+                blocks,
+                false,
+                billow_format::SIGNED_ZERO_BLOCK,
+            );
+            let view = texture.create_view(&Default::default());
+            (Some((texture, view)), true)
+        }
+        None => (normal_texture(gpu, dims0, levels, normals), false),
+    }
+}
+
+/// The normal moments of a volume as stored (`Rgba8Snorm` `(E[n∘n], 0)`, SPEC §8.4a), four
+/// bytes a texel: the shader normalises by their trace, so they need no alpha.
+fn moments_texture(
+    gpu: &Gpu,
+    dims0: [u32; 3],
+    moments: Option<&[Vec<u8>]>,
+) -> Option<(wgpu::Texture, wgpu::TextureView)> {
+    moments.map(|m| {
+        texture_3d(
+            gpu,
+            "volume moments",
+            dims0,
+            NORMAL_FORMAT,
+            m.iter().map(|b| &b[..]),
         )
     })
 }

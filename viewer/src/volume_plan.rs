@@ -318,7 +318,8 @@ pub fn plan(
                             u8::from(b.gpu.repeat)
                                 + 2 * u8::from(shaded)
                                 + 4 * u8::from(b.gpu.storage == VolumeStorage::Blocks)
-                                + 8 * u8::from(shaded && b.gpu.moments),
+                                + 8 * u8::from(shaded && b.gpu.moments)
+                                + 16 * u8::from(shaded && b.gpu.moments_bc),
                         ),
                     ],
                     q: [v0, v.max_lod as f32, lo, hi],

@@ -144,6 +144,50 @@ fn compressed_volumes_draw_the_same_from_blocks_and_decoded() {
     assert!(lossy < 0.02, "compressed vs raw RMSE {lossy}");
 }
 
+/// A volume of normal moments (format 1.4, lit two-sided): its `VMB7` blocks are sampled
+/// as they are where the colour's are (the shader maps the unorm of the XOR-ed bytes back),
+/// and draw what the decoded moments draw.
+#[test]
+fn compressed_moments_draw_the_same_from_blocks_and_decoded() {
+    let name = "compressed_moments_draw_the_same_from_blocks_and_decoded";
+    let Some((with, without)) = devices(name) else {
+        return;
+    };
+    let mut asset = common::as_moments(billow::noise_volume::sphere(32, Vec3::new(0.6, 0.5, 0.4)));
+    let blocks = compress_volume(&mut asset);
+    assert!(blocks.normals.is_some(), "the moments are compressed too");
+    let direct = with.block_upload(asset.level_dims(0), true);
+    let mut rb = Renderer::new(with);
+    rb.add_volume_blocks(&asset, Some(&blocks), vec![Mat4::IDENTITY], None)
+        .unwrap();
+    let mut rd = Renderer::new(without);
+    rd.add_volume_blocks(&asset, Some(&blocks), vec![Mat4::IDENTITY], None)
+        .unwrap();
+    assert_eq!(rd.block_textures, 0, "the decode path uploads no blocks");
+    // Colour and moments.
+    assert_eq!(rb.block_textures, 2 * u32::from(direct));
+    let cam = ViewCamera::look_at(
+        Vec3::new(1.8, 1.2, 2.6),
+        Vec3::ZERO,
+        Vec3::Y,
+        0.8,
+        64,
+        64,
+        0.1,
+        10.0,
+    );
+    let b = image(&rb.render_image(&cam).unwrap().0);
+    let d = image(&rd.render_image(&cam).unwrap().0);
+    let diff = max_abs(&b, &d);
+    println!("moments: blocks vs decoded max |Δ| {diff:.5}");
+    if diff > 2.0 / 255.0 {
+        let p = common::out_dir().join(format!("{name}.diff.png"));
+        write_comparison_png(&d, &b, 4.0, &p).unwrap();
+        panic!("blocks vs decoded max |Δ| {diff}; {}", p.display());
+    }
+    assert!(d.coverage() > 1e-3, "the ball is drawn");
+}
+
 /// A volume with an LOD band (format 1.3, as `billow emptyspace` writes): every band's blocks take the
 /// same path as the base texture, and both paths draw the same picture.
 #[test]

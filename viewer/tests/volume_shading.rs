@@ -162,32 +162,13 @@ fn lit_ball_gpu_matches_cpu() {
     );
 }
 
-/// `asset` with its mean normals turned into normal moments (SPEC §8.4a): each texel's
-/// `(nx², ny², nz²)` of its stored normal, snorm8.
-fn as_moments(mut asset: VolumeAsset) -> VolumeAsset {
-    let sq = |b: u8| {
-        let v = f32::from(b as i8).max(-127.0) / 127.0;
-        (v * v * 127.0).round() as i8 as u8
-    };
-    for level in asset.normals.as_mut().expect("normals") {
-        for t in level.chunks_exact_mut(4) {
-            let m = [sq(t[0]), sq(t[1]), sq(t[2]), 0];
-            t.copy_from_slice(&m);
-        }
-    }
-    let v = asset.header.volume.as_mut().expect("volume");
-    v.set_normal_kind(Some(billow_format::NormalKind::Moments));
-    asset.validate().expect("a valid moments asset");
-    asset
-}
-
 /// Normal moments are lit two-sided by the viewer as by the CPU slicer
 /// (`billow_core::shading::moments_diffuse_factor`, `volume.wgsl`'s `moments_cosine`).
 #[test]
 fn lit_ball_of_moments_gpu_matches_cpu() {
     gpu_matches_cpu(
         "lit_ball_moments",
-        &as_moments(sphere(64, Vec3::new(0.6, 0.5, 0.4))),
+        &common::as_moments(sphere(64, Vec3::new(0.6, 0.5, 0.4))),
         &box_camera(Vec3::new(0.4, -0.5, -1.0), 128),
         VolumeLight {
             dir: Vec3::new(-0.8, 0.5, 0.2).normalize(),

@@ -25,7 +25,7 @@ struct Slice {
 struct VolumeParams {
     // The band's: x: v0 · 2^first_level, y: its max lod, z: texture slot,
     // w: flags (1 = repeat, + 2 = shaded from normals, + 4 = BC7 blocks filtered by loads,
-    // + 8 = the normals are moments)
+    // + 8 = the normals are moments, + 16 = moments as BC7 blocks)
     p: vec4<f32>,
     // The asset's: x: v0, y: largest LOD L, z..w: slice-LOD range [f_b, f_{b+1}) of the band
     q: vec4<f32>,
@@ -57,6 +57,7 @@ struct VOut {
     // w: its thickness
     @location(1) @interpolate(flat) lod_ratio: vec4<f32>,
     // x: texture slot, y: flags (1 = repeat addressing, 2 = shaded from normals, 8 = moments,
+    // 16 = moments as BC7 blocks,
     // 4 = BC7 blocks filtered by loads)
     @location(2) @interpolate(flat) slot: vec2<u32>,
     @location(3) shadow_clip: vec4<f32>,
@@ -216,11 +217,15 @@ fn toksvig_normal(in: VOut) -> vec3<f32> {
 }
 
 // The two-sided cosine of a volume storing normal moments (flag 8; SPEC §8.4a;
-// core/src/shading.rs::moments_diffuse_factor): √(m·(L∘L) / tr m), m the filtered
-// (α·E[n∘n], α) (α cancels in the ratio), L in the volume's own axes (Mᵀ·L, M the normal
-// matrix whose rows are n0, n1, n2).
+// core/src/shading.rs::moments_diffuse_factor): √(m·(L∘L) / tr m), m the filtered moments
+// as stored (E[n∘n]; flag 16: their BC7 blocks, unorm of the snorm bytes XOR 0x80, mapped
+// back by v = (255·u − 128)/127), L in the volume's own axes (Mᵀ·L, M the normal matrix
+// whose rows are n0, n1, n2).
 fn moments_cosine(in: VOut) -> f32 {
-    let s = sample_normals(in.slot.x, (in.slot.y & 1u) != 0u, in.uvw, in.lod_ratio.x);
+    var s = sample_normals(in.slot.x, (in.slot.y & 1u) != 0u, in.uvw, in.lod_ratio.x);
+    if (in.slot.y & 16u) != 0u {
+        s = vec4<f32>(s.xyz * (255.0 / 127.0) - vec3<f32>(128.0 / 127.0), 0.0);
+    }
     let tr = s.x + s.y + s.z;
     if !(tr > 1e-6) {
         return 0.0;

@@ -142,3 +142,22 @@ pub fn ball_asset(shell: bool) -> VolumeAsset {
         cells,
     }
 }
+
+/// `asset` with its mean normals turned into normal moments (SPEC §8.4a): each texel's
+/// `(nx², ny², nz²)` of its stored normal, snorm8.
+pub fn as_moments(mut asset: VolumeAsset) -> VolumeAsset {
+    let sq = |b: u8| {
+        let v = f32::from(b as i8).max(-127.0) / 127.0;
+        (v * v * 127.0).round() as i8 as u8
+    };
+    for level in asset.normals.as_mut().expect("normals") {
+        for t in level.chunks_exact_mut(4) {
+            let m = [sq(t[0]), sq(t[1]), sq(t[2]), 0];
+            t.copy_from_slice(&m);
+        }
+    }
+    let v = asset.header.volume.as_mut().expect("volume");
+    v.set_normal_kind(Some(billow_format::NormalKind::Moments));
+    asset.validate().expect("a valid moments asset");
+    asset
+}
