@@ -7,8 +7,8 @@
 //! colour of partly covered texels stays that of the leaves at every MIP level. The
 //! asset's own premultiplied MIPs are checked the same way.
 
-use billow::bbcloud::straight::{straight_rgba8, straight_rgba8_undilated};
 use billow::bbcloud::{bake, BbcloudOptions, Shading};
+use billow::export::straight::{straight_rgba8, straight_rgba8_undilated};
 use billow::import::{import, ImportOptions};
 use billow::texture::srgb_to_linear_lut;
 use glam::{Vec3, Vec4};

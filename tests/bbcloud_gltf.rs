@@ -302,7 +302,7 @@ fn pictures_for_the_docs() {
     let refs: Vec<&ImageF32> = lods.iter().collect();
     write_comparisons_png(&reference[0], &refs, 4.0, &out.join("oak_lods_front.png")).unwrap();
     // LOD 0's atlas, straight alpha over white-free transparency, reduced to 512.
-    let png = billow::bbcloud::straight::atlas_png(&asset.atlases[0]).unwrap();
+    let png = billow::export::straight::atlas_png(&asset.atlases[0]).unwrap();
     let img = image::load_from_memory(&png).unwrap();
     img.resize(512, 512, image::imageops::FilterType::Triangle)
         .save(out.join("oak_lod0_atlas.png"))

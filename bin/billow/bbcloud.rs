@@ -5,11 +5,12 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use billow::bbcloud::{
-    bake, estimate, straight, BbcloudOptions, BbcloudStats, Estimate, Shading, Stage, ViewDirs,
+    bake, estimate, BbcloudOptions, BbcloudStats, Estimate, Shading, Stage, ViewDirs,
     ViewPreference, MAX_ATLAS_BYTES,
 };
 use billow::compress::{compress_cloud, Compression};
 use billow::export::gltf::cloud_gltf_bytes_with;
+use billow::export::straight;
 use billow::export::{GltfAlpha, GltfContainer, GltfOptions};
 use billow::import::{import, ImportOptions, Imported};
 use billow::presets::target::{search_cloud, short, TargetOptions, Trial};
@@ -83,14 +84,15 @@ pub struct Args {
     /// Texels per world unit at LOD 0, > 0 (default: the most that fits one atlas per level).
     #[arg(long)]
     texel_density: Option<f32>,
-    /// Direction towards the light, x,y,z (finite, not zero).
-    #[arg(long, default_value = "0.3,1,0.5", conflicts_with = "unlit")]
+    /// Direction towards the light, x,y,z (finite, not zero); the default is the viewer's
+    /// scene light.
+    #[arg(long, default_value_t = default_light(), conflicts_with = "unlit")]
     light: String,
     /// Bake albedo only, no lighting.
     #[arg(long)]
     unlit: bool,
     /// Ambient light fraction (the rest is diffuse), in [0, 1].
-    #[arg(long, default_value_t = 0.3)]
+    #[arg(long, default_value_t = billow_core::shading::DEFAULT_AMBIENT)]
     ambient: f32,
     /// K: K×K coverage samples per texel, 1–8.
     #[arg(long, default_value_t = 3)]
@@ -184,6 +186,12 @@ struct Summary<'a> {
 
 fn bad(flag: &str, e: impl std::fmt::Display) -> CliError {
     CliError::new(Code::BadParameter, format!("{flag}: {e}"))
+}
+
+/// `--light`'s default, `billow_core::shading::DEFAULT_LIGHT` as the flag spells it.
+fn default_light() -> String {
+    let l = billow_core::shading::DEFAULT_LIGHT;
+    format!("{},{},{}", l.x, l.y, l.z)
 }
 
 fn parse_light(s: &str) -> Result<Vec3, CliError> {

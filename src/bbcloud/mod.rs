@@ -27,9 +27,6 @@ pub mod plane_search;
 pub mod rect;
 pub mod sampler;
 pub mod slab;
-/// Moved to [`crate::export::straight`] (an export concern: the exporter no longer
-/// depends on the baker); re-exported here under its old path.
-pub use crate::export::straight;
 pub mod view;
 
 use std::collections::BTreeMap;
