@@ -1,4 +1,31 @@
 //! billow: bakes meshes into image-based level-of-detail assets.
+//!
+//! What `billow voxelize --prune` does, from Rust ([`voxelize::bake()`]; a full program
+//! that also evaluates the result is `examples/bake_from_rust.rs`):
+//!
+//! ```no_run
+//! use std::path::Path;
+//!
+//! use billow::import::{import, ImportOptions};
+//! use billow::voxelize::{bake, default_align, BakeHooks, BakeOptions, Resolution, VoxelizeOptions};
+//!
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let scene = import(Path::new("tree.gltf"), &ImportOptions::default())?.scene;
+//! let resolution = Resolution::Longest(128);
+//! let opts = BakeOptions {
+//!     voxelize: VoxelizeOptions {
+//!         resolution,
+//!         align: default_align(&resolution, false), // as `--res 128`: sides a multiple of 8
+//!         ..VoxelizeOptions::default()
+//!     },
+//!     prune: true,
+//!     ..BakeOptions::default() // normals auto, BC7
+//! };
+//! let baked = bake(&scene, &opts, &BakeHooks::default())?;
+//! std::fs::write("tree.billow", baked.asset.to_bytes_with(baked.blocks.as_ref())?)?;
+//! # Ok(())
+//! # }
+//! ```
 pub mod bbcloud;
 pub mod bvh;
 pub mod camera;

@@ -13,7 +13,7 @@ use billow::import::{import, ImportOptions, Imported};
 use billow::presets::{resolve_volume, Preset, Source, VolumeFlags};
 use billow::provenance::{source_info, with_companions};
 use billow::scene::Aabb;
-use billow::voxelize::{default_align, Bake, CombineFn, Resolution, VoxelizeOptions};
+use billow::voxelize::{default_align, Bake, Baked, CombineFn, Resolution, VoxelizeOptions};
 use glam::Vec3;
 use serde::Serialize;
 
@@ -26,7 +26,7 @@ use crate::output::{
 use crate::staged::{out_err, Staged};
 use crate::target::{target_options, TargetSummary};
 use crate::voxelize_args::{Args, NormalsArg};
-use crate::voxelize_bake::{bake_once, bake_to_target, Baked};
+use crate::voxelize_bake::{bake_once, bake_to_target, BakeRun};
 use crate::Ctx;
 
 #[derive(Serialize)]
@@ -344,13 +344,13 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     }
     let import_s = start.elapsed().as_secs_f64();
 
-    let (baked, target_summary) = match &target {
+    let (run, target_summary) = match &target {
         None => (
-            bake_once(&scene, &mut opts, &args, compression, ctx, &input, source)?,
+            bake_once(&scene, &opts, &args, compression, ctx, &input, source)?,
             None,
         ),
         Some(t) => {
-            let (baked, chosen, summary) = bake_to_target(
+            let (run, summary) = bake_to_target(
                 &scene,
                 &opts,
                 &args,
@@ -361,22 +361,23 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
                 &input,
                 &source,
             )?;
-            opts = chosen;
-            (baked, Some(summary))
+            (run, Some(summary))
         }
     };
+    let BakeRun { baked, notes } = run;
     let Baked {
         asset,
         blocks,
         stats,
         dims,
         mip_count,
-        coherence,
+        normals,
         pruned: pruned_stats,
-        judge_s,
-        compress_s,
-        notes,
+        options,
+        compress_seconds: compress_s,
     } = baked;
+    // As the bake used them (the normals it kept, the chosen settings of --target-error).
+    opts = options;
     warnings.extend(notes);
     let gpu = billow_core::gpu_memory::volume_gpu_bytes(&asset, blocks.is_some());
     let write_start = Instant::now();
@@ -440,7 +441,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         supersample: opts.supersample,
         normals: opts.normals,
         normal_moments: opts.normals && opts.moments,
-        normal_coherence: coherence,
+        normal_coherence: normals.coherence,
         compress: args.compress.clone(),
         triangles: stats.triangles,
         non_empty_voxels: stats.non_empty_voxels,
@@ -453,7 +454,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         peak_memory_bytes: peak_rss_bytes(),
         seconds: Seconds {
             import: import_s,
-            judge_normals: judge_s,
+            judge_normals: normals.judge_seconds,
             rasterize: stats.seconds.rasterize,
             bake: stats.seconds.bake,
             mip: stats.seconds.mip,

@@ -19,6 +19,11 @@
 //!    [`toksvig`] and summed the same way;
 //! 4. [`quantize`]: RGBA8 `SrgbPremultiplied`, normals snorm8.
 //!
+//! [`bake()`] is all of `billow voxelize` as one call: this pipeline with normals as asked
+//! ([`bake_with_normals`]), optionally pruned of its empty space ([`voxelize_sparse`] and
+//! [`crate::emptyspace::prune_sparse`]), the asset with its header's bake parameters, and
+//! the BC7 blocks; the CLI only adds its progress bar, warnings and exit codes.
+//!
 //! Everything is deterministic: parallel loops write disjoint outputs, every reduction has a
 //! fixed order, so the bytes do not depend on the number of threads.
 //!
@@ -44,6 +49,7 @@
 
 mod ao;
 pub mod asset;
+mod bake;
 pub(crate) mod bricks;
 pub mod cells;
 pub mod combine;
@@ -72,6 +78,7 @@ pub use ao::{
     voxel_stream, AoRays, Bake, AO_SEED, DEFAULT_AO_RAYS, DEFAULT_DISTANCE_FRACTION, MAX_AO_RAYS,
 };
 pub use asset::{bake_params, bake_params_for};
+pub use bake::{bake, BakeError, BakeHooks, BakeOptions, Baked};
 pub use cells::{box_prisms, Prism};
 pub use combine::{Combine, CombineFn, CombineParseError, Preset};
 pub use coverage::CoverageScales;
@@ -169,7 +176,7 @@ pub struct VoxelizeOptions {
     /// Baked lighting multiplied into the level-0 colour (default none; see [`Bake`]).
     pub bake: Bake,
     /// Whether the volume is a closed surface, whose level 0 keeps its opacity
-    /// ([`CoverageScales::settle_level0`]), as judged before the bake (`--normals auto`:
+    /// (`CoverageScales::settle_level0`), as judged before the bake (`--normals auto`:
     /// [`toksvig::judge_normals`]); `None`: judged on the bake's own mean normals, and
     /// not a surface without them.
     pub surface: Option<bool>,

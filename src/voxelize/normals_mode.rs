@@ -4,8 +4,9 @@
 //! level [`toksvig::AUTO_NORMALS_LEVEL`]) judged before the bake to tell a closed surface,
 //! which keeps its level 0 unthinned, from foliage (docs/voxelize.md, "Normals"); given up,
 //! with a reason, when they alone would exceed the memory limit.
-//! The one place this rule lives: `billow voxelize` (dense and `--prune`d) and any Rust
-//! caller bake through [`bake_with_normals`].
+//! The one place this rule lives: [`super::bake()`] (what `billow voxelize` calls, dense
+//! and `--prune`d) bakes through [`bake_with_normals`], as may a Rust caller that drives
+//! [`super::voxelize()`] or [`super::voxelize_sparse`] itself.
 
 use std::time::Instant;
 
