@@ -109,13 +109,6 @@ impl DecodedVolume {
                 cells: b.cells.clone(),
             })
             .collect();
-        let bands: Vec<DecodedBand> = bands
-            .into_iter()
-            .map(|mut b: DecodedBand| {
-                b.volume.moments = moments;
-                b
-            })
-            .collect();
         Ok(DecodedVolume {
             bands,
             moments,
