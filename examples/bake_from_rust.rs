@@ -13,10 +13,7 @@ use billow::compress::Compression;
 use billow::eval::suite::{reference_lighting, spec, EvalOptions, Evaluator, PreparedAsset};
 use billow::import::{import, ImportOptions, Imported};
 use billow::provenance::source_info_all;
-use billow::voxelize::{
-    bake, default_align, BakeHooks, BakeOptions, CombineFn, NormalsMode, Preset, Resolution,
-    VoxelizeOptions,
-};
+use billow::voxelize::{bake, BakeHooks, BakeOptions, NormalsMode, Resolution};
 use glam::Vec3;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -30,16 +27,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     let t = Instant::now();
     let Imported { scene, report } = import(&mesh, &ImportOptions { strict: false })?;
+    // `billow voxelize --res N --prune`: the opaque combine, the grid's sides a multiple of
+    // 8 (for N = 128, so that the prune can cut MIP levels 1–3 into bricks as well).
     let opts = BakeOptions {
-        voxelize: VoxelizeOptions {
-            resolution: Resolution::Longest(res),
-            // As `billow voxelize --res N` does: sides a multiple of 8 (for N = 128), so that
-            // the prune can cut MIP levels 1–3 into bricks as well.
-            align: default_align(&Resolution::Longest(res), false),
-            // The CLI's default combine (the library's is the paper's `mean`).
-            combine: CombineFn::Preset(Preset::Opaque),
-            ..VoxelizeOptions::default()
-        },
         normals: NormalsMode::Auto,
         prune: true,
         compression: Compression::Bc,
@@ -47,7 +37,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         decode_blocks: true,
         // The mesh and the files it read (buffers, textures), as the CLI records them.
         source: Some(source_info_all(&mesh, &report.files)?),
-        ..BakeOptions::default()
+        ..BakeOptions::at(Resolution::Longest(res))
     };
     let note = |m: &str| eprintln!("warning: {m}");
     let hooks = BakeHooks {

@@ -7,19 +7,14 @@
 //! use std::path::Path;
 //!
 //! use billow::import::{import, ImportOptions};
-//! use billow::voxelize::{bake, default_align, BakeHooks, BakeOptions, Resolution, VoxelizeOptions};
+//! use billow::voxelize::{bake, BakeHooks, BakeOptions, Resolution};
 //!
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! let scene = import(Path::new("tree.gltf"), &ImportOptions::default())?.scene;
-//! let resolution = Resolution::Longest(128);
+//! // `billow voxelize --res 96 --prune`: normals auto (moments), BC7.
 //! let opts = BakeOptions {
-//!     voxelize: VoxelizeOptions {
-//!         resolution,
-//!         align: default_align(&resolution, false), // as `--res 128`: sides a multiple of 8
-//!         ..VoxelizeOptions::default()
-//!     },
 //!     prune: true,
-//!     ..BakeOptions::default() // normals auto, BC7
+//!     ..BakeOptions::at(Resolution::Longest(96))
 //! };
 //! let baked = bake(&scene, &opts, &BakeHooks::default())?;
 //! std::fs::write("tree.billow", baked.asset.to_bytes_with(baked.blocks.as_ref())?)?;

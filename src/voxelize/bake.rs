@@ -17,7 +17,10 @@ use billow_format::{SourceInfo, VolumeAsset, VolumeBlocks};
 use super::asset::{bake_params, bake_params_for};
 use super::normals_mode::{bake_with_normals, MemoryRefusal, NormalsMode, NormalsOutcome};
 use super::sparse::voxelize_sparse;
-use super::{voxelize, CombineFn, Stage, VoxelizeError, VoxelizeOptions, VoxelizeStats};
+use super::{
+    default_align, voxelize, CombineFn, Preset, Resolution, Stage, VoxelizeError, VoxelizeOptions,
+    VoxelizeStats,
+};
 use crate::compress::{compress_volume, encode_volume, Compression};
 use crate::emptyspace::{
     prune, prune_sparse, EmptySpaceError, EmptySpaceOptions, EmptySpaceStats, Pruned,
@@ -30,8 +33,9 @@ use crate::scene::Scene;
 pub struct BakeOptions {
     /// The voxelization. Its `normals`, `moments` and `surface` are set from
     /// [`BakeOptions::normals`] ([`bake_with_normals`]); [`Baked::options`] says what was
-    /// used. `billow voxelize`'s defaults differ from [`VoxelizeOptions::default`] in the
-    /// combine (`opaque`, not `mean`) and the alignment ([`super::default_align`]: 8 for
+    /// used. [`BakeOptions::at`] (and `default()`, at 128) sets what `billow voxelize`
+    /// does without flags, which differs from [`VoxelizeOptions::default`] in the combine
+    /// (`opaque`, not the paper's `mean`) and the alignment ([`default_align`]: 8 for
     /// `--res 128`).
     pub voxelize: VoxelizeOptions,
     /// Which normals to store (`--normals`; default `Auto`).
@@ -56,10 +60,20 @@ pub struct BakeOptions {
     pub params: BTreeMap<String, String>,
 }
 
-impl Default for BakeOptions {
-    fn default() -> Self {
+impl BakeOptions {
+    /// What `billow voxelize MESH -o OUT --res <resolution>` does with no other flag: the
+    /// `opaque` combine, the grid aligned as [`default_align`] says, normals `Auto`, BC7,
+    /// no prune, `tool` [`tool_version`]. Add the mesh's [`BakeOptions::source`] (the
+    /// CLI records [`crate::provenance::source_info_all`] of the files the import read)
+    /// and the file is the CLI's, byte for byte (tests/cli_bake_api.rs).
+    pub fn at(resolution: Resolution) -> Self {
         BakeOptions {
-            voxelize: VoxelizeOptions::default(),
+            voxelize: VoxelizeOptions {
+                resolution,
+                combine: CombineFn::Preset(Preset::Opaque),
+                align: default_align(&resolution, false),
+                ..VoxelizeOptions::default()
+            },
             normals: NormalsMode::default(),
             prune: false,
             compression: Compression::default(),
@@ -68,6 +82,14 @@ impl Default for BakeOptions {
             source: None,
             params: BTreeMap::new(),
         }
+    }
+}
+
+impl Default for BakeOptions {
+    /// [`BakeOptions::at`] the default resolution (128 along the longest side): `billow
+    /// voxelize` without flags.
+    fn default() -> Self {
+        BakeOptions::at(Resolution::default())
     }
 }
 
