@@ -385,14 +385,17 @@ fn help_gives_ranges_and_keys() {
         assert!(entry.contains(range), "bbcloud {flag}: {entry}");
     }
     let vx = help("voxelize");
-    let margin = format!("0–{}", billow::voxelize::MAX_MARGIN);
+    // The library's limits, which the help prints from the same constants.
+    use billow::voxelize::{MAX_AO_RAYS, MAX_AXIS, MAX_MARGIN, MAX_SUPERSAMPLE};
+    let (margin, axis) = (format!("0–{MAX_MARGIN}"), format!("1–{MAX_AXIS}"));
+    let (samples, rays) = (format!("1–{MAX_SUPERSAMPLE}"), format!("1–{MAX_AO_RAYS}"));
     for (flag, range) in [
-        ("--res", "1–2048"),
-        ("--supersample", "1–8"),
+        ("--res", axis.as_str()),
+        ("--supersample", samples.as_str()),
         ("--mips", "1–"),
         ("--margin", margin.as_str()),
-        ("--align", "1–2048"),
-        ("--ao-rays", "1–4096"),
+        ("--align", axis.as_str()),
+        ("--ao-rays", rays.as_str()),
         ("--ao-distance", "> 0"),
     ] {
         let entry = flag_help(&vx, flag);

@@ -12,13 +12,20 @@ pub struct Args {
     /// Where to write the volume asset (.billow). Written atomically.
     #[arg(short, long)]
     pub(crate) output: PathBuf,
-    /// Voxels along the longest axis (others in proportion), or exactly XxYxZ (e.g. 256x128x128);
-    /// each axis 1–2048, and the estimated memory must fit (default: the preset's, else 128).
-    #[arg(long)]
+    // The ranges in this help are the library's constants, said once.
+    #[arg(long, help = format!(
+        "Voxels along the longest axis (others in proportion), or exactly XxYxZ (e.g. \
+         256x128x128); each axis 1–{}, and the estimated memory must fit (default: the \
+         preset's, else 128)",
+        billow::voxelize::MAX_AXIS
+    ))]
     pub(crate) res: Option<String>,
-    /// K: K×K coverage samples per voxel column, 1–8; gives thin parts fractional opacity
-    /// (default: the preset's, else 4).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=i64::from(billow::voxelize::MAX_SUPERSAMPLE)))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=i64::from(billow::voxelize::MAX_SUPERSAMPLE)),
+          help = format!(
+              "K: K×K coverage samples per voxel column, 1–{}; gives thin parts fractional \
+               opacity (default: the preset's, else 4)",
+              billow::voxelize::MAX_SUPERSAMPLE
+          ))]
     pub(crate) supersample: Option<u32>,
     /// A named point of the measured accuracy/cost front, setting --res and --supersample:
     /// draft, balanced, quality or hero (docs/cli.md, "Presets"). Explicit --res or
@@ -83,8 +90,8 @@ pub struct Args {
     /// against the source mesh; see docs/voxelize.md).
     #[arg(long, default_value = "none")]
     pub(crate) bake: String,
-    /// Rays per voxel for --bake ao, 1–4096.
-    #[arg(long, default_value_t = billow::voxelize::DEFAULT_AO_RAYS)]
+    #[arg(long, default_value_t = billow::voxelize::DEFAULT_AO_RAYS,
+          help = format!("Rays per voxel for --bake ao, 1–{}", billow::voxelize::MAX_AO_RAYS))]
     pub(crate) ao_rays: u32,
     /// Occlusion distance for --bake ao, in scene units, > 0 (default: 0.2 × the grid's diagonal).
     #[arg(long)]
