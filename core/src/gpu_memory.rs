@@ -73,10 +73,7 @@ pub fn volume_gpu_bytes(asset: &VolumeAsset, compressed: bool) -> GpuBytes {
     let mut out = GpuBytes::default();
     // Normal moments are sampled as the file's BC7 blocks where the colour is (mean normals
     // are weighted by alpha on upload, so they are decoded).
-    let moments = asset
-        .header
-        .volume
-        .is_some_and(|v| v.normal_kind() == Some(billow_format::NormalKind::Moments));
+    let moments = asset.has_moments();
     let mut texture = |dims: [u32; 3], levels: usize, has_normals: bool, compressed: bool| {
         let raw = VOLUME_TEXEL_BYTES * chain_texels(dims, levels);
         let colour = if compressed {

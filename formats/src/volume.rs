@@ -88,6 +88,17 @@ impl VolumeAsset {
             .map_or([0; 3], |v| mip_dims(v.dims, level))
     }
 
+    /// The kind of normal texels the header declares (`normals` holds them), `None` for a
+    /// volume without normals.
+    pub fn normal_kind(&self) -> Option<NormalKind> {
+        self.header.volume.and_then(|v| v.normal_kind())
+    }
+
+    /// Whether the normals are second moments (SPEC §8.4a), lit two-sided.
+    pub fn has_moments(&self) -> bool {
+        self.normal_kind() == Some(NormalKind::Moments)
+    }
+
     /// Check the asset against its header and the format rules.
     pub fn validate(&self) -> Result<(), FormatError> {
         self.header.validate()?;

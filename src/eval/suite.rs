@@ -261,10 +261,7 @@ pub fn reference_lighting(asset: &VolumeAsset) -> Result<(Lighting, Option<Strin
         Vec3::from(b.min),
         Vec3::from(b.max),
         asset.level_dims(0),
-        asset
-            .normals
-            .as_ref()
-            .and(asset.header.volume.and_then(|v| v.normal_kind())),
+        asset.normals.as_ref().and(asset.normal_kind()),
     )
     .map_err(EvalError::InvalidAsset)
 }

@@ -89,10 +89,7 @@ impl DecodedVolume {
         let srgb = asset.header.colour_space == ColourSpace::SrgbPremultiplied;
         let repeat = repeat_axes(asset);
         let dims0 = asset.level_dims(0);
-        let moments = asset
-            .header
-            .volume
-            .is_some_and(|v| v.normal_kind() == Some(billow_format::NormalKind::Moments));
+        let moments = asset.has_moments();
         let bands: Vec<DecodedBand> = asset
             .bands
             .iter()

@@ -535,10 +535,7 @@ impl VolumePass {
         let repeat = rep[0] || rep[2];
         let cs = asset.header.colour_space;
         let dims0 = asset.level_dims(0);
-        let moments = asset
-            .header
-            .volume
-            .is_some_and(|v| v.normal_kind() == Some(billow_format::NormalKind::Moments));
+        let moments = asset.has_moments();
         let direct = blocks
             .filter(|b| b.colour.len() == asset.levels.len() && gpu.block_upload(dims0, true));
         let mut out = vec![match direct {
