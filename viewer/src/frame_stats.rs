@@ -29,6 +29,10 @@ pub struct FrameStats {
     /// the cascades, and those left out because they lie outside a cascade's window.
     pub shadow_casters: usize,
     pub shadow_casters_culled: usize,
+    /// The shadow atlas of an earlier frame was reused: nothing it depends on changed
+    /// (`render::frame`'s `ShadowKey`), so no cascade was drawn and the shadow counts are
+    /// those of the frame that drew it.
+    pub shadow_reused: bool,
     /// Billboard quads (sides) drawn.
     pub cloud_quads: usize,
     /// Bytes written to the GPU per frame for the clouds (instance data and frame

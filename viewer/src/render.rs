@@ -99,6 +99,20 @@ struct Shadows {
     /// its 2048² atlas).
     on: bool,
     map: OnceCell<ShadowMap>,
+    /// What the atlas holds: the key of the frame that drew it and what that frame
+    /// counted (`frame::ShadowKey`); `None` after anything that changes the casters.
+    drawn: RefCell<Option<(frame::ShadowKey, frame::CasterStats)>>,
+    /// Reuse the atlas when a frame's key equals the drawn one's (on by default;
+    /// `BILLOW_VIEW_SHADOW_CACHE=off` turns it off to measure the cascades' cost).
+    pub(crate) reuse: bool,
+}
+
+impl Shadows {
+    /// The casters changed (content added, a cloud's dissolve set, shadows toggled):
+    /// the next frame draws the atlas again.
+    fn forget(&mut self) {
+        *self.drawn.get_mut() = None;
+    }
 }
 
 /// The particle systems (spherical billboards), how their layer is made, its pass (only
@@ -130,6 +144,8 @@ impl Renderer {
                 none,
                 on: false,
                 map: OnceCell::new(),
+                drawn: RefCell::new(None),
+                reuse: std::env::var("BILLOW_VIEW_SHADOW_CACHE").map_or(true, |v| v != "off"),
             },
             light_dir: billow_core::shading::DEFAULT_LIGHT.normalize(),
             ambient: billow_core::shading::DEFAULT_AMBIENT,
@@ -220,6 +236,7 @@ impl Renderer {
     /// Turns shadows on (the map is made by the first frame with something to cast) or
     /// off (the map dropped).
     pub fn set_shadows(&mut self, on: bool) {
+        self.shadows.forget();
         self.shadows.on = on;
         if !on {
             self.shadows.map = OnceCell::new();
@@ -256,6 +273,7 @@ impl Renderer {
         animation: Option<crate::animate::Sway>,
     ) -> Result<(), ViewError> {
         check_transforms(&instances)?;
+        self.shadows.forget();
         if let Some(a) = &animation {
             a.validate().map_err(ViewError::InvalidParam)?;
         }
@@ -319,6 +337,7 @@ impl Renderer {
             .get_or_insert_with(|| MeshPass::new(&self.gpu, &self.shadows.receiver_layout));
         let m = pass.upload(&self.gpu, mesh)?;
         self.meshes.push(m);
+        self.shadows.forget();
         Ok(())
     }
 

@@ -603,6 +603,53 @@ fn shadow_cascades_leave_out_casters_outside_their_windows_and_nothing_changes()
     );
 }
 
+/// A frame whose camera, light and casters are those of the frame before reuses its
+/// shadow atlas (the same picture, the same counts); a moved camera, a new light or a
+/// new dissolve draws it again, and the picture is a fresh renderer's.
+#[test]
+fn a_still_frame_reuses_the_shadow_atlas_and_any_change_draws_it_again() {
+    let name = "a_still_frame_reuses_the_shadow_atlas_and_any_change_draws_it_again";
+    let (Some(gpu), Some(gpu_fresh)) = (common::gpu_or_skip(name), common::gpu_or_skip(name))
+    else {
+        return;
+    };
+    let light = Vec3::new(1.0, 1.0, -0.5);
+    let (mut r, cam) = shadow_row(gpu, light);
+    let (mut fresh, _) = shadow_row(gpu_fresh, light);
+    let (first, s1) = r.render_image(&cam).expect("render");
+    let (again, s2) = r.render_image(&cam).expect("render");
+    assert!(!s1.shadow_reused && s2.shadow_reused, "{s1:?} then {s2:?}");
+    assert_eq!(
+        (s2.shadow_casters, s2.shadow_casters_culled),
+        (s1.shadow_casters, s1.shadow_casters_culled)
+    );
+    assert!(
+        first.data == again.data,
+        "the reused atlas changed the picture"
+    );
+    let same_as_fresh = |r: &Renderer, fresh: &Renderer, cam: &ViewCamera, what: &str| {
+        let (img, s) = r.render_image(cam).expect("render");
+        assert!(!s.shadow_reused, "{what}: the atlas was reused");
+        let (want, _) = fresh.render_image(cam).expect("render");
+        let differ = (0..img.data.len())
+            .filter(|&i| img.data[i] != want.data[i])
+            .count();
+        assert_eq!(
+            differ, 0,
+            "{what}: {differ} pixels differ from a fresh renderer's"
+        );
+    };
+    let moved = cam.with_view(cam.view * Mat4::from_translation(Vec3::new(-1.3, 0.0, 0.8)));
+    same_as_fresh(&r, &fresh, &moved, "camera moved");
+    let other = Vec3::new(-1.0, 1.0, -0.4).normalize();
+    r.light_dir = other;
+    fresh.light_dir = other;
+    same_as_fresh(&r, &fresh, &moved, "light moved");
+    r.set_cloud_dissolve(0, 0.0).expect("dissolve");
+    fresh.set_cloud_dissolve(0, 0.0).expect("dissolve");
+    same_as_fresh(&r, &fresh, &moved, "dissolve set");
+}
+
 #[test]
 fn a_billboard_casts_the_same_shadow_lit_from_either_side() {
     let name = "a_billboard_casts_the_same_shadow_lit_from_either_side";

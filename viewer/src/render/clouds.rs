@@ -39,6 +39,7 @@ impl Renderer {
         fov_y: f32,
     ) -> Result<(), ViewError> {
         check_transforms(&instances)?;
+        self.shadows.forget();
         let pass = self
             .cloud_pass
             .get_or_insert_with(|| CloudPass::new(&self.gpu, &self.shadows.receiver_layout));
@@ -111,6 +112,7 @@ impl Renderer {
             )));
         };
         c.dissolve = octaves;
+        self.shadows.forget();
         Ok(())
     }
 

@@ -8,7 +8,7 @@ use std::cell::Ref;
 use glam::{Mat4, Vec3};
 
 use super::{FrameStats, Renderer};
-use crate::cloud_pass::CloudFrame;
+use crate::cloud_pass::{CloudFrame, LodChoice};
 use crate::mesh_pass::{MeshFrame, View};
 use crate::particle_pass::LayerTargets;
 use crate::shadow::{self, ShadowMap, SHADOW_MAP_SIZE};
@@ -42,17 +42,60 @@ struct ColourPass<'a> {
     receiver: &'a wgpu::BindGroup,
 }
 
+/// Everything the shadow atlas depends on that may change from frame to frame (the
+/// content itself only changes through `&mut` methods, which forget the atlas): the
+/// light, the slicing parameters, the culling switch, the batch size, the scene time
+/// where cells are animated, the cascades' cameras (texel-snapped, so a camera that
+/// moves a little may keep the far ones) and every cloud instance's level, morph and
+/// dissolve.
+#[derive(Clone, Debug, PartialEq)]
+pub(super) struct ShadowKey {
+    light_dir: Vec3,
+    params: SliceParams,
+    culling: bool,
+    texture_batch: usize,
+    time: Option<f32>,
+    cameras: Vec<ViewCamera>,
+    levels: Vec<LodChoice>,
+}
+
+/// What the atlas holds, as [`FrameStats`]' shadow fields counted it when it was drawn;
+/// a frame that reuses the atlas reports them again (and `shadow_reused`).
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct CasterStats {
+    slices: usize,
+    casters: usize,
+    culled: usize,
+}
+
+impl CasterStats {
+    fn from(s: &FrameStats) -> CasterStats {
+        CasterStats {
+            slices: s.shadow_slices,
+            casters: s.shadow_casters,
+            culled: s.shadow_casters_culled,
+        }
+    }
+
+    fn add_to(&self, s: &mut FrameStats) {
+        s.shadow_slices += self.slices;
+        s.shadow_casters += self.casters;
+        s.shadow_casters_culled += self.culled;
+    }
+}
+
 impl Renderer {
     /// Renders one frame into `target` (submitted, not waited for).
     pub fn render(&self, target: &Target, camera: &ViewCamera) -> Result<FrameStats, ViewError> {
         self.check_frame(target, camera)?;
         let mut stats = FrameStats::default();
         self.gpu.note_frame_start();
-        let cloud_frame = self.cloud_frame(camera, &mut stats);
+        let (cloud_frame, levels) = self.cloud_frame(camera, &mut stats);
         let mut enc = self.gpu.device.create_command_encoder(&Default::default());
 
         // 1. Shadow map.
-        let shadow = self.shadow_cascades(camera, cloud_frame.as_ref(), &mut stats)?;
+        let clouds = (cloud_frame.as_ref(), levels);
+        let shadow = self.shadow_cascades(camera, clouds, &mut stats)?;
         let receiver = shadow.map_or(&self.shadows.none.bind_group, |(m, _)| &m.bind_group);
         let lookup: ShadowLookup = shadow.map(|(_, l)| {
             (
@@ -116,10 +159,14 @@ impl Renderer {
         Ok(())
     }
 
-    /// The clouds' levels for `camera` (into `stats`) and their instance data, which
-    /// serves the shadow and the main pass (it does not depend on the view): written
-    /// once, before anything is encoded.
-    fn cloud_frame(&self, camera: &ViewCamera, stats: &mut FrameStats) -> Option<CloudFrame<'_>> {
+    /// The clouds' levels for `camera` (returned, and into `stats`) and their instance
+    /// data, which serves the shadow and the main pass (it does not depend on the view):
+    /// written once, before anything is encoded.
+    fn cloud_frame(
+        &self,
+        camera: &ViewCamera,
+        stats: &mut FrameStats,
+    ) -> (Option<CloudFrame<'_>>, Vec<LodChoice>) {
         let levels = self.cloud_levels(camera);
         stats.cloud_lods = levels.iter().map(|l| (l.level, l.morph)).collect();
         stats.cloud_dissolves = levels.iter().map(|l| l.dissolve).collect();
@@ -132,16 +179,19 @@ impl Renderer {
             stats.cloud_quads = cf.quads;
             stats.cloud_bytes_uploaded = cf.bytes_uploaded;
         }
-        cloud_frame
+        (cloud_frame, levels)
     }
 
     /// With shadows on and something to cast: the cascades fitted to `camera`, one
     /// submission each (the light's uniforms and volume plan are written again for each;
     /// writes land before the next submission). Returns the map and the light camera.
+    /// When nothing the atlas depends on changed since it was drawn ([`ShadowKey`]: a
+    /// still camera and light, no animated cells, no cloud changing level), it is reused
+    /// and only its counts are reported again.
     fn shadow_cascades(
         &self,
         camera: &ViewCamera,
-        clouds: Option<&CloudFrame<'_>>,
+        (clouds, levels): (Option<&CloudFrame<'_>>, Vec<LodChoice>),
         stats: &mut FrameStats,
     ) -> Result<Shadow<'_>, ViewError> {
         if !(self.shadows.on && self.has_casters()) {
@@ -152,14 +202,44 @@ impl Renderer {
             ShadowMap::new(&self.gpu, &self.shadows.receiver_layout, SHADOW_MAP_SIZE)
         });
         let cs = shadow::cascades(self.light_dir, camera, self.content_bounds(), map.size);
+        let key = ShadowKey {
+            light_dir: self.light_dir,
+            params: self.params,
+            culling: self.shadow_culling,
+            texture_batch: self.texture_batch,
+            time: self
+                .volumes
+                .entries
+                .iter()
+                .any(|v| v.animation.is_some())
+                .then_some(self.time),
+            cameras: cs.cameras.clone(),
+            levels,
+        };
+        // The receivers' map from the base camera (fitted to the whole view, not part of
+        // the key) to each cascade: written every frame.
         self.gpu
             .queue
             .write_buffer(&map.cascades, 0, bytemuck::bytes_of(&cs.uniform));
+        let mut drawn = self.shadows.drawn.borrow_mut();
+        if let Some((k, counts)) = drawn.as_ref().filter(|_| self.shadows.reuse) {
+            if *k == key {
+                counts.add_to(stats);
+                stats.shadow_reused = true;
+                return Ok(Some((map, cs.base)));
+            }
+        }
+        *drawn = None;
+        let mut counts = FrameStats::default();
         for (k, light) in cs.cameras.iter().enumerate() {
             let mut senc = self.gpu.device.create_command_encoder(&Default::default());
-            self.shadow_pass(&mut senc, map, k, light, clouds, stats)?;
+            self.shadow_pass(&mut senc, map, k, light, clouds, &mut counts)?;
             self.gpu.queue.submit([senc.finish()]);
         }
+        stats.cloud_bytes_uploaded += counts.cloud_bytes_uploaded;
+        let counts = CasterStats::from(&counts);
+        counts.add_to(stats);
+        *drawn = Some((key, counts));
         Ok(Some((map, cs.base)))
     }
 
