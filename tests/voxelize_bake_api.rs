@@ -182,7 +182,7 @@ fn pruned_by_hand(
     let mut asset = prune_sparse(&shell, sv.levels, &es).unwrap().asset;
     let blocks = (compression == Compression::Bc).then(|| {
         asset.header.set_compress("bc7");
-        encode_volume(&asset)
+        encode_volume(&mut asset)
     });
     (asset, blocks)
 }

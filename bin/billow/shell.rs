@@ -136,7 +136,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             asset.header.set_compress("bc7");
             Some(match volume_blocks.filter(|_| !args.surface_normals) {
                 Some(b) => b,
-                None => encode_volume(&asset),
+                None => encode_volume(&mut asset),
             })
         }
     };

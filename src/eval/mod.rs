@@ -4,6 +4,7 @@
 //! Every image here is **premultiplied linear RGBA, f32**, transparent background
 //! ([`image::ImageF32`]). The camera conventions are in [`crate::camera`].
 
+pub mod banding;
 pub mod cloud_render;
 pub mod compositing;
 pub mod error;

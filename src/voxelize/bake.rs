@@ -187,7 +187,7 @@ pub fn bake(scene: &Scene, opts: &BakeOptions, hooks: &BakeHooks) -> Result<Bake
         if opts.decode_blocks {
             compress_volume(&mut asset)
         } else {
-            encode_volume(&asset)
+            encode_volume(&mut asset)
         }
     });
     Ok(Baked {
