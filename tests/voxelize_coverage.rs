@@ -406,3 +406,41 @@ fn a_surface_with_coherent_normals_keeps_its_level_0_and_foliage_is_thinned() {
         "auto on the leaves: {c:?} {surface:?}"
     );
 }
+
+/// `--normals off` and `--normals moments` judge the surface as `auto` does (on the coarse
+/// bake): a closed torus keeps its level 0 (unthinned: thinned, the spot showed holes and
+/// bands), foliage is thinned.
+#[test]
+fn every_normals_mode_judges_whether_a_closed_surface_keeps_its_level_0() {
+    let quiet = |_: billow::voxelize::Stage, _: f32| {};
+    let judged = |scene: &Scene, mode: NormalsMode| {
+        let mut opts = VoxelizeOptions {
+            resolution: Resolution::Longest(32),
+            combine: CombineFn::Preset(Preset::Opaque),
+            ..VoxelizeOptions::default()
+        };
+        let (v, _) = bake_with_normals(
+            scene,
+            &mut opts,
+            mode,
+            |o| voxelize(scene, o, &quiet),
+            |v| (v.normal_coherence, v.normals.is_some()),
+        )
+        .expect("bake");
+        (opts.surface, v.coverage.scales[0])
+    };
+    let torus = billow::procgen::torus(1.0, 0.35, 48, 24);
+    let leaves = foliage(400, 5);
+    for mode in [NormalsMode::Off, NormalsMode::Moments] {
+        let (surface, k) = judged(&torus, mode);
+        assert!(
+            surface == Some(true) && k == 1.0,
+            "{mode:?} on the torus: surface {surface:?}, level 0 scaled by {k}"
+        );
+        let (surface, k) = judged(&leaves, mode);
+        assert!(
+            surface == Some(false) && k < 1.0,
+            "{mode:?} on the leaves: surface {surface:?}, level 0 scaled by {k}"
+        );
+    }
+}

@@ -60,7 +60,9 @@ pub struct NormalsOutcome {
 /// use), storing normals as `mode` says. `Auto` stores the moments, and judges before the
 /// bake whether the volume is a closed surface whose level 0 keeps its opacity
 /// ([`VoxelizeOptions::surface`]): on a coarse bake ([`toksvig::judge_normals`]), or for a
-/// volume of one MIP level on a bake with mean normals of its own. It bakes without normals
+/// volume of one MIP level on a bake with mean normals of its own. `Moments` and `Off`
+/// judge the surface on the coarse bake too (not for one MIP level); `On` on its own mean
+/// normals. It bakes without normals
 /// when they alone take the bake past `opts.memory_limit`. `judged` reads a finished bake's
 /// coherence and whether it stored normals. `opts` is left as the last bake used it
 /// (`normals` false where they were given up, `moments` when they are moments), so that the
@@ -77,6 +79,15 @@ pub fn bake_with_normals<T>(
     opts.moments = matches!(mode, NormalsMode::Auto | NormalsMode::Moments);
     opts.surface = None;
     let mut on_the_bake = false;
+    if matches!(mode, NormalsMode::Moments | NormalsMode::Off) {
+        // Not judged for the normals, but whether a closed surface keeps its level 0 is
+        // the same question: a closed mesh thinned to its coverage opens (the spot with
+        // `off`: k = 0.14, holes and bands). A volume of one level, or a judgement past the
+        // memory limit, is left to the bake (not a surface without mean normals).
+        if let Ok(NormalsJudgement::Coarse(k)) = toksvig::judge_normals(scene, opts) {
+            opts.surface = Some(toksvig::keeps(k));
+        }
+    }
     if mode == NormalsMode::Auto {
         let start = Instant::now();
         match toksvig::judge_normals(scene, opts) {
