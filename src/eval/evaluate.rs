@@ -6,6 +6,29 @@
 //! [`EvaluateOptions`]; the reference's lighting follows the asset's own unless told
 //! otherwise ([`ReferenceLighting`]). Nothing here prints or writes files: progress and the
 //! images go to [`EvaluateHooks`] (docs/eval.md, "From Rust").
+//!
+//! ```no_run
+//! use std::path::Path;
+//!
+//! use billow::camera::{view_set, ViewDirections};
+//! use billow::eval::evaluate::{evaluate, Asset, EvaluateHooks, EvaluateOptions};
+//! use billow::import::{import, ImportOptions};
+//!
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let scene = import(Path::new("tree.gltf"), &ImportOptions::default())?.scene;
+//! let asset = Asset::from_container(billow_format::read_file(Path::new("tree.billow"))?)?;
+//! // `billow eval tree.gltf tree.billow --size 64x64 --views axes`: 1×, 4×, 16×.
+//! let options = EvaluateOptions {
+//!     width: 64,
+//!     height: 64,
+//!     views: view_set(ViewDirections::Axes),
+//!     ..EvaluateOptions::default()
+//! };
+//! let e = evaluate(&scene, &asset, &options, &mut EvaluateHooks::default())?;
+//! println!("mean RMSE {:.4}, notes {:?}", e.levels[0].mean.rmse, e.notes);
+//! # Ok(())
+//! # }
+//! ```
 
 use std::ops::ControlFlow;
 use std::time::Instant;
