@@ -8,8 +8,11 @@
 mod common;
 
 use billow::camera::{parse_direction, views_of, ViewSpec};
+use std::ops::ControlFlow;
+
 use billow::eval::evaluate::{
-    evaluate, Asset, EvaluateHooks, EvaluateOptions, Evaluation, ReferenceLighting,
+    evaluate, Asset, EvaluateError, EvaluateHooks, EvaluateOptions, EvaluateProgress, Evaluation,
+    ReferenceLighting, ViewImages,
 };
 use billow::eval::lighting::light_set;
 use billow::import::{import, ImportOptions};
@@ -68,16 +71,26 @@ fn strip_seconds(v: &mut Value) {
     }
 }
 
-fn library(scene: &Scene, asset: &Asset, lighting: ReferenceLighting) -> Evaluation {
-    let options = EvaluateOptions {
+/// The CLI calls' options.
+fn options(lighting: ReferenceLighting) -> EvaluateOptions {
+    EvaluateOptions {
         width: 32,
         height: 32,
         reference_per_axis: 2,
         views: views(),
         lighting,
         ..EvaluateOptions::default()
-    };
-    evaluate(scene, asset, &options, &mut EvaluateHooks::default()).unwrap()
+    }
+}
+
+fn library(scene: &Scene, asset: &Asset, lighting: ReferenceLighting) -> Evaluation {
+    evaluate(
+        scene,
+        asset,
+        &options(lighting),
+        &mut EvaluateHooks::default(),
+    )
+    .unwrap()
 }
 
 /// `v` as the CLI's JSON text reads (f32 fields printed as f32), without timings.
@@ -233,5 +246,75 @@ fn the_library_evaluation_is_the_cli_s() {
         assert_same(&cl["texture_bytes"], &json!(info.texture_bytes));
         assert_same(&cl["fragments"], &json!(l.fragments));
         assert_same_level(l, cl, &cl["mean"]);
+    }
+
+    // The hooks: progress after each of the 4 views × 2 levels, the images once a view (both
+    // levels' and the 1-spp mesh's); a hook's Break stops the evaluation.
+    let (mut progress, mut images) = (Vec::new(), 0);
+    let mut on_progress = |p: EvaluateProgress| {
+        progress.push((p.done, p.total));
+        ControlFlow::Continue(())
+    };
+    let mut on_images = |v: ViewImages| {
+        assert_eq!(v.assets.len(), 2);
+        assert!(v.light.is_none() && v.raster_1spp.is_some());
+        images += 1;
+        ControlFlow::Continue(())
+    };
+    let mut hooks = EvaluateHooks {
+        progress: Some(&mut on_progress),
+        images: Some(&mut on_images),
+    };
+    let with_hooks = evaluate(&scene, &cloud, &options(ReferenceLighting::Own), &mut hooks);
+    // The same numbers with hooks as without (the seconds aside).
+    let (a, b) = (&with_hooks.unwrap().levels, &lib.levels);
+    assert_eq!(a.len(), b.len());
+    for (a, b) in a.iter().zip(b) {
+        assert_eq!(value(&a.views), value(&b.views));
+        assert_eq!((a.mean, a.cloud), (b.mean, b.cloud));
+    }
+    assert_eq!(progress, (1..=8).map(|d| (d, 8)).collect::<Vec<_>>());
+    assert_eq!(images, 4);
+    let mut stop = |_: EvaluateProgress| ControlFlow::Break(());
+    let mut hooks = EvaluateHooks {
+        progress: Some(&mut stop),
+        images: None,
+    };
+    let stopped = evaluate(&scene, &cloud, &options(ReferenceLighting::Own), &mut hooks);
+    assert!(
+        matches!(stopped, Err(EvaluateError::Stopped)),
+        "{stopped:?}"
+    );
+
+    // What is refused, before any rendering.
+    let refused = |asset: &Asset, o: EvaluateOptions| {
+        evaluate(&scene, asset, &o, &mut EvaluateHooks::default()).unwrap_err()
+    };
+    let lod = |lod| EvaluateOptions {
+        lod: Some(lod),
+        ..options(ReferenceLighting::Own)
+    };
+    assert!(matches!(
+        refused(&volume, lod(0)),
+        EvaluateError::LodOfVolume
+    ));
+    let e = refused(&cloud, lod(2));
+    assert!(
+        matches!(e, EvaluateError::NoSuchLod { lod: 2, levels: 2 }),
+        "{e:?}"
+    );
+    let no_views = EvaluateOptions {
+        views: Vec::new(),
+        ..options(ReferenceLighting::Own)
+    };
+    let no_lights = options(ReferenceLighting::Lights {
+        lights: Vec::new(),
+        shadows: false,
+    });
+    for o in [no_views, no_lights] {
+        assert!(matches!(
+            refused(&volume, o),
+            EvaluateError::InvalidOption(_)
+        ));
     }
 }
