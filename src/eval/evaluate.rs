@@ -128,6 +128,32 @@ impl Default for EvaluateOptions {
     }
 }
 
+/// Most reference samples ([`EvaluateOptions::reference_samples`]) `billow eval` traces:
+/// 10¹⁰, about 80 minutes at [`REFERENCE_SAMPLES_PER_SECOND`] (it refuses more before any
+/// work; [`evaluate()`] itself does not).
+pub const MAX_REFERENCE_SAMPLES: f64 = 1e10;
+/// Reference samples per second assumed for time estimates (measured: the oak, release
+/// build, a few cores).
+pub const REFERENCE_SAMPLES_PER_SECOND: f64 = 2e6;
+
+impl EvaluateOptions {
+    /// The reference renders: views × lights (one light without a set).
+    pub fn references(&self) -> usize {
+        let lights = match &self.lighting {
+            ReferenceLighting::Lights { lights, .. } => lights.len(),
+            _ => 1,
+        };
+        self.views.len() * lights
+    }
+
+    /// The reference's samples, what its cost grows with: pixels × samples per pixel ×
+    /// [`Self::references`].
+    pub fn reference_samples(&self) -> f64 {
+        let spp = self.reference_per_axis * self.reference_per_axis;
+        f64::from(self.width) * f64::from(self.height) * f64::from(spp) * self.references() as f64
+    }
+}
+
 /// Progress of [`evaluate()`]: `done` of `total` asset renders (views × lights × LOD
 /// levels) are finished, the last of `view`.
 #[derive(Clone, Copy, Debug)]

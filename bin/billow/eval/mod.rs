@@ -12,7 +12,8 @@ use billow::camera::{parse_direction, view_directions, views_of, ViewDirections,
 use billow::eval::evaluate;
 use billow::eval::evaluate::{
     Asset, EvaluateError, EvaluateHooks, EvaluateOptions, EvaluateProgress, Evaluation,
-    LightResult, ReferenceLighting, ViewImages,
+    LightResult, ReferenceLighting, ViewImages, MAX_REFERENCE_SAMPLES,
+    REFERENCE_SAMPLES_PER_SECOND,
 };
 use billow::eval::image::comparisons_png_bytes;
 use billow::eval::lighting::{parse_light_set, EvalLight, LightSetError};
@@ -479,19 +480,12 @@ pub(crate) fn source_note(
     Some(note)
 }
 
-/// Most reference samples (pixels × spp × views) an eval may trace: 10¹⁰, about 80 minutes at
-/// [`REFERENCE_SAMPLES_PER_SECOND`].
-pub(crate) const MAX_REFERENCE_SAMPLES: f64 = 1e10;
-/// Reference samples per second assumed for the time estimate (measured: the oak, release
-/// build, a few cores).
-pub(crate) const REFERENCE_SAMPLES_PER_SECOND: f64 = 2e6;
-
 /// Refuses (exit 8) an eval whose reference would trace more than
 /// [`MAX_REFERENCE_SAMPLES`], and warns with the expected time above a minute; before any
 /// work.
-fn check_cost(ctx: &Ctx, args: &Args, views: usize) -> Result<(), CliError> {
-    let (w, h) = parse_size(&args.size)?;
-    let samples = f64::from(w) * f64::from(h) * f64::from(args.spp) * views as f64;
+fn check_cost(ctx: &Ctx, args: &Args, options: &EvaluateOptions) -> Result<(), CliError> {
+    let (w, h, views) = (options.width, options.height, options.references());
+    let samples = options.reference_samples();
     let seconds = samples / REFERENCE_SAMPLES_PER_SECOND;
     // Float images (reference, asset, 1-spp mesh, panels) per view: about 100 bytes a pixel.
     let mib = f64::from(w) * f64::from(h) * 100.0 / f64::from(1u32 << 20);
@@ -526,11 +520,7 @@ fn check_cost(ctx: &Ctx, args: &Args, views: usize) -> Result<(), CliError> {
 pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let start = Instant::now();
     let mut options = parse_options(&args)?;
-    let lights = match &options.lighting {
-        ReferenceLighting::Lights { lights, .. } => lights.len(),
-        _ => 1,
-    };
-    check_cost(ctx, &args, options.views.len() * lights)?;
+    check_cost(ctx, &args, &options)?;
     // Reject a bad --spacing before the (slow) work.
     options.spacing = parse_spacing(&args.spacing)?;
     if let Some(dir) = &args.out {
