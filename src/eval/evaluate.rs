@@ -580,10 +580,14 @@ fn render_views(
         }
         // The kept mesh is drawn as the viewer draws meshes: lit like the reference.
         let renderer = match prepared {
-            Prepared::Cloud(_, p, _) => Some(
-                CloudRenderer::new(p, evaluator.options.lighting).map_err(EvaluateError::Asset)?,
+            Prepared::Cloud(_, p, _) => Renderer::Cloud(
+                p,
+                Box::new(
+                    CloudRenderer::new(p, evaluator.options.lighting)
+                        .map_err(EvaluateError::Asset)?,
+                ),
             ),
-            Prepared::Volume(..) => None,
+            Prepared::Volume(_, p) => Renderer::Volume(p),
         };
         for spec in &options.views {
             let reference = evaluator
@@ -592,8 +596,7 @@ fn render_views(
             seconds.reference += reference.seconds;
             let mut images = Vec::new();
             for (i, lod) in lods.iter().enumerate() {
-                let (result, image) =
-                    render(&evaluator, prepared, renderer.as_ref(), *lod, &reference)?;
+                let (result, image) = render(&evaluator, &renderer, *lod, &reference)?;
                 seconds.asset += result.seconds.asset;
                 per_level[i].push(result);
                 if hooks.images.is_some() {
@@ -627,18 +630,22 @@ fn render_views(
     })
 }
 
+/// What draws the asset under the current light.
+enum Renderer<'a> {
+    Volume(&'a PreparedAsset),
+    Cloud(&'a PreparedCloud, Box<CloudRenderer<'a>>),
+}
+
 /// Renders the asset (LOD `lod` of a cloud) from `reference`'s view and compares.
 fn render(
     evaluator: &Evaluator,
-    prepared: &Prepared,
-    renderer: Option<&CloudRenderer>,
+    renderer: &Renderer,
     lod: Option<usize>,
     reference: &ReferenceView,
 ) -> Result<(ViewResult, ImageF32), EvaluateError> {
-    match (prepared, renderer, lod) {
-        (Prepared::Cloud(_, p, _), Some(r), Some(lod)) => evaluator.cloud(r, p, lod, reference),
-        (Prepared::Volume(_, p), _, _) => evaluator.asset(p, reference),
-        _ => unreachable!("a cloud has a renderer and a LOD level"),
+    match renderer {
+        Renderer::Volume(p) => evaluator.asset(p, reference),
+        Renderer::Cloud(p, r) => evaluator.cloud(r, p, lod.unwrap_or(0), reference),
     }
     .map_err(EvaluateError::Asset)
 }
