@@ -1,7 +1,8 @@
 //! `billow voxelize --prune` and `billow eval` from Rust, through the library's public API
 //! only: imports a mesh, bakes it into a pruned, BC7-compressed volumetric billboard with
 //! [`billow::voxelize::bake`] — the same bytes as `billow voxelize MESH --res RES --prune`
-//! writes —, and compares it with the mesh from two views as `billow eval` does.
+//! writes —, and compares it with the mesh from two views with [`billow::eval::evaluate`],
+//! `billow eval`'s numbers for the same options.
 //!
 //! `cargo run --release --example bake_from_rust [-- MESH [RES [OUT.billow]]]`
 //! (default: the oak fixture at 128 voxels, nothing written).
@@ -10,7 +11,8 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use billow::compress::Compression;
-use billow::eval::suite::{reference_lighting, spec, EvalOptions, Evaluator, PreparedAsset};
+use billow::eval::evaluate::{evaluate, Asset, EvaluateHooks, EvaluateOptions};
+use billow::eval::suite::spec;
 use billow::import::{import, ImportOptions, Imported};
 use billow::provenance::source_info_all;
 use billow::voxelize::{bake, BakeHooks, BakeOptions, NormalsMode, Resolution};
@@ -72,23 +74,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         println!("wrote {}", path.display());
     }
 
-    // `billow eval`'s defaults: 128×128, 4×4 reference samples per pixel, the reference lit
-    // as the asset's normals are shaded.
-    let (lighting, lighting_note) = reference_lighting(&baked.asset)?;
-    if let Some(n) = lighting_note {
+    // `billow eval MESH ASSET --views +x@1x,+x+y+z@4x`: 128×128, 4×4 reference samples per
+    // pixel, the reference lit as the asset's normals are shaded.
+    let options = EvaluateOptions {
+        views: vec![spec("+x", Vec3::X, 1.0), spec("+x+y+z", Vec3::ONE, 4.0)],
+        ..EvaluateOptions::default()
+    };
+    let asset = Asset::Volume(baked.asset);
+    let evaluation = evaluate(&scene, &asset, &options, &mut EvaluateHooks::default())?;
+    for n in &evaluation.notes {
         eprintln!("note: {n}");
     }
-    let evaluator = Evaluator::new(
-        &scene,
-        EvalOptions {
-            lighting,
-            ..EvalOptions::default()
-        },
-    )?;
-    let prepared = PreparedAsset::new(&baked.asset)?;
-    for view in [spec("+x", Vec3::X, 1.0), spec("+x+y+z", Vec3::ONE, 4.0)] {
-        let reference = evaluator.reference(&view)?;
-        let (result, _image) = evaluator.asset(&prepared, &reference)?;
+    let volume = &evaluation.levels[0];
+    for result in &volume.views {
         println!(
             "{:>10}: RMSE {:.4}, PSNR {:.1} dB, coverage {:+.3}, FLIP {:.3}",
             result.view,
@@ -98,5 +96,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             result.asset.flip
         );
     }
+    println!(
+        "      mean: RMSE {:.4}, PSNR {:.1} dB (the mesh at 1 spp: {:.4}); {} bytes on a GPU \
+         with BC7",
+        volume.mean.rmse,
+        volume.mean.psnr,
+        evaluation.raster_1spp.rmse,
+        evaluation.gpu_bytes.with_bc
+    );
     Ok(())
 }

@@ -1,7 +1,8 @@
 //! billow: bakes meshes into image-based level-of-detail assets.
 //!
 //! What `billow voxelize --prune` does, from Rust ([`voxelize::bake()`]; a full program
-//! that also evaluates the result is `examples/bake_from_rust.rs`):
+//! that also evaluates the result with [`eval::evaluate()`], `billow eval` as one call, is
+//! `examples/bake_from_rust.rs`):
 //!
 //! ```no_run
 //! use std::path::Path;

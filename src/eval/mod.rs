@@ -3,11 +3,15 @@
 //!
 //! Every image here is **premultiplied linear RGBA, f32**, transparent background
 //! ([`image::ImageF32`]). The camera conventions are in [`crate::camera`].
+//!
+//! `billow eval` as one call is [`evaluate()`] ([`evaluate::EvaluateOptions`] in, an
+//! [`evaluate::Evaluation`] out); [`suite`] holds its parts.
 
 pub mod banding;
 pub mod cloud_render;
 pub mod compositing;
 pub mod error;
+pub mod evaluate;
 pub mod image;
 pub mod lighting;
 pub mod metrics;
@@ -20,4 +24,5 @@ pub mod suite;
 pub mod volume_sampler;
 
 pub use error::EvalError;
+pub use evaluate::evaluate;
 pub use image::ImageF32;

@@ -4,20 +4,25 @@
 
 mod cloud;
 
+use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use billow::camera::{parse_direction, view_directions, views_of, ViewDirections, ViewSpec};
+use billow::eval::evaluate;
+use billow::eval::evaluate::{
+    Asset, EvaluateError, EvaluateHooks, EvaluateOptions, EvaluateProgress, Evaluation,
+    LightResult, ReferenceLighting, ViewImages, MAX_REFERENCE_SAMPLES,
+    REFERENCE_SAMPLES_PER_SECOND,
+};
 use billow::eval::image::comparisons_png_bytes;
-use billow::eval::lighting::{parse_light_set, EvalLight, LightSetError, Lighting};
-use billow::eval::slicer::{SlicerParams, Spacing};
+use billow::eval::lighting::{parse_light_set, EvalLight, LightSetError};
+use billow::eval::slicer::Spacing;
 use billow::eval::suite::{
-    mean_errors, means_by_distance, means_by_light, reference_lighting, view_file_stem,
-    DistanceMeans, EvalOptions, Evaluator, LightMeans, MeanErrors, PreparedAsset, ViewResult,
-    EVAL_FOV_Y,
+    mean_errors, view_file_stem, DistanceMeans, LightMeans, MeanErrors, ViewResult, EVAL_FOV_Y,
 };
 use billow::import::{import, ImportOptions, Imported};
-use billow_format::{read_file, AssetKind, Container, VolumeAsset};
+use billow_format::{read_file, Container};
 use glam::Vec3;
 use serde::Serialize;
 
@@ -167,20 +172,14 @@ pub(crate) struct LightJson {
 }
 
 /// The lights' JSON entries (empty without `--light`/`--lights`).
-pub(crate) fn lights_json(lights: Option<&[EvalLight]>, results: &[ViewResult]) -> Vec<LightJson> {
-    let Some(lights) = lights else {
-        return Vec::new();
-    };
-    means_by_light(results)
+pub(crate) fn lights_json(by_light: Vec<LightResult>) -> Vec<LightJson> {
+    by_light
         .into_iter()
-        .filter_map(|m| {
-            let l = lights.iter().find(|l| l.name == m.light)?;
-            Some(LightJson {
-                name: l.name.clone(),
-                dir: l.dir.to_array(),
-                ambient: l.ambient,
-                means: m,
-            })
+        .map(|l| LightJson {
+            name: l.light.name,
+            dir: l.light.dir.to_array(),
+            ambient: l.light.ambient,
+            means: l.means,
         })
         .collect()
 }
@@ -339,8 +338,8 @@ pub fn parse_views(s: &str, distances: &[f32]) -> Result<Vec<ViewSpec>, CliError
     Ok(out)
 }
 
-/// See `--spacing`; `voxel` is the asset's level-0 voxel size.
-pub fn parse_spacing(s: &str, voxel: Option<f32>) -> Result<Spacing, CliError> {
+/// See `--spacing` (a uniform spacing in level-0 voxels: [`EvaluateOptions::spacing`]).
+pub fn parse_spacing(s: &str) -> Result<Spacing, CliError> {
     let (mode, arg) = match s.split_once(':') {
         Some((m, a)) => (m.trim(), Some(a.trim())),
         None => (s.trim(), None),
@@ -362,9 +361,7 @@ pub fn parse_spacing(s: &str, voxel: Option<f32>) -> Result<Spacing, CliError> {
         "adaptive" => Ok(Spacing::Adaptive { bias: num(arg)? }),
         "uniform" => {
             let v = num(arg)?;
-            Ok(Spacing::Uniform {
-                spacing: v * voxel.unwrap_or(1.0),
-            })
+            Ok(Spacing::Uniform { spacing: v })
         }
         _ => Err(usage(
             "--spacing",
@@ -434,11 +431,13 @@ pub(crate) fn stage_png(
     Ok(())
 }
 
-/// Stages `eval.json` and commits every file of the `--out` folder.
-pub(crate) fn finish_out(
+/// Stages `eval.json` and commits every file of the `--out` folder, then prints the JSON
+/// or the table.
+pub(crate) fn emit<S: Serialize>(
     args: &Args,
     stage: Option<Staged>,
-    summary: &impl Serialize,
+    summary: &S,
+    table: fn(&S),
 ) -> Result<(), CliError> {
     if let (Some(dir), Some(mut stage)) = (&args.out, stage) {
         let json = serde_json::to_vec_pretty(summary)
@@ -447,7 +446,12 @@ pub(crate) fn finish_out(
         stage.stage(&path, &json).map_err(|e| out_err(&path, e))?;
         stage.commit_or_fail()?;
     }
-    Ok(())
+    if args.json {
+        print_json(summary)
+    } else {
+        table(summary);
+        Ok(())
+    }
 }
 
 /// A note (also a warning on stderr) when `source` is not the file the asset was baked
@@ -476,19 +480,12 @@ pub(crate) fn source_note(
     Some(note)
 }
 
-/// Most reference samples (pixels × spp × views) an eval may trace: 10¹⁰, about 80 minutes at
-/// [`REFERENCE_SAMPLES_PER_SECOND`].
-pub(crate) const MAX_REFERENCE_SAMPLES: f64 = 1e10;
-/// Reference samples per second assumed for the time estimate (measured: the oak, release
-/// build, a few cores).
-pub(crate) const REFERENCE_SAMPLES_PER_SECOND: f64 = 2e6;
-
 /// Refuses (exit 8) an eval whose reference would trace more than
 /// [`MAX_REFERENCE_SAMPLES`], and warns with the expected time above a minute; before any
 /// work.
-fn check_cost(ctx: &Ctx, args: &Args, views: usize) -> Result<(), CliError> {
-    let (w, h) = parse_size(&args.size)?;
-    let samples = f64::from(w) * f64::from(h) * f64::from(args.spp) * views as f64;
+fn check_cost(ctx: &Ctx, args: &Args, options: &EvaluateOptions) -> Result<(), CliError> {
+    let (w, h, views) = (options.width, options.height, options.references());
+    let samples = options.reference_samples();
     let seconds = samples / REFERENCE_SAMPLES_PER_SECOND;
     // Float images (reference, asset, 1-spp mesh, panels) per view: about 100 bytes a pixel.
     let mib = f64::from(w) * f64::from(h) * 100.0 / f64::from(1u32 << 20);
@@ -522,186 +519,179 @@ fn check_cost(ctx: &Ctx, args: &Args, views: usize) -> Result<(), CliError> {
 
 pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let start = Instant::now();
-    parse_size(&args.size)?;
-    spp_per_axis(args.spp)?;
-    let views = parse_views(&args.views, &parse_distances(&args.distances)?)?;
-    let lights = parse_lights(&args)?;
-    check_cost(
-        ctx,
-        &args,
-        views.len() * lights.as_ref().map_or(1, Vec::len),
-    )?;
+    let mut options = parse_options(&args)?;
+    check_cost(ctx, &args, &options)?;
     // Reject a bad --spacing before the (slow) work.
-    parse_spacing(&args.spacing, None)?;
+    options.spacing = parse_spacing(&args.spacing)?;
     if let Some(dir) = &args.out {
         refuse_file_as_folder("--out", dir)?;
     }
     let source = import_source(&args, ctx)?;
     let import_s = start.elapsed().as_secs_f64();
     let t = Instant::now();
-    let container = read_asset(&args.asset)?;
-    if container.header.kind == AssetKind::Cloud {
-        return cloud::run(&args, ctx, &source, container, start, import_s, t);
-    }
-    if args.lod.is_some() {
-        return Err(bad("--lod", "applies to billboard-cloud assets only"));
-    }
-    run_volume(&args, ctx, &source, container, start, import_s, t)
-}
-
-fn run_volume(
-    args: &Args,
-    ctx: &Ctx,
-    source: &Imported,
-    container: Container,
-    start: Instant,
-    import_s: f64,
-    t: Instant,
-) -> Result<(), CliError> {
-    let scene = &source.scene;
-    let (width, height) = parse_size(&args.size)?;
-    let per_axis = spp_per_axis(args.spp)?;
-    let views = parse_views(&args.views, &parse_distances(&args.distances)?)?;
-    let source_shown = args.source.display().to_string();
-    let asset_shown = args.asset.display().to_string();
-    let asset = VolumeAsset::from_container(container)
-        .map_err(|e| CliError::new(Code::from(&e), format!("{asset_shown}: {e}")))?;
-    let prepared = PreparedAsset::new(&asset)
-        .map_err(|e| CliError::new(Code::from(&e), format!("{asset_shown}: {e}")))?;
+    let asset = Asset::from_container(read_asset(&args.asset)?)
+        .map_err(|e| CliError::new(Code::from(&e), format!("{}: {e}", args.asset.display())))?;
     let read_s = t.elapsed().as_secs_f64();
-    let spacing = parse_spacing(&args.spacing, prepared.voxel_size())?;
-    let (lighting, lighting_note) = match args.lighting {
-        LightingArg::Auto => reference_lighting(&asset)
-            .map_err(|e| CliError::new(Code::from(&e), format!("{asset_shown}: {e}")))?,
-        LightingArg::Unlit => {
-            let bake = asset.header.volume_bake();
-            let note = (bake != billow_format::VolumeBake::None)
-                .then(|| bake.name().to_string())
-                .map(|b| {
-                    format!(
-                        "the asset has baked lighting (bake={b}) but --lighting unlit: the \
-                         errors include the lighting difference"
-                    )
-                });
-            (Lighting::Unlit, note)
+    let (recorded, params) = match &asset {
+        Asset::Volume(v) => (v.header.source.as_ref(), &v.header.params),
+        Asset::Cloud(c) => (c.header.source.as_ref(), &c.header.params),
+    };
+    let mut stage = create_out(&args)?;
+    let mismatch = source_note(ctx, &args, &source, recorded);
+
+    let bar = progress(ctx, 0, "eval");
+    let mut on_progress = |p: EvaluateProgress| {
+        bar.set_length(p.total as u64);
+        bar.set_message(p.view.to_string());
+        bar.set_position(p.done as u64);
+        ControlFlow::Continue(())
+    };
+    let mut images = Vec::new();
+    let mut staging: Result<(), CliError> = Ok(());
+    let mut on_images = |v: ViewImages| {
+        let Some(dir) = &args.out else {
+            return ControlFlow::Continue(());
+        };
+        let path = dir.join(format!("{}.png", image_stem(v.light, &v.view.name)));
+        let tests: Vec<_> = v.assets.iter().chain(v.raster_1spp).collect();
+        staging = stage_png(&mut stage, &path, v.reference, &tests);
+        images.push(path.display().to_string());
+        if staging.is_ok() {
+            ControlFlow::Continue(())
+        } else {
+            ControlFlow::Break(())
         }
     };
+    let mut hooks = EvaluateHooks {
+        progress: Some(&mut on_progress),
+        images: match args.out {
+            Some(_) => Some(&mut on_images),
+            None => None,
+        },
+    };
+    let evaluated = evaluate(&source.scene, &asset, &options, &mut hooks);
+    bar.finish_and_clear();
+    staging?;
+    let e = evaluated.map_err(|e| evaluate_error(&args, e))?;
+    let head = Head {
+        notes: mismatch
+            .into_iter()
+            .chain(e.notes.iter().cloned())
+            .collect(),
+        lighting: LightingJson {
+            asset: e.lighting.asset.clone(),
+            reference: e.lighting.reference.name(),
+            reference_details: e.lighting.reference_details.clone(),
+        },
+        seconds: Seconds {
+            import: import_s,
+            read_asset: read_s + e.seconds.prepare,
+            reference: e.seconds.reference,
+            asset: e.seconds.asset,
+            raster_1spp: e.seconds.raster_1spp,
+            total: start.elapsed().as_secs_f64(),
+        },
+        params: params.clone(),
+        images,
+    };
+    match &asset {
+        Asset::Volume(_) => volume_output(&args, &options, head, e, stage),
+        Asset::Cloud(_) => cloud::output(&args, &options, head, e, stage),
+    }
+}
 
-    let options = EvalOptions {
+/// What both kinds' outputs take from the run besides the [`Evaluation`].
+pub(crate) struct Head {
+    notes: Vec<String>,
+    lighting: LightingJson,
+    seconds: Seconds,
+    params: std::collections::BTreeMap<String, String>,
+    images: Vec<String>,
+}
+
+/// The options of the flags (the spacing is checked later, after the cost).
+fn parse_options(args: &Args) -> Result<EvaluateOptions, CliError> {
+    let (width, height) = parse_size(&args.size)?;
+    let reference_per_axis = spp_per_axis(args.spp)?;
+    let views = parse_views(&args.views, &parse_distances(&args.distances)?)?;
+    let lighting = match (parse_lights(args)?, args.lighting) {
+        (Some(lights), _) => ReferenceLighting::Lights {
+            lights,
+            shadows: args.shadows,
+        },
+        (None, LightingArg::Auto) => ReferenceLighting::Own,
+        (None, LightingArg::Unlit) => ReferenceLighting::Unlit,
+    };
+    Ok(EvaluateOptions {
         width,
         height,
         fov_y: EVAL_FOV_Y,
-        reference_per_axis: per_axis,
-        slicer: SlicerParams {
-            spacing,
-            ..SlicerParams::default()
-        },
-        raster_1spp: true,
+        reference_per_axis,
+        views,
         lighting,
-    };
-    let mut evaluator = Evaluator::new(scene, options)
-        .map_err(|e| CliError::new(Code::InvalidInput, format!("{source_shown}: {e}")))?;
-    let mut stage = create_out(args)?;
-    let mismatch = source_note(ctx, args, source, asset.header.source.as_ref());
-    let lights = parse_lights(args)?;
-    let (lighting, lighting_note) = match &lights {
-        Some(_) => (
-            Lighting::Scene {
-                light: Vec3::ZERO,
-                ambient: args.ambient,
-                shadows: args.shadows,
-            },
-            args.shadows.then(|| {
-                "--shadows: the reference and meshes are shadowed, the CPU slicer draws volumes \
-                 unshadowed: the errors include the shadows"
-                    .to_string()
-            }),
-        ),
-        None => (lighting, lighting_note),
-    };
-    let light_list: Vec<Option<&EvalLight>> = match &lights {
-        Some(l) => l.iter().map(Some).collect(),
-        None => vec![None],
-    };
+        lod: args.lod,
+        ..EvaluateOptions::default()
+    })
+}
 
-    let bar = progress(ctx, (views.len() * light_list.len()) as u64, "eval");
-    let mut results = Vec::with_capacity(views.len() * light_list.len());
-    let mut images = Vec::new();
-    for light in &light_list {
-        if let Some(l) = light {
-            evaluator
-                .set_light(l, args.shadows)
-                .map_err(|e| CliError::new(Code::from(&e), format!("{source_shown}: {e}")))?;
-        }
-        for spec in &views {
-            bar.set_message(spec.name.clone());
-            let reference = evaluator
-                .reference(spec)
-                .map_err(|e| CliError::new(Code::from(&e), format!("{source_shown}: {e}")))?;
-            let (result, image) = evaluator
-                .asset(&prepared, &reference)
-                .map_err(|e| CliError::new(Code::from(&e), format!("{asset_shown}: {e}")))?;
-            if let Some(dir) = &args.out {
-                let path = dir.join(format!("{}.png", image_stem(*light, &spec.name)));
-                let mut tests = vec![&image];
-                if let Some((r, _, _)) = &reference.raster_1spp {
-                    tests.push(r);
-                }
-                stage_png(&mut stage, &path, &reference.image, &tests)?;
-                images.push(path.display().to_string());
-            }
-            results.push(result);
-            bar.inc(1);
+/// The exit code and message of each failure, naming the file it comes from.
+fn evaluate_error(args: &Args, e: EvaluateError) -> CliError {
+    let (source, asset) = (args.source.display(), args.asset.display());
+    match e {
+        EvaluateError::Source(e) => CliError::new(Code::InvalidInput, format!("{source}: {e}")),
+        EvaluateError::Reference(e) => CliError::new(Code::from(&e), format!("{source}: {e}")),
+        EvaluateError::Asset(e) => CliError::new(Code::from(&e), format!("{asset}: {e}")),
+        EvaluateError::AssetHeader(m) => CliError::new(Code::InvalidInput, format!("{asset}: {m}")),
+        EvaluateError::NoSuchLod { lod, levels } => bad(
+            "--lod",
+            format!(
+                "{lod}: {asset} has {levels} LOD levels (0 to {})",
+                levels - 1
+            ),
+        ),
+        EvaluateError::LodOfVolume => bad("--lod", "applies to billboard-cloud assets only"),
+        e @ (EvaluateError::InvalidOption(_) | EvaluateError::Stopped) => {
+            CliError::new(Code::Internal, e)
         }
     }
-    bar.finish_and_clear();
+}
 
-    let notes: Vec<String> = mismatch.into_iter().chain(lighting_note).collect();
-    let sum = |f: &dyn Fn(&ViewResult) -> f64| results.iter().map(f).sum::<f64>();
-    let gpu = billow_core::gpu_memory::volume_gpu_bytes(&asset, asset.header.compress().is_some());
+/// The volume's JSON and table.
+fn volume_output(
+    args: &Args,
+    options: &EvaluateOptions,
+    head: Head,
+    e: Evaluation,
+    stage: Option<Staged>,
+) -> Result<(), CliError> {
+    let [level] = <[_; 1]>::try_from(e.levels)
+        .map_err(|_| CliError::new(Code::Internal, "a volume's evaluation has one level"))?;
     let summary = Summary {
-        source: source_shown,
-        asset: asset_shown,
-        asset_dims: prepared.dims0,
-        asset_params: asset.header.params.clone(),
-        gpu_bytes: gpu.with_bc,
-        gpu_bytes_no_bc: gpu.without_bc,
-        size: [width, height],
-        fov_y_degrees: EVAL_FOV_Y.to_degrees(),
+        source: args.source.display().to_string(),
+        asset: args.asset.display().to_string(),
+        asset_dims: e.volume_dims.unwrap_or_default(),
+        asset_params: head.params,
+        gpu_bytes: e.gpu_bytes.with_bc,
+        gpu_bytes_no_bc: e.gpu_bytes.without_bc,
+        size: [options.width, options.height],
+        fov_y_degrees: options.fov_y.to_degrees(),
         reference_spp: args.spp,
         spacing: args.spacing.clone(),
-        lighting: LightingJson {
-            asset: asset.header.volume_bake().name().to_string(),
-            reference: lighting.name(),
-            reference_details: reference_details(&lighting, lights.as_deref(), args),
-        },
-        notes,
+        lighting: head.lighting,
+        notes: head.notes,
         mean: Means {
-            asset: mean_errors(results.iter().map(|r| &r.asset)),
-            raster_1spp: mean_errors(results.iter().filter_map(|r| r.raster_1spp.as_ref())),
+            asset: level.mean,
+            raster_1spp: e.raster_1spp,
         },
-        by_distance: means_by_distance(&results),
-        lights: lights_json(lights.as_deref(), &results),
-        slices: results.iter().map(|r| r.slices).sum(),
-        fragments: results.iter().map(|r| r.fragments).sum(),
-        seconds: Seconds {
-            import: import_s,
-            read_asset: read_s,
-            reference: sum(&|r| r.seconds.reference),
-            asset: sum(&|r| r.seconds.asset),
-            raster_1spp: sum(&|r| r.seconds.raster_1spp),
-            total: start.elapsed().as_secs_f64(),
-        },
-        views: results,
-        images,
+        by_distance: level.by_distance,
+        lights: lights_json(level.by_light),
+        slices: level.slices,
+        fragments: level.fragments,
+        seconds: head.seconds,
+        views: level.views,
+        images: head.images,
     };
-    finish_out(args, stage, &summary)?;
-    if args.json {
-        print_json(&summary)?;
-    } else {
-        print_table(&summary);
-    }
-    Ok(())
+    emit(args, stage, &summary, print_table)
 }
 
 /// `(112x128x112)` for a volume, `(grid 112x128x112, pruned into an 84x128x74 atlas)`
@@ -844,28 +834,4 @@ pub(crate) fn print_rows(
         "mean over the lights"
     };
     row(name, &mean.asset, &mean.raster_1spp, t);
-}
-
-/// What the JSON says of the reference's lighting: its own description, or with
-/// `--light`/`--lights` the set's (the scene lighting's own light is a placeholder there:
-/// each light of the set is set in turn).
-pub(crate) fn reference_details(
-    lighting: &Lighting,
-    lights: Option<&[EvalLight]>,
-    args: &Args,
-) -> String {
-    match lights {
-        Some(l) => format!(
-            "the viewer's mesh lighting: ambient {} + two-sided diffuse{}, under each of the \
-             {} light(s) in `lights`",
-            args.ambient,
-            if args.shadows {
-                ", ray-traced shadows"
-            } else {
-                ""
-            },
-            l.len()
-        ),
-        None => lighting.describe(),
-    }
 }
