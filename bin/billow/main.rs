@@ -2,7 +2,7 @@
 //! All the work happens in the `billow` library; this binary only talks to the user.
 
 #[macro_use]
-mod out;
+mod stdout;
 
 mod alloc;
 mod bbcloud;
@@ -166,7 +166,7 @@ fn out_of_range(e: &clap::Error) -> Option<String> {
 
 fn main() -> ExitCode {
     signals::install();
-    out::install_panic_hook();
+    stdout::install_panic_hook();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {
@@ -201,7 +201,7 @@ fn main() -> ExitCode {
         Command::Emptyspace(a) => emptyspace::run(a, &ctx),
     };
     // The command's own error first; else a failure to write stdout (exit 7).
-    match result.and_then(|()| out::finish()) {
+    match result.and_then(|()| stdout::finish()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             use std::io::Write;

@@ -22,10 +22,10 @@ static FAILED: Mutex<Option<String>> = Mutex::new(None);
 #[macro_export]
 macro_rules! outln {
     () => {
-        $crate::out::write(format_args!("\n"))
+        $crate::stdout::write(format_args!("\n"))
     };
     ($($arg:tt)*) => {
-        $crate::out::write(format_args!("{}\n", format_args!($($arg)*)))
+        $crate::stdout::write(format_args!("{}\n", format_args!($($arg)*)))
     };
 }
 
@@ -33,7 +33,7 @@ macro_rules! outln {
 #[macro_export]
 macro_rules! out {
     ($($arg:tt)*) => {
-        $crate::out::write(format_args!($($arg)*))
+        $crate::stdout::write(format_args!($($arg)*))
     };
 }
 
