@@ -39,6 +39,7 @@ pub mod rng;
 pub mod scene;
 pub(crate) mod shade;
 pub mod shell;
+pub mod target_error;
 pub mod texture;
 pub mod voxelize;
 

@@ -1,12 +1,12 @@
 //! `--target-error` and its flags, shared by `billow voxelize` and `billow bbcloud`: the
 //! parsing, the per-trial lines and the JSON. The search and the judge are the library's
-//! (`billow::presets::target`).
+//! (`billow::target_error`).
 
 use billow::eval::lighting::{parse_light_set, LightSetError};
-use billow::presets::target::{
+use billow::presets::Preset;
+use billow::target_error::{
     DistanceError, Found, SearchError, TargetError, TargetOptions, Trial, Weighting,
 };
-use billow::presets::Preset;
 use billow_core::shading::DEFAULT_AMBIENT;
 use serde::Serialize;
 

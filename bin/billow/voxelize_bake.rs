@@ -4,8 +4,8 @@
 //! `--target-error` search over such bakes.
 
 use billow::compress::Compression;
-use billow::presets::target::{search_volume, TargetOptions, Trial};
 use billow::presets::{VolumeFlags, VolumeSettings};
+use billow::target_error::{search_volume, TargetOptions, Trial};
 use billow::voxelize::{
     bake, default_align, BakeError, BakeHooks, BakeOptions, Baked, NormalsMode, Stage,
     VoxelizeOptions,

@@ -1,5 +1,5 @@
 //! Named bake settings (`--preset draft|balanced|quality|hero`) and how explicit flags
-//! override them; the search behind `--target-error` is in [`target`].
+//! override them; the search behind `--target-error` is [`crate::target_error`].
 //!
 //! Each preset is a point of the measured Pareto front of a combined sweep
 //! (`examples/pareto_sweep.rs`, docs/accuracy.md "Pareto fronts and presets"): on the
@@ -15,8 +15,6 @@
 //! ([`resolve_volume`], [`resolve_cloud`]); without a preset the defaults are the
 //! commands' long-standing defaults ([`VolumeSettings::default`],
 //! [`CloudSettings::default`]).
-
-pub mod target;
 
 use std::fmt;
 use std::str::FromStr;
@@ -165,7 +163,7 @@ pub enum Source {
     Preset,
     /// An explicit flag.
     Flag,
-    /// Chosen by the `--target-error` search ([`target::search`]).
+    /// Chosen by the `--target-error` search ([`crate::target_error::search`]).
     Target,
 }
 
