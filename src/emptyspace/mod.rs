@@ -10,7 +10,7 @@
 //!    (2×2×2 texels of level `k`) that any non-empty texel of levels `k, k + 1` reaches
 //!    through trilinear filtering ([`occupancy`]); kd-tree boxes over them ([`kdtree`]);
 //!    slots = box + one-block apron, packed with shared zero aprons ([`pack`]); byte-exact
-//!    copies of levels `k` and `k + 1` ([`bricks`]); two prisms per box;
+//!    copies of levels `k` and `k + 1` ([`brick_copy`]); two prisms per box;
 //! 3. the *tail* `K`: the source's levels `K..` stored whole with the source's box cells;
 //! 4. `K` is the largest tail level whose texel bytes `Σ_{k<K} tier_k + tail_K` are
 //!    within 1 % of the smallest and whose last tier leaves out at least a tenth of its
@@ -21,11 +21,11 @@
 //! the tail (first level `K`). A slice at LOD `λ` draws exactly one of them, sampling the
 //! same texel values the source would sample at `λ` (SPEC §8.6).
 
-pub mod bricks;
+pub mod brick_copy;
 pub mod kdtree;
 pub mod occupancy;
 pub mod pack;
-pub mod sparse;
+pub mod sparse_tier;
 /// Test support (feature `test-support`, on for billow's own tests): not part of the API.
 #[cfg(any(test, feature = "test-support"))]
 pub mod synthetic;
@@ -40,8 +40,9 @@ use serde::Serialize;
 
 use self::kdtree::KdParams;
 use self::occupancy::{apply_threshold, TierSource, TierTexels};
-use self::sparse::{SparseLevel, SparseTier};
+use self::sparse_tier::SparseTier;
 use self::tier::{fill_tier, plan_tier, Tier, TierParams, TierPlan};
+use crate::sparse_level::SparseLevel;
 
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum EmptySpaceError {

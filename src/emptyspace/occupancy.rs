@@ -126,7 +126,7 @@ impl TierSource<'_> {
 }
 
 /// What a tier reads of its two levels: [`TierSource`] (dense bytes) or a brick-sparse
-/// source ([`super::sparse`]). Every method must give the same answers as the dense
+/// source ([`crate::sparse_level`]). Every method must give the same answers as the dense
 /// levels would, so that a tier comes out byte for byte the same from either.
 pub trait TierTexels: Sync {
     /// Level-`k` size in texels (every side even; level `k + 1` is `n / 2`).

@@ -11,7 +11,7 @@
 use billow_format::Prism;
 use glam::Vec3;
 
-use super::bricks::{fill_level_with, Brick};
+use super::brick_copy::{fill_level_with, Brick};
 use super::kdtree::{aligned_span, subdivide, BlockBox, KdParams, TierGrid};
 use super::occupancy::{tier_needed_blocks, DataGrid, TierTexels};
 use super::pack::{pack, Slot};

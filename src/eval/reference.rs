@@ -40,8 +40,8 @@ use super::ray_triangle::{TriangleHit, WatertightRay};
 use super::{EvalError, ImageF32};
 use crate::bvh::scene_bvh;
 use crate::camera::Camera;
+use crate::material::{validate_scene, Shader};
 use crate::scene::{AlphaMode, Scene};
-use crate::shade::{validate_scene, Shader};
 
 /// Pixel sampling pattern.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

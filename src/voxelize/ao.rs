@@ -37,9 +37,9 @@ use rayon::prelude::*;
 use super::grid::GridSpec;
 use super::slices::DirSlices;
 use crate::bvh::scene_bvh;
+use crate::material::Shader;
 use crate::rng::Pcg32;
 use crate::scene::{AlphaMode, Scene};
-use crate::shade::Shader;
 use billow_core::ray_triangle::WatertightRay;
 
 /// Baked lighting (see the module docs).
@@ -192,7 +192,7 @@ impl AoRays {
     }
 
     /// AO at `origin` (mean visibility of the rays, in [0, 1]) with the directions of
-    /// stream `stream`. The scene must have passed `shade::validate_scene`; `bvh` is
+    /// stream `stream`. The scene must have passed `material::validate_scene`; `bvh` is
     /// [`scene_bvh`] of it.
     pub(crate) fn ambient_occlusion(
         &self,

@@ -33,7 +33,7 @@ use std::sync::Arc;
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
-use super::bricks::{self, for_each_voxel, local, BrickAccum, Bricked, B3};
+use super::brick_grid::{self, for_each_voxel, local, BrickAccum, Bricked, B3};
 use super::coverage::{scale_opacity, Columns};
 use super::expr::{Expr, ExprError};
 use super::grid3::{Disjoint, Grid3, Texel};
@@ -272,7 +272,7 @@ impl Accum {
         let acc = &self.levels[level];
         Columns::build(acc.dims, |bc, out| {
             let slot = acc.slot[bc[0] + acc.nb[0] * (bc[1] + acc.nb[1] * bc[2])];
-            if slot == bricks::EMPTY {
+            if slot == brick_grid::EMPTY {
                 return false;
             }
             let brick = &acc.data[slot as usize * B3 * w..(slot as usize + 1) * B3 * w];
@@ -372,23 +372,23 @@ pub(crate) fn combine_level_bricks<T: Texel>(
     let l = &dirs[0].layout;
     // Bricks held by any direction, by brick layer (z): each layer writes its own planes.
     let held: Vec<bool> = (0..l.slot.len())
-        .map(|b| dirs.iter().any(|d| d.layout.slot[b] != bricks::EMPTY))
+        .map(|b| dirs.iter().any(|d| d.layout.slot[b] != brick_grid::EMPTY))
         .collect();
     let layer = l.nb[0] * l.nb[1];
     let plane = 4 * dims[0] * dims[1];
-    out.par_chunks_mut(plane * bricks::B)
+    out.par_chunks_mut(plane * brick_grid::B)
         .enumerate()
         .for_each(|(bz, o)| {
             for b in (bz * layer..(bz + 1) * layer).filter(|&b| held[b]) {
                 let slots = dirs.map(|d| d.layout.slot[b]);
-                for p in bricks::voxels_of(l.coords(b), dims) {
+                for p in brick_grid::voxels_of(l.coords(b), dims) {
                     let s = std::array::from_fn(|d| match slots[d] {
-                        bricks::EMPTY => Vec4::ZERO,
+                        brick_grid::EMPTY => Vec4::ZERO,
                         slot => {
                             Vec4::from_array(dirs[d].data[slot as usize * B3 + local(p)].load())
                         }
                     });
-                    let i = 4 * (p[0] + dims[0] * (p[1] + dims[1] * (p[2] - bz * bricks::B)));
+                    let i = 4 * (p[0] + dims[0] * (p[1] + dims[1] * (p[2] - bz * brick_grid::B)));
                     o[i..i + 4].copy_from_slice(&voxel(s));
                 }
             }

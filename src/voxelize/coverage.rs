@@ -55,10 +55,10 @@
 
 use rayon::prelude::*;
 
-use super::bricks::{B, B3};
+use super::brick_grid::{B, B3};
 use super::quantize::{srgb_eotf, Encoder};
 use super::slices::DirSlices;
-use crate::emptyspace::sparse::SparseLevel;
+use crate::sparse_level::SparseLevel;
 use crate::texture::clamp_edge_taps;
 
 /// The largest optical depth a level-0 texel holds when the slicer filters it

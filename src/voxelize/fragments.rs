@@ -15,8 +15,8 @@ use glam::{Vec2, Vec3, Vec4};
 use super::grid::GridSpec;
 use super::lanes::{at_least, negative};
 use super::Dir;
+use crate::material::Shader;
 use crate::scene::{AlphaMode, Material, Scene};
-use crate::shade::Shader;
 
 mod voxels;
 

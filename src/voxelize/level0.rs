@@ -16,12 +16,12 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::bricks::{local, B, B3};
+use super::brick_grid::{local, B, B3};
 use super::combine::{finished_value, plane_table, Accum, Preset};
 use super::quantize::{clamp_premultiplied, encode_normal, Encoder};
 use super::slices::DirSlices;
 use super::toksvig::average_normal;
-use crate::emptyspace::sparse::{BrickMask, SparseLevel};
+use crate::sparse_level::{BrickMask, SparseLevel};
 
 /// The level-0 accumulator (see the module docs).
 pub(crate) struct Level0 {

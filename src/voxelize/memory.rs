@@ -6,7 +6,7 @@ use rayon::prelude::*;
 
 use super::combine::{CombineFn, Preset};
 use super::grid::{self, GridSpec};
-use super::{ao, bricks, Bake, VoxelizeOptions};
+use super::{ao, brick_grid, Bake, VoxelizeOptions};
 use crate::scene::Scene;
 
 /// Estimated peak memory of [`super::voxelize`] for a grid (see the module docs of
@@ -149,7 +149,7 @@ pub fn estimate_peak_bytes_pruned(
     let stacks = 2 * (z.vox + 8 * rows);
     let acc = accumulator_bytes(preset, z.coarse, normals);
     let texel = 4 * (1 + nrm);
-    let b3 = bricks::B3 as u64;
+    let b3 = brick_grid::B3 as u64;
     let level = |l: u32| level_voxels(dims, l);
     // Per level: stored bricks, and the packed bytes (texels, brick tables, slot grid).
     let stored = |l: u32| level(l).div_ceil(b3).min(z.sparse);

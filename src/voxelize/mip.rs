@@ -26,7 +26,7 @@
 use half::f16;
 use rayon::prelude::*;
 
-use super::bricks::{local, Bricked, Layout, B, B3, EMPTY};
+use super::brick_grid::{local, Bricked, Layout, B, B3, EMPTY};
 use super::grid3::{Disjoint, Grid3, Texel};
 use super::slices::DirSlices;
 use super::Dir;

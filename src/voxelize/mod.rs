@@ -50,7 +50,7 @@
 mod ao;
 pub mod asset;
 mod bake;
-pub(crate) mod bricks;
+pub(crate) mod brick_grid;
 pub mod cells;
 pub mod combine;
 pub mod coverage;
@@ -95,9 +95,9 @@ pub use slices::MAX_SUPERSAMPLE;
 use sparse::sparse_level;
 pub use sparse::{voxelize_sparse, SparseVolume};
 
-use crate::emptyspace::sparse::SparseLevel;
+use crate::material;
 use crate::scene::{Aabb, Scene};
-use crate::shade;
+use crate::sparse_level::SparseLevel;
 use grid3::Texel;
 
 /// A view direction: the camera on that side of the object, looking at it.
@@ -398,7 +398,7 @@ fn check(
             limit_gib: gib(opts.memory_limit),
         });
     }
-    shade::validate_scene(scene).map_err(VoxelizeError::InvalidScene)?;
+    material::validate_scene(scene).map_err(VoxelizeError::InvalidScene)?;
     Ok((grid, mips, need))
 }
 
@@ -420,7 +420,7 @@ pub fn slice_stack(
     dir: Dir,
 ) -> Result<SliceStack, VoxelizeError> {
     let (grid, ..) = check(scene, opts, false)?;
-    let shader = shade::Shader::new(scene);
+    let shader = material::Shader::new(scene);
     let side = if dir.positive() { 1 } else { 2 };
     let mut s = slices::rasterize(
         &mut Default::default(),
@@ -455,7 +455,7 @@ pub fn slice_stack(
 
 fn ao_baker<'a>(
     scene: &'a Scene,
-    shader: &'a shade::Shader<'a>,
+    shader: &'a material::Shader<'a>,
     grid: &GridSpec,
     opts: &VoxelizeOptions,
 ) -> Option<ao::AoBaker<'a>> {
@@ -476,7 +476,10 @@ enum Level<'a, T> {
     Zero(&'a slices::DirSlices),
     /// A coarser level: colour and weighted normals, brick-sparse (the normals on the
     /// colour's bricks).
-    Dense(bricks::Bricked<T>, Option<bricks::Bricked<[f16; 4]>>),
+    Dense(
+        brick_grid::Bricked<T>,
+        Option<brick_grid::Bricked<[f16; 4]>>,
+    ),
 }
 
 /// Builds the pyramid of one direction from its sparse level 0: level 1 is filtered
@@ -561,7 +564,7 @@ fn voxelize_as(
 ) -> Result<(GridSpec, Output, VoxelizeStats, CoverageScales), VoxelizeError> {
     let t_all = Instant::now();
     let (grid, mips, estimated_peak_bytes) = check(scene, opts, sparse)?;
-    let shader = shade::Shader::new(scene);
+    let shader = material::Shader::new(scene);
     let dims: Vec<[usize; 3]> = (0..mips)
         .map(|l| grid.level_dims(l).map(|d| d as usize))
         .collect();
@@ -581,7 +584,7 @@ fn voxelize_as(
     /// The directions of `axis` in `sides` (see `slices::passes`), + first.
     fn raster(
         bufs: &mut slices::SetupBufs,
-        ctx: (&Scene, &shade::Shader, &GridSpec, u32, NormalSums),
+        ctx: (&Scene, &material::Shader, &GridSpec, u32, NormalSums),
         (axis, sides): (usize, u8),
         times: &mut StageTimes,
         baker: Option<&mut ao::AoBaker>,
@@ -728,7 +731,7 @@ fn voxelize_as(
         }
         f => {
             // Six brick-sparse f16 pyramids: only the bricks a direction's voxels reach.
-            let mut pyrs: Vec<Vec<Option<bricks::Bricked<[f16; 4]>>>> = Vec::with_capacity(6);
+            let mut pyrs: Vec<Vec<Option<brick_grid::Bricked<[f16; 4]>>>> = Vec::with_capacity(6);
             let mut seen = [0.0f64; 6];
             for &pass in &passes {
                 let stacks = raster(&mut bufs, ctx, pass, &mut times, baker.as_mut(), progress);
@@ -743,7 +746,7 @@ fn voxelize_as(
                             if let Some(na) = nacc.as_mut() {
                                 na.fold_sparse(s);
                             }
-                            levels.push(Some(bricks::Bricked::from_slices(s)));
+                            levels.push(Some(brick_grid::Bricked::from_slices(s)));
                         }
                         Level::Dense(c, n) => {
                             if let (Some(na), Some(n)) = (nacc.as_mut(), n.as_ref()) {
@@ -761,7 +764,7 @@ fn voxelize_as(
             let t = Instant::now();
             let mut out = Vec::with_capacity(mips as usize);
             for l in 0..mips as usize {
-                let grids: Vec<bricks::Bricked<[f16; 4]>> = pyrs
+                let grids: Vec<brick_grid::Bricked<[f16; 4]>> = pyrs
                     .iter_mut()
                     .map(|p| p[l].take().expect("level stored"))
                     .collect();

@@ -43,8 +43,8 @@ use super::fragments::{
 use super::grid::GridSpec;
 use super::grid3::{Grid3, Texel};
 use super::Dir;
+use crate::material::Shader;
 use crate::scene::Scene;
-use crate::shade::Shader;
 
 /// Largest projected coordinate kept, in voxels (keeps edge functions in i64).
 const MAX_COORD: f64 = (1u64 << 20) as f64;

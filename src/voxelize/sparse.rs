@@ -3,11 +3,11 @@
 //! grid, handed to [`crate::emptyspace::prune_sparse`] without a dense volume in between.
 
 use super::{
-    bricks, quantize, voxelize_as, CombineFn, GridSpec, Output, Stage, Volume, VoxelizeError,
+    brick_grid, quantize, voxelize_as, CombineFn, GridSpec, Output, Stage, Volume, VoxelizeError,
     VoxelizeOptions, VoxelizeStats,
 };
-use crate::emptyspace::sparse::SparseLevel;
 use crate::scene::Scene;
+use crate::sparse_level::SparseLevel;
 
 /// The result of [`voxelize_sparse`]: every MIP level brick-sparse (8³ bricks of RGBA8
 /// and snorm8 normals holding a non-zero byte), what `voxelize --prune` hands to
@@ -149,7 +149,7 @@ pub(super) fn sparse_level(
     if nb == bricks {
         return SparseLevel::from_bricks(dims, bricks, colour, Some(nbytes));
     }
-    let per = 4 * bricks::B3;
+    let per = 4 * brick_grid::B3;
     let mut all = bricks.clone();
     let mut c = colour;
     let at: std::collections::HashMap<u32, usize> =

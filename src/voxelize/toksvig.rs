@@ -23,7 +23,7 @@ use glam::Vec3;
 use half::f16;
 use rayon::prelude::*;
 
-use super::bricks::{for_each_voxel, local, BrickAccum, Bricked, Layout, B3};
+use super::brick_grid::{for_each_voxel, local, BrickAccum, Bricked, Layout, B3};
 use super::grid3::{Disjoint, Texel};
 use super::mip::downsample_bricks;
 use super::slices::DirSlices;

@@ -5,7 +5,7 @@
 use glam::{Vec3, Vec4};
 
 use super::{Frag, NormalSums, RowOut, Scratch, Vox};
-use crate::shade::Shader;
+use crate::material::Shader;
 
 /// The shading normals of a row's fragments, as a direction sees them.
 struct FragNormals<'a> {

@@ -47,7 +47,7 @@ pub fn fill_level(
 }
 
 /// [`fill_level`] reading the source texel at `p` (inside `ns`) through `src` (a
-/// brick-sparse source, [`super::sparse`]).
+/// brick-sparse source, [`crate::sparse_level`]).
 pub fn fill_level_with(
     src: impl Fn([usize; 3]) -> [u8; 4],
     ns: [usize; 3],
