@@ -30,7 +30,6 @@ impl TierTexels for SparseTier<'_> {
 mod tests {
     use super::super::synthetic::volume_from_fn;
     use super::super::{prune, prune_sparse, EmptySpaceOptions, Pruned};
-    use super::*;
     use crate::sparse_level::*;
     use billow_format::{mip_dims, VolumeAsset};
 
