@@ -325,3 +325,41 @@ fn the_references_lighting_models_agree_with_the_asset_paths() {
         );
     }
 }
+
+/// `--lighting unlit` compares the unlit mesh with the asset unlit: a volume that stores
+/// normal moments (the default) is drawn with its albedo, not shaded by the default light
+/// (which read −39 % luminance on the spot against its unlit mesh).
+#[test]
+fn unlit_evaluation_draws_a_lit_volume_unlit_too() {
+    use billow::eval::evaluate::ReferenceLighting;
+    use billow::eval::evaluate::{evaluate, Asset, EvaluateHooks, EvaluateOptions};
+    use billow::voxelize::{bake, BakeHooks, BakeOptions};
+    let scene = billow::procgen::torus(1.0, 0.35, 32, 16);
+    let baked = bake(
+        &scene,
+        &BakeOptions::at(Resolution::Longest(32)),
+        &BakeHooks::default(),
+    )
+    .expect("bake");
+    assert!(baked.asset.has_moments(), "the default bake stores moments");
+    let options = EvaluateOptions {
+        width: 64,
+        height: 64,
+        views: vec![spec("+x+y+z", Vec3::ONE, 1.0), spec("+y", Vec3::Y, 1.0)],
+        lighting: ReferenceLighting::Unlit,
+        ..EvaluateOptions::default()
+    };
+    let e = evaluate(
+        &scene,
+        &Asset::Volume(baked.asset),
+        &options,
+        &mut EvaluateHooks::default(),
+    )
+    .expect("evaluate");
+    let lum = e.levels[0].mean.luminance_rel_diff;
+    assert!(
+        lum.abs() < 0.03,
+        "unlit: the asset's mean covered luminance is {:+.1} % of the unlit mesh's",
+        100.0 * lum
+    );
+}

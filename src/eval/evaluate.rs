@@ -513,7 +513,8 @@ pub fn evaluate(
 }
 
 /// The suite's options: a uniform spacing in the volume's voxels made world units; with
-/// lights, an unlit start (each light of the set is set before any render).
+/// lights, an unlit start (each light of the set is set before any render); unlit, the
+/// slicer draws volumes unlit too (their normals unused).
 fn evaluator_options(
     options: &EvaluateOptions,
     prepared: &Prepared,
@@ -534,6 +535,12 @@ fn evaluator_options(
         reference_per_axis: options.reference_per_axis,
         slicer: SlicerParams {
             spacing,
+            // Unlit: the asset's albedo too (a volume's normals unused), so that an unlit
+            // reference is compared with what is stored, not with the default light.
+            light: match options.lighting {
+                ReferenceLighting::Unlit => None,
+                _ => SlicerParams::default().light,
+            },
             ..SlicerParams::default()
         },
         raster_1spp: true,

@@ -65,7 +65,8 @@ pub struct Args {
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
     /// Lighting of the reference when no --light/--lights is given: auto (the lighting the
-    /// asset was baked with: its baked AO at each hit point, or unlit) or unlit.
+    /// asset was baked with: its baked AO at each hit point, or unlit) or unlit (the asset
+    /// drawn unlit too: a volume's normals unused).
     #[arg(long, value_enum, default_value_t = LightingArg::Auto)]
     lighting: LightingArg,
     /// Light the reference and the asset by this light, as `billow view` lights each kind:
