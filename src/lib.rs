@@ -32,8 +32,13 @@ pub mod export;
 pub mod import;
 pub mod inspect;
 pub(crate) mod material;
+/// Procedural noise volumes for tests and examples (feature `test-support`).
+#[cfg(any(test, feature = "test-support"))]
 pub mod noise_volume;
 pub mod presets;
+/// Procedural meshes (trees, tori, fur, trusses) for tests, examples and the gallery
+/// (feature `test-support`).
+#[cfg(any(test, feature = "test-support"))]
 pub mod procgen;
 pub mod provenance;
 pub mod rng;

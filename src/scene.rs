@@ -1,7 +1,7 @@
 //! The scene: what every baker consumes, and the one [`SceneBuilder`] that makes it.
 //!
 //! Import runs once and produces world-space triangles with per-vertex attributes
-//! and a per-triangle material; the procedural shapes ([`crate::procgen`]) build the
+//! and a per-triangle material; the procedural shapes (`procgen`, a test generator) build the
 //! same kind of scene. A `Scene` is geometry only: what an import noticed on the way
 //! (warnings, textures found or missing, dropped triangles, files read) is in the
 //! separate [`crate::import::ImportReport`]. Conventions (all importers follow them):

@@ -3,7 +3,7 @@
 //!
 //! Every triangle of a surface is extruded along its vertex normals into one prism cell,
 //! and the prisms' texture coordinates come from the surface's UVs, so one small tileable
-//! volume (e.g. a patch of fur baked from [`crate::procgen::fur_tile`]) is repeated over
+//! volume (e.g. a patch of fur baked from `procgen::fur_tile`, a test generator) is repeated over
 //! the whole surface. The rendering algorithm is unchanged: shell prisms are ordinary
 //! cells (SPEC §8.5).
 //!
@@ -27,7 +27,7 @@
 //! # Texture coordinates (the uvw → volume-axis mapping)
 //!
 //! Volumes are **Y-up**, like the box cells of `voxelize` ([`crate::voxelize::box_prisms`],
-//! extruded along +Y) and like [`crate::procgen::fur_tile`] (strands rooted in the unit
+//! extruded along +Y) and like `procgen::fur_tile` (strands rooted in the unit
 //! square of the x–z plane, growing along +Y to height 1). So a shell maps the surface's UV
 //! to the volume's **x and z** and the height fraction to **y**:
 //!

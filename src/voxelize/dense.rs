@@ -1,5 +1,5 @@
 //! The volume generation's MIP + combine stages (VB §3.2) for a level 0 that is already
-//! a dense volume — procedural volumes ([`crate::noise_volume`]) rather than rendered
+//! a dense volume — procedural volumes (`noise_volume`, a test generator) rather than rendered
 //! slice stacks. Level 0 is the same from all six directions; each direction's pyramid
 //! composites along its view axis and averages across ([`super::mip::downsample`]), and
 //! the six are combined per level with the user's function, exactly as `voxelize` does.
