@@ -429,13 +429,18 @@ fn help_gives_ranges_and_keys() {
     }
 }
 
-/// The help text of one flag (from its line to the next flag).
+/// The help text of one flag (from its line to the next flag's: `  -x, --long` or
+/// `      --long`, whichever comes first).
 fn flag_help<'a>(help: &'a str, flag: &str) -> &'a str {
     let start = help
         .find(&format!("      {flag} "))
         .or_else(|| help.find(&format!(", {flag} ")))
         .unwrap_or_else(|| panic!("{flag} not in help"));
     let rest = &help[start + flag.len() + 6..];
-    let end = rest.find("\n  -").unwrap_or(rest.len());
+    let end = ["\n  -", "\n      -"]
+        .iter()
+        .filter_map(|next| rest.find(next))
+        .min()
+        .unwrap_or(rest.len());
     &help[start..start + flag.len() + 6 + end]
 }
