@@ -15,19 +15,11 @@ mod common;
 
 use billow::camera::Camera;
 use billow::eval::image::write_comparison_png;
-use billow::eval::ImageF32;
 use billow::scene::Aabb;
 use billow_view::mesh_pass::MeshData;
-use billow_view::{Renderer, RgbaImage, ViewCamera};
+use billow_view::{Renderer, ViewCamera};
+use common::image_f32;
 use glam::{Mat4, Vec3, Vec4};
-
-fn image(i: &RgbaImage) -> ImageF32 {
-    ImageF32 {
-        width: i.width,
-        height: i.height,
-        data: i.data.iter().map(|p| Vec4::from_array(*p)).collect(),
-    }
-}
 
 #[test]
 fn a_mesh_plane_through_a_volume_cuts_it() {
@@ -74,7 +66,7 @@ fn a_mesh_plane_through_a_volume_cuts_it() {
         }
         let passes = r.passes();
         let (img, _) = r.render_image(&cam).expect("render");
-        (image(&img), passes)
+        (image_f32(&img), passes)
     };
     let (cut, passes) = render(&full, true, gpu);
     assert_eq!(passes, ["mesh", "volume", "resolve"]);
