@@ -24,7 +24,7 @@ use billow::scene::Aabb;
 use billow::test_support::max_abs_diff as max_abs;
 use billow::voxelize::{voxelize, Resolution, VoxelizeOptions};
 use billow_format::VolumeAsset;
-use billow_view::{Renderer, ViewCamera};
+use billow_view::Renderer;
 use common::image_f32;
 use glam::{Mat4, Vec3};
 
@@ -67,7 +67,7 @@ fn pruned_volumes_with_lod_bands_draw_like_the_cpu_and_like_the_source() {
     .enumerate()
     {
         let c = Camera::framed(&bounds, dir, std::f32::consts::FRAC_PI_4, 64, 64, dist);
-        let cam = ViewCamera::from_parts(c.view(), c.fov_y, c.width, c.height, c.near, c.far);
+        let cam = common::view_camera(&c);
         let cpu = render_volume(&pruned, &c, &SlicerParams::default()).expect("CPU render");
         let (g, stats) = rp.render_image(&cam).expect("GPU render");
         let (s, _) = rs.render_image(&cam).expect("GPU render");

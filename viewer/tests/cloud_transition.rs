@@ -26,7 +26,7 @@ use billow::camera::Camera;
 use billow::eval::image::write_comparison_png;
 use billow::import::{import, ImportOptions};
 use billow::scene::Aabb;
-use billow_view::{Renderer, RgbaImage, ViewCamera};
+use billow_view::{Renderer, RgbaImage};
 use common::image_f32;
 use glam::{Mat4, Vec3};
 
@@ -90,7 +90,7 @@ fn a_cloud_mid_transition_morphs_instead_of_popping() {
     };
     // Side view, as Lacewell's plots (view parallel to the ground).
     let c = Camera::framed(&bounds, Vec3::new(-0.9, -0.5, -0.6), 0.8, 96, 96, 1.0);
-    let cam = ViewCamera::from_parts(c.view(), c.fov_y, c.width, c.height, c.near, c.far);
+    let cam = common::view_camera(&c);
     let mut at = |z: f32| {
         r.lod_distance_override = Some(z);
         let (img, stats) = r.render_image(&cam).expect("render");

@@ -17,7 +17,7 @@ use billow::camera::Camera;
 use billow::eval::image::write_comparison_png;
 use billow::scene::Aabb;
 use billow_view::mesh_pass::MeshData;
-use billow_view::{Renderer, ViewCamera};
+use billow_view::Renderer;
 use common::image_f32;
 use glam::{Mat4, Vec3, Vec4};
 
@@ -39,7 +39,7 @@ fn a_mesh_plane_through_a_volume_cuts_it() {
         96,
         1.0,
     );
-    let cam = ViewCamera::from_parts(c.view(), c.fov_y, c.width, c.height, c.near, c.far);
+    let cam = common::view_camera(&c);
     // The ball with its cells split at z = 0.5 (so the front half can be drawn alone).
     let mut full = common::ball_asset(false);
     full.cells = Vec::new();

@@ -20,7 +20,7 @@ use billow::eval::slicer::{render_decoded_over, OpaqueBackdrop, SlicerParams};
 use billow::eval::volume_sampler::DecodedVolume;
 use billow::test_support::oak_wall::{camera, oak, WALL};
 use billow_view::mesh_pass::MeshData;
-use billow_view::{Renderer, ViewCamera};
+use billow_view::Renderer;
 use common::image_f32;
 use glam::{Mat4, Vec3};
 
@@ -33,14 +33,7 @@ fn check(name: &str, res: u32, size: u32) {
     };
     let asset = oak(res, "oak_wall_fade");
     let cam = camera(size);
-    let vc = ViewCamera::from_parts(
-        cam.view(),
-        cam.fov_y,
-        cam.width,
-        cam.height,
-        cam.near,
-        cam.far,
-    );
+    let vc = common::view_camera(&cam);
     // wall.obj (2 × 2 in x = 0) scaled by 40, moved down by 1.
     let wall = MeshData::quad(
         Vec3::new(0.0, -1.0, -40.0),

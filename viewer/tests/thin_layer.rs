@@ -18,7 +18,7 @@ use billow::eval::slicer::{render_volume, SlicerParams};
 use billow::test_support::thin_layer::{
     camera, coverage, plane_asset, Chain, AREA_TOL, FAR, NEAR, ROW_TOL,
 };
-use billow_view::{Renderer, ViewCamera};
+use billow_view::Renderer;
 use glam::Mat4;
 
 const RMSE_TOL: f64 = 0.005;
@@ -36,14 +36,7 @@ fn one_voxel_opaque_plane_is_covered_on_the_gpu() {
     for distance in [NEAR, FAR] {
         for elevation in [30.0f32, 45.0, 60.0] {
             let cam = camera(elevation, distance);
-            let vc = ViewCamera::from_parts(
-                cam.view(),
-                cam.fov_y,
-                cam.width,
-                cam.height,
-                cam.near,
-                cam.far,
-            );
+            let vc = common::view_camera(&cam);
             let (img, _) = r.render_image(&vc).expect("render");
             let gpu_img = common::image_f32(&img);
             let cpu = render_volume(&asset, &cam, &SlicerParams::default())
