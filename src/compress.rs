@@ -785,46 +785,4 @@ mod tests {
             &bc7(&odd.try_into().unwrap(), BC7Settings::alpha_ultrafast())
         );
     }
-
-    /// Measurement for docs/accuracy.md (not a check): the exact-zero constraint's cost on
-    /// a raw volume named by `BILLOW_MEASURE_VOLUME` (e.g. the oak at 128³, `--compress
-    /// none`). Run with `cargo test --lib compress -- --ignored --nocapture`.
-    #[test]
-    #[ignore = "measurement; needs BILLOW_MEASURE_VOLUME"]
-    fn measure_exact_zero_constraint() {
-        let Ok(p) = std::env::var("BILLOW_MEASURE_VOLUME") else {
-            crate::test_support::skip(
-                "measure_exact_zero_constraint",
-                "BILLOW_MEASURE_VOLUME unset",
-            );
-            return;
-        };
-        let a = VolumeAsset::read(std::path::Path::new(&p)).unwrap();
-        let dims = a.level_dims(0);
-        for keep in [false, true] {
-            let (mut sq, mut n, mut leaks, mut bytes) = (0f64, 0u64, 0u64, 0usize);
-            for (i, l) in a.levels.iter().enumerate() {
-                let d = mip_dims(dims, i as u32);
-                let enc = encode_bc7_with(l, d, 0, false, keep);
-                bytes += enc.len();
-                let dec = decode_bc7(&enc, d, 0);
-                for (s, t) in l.chunks_exact(4).zip(dec.chunks_exact(4)) {
-                    if s == [0; 4] && t != [0; 4] {
-                        leaks += 1;
-                    }
-                    if s != [0; 4] {
-                        for c in 0..4 {
-                            let e = f64::from(s[c]) - f64::from(t[c]);
-                            sq += e * e;
-                        }
-                        n += 4;
-                    }
-                }
-            }
-            eprintln!(
-                "keep_zero={keep}: {bytes} bytes, leaking empty texels {leaks}, RMSE over non-empty texel bytes {:.4}",
-                (sq / n as f64).sqrt()
-            );
-        }
-    }
 }

@@ -4,9 +4,19 @@
 //! straight to the process's stderr so that it shows even though a test harness captures
 //! `eprintln!`, and it fails instead under CI (`CI` set) or `BILLOW_REQUIRE=all`, where
 //! every resource it needs must be there. One rule for every test and report generator.
+//!
+//! Also the fixtures both the root tests (tests/) and the viewer's (viewer/tests/) draw,
+//! so that a GPU test and its CPU twin build one scene: the thin layer ([`thin_layer`]),
+//! the oak before a wall ([`oak_wall`]), boxes as prisms ([`box_prisms_z`]), and the
+//! measure of a lit ball ([`mean_around`]).
 
 use std::io::Write;
 use std::path::PathBuf;
+
+use billow_format::Prism;
+
+pub mod oak_wall;
+pub mod thin_layer;
 
 /// The repository root (the library's package root), whichever package's test asks: the
 /// CLI's tests run with their own manifest directory, bin/billow.
@@ -40,4 +50,69 @@ fn skip_unless_required(name: &str, tool: Option<&str>, reason: &str) {
         "{name}: {reason} (required under CI / BILLOW_REQUIRE=all)"
     );
     let _ = writeln!(std::io::stderr(), "SKIP: {name}: {reason}");
+}
+
+/// The positions of the two prisms (vertical edges along z: bottom z = `a[2]`, top z =
+/// `b[2]`) tiling the box `[a, b]`, split along its `(a.x, a.y)`–`(b.x, b.y)` diagonal.
+pub fn box_positions_z(a: [f32; 3], b: [f32; 3]) -> [[[f32; 3]; 6]; 2] {
+    let c = |x: f32, y: f32, z: f32| [x, y, z];
+    [
+        [
+            c(a[0], a[1], a[2]),
+            c(b[0], a[1], a[2]),
+            c(b[0], b[1], a[2]),
+            c(a[0], a[1], b[2]),
+            c(b[0], a[1], b[2]),
+            c(b[0], b[1], b[2]),
+        ],
+        [
+            c(a[0], a[1], a[2]),
+            c(b[0], b[1], a[2]),
+            c(a[0], b[1], a[2]),
+            c(a[0], a[1], b[2]),
+            c(b[0], b[1], b[2]),
+            c(a[0], b[1], b[2]),
+        ],
+    ]
+}
+
+/// The prisms of [`box_positions_z`], uvw = position mapped through `uvw_of` (the
+/// library's own boxes, `billow::voxelize::box_prisms`, are extruded along y).
+pub fn box_prisms_z(a: [f32; 3], b: [f32; 3], uvw_of: impl Fn([f32; 3]) -> [f32; 3]) -> Vec<Prism> {
+    box_positions_z(a, b)
+        .into_iter()
+        .map(|pos| Prism {
+            pos,
+            uvw: pos.map(&uvw_of),
+        })
+        .collect()
+}
+
+/// Mean of the 3×3 pixels of `img` around the projection of the world point `p` (the
+/// CPU and GPU shading tests measure a lit ball there).
+pub fn mean_around(
+    img: &crate::eval::ImageF32,
+    cam: &crate::camera::Camera,
+    p: glam::Vec3,
+) -> glam::Vec4 {
+    let (x, y) = cam
+        .view_to_pixel(crate::camera::to_view(&cam.view(), p))
+        .expect("in front of the camera");
+    let (x, y) = (x as i64, y as i64);
+    let mut acc = glam::Vec4::ZERO;
+    for dy in -1..=1 {
+        for dx in -1..=1 {
+            acc += img.data[(x + dx) as usize + img.width as usize * (y + dy) as usize];
+        }
+    }
+    acc / 9.0
+}
+
+/// The largest difference of any channel of any pixel between two images of one size.
+pub fn max_abs_diff(a: &crate::eval::ImageF32, b: &crate::eval::ImageF32) -> f32 {
+    a.data
+        .iter()
+        .zip(&b.data)
+        .map(|(p, q)| (*p - *q).abs().max_element())
+        .fold(0.0, f32::max)
 }

@@ -349,3 +349,67 @@ fn oak_bark_by_name() {
     assert_eq!(a.foliage.triangles.len(), 3166);
     assert_eq!(a.trunk.triangles.len(), 10_640);
 }
+
+/// The limits `billow bbcloud --help` prints are the ones the library refuses by: each
+/// option is accepted at its limit and refused just past it, naming itself.
+#[test]
+fn options_are_refused_exactly_past_their_published_limits() {
+    use billow::bbcloud::{
+        check_ambient, check_view_strength, estimate, BbcloudError, LARGEST_MAX_EXTENT,
+        MAX_ATLAS_SIZE, MAX_EPSILON, MAX_GUTTER, MAX_LODS, MAX_MIP_LEVELS, MAX_SAMPLES,
+        MAX_SUPERSAMPLE, MAX_VIEW_DIRS, MIN_ATLAS_SIZE, UNIT_RANGE,
+    };
+    let scene = leafy_scene(20);
+    let refused = |o: &BbcloudOptions| match estimate(&scene, o) {
+        Err(BbcloudError::BadParameter { option, .. }) => Some(option),
+        Ok(_) => None,
+        Err(e) => panic!("{e}"),
+    };
+    let d = BbcloudOptions::default;
+    let next_up = |x: f32| f32::from_bits(x.to_bits() + 1);
+    let view = |n: usize, strength: f32| {
+        Some(ViewPreference {
+            dirs: ViewDirs::Directions(vec![Vec3::Z; n]),
+            strength,
+        })
+    };
+    let shading = |ambient: f32| Shading {
+        light: None,
+        ambient,
+    };
+    #[rustfmt::skip]
+    let cases: Vec<(&str, BbcloudOptions, BbcloudOptions)> = vec![
+        ("epsilon", BbcloudOptions { epsilon: MAX_EPSILON, ..d() },
+            BbcloudOptions { epsilon: next_up(MAX_EPSILON), ..d() }),
+        ("samples", BbcloudOptions { samples: MAX_SAMPLES, ..d() },
+            BbcloudOptions { samples: MAX_SAMPLES + 1, ..d() }),
+        ("lods", BbcloudOptions { lods: MAX_LODS, ..d() },
+            BbcloudOptions { lods: MAX_LODS + 1, ..d() }),
+        ("atlas_size", BbcloudOptions { atlas_size: MIN_ATLAS_SIZE, ..d() },
+            BbcloudOptions { atlas_size: MIN_ATLAS_SIZE / 2, ..d() }),
+        ("atlas_size", BbcloudOptions { atlas_size: MAX_ATLAS_SIZE, ..d() },
+            BbcloudOptions { atlas_size: MAX_ATLAS_SIZE * 2, ..d() }),
+        ("max_extent", BbcloudOptions { max_extent: Some(LARGEST_MAX_EXTENT), ..d() },
+            BbcloudOptions { max_extent: Some(next_up(LARGEST_MAX_EXTENT)), ..d() }),
+        ("supersample", BbcloudOptions { supersample: MAX_SUPERSAMPLE, ..d() },
+            BbcloudOptions { supersample: MAX_SUPERSAMPLE + 1, ..d() }),
+        ("gutter", BbcloudOptions { gutter: MAX_GUTTER, ..d() },
+            BbcloudOptions { gutter: MAX_GUTTER + 1, ..d() }),
+        ("mip_levels", BbcloudOptions { mip_levels: MAX_MIP_LEVELS, ..d() },
+            BbcloudOptions { mip_levels: MAX_MIP_LEVELS + 1, ..d() }),
+        ("ambient", BbcloudOptions { shading: shading(*UNIT_RANGE.end()), ..d() },
+            BbcloudOptions { shading: shading(next_up(*UNIT_RANGE.end())), ..d() }),
+        ("view_strength", BbcloudOptions { view: view(1, *UNIT_RANGE.end()), ..d() },
+            BbcloudOptions { view: view(1, next_up(*UNIT_RANGE.end())), ..d() }),
+        ("view", BbcloudOptions { view: view(MAX_VIEW_DIRS, 1.0), ..d() },
+            BbcloudOptions { view: view(MAX_VIEW_DIRS + 1, 1.0), ..d() }),
+    ];
+    for (option, at, past) in &cases {
+        assert_eq!(refused(at), None, "{option} at its limit");
+        assert_eq!(refused(past), Some(*option), "{option} past its limit");
+    }
+    assert!(check_ambient(*UNIT_RANGE.start()).is_ok());
+    assert!(check_ambient(-f32::MIN_POSITIVE).is_err());
+    assert!(check_view_strength(*UNIT_RANGE.start()).is_ok());
+    assert!(check_view_strength(f32::NAN).is_err());
+}

@@ -368,21 +368,43 @@ fn help_gives_ranges_and_keys() {
         assert_eq!(r.code, Some(0), "{}", r.stderr);
         r.stdout
     };
+    // Every range below is the library's constant (the one the library refuses by), so the
+    // help and the library cannot disagree.
+    use billow::bbcloud::{
+        LARGEST_MAX_EXTENT, MAX_ATLAS_SIZE, MAX_EPSILON, MAX_LODS, MAX_MIP_LEVELS, MAX_SAMPLES,
+        MAX_SUPERSAMPLE as BB_SUPERSAMPLE, MIN_ATLAS_SIZE, UNIT_RANGE,
+    };
+    let unit = format!("[{}, {}]", UNIT_RANGE.start(), UNIT_RANGE.end());
+    let bb_ranges = [
+        ("--epsilon", format!("(0, {MAX_EPSILON}]")),
+        ("--samples", format!("1–{MAX_SAMPLES}")),
+        ("--lods", format!("1–{MAX_LODS}")),
+        ("--view-strength", unit.clone()),
+        ("--mip-levels", format!("1–{MAX_MIP_LEVELS}")),
+        ("--atlas-size", format!("{MIN_ATLAS_SIZE}–{MAX_ATLAS_SIZE}")),
+        ("--texel-density", "> 0".to_string()),
+        ("--ambient", unit),
+        ("--supersample", format!("1–{BB_SUPERSAMPLE}")),
+        ("--max-extent", format!("at most {LARGEST_MAX_EXTENT}")),
+    ];
     let bb = help("bbcloud");
-    for (flag, range) in [
-        ("--epsilon", "(0, 2]"),
-        ("--samples", "1–1000000"),
-        ("--lods", "1–8"),
-        ("--view-strength", "[0, 1]"),
-        ("--mip-levels", "1–5"),
-        ("--atlas-size", "64–16384"),
-        ("--texel-density", "> 0"),
-        ("--ambient", "[0, 1]"),
-        ("--supersample", "1–8"),
-        ("--max-extent", "at most 4"),
-    ] {
+    for (flag, range) in &bb_ranges {
         let entry = flag_help(&bb, flag);
-        assert!(entry.contains(range), "bbcloud {flag}: {entry}");
+        assert!(entry.contains(range.as_str()), "bbcloud {flag}: {entry}");
+    }
+    use billow::emptyspace::{MAX_DEPTH, MIN_CELL_COST, MIN_GAIN_RANGE};
+    let es = help("emptyspace");
+    for (flag, range) in [
+        ("--threshold", format!("0–{}", u8::MAX)),
+        ("--max-depth", format!("0–{MAX_DEPTH}")),
+        (
+            "--min-gain",
+            format!("[{}, {})", MIN_GAIN_RANGE.start, MIN_GAIN_RANGE.end),
+        ),
+        ("--cell-cost", format!("≥ {MIN_CELL_COST}")),
+    ] {
+        let entry = flag_help(&es, flag);
+        assert!(entry.contains(range.as_str()), "emptyspace {flag}: {entry}");
     }
     let vx = help("voxelize");
     // The library's limits, which the help prints from the same constants.
@@ -407,13 +429,18 @@ fn help_gives_ranges_and_keys() {
     }
 }
 
-/// The help text of one flag (from its line to the next flag).
+/// The help text of one flag (from its line to the next flag's: `  -x, --long` or
+/// `      --long`, whichever comes first).
 fn flag_help<'a>(help: &'a str, flag: &str) -> &'a str {
     let start = help
         .find(&format!("      {flag} "))
         .or_else(|| help.find(&format!(", {flag} ")))
         .unwrap_or_else(|| panic!("{flag} not in help"));
     let rest = &help[start + flag.len() + 6..];
-    let end = rest.find("\n  -").unwrap_or(rest.len());
+    let end = ["\n  -", "\n      -"]
+        .iter()
+        .filter_map(|next| rest.find(next))
+        .min()
+        .unwrap_or(rest.len());
     &help[start..start + flag.len() + 6 + end]
 }

@@ -420,9 +420,15 @@ fn shells_pruned_and_banded_assets_and_bad_parameters_are_refused() {
         prune(&skew, &EmptySpaceOptions::default()),
         Err(EmptySpaceError::NotABox(0))
     ));
+    // The limits `billow emptyspace --help` prints: refused just past them, accepted at them.
+    use billow::emptyspace::{MAX_DEPTH, MIN_CELL_COST, MIN_GAIN_RANGE};
     for bad in [
         EmptySpaceOptions {
-            min_gain: 1.0,
+            min_gain: MIN_GAIN_RANGE.end,
+            ..Default::default()
+        },
+        EmptySpaceOptions {
+            min_gain: -f64::EPSILON,
             ..Default::default()
         },
         EmptySpaceOptions {
@@ -430,7 +436,11 @@ fn shells_pruned_and_banded_assets_and_bad_parameters_are_refused() {
             ..Default::default()
         },
         EmptySpaceOptions {
-            max_depth: 65,
+            cell_cost: MIN_CELL_COST - 1e-9,
+            ..Default::default()
+        },
+        EmptySpaceOptions {
+            max_depth: MAX_DEPTH + 1,
             ..Default::default()
         },
     ] {
@@ -439,6 +449,13 @@ fn shells_pruned_and_banded_assets_and_bad_parameters_are_refused() {
             "{bad:?}"
         );
     }
+    let edge = EmptySpaceOptions {
+        min_gain: MIN_GAIN_RANGE.start,
+        cell_cost: MIN_CELL_COST,
+        max_depth: MAX_DEPTH,
+        ..Default::default()
+    };
+    assert!(prune(&src, &edge).is_ok(), "{edge:?}");
 }
 
 #[test]

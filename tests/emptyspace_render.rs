@@ -22,6 +22,7 @@ use billow::eval::volume_sampler::DecodedVolume;
 use billow::eval::ImageF32;
 use billow::import::{import, ImportOptions};
 use billow::scene::Aabb;
+use billow::test_support::max_abs_diff as max_abs;
 use billow::voxelize::{voxelize, Resolution, VoxelizeOptions};
 use billow_format::VolumeAsset;
 use glam::Vec3;
@@ -54,14 +55,6 @@ fn render(vol: &DecodedVolume, a: &VolumeAsset, cam: &Camera) -> (ImageF32, Slic
     )
     .unwrap();
     (r.image, r.stats)
-}
-
-fn max_abs(a: &ImageF32, b: &ImageF32) -> f32 {
-    a.data
-        .iter()
-        .zip(&b.data)
-        .map(|(p, q)| (*p - *q).abs().max_element())
-        .fold(0.0, f32::max)
 }
 
 fn out_dir() -> PathBuf {

@@ -13,59 +13,15 @@
 //! [`CUT_RMSE`] (a hard depth test measures 0.0144 at 32³ and 0.0094 at 128³, see
 //! docs/eval.md "Depth fade").
 
-use std::collections::BTreeMap;
-use std::path::PathBuf;
-
 use billow::camera::Camera;
 use billow::eval::image::write_comparison_png;
 use billow::eval::slicer::{render_decoded_over, OpaqueBackdrop, SlicerParams, Spacing};
 use billow::eval::volume_sampler::DecodedVolume;
 use billow::eval::ImageF32;
-use billow::import::{import, ImportOptions};
-use billow::voxelize::{voxelize, CombineFn, Preset, Resolution, VoxelizeOptions};
-use billow_format::VolumeAsset;
-use glam::{Vec3, Vec4};
+use billow::test_support::oak_wall::{camera, oak, WALL};
+use glam::Vec4;
 
 const CUT_RMSE: f64 = 0.008;
-const WALL: [f32; 4] = [0.5, 0.45, 0.4, 1.0];
-
-fn repo() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn oak(res: u32) -> VolumeAsset {
-    if res == 32 {
-        return VolumeAsset::read(&repo().join("fixtures/scenes/oak32.billow")).expect("oak32");
-    }
-    let scene = import(
-        &repo().join("fixtures/oak/eztree_oak_medium.gltf"),
-        &ImportOptions::default(),
-    )
-    .expect("import the oak")
-    .scene;
-    let opts = VoxelizeOptions {
-        resolution: Resolution::Longest(res),
-        combine: CombineFn::Preset(Preset::Opaque),
-        ..VoxelizeOptions::default()
-    };
-    voxelize(&scene, &opts, &|_, _| {})
-        .expect("voxelize")
-        .into_asset("eval_depth_fade", None, BTreeMap::new())
-}
-
-/// The camera of `oak_wall.ron`, `size`² pixels.
-fn camera(size: u32) -> Camera {
-    Camera {
-        eye: Vec3::new(110.0, 60.0, 70.0),
-        target: Vec3::new(0.0, 30.0, 0.0),
-        up: Vec3::Y,
-        fov_y: 45f32.to_radians(),
-        width: size,
-        height: size,
-        near: 1.0,
-        far: 400.0,
-    }
-}
 
 /// The wall (x = 0, y ∈ [−1, 79], z ∈ [−40, 40]) as view distances and a flat colour.
 fn wall(cam: &Camera) -> OpaqueBackdrop {
@@ -104,7 +60,7 @@ fn cut_rmse(a: &ImageF32, b: &ImageF32, backdrop: &OpaqueBackdrop) -> (f64, usiz
 }
 
 fn check(res: u32) {
-    let asset = oak(res);
+    let asset = oak(res, "eval_depth_fade");
     let vol = DecodedVolume::decode(&asset).expect("decode");
     // Pixels no larger than a voxel: slices at v₀, MIP level 0 (as the reference).
     let cam = camera(if res <= 32 { 128 } else { 256 });

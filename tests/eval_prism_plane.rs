@@ -10,6 +10,7 @@
 //!   lost), within `TOL_REL`·scale².
 
 use billow::eval::prism_plane::{intersect_prism_plane, SlicePolygon};
+use billow::test_support::box_positions_z as boxed;
 use proptest::prelude::*;
 
 /// Relative tolerance (f32 has 6e-8; a lerp costs a few ulps).
@@ -172,30 +173,6 @@ fn check_with(pos: &P6, z: f32, planar_sides: bool) -> SlicePolygon {
         "area {area} vs hull {ref_area}"
     );
     poly
-}
-
-fn boxed(min: [f32; 3], max: [f32; 3]) -> [P6; 2] {
-    // The fixture's box: prisms along z (bottom z = min, top z = max).
-    let c = |x: f32, y: f32, z: f32| [x, y, z];
-    let (a, b) = (min, max);
-    [
-        [
-            c(a[0], a[1], a[2]),
-            c(b[0], a[1], a[2]),
-            c(b[0], b[1], a[2]),
-            c(a[0], a[1], b[2]),
-            c(b[0], a[1], b[2]),
-            c(b[0], b[1], b[2]),
-        ],
-        [
-            c(a[0], a[1], a[2]),
-            c(b[0], b[1], a[2]),
-            c(a[0], b[1], a[2]),
-            c(a[0], a[1], b[2]),
-            c(b[0], b[1], b[2]),
-            c(a[0], b[1], b[2]),
-        ],
-    ]
 }
 
 /// Re-orders coordinates so the prism's vertical edges point along `axis` (0 = x, ...).

@@ -8,6 +8,7 @@ use billow::eval::reference::{ReferenceRenderer, Sampling};
 use billow::eval::slicer::{render_decoded_in_depth_range, render_volume, SlicerParams, Spacing};
 use billow::eval::volume_sampler::{DecodedVolume, MipFilter};
 use billow::scene::{Aabb, AlphaMode, Material, Scene, SceneBuilder, Vertex};
+use billow::test_support::box_prisms_z;
 use billow_format::{full_mip_count, mip_dims, ColourSpace, Header, Prism, VolumeAsset};
 use glam::{Vec2, Vec3, Vec4};
 
@@ -16,46 +17,11 @@ const RES: u32 = 16;
 const SIZE: u32 = 64;
 const FOV: f32 = std::f32::consts::FRAC_PI_4;
 
+/// The box `[min, max]` as two prisms extruded along z, uvw spanning [0, 1]³ over it.
 fn box_prisms(min: [f32; 3], max: [f32; 3]) -> Vec<Prism> {
-    let (a, b) = (min, max);
-    vec![
-        Prism {
-            pos: [
-                [a[0], a[1], a[2]],
-                [b[0], a[1], a[2]],
-                [b[0], b[1], a[2]],
-                [a[0], a[1], b[2]],
-                [b[0], a[1], b[2]],
-                [b[0], b[1], b[2]],
-            ],
-            uvw: [
-                [0., 0., 0.],
-                [1., 0., 0.],
-                [1., 1., 0.],
-                [0., 0., 1.],
-                [1., 0., 1.],
-                [1., 1., 1.],
-            ],
-        },
-        Prism {
-            pos: [
-                [a[0], a[1], a[2]],
-                [b[0], b[1], a[2]],
-                [a[0], b[1], a[2]],
-                [a[0], a[1], b[2]],
-                [b[0], b[1], b[2]],
-                [a[0], b[1], b[2]],
-            ],
-            uvw: [
-                [0., 0., 0.],
-                [1., 1., 0.],
-                [0., 1., 0.],
-                [0., 0., 1.],
-                [1., 1., 1.],
-                [0., 1., 1.],
-            ],
-        },
-    ]
+    box_prisms_z(min, max, |p| {
+        std::array::from_fn(|i| (p[i] - min[i]) / (max[i] - min[i]))
+    })
 }
 
 /// An opaque cube volume of `RES³` in `[0,1]³`, every level opaque `COLOR`.

@@ -5,51 +5,21 @@
 //! volume drawn by the slicer under the same light). The negative control is the volume
 //! without normals (what `auto` stored for foliage before), whose albedo ignores the light.
 
+mod common;
+
 use std::collections::BTreeMap;
 
 use billow::camera::ViewSpec;
 use billow::eval::lighting::EvalLight;
 use billow::eval::suite::{EvalOptions, Evaluator, PreparedAsset};
-use billow::rng::Pcg32;
-use billow::scene::{Material, Scene, SceneBuilder};
+use billow::scene::Scene;
 use billow::voxelize::{
     bake_params, bake_with_normals, voxelize, CombineFn, NormalsMode, Preset, Resolution,
     VoxelizeOptions,
 };
 use billow_format::{NormalKind, VolumeAsset};
-use glam::{Vec3, Vec4};
-
-/// `n` double-sided leaves in a flattened ball, each tilted up to 35° from horizontal
-/// (a canopy's leaves face the sky more than the horizon), one shade of green.
-fn canopy(n: u32, seed: u64) -> Scene {
-    let mut rng = Pcg32::seeded(seed, 3);
-    let mut sb = SceneBuilder::new();
-    let leaf = sb.material(Material {
-        double_sided: true,
-        ..Material::default()
-    });
-    let mesh = sb.mesh("leaves");
-    for _ in 0..n {
-        let c = loop {
-            let p = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0;
-            if p.length_squared() <= 1.0 {
-                break p * Vec3::new(1.0, 0.6, 1.0);
-            }
-        };
-        let tilt = 35f32.to_radians() * rng.next_f32();
-        let phi = std::f32::consts::TAU * rng.next_f32();
-        let nrm = Vec3::new(tilt.sin() * phi.cos(), tilt.cos(), tilt.sin() * phi.sin());
-        let a = nrm.any_orthonormal_vector() * 0.07;
-        let b = nrm.cross(a);
-        sb.quad(
-            [c - a - b, c + a - b, c + a + b, c - a + b],
-            Vec4::new(0.25, 0.6, 0.15, 1.0),
-            leaf,
-            mesh,
-        );
-    }
-    sb.finish()
-}
+use common::{leaf_canopy, Leaves};
+use glam::Vec3;
 
 /// The canopy baked at 32³ as `voxelize --normals <mode>` would.
 fn bake(scene: &Scene, mode: NormalsMode) -> VolumeAsset {
@@ -110,7 +80,7 @@ fn luminance(scene: &Scene, asset: &VolumeAsset, light: Vec3) -> (f64, f64) {
 
 #[test]
 fn a_foliage_volume_relights_like_its_mesh() {
-    let scene = canopy(500, 9);
+    let scene = leaf_canopy(500, 9, Leaves::Canopy);
     let moments = bake(&scene, NormalsMode::Auto);
     let kind = moments.header.volume.and_then(|v| v.normal_kind());
     assert_eq!(kind, Some(NormalKind::Moments), "auto stores moments");

@@ -10,11 +10,12 @@
 //! voxel normal (the radial normal at the voxel centre, trilinearly filtered) and the
 //! one-voxel soft edge of the ball.
 
-use billow::camera::{to_view, Camera};
+use billow::camera::Camera;
 use billow::eval::lighting::VolumeLight;
 use billow::eval::slicer::{render_volume, SlicerParams};
 use billow::noise_volume::{dust, sphere};
 use billow::scene::Aabb;
+use billow::test_support::mean_around as around;
 use glam::{Vec3, Vec4};
 
 const AMBIENT: f32 = 0.3;
@@ -26,21 +27,6 @@ fn camera() -> Camera {
         max: Vec3::ONE,
     };
     Camera::framed(&b, Vec3::NEG_Z, std::f32::consts::FRAC_PI_4, 128, 128, 1.0)
-}
-
-/// Mean of the 3×3 pixels around the projection of the world point `p`.
-fn around(img: &billow::eval::ImageF32, cam: &Camera, p: Vec3) -> Vec4 {
-    let (x, y) = cam
-        .view_to_pixel(to_view(&cam.view(), p))
-        .expect("in front of the camera");
-    let (x, y) = (x as i64, y as i64);
-    let mut acc = Vec4::ZERO;
-    for dy in -1..=1 {
-        for dx in -1..=1 {
-            acc += img.data[(x + dx) as usize + img.width as usize * (y + dy) as usize];
-        }
-    }
-    acc / 9.0
 }
 
 #[test]

@@ -13,6 +13,8 @@
 //! opacity correction for two blended levels) `opaque` measured +24.8 % / +50.0 % /
 //! +153 %, failing at 1× already.
 
+mod common;
+
 use billow::camera::{view_set_with, ViewDirections};
 use billow::eval::slicer::{render_decoded, SlicerParams, Spacing};
 use billow::eval::suite::{means_by_distance, EvalOptions, Evaluator, PreparedAsset};
@@ -25,53 +27,8 @@ use billow::voxelize::{
     bake_with_normals, voxelize, voxelize_sparse, CombineFn, NormalsMode, Preset, Resolution,
     VoxelizeOptions,
 };
+use common::{leaf_canopy, Leaves};
 use glam::{Vec3, Vec4};
-
-/// A foliage-like cloud: `n` small double-sided opaque quads of random orientation in a
-/// ball of radius 1 (denser towards the centre), and a trunk-like column of quads below
-/// it, whose coverage is correlated along every horizontal ray.
-fn foliage(n: u32, seed: u64) -> Scene {
-    let mut rng = Pcg32::seeded(seed, 7);
-    let mut sb = SceneBuilder::new();
-    let leaf = sb.material(Material {
-        double_sided: true,
-        ..Material::default()
-    });
-    let mesh = sb.mesh("leaves");
-    for _ in 0..n {
-        let c = loop {
-            let p = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0;
-            if p.length_squared() <= 1.0 {
-                break p * (0.4 + 0.6 * rng.next_f32());
-            }
-        };
-        let nrm = (Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0)
-            .normalize_or(Vec3::Y);
-        let a = nrm.any_orthonormal_vector() * 0.06;
-        let b = nrm.cross(a);
-        let g = 0.4 + 0.4 * rng.next_f32();
-        sb.quad(
-            [c - a - b, c + a - b, c + a + b, c - a + b],
-            Vec4::new(0.2, g, 0.1, 1.0),
-            leaf,
-            mesh,
-        );
-    }
-    // The trunk: a square column of four faces, x, z in [−0.08, 0.08], y from −1.6 to −0.6.
-    let bark = sb.mesh("trunk");
-    let (lo, hi, w) = (-1.6f32, -0.6f32, 0.08f32);
-    let c = Vec4::new(0.3, 0.2, 0.1, 1.0);
-    for (p, q) in [
-        (Vec3::new(-w, 0.0, -w), Vec3::new(w, 0.0, -w)),
-        (Vec3::new(w, 0.0, -w), Vec3::new(w, 0.0, w)),
-        (Vec3::new(w, 0.0, w), Vec3::new(-w, 0.0, w)),
-        (Vec3::new(-w, 0.0, w), Vec3::new(-w, 0.0, -w)),
-    ] {
-        let y = |v: Vec3, h: f32| Vec3::new(v.x, h, v.z);
-        sb.quad([y(p, lo), y(q, lo), y(q, hi), y(p, hi)], c, leaf, bark);
-    }
-    sb.finish()
-}
 
 /// Mean coverage difference (asset against mesh) per distance of a `combine` bake.
 fn coverage_by_distance(scene: &Scene, combine: Preset, factors: &[f32]) -> Vec<(f32, f64)> {
@@ -106,7 +63,7 @@ fn coverage_by_distance(scene: &Scene, combine: Preset, factors: &[f32]) -> Vec<
 
 #[test]
 fn a_foliage_volume_keeps_the_meshs_coverage_at_every_distance() {
-    let scene = foliage(700, 3);
+    let scene = leaf_canopy(700, 3, Leaves::Foliage);
     for combine in [Preset::Opaque, Preset::Mean] {
         let by = coverage_by_distance(&scene, combine, &[1.0, 4.0, 16.0]);
         println!("{combine:?}: {by:?}");
@@ -389,7 +346,7 @@ fn a_surface_with_coherent_normals_keeps_its_level_0_and_foliage_is_thinned() {
         "auto on the torus: {c:?} {surface:?}"
     );
     // Foliage: incoherent normals, thinned whatever is stored.
-    let leaves = foliage(400, 5);
+    let leaves = leaf_canopy(400, 5, Leaves::Foliage);
     let (k_off, _, _) = level0(&leaves, false, false, None);
     let (k, c, _) = level0(&leaves, true, false, None);
     let c = c.expect("coherence of a bake with mean normals");
@@ -430,7 +387,7 @@ fn every_normals_mode_judges_whether_a_closed_surface_keeps_its_level_0() {
         (opts.surface, v.coverage.scales[0])
     };
     let torus = billow::procgen::torus(1.0, 0.35, 48, 24);
-    let leaves = foliage(400, 5);
+    let leaves = leaf_canopy(400, 5, Leaves::Foliage);
     for mode in [NormalsMode::Off, NormalsMode::Moments] {
         let (surface, k) = judged(&torus, mode);
         assert!(

@@ -5,8 +5,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use billow::bbcloud::{
-    bake, estimate, BbcloudOptions, BbcloudStats, Estimate, Shading, Stage, ViewDirs,
-    ViewPreference, MAX_ATLAS_BYTES,
+    self as bb, bake, check_ambient, check_view_strength, estimate, BbcloudOptions, BbcloudStats,
+    Estimate, Shading, Stage, ViewDirs, ViewPreference, MAX_ATLAS_BYTES,
 };
 use billow::compress::{compress_cloud, Compression};
 use billow::export::gltf::cloud_gltf_bytes_with;
@@ -37,12 +37,17 @@ pub struct Args {
     /// Where to write the cloud asset (.billow). Written atomically.
     #[arg(short, long)]
     output: PathBuf,
-    /// Slab half-width ε of the plane search, in foliage bounding-sphere radii (doubled per LOD);
-    /// in (0, 2] (default: the preset's, else 0.04).
-    #[arg(long)]
+    // The ranges in this help are the library's constants (billow::bbcloud), said once.
+    #[arg(long, help = format!(
+        "Slab half-width ε of the plane search, in foliage bounding-sphere radii (doubled per \
+         LOD); in (0, {}] (default: the preset's, else 0.04)",
+        bb::MAX_EPSILON
+    ))]
     epsilon: Option<f32>,
-    /// Candidate planes tried per billboard (N), 1–1000000 (default: the preset's, else 500).
-    #[arg(long)]
+    #[arg(long, help = format!(
+        "Candidate planes tried per billboard (N), 1–{} (default: the preset's, else 500)",
+        bb::MAX_SAMPLES
+    ))]
     samples: Option<u32>,
     /// A named point of the measured accuracy/cost front, setting --epsilon, --samples and
     /// --atlas-size: draft, balanced, quality or hero (docs/cli.md, "Presets"). Explicit
@@ -54,8 +59,10 @@ pub struct Args {
     /// Random seed (PCG32), any 64-bit number; the same seed gives the same bytes.
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Number of LOD levels, 1–8; with 2 or more the last is two crossed vertical billboards.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, help = format!(
+        "Number of LOD levels, 1–{}; with 2 or more the last is two crossed vertical billboards",
+        bb::MAX_LODS
+    ))]
     lods: u32,
     /// Up axis: +x, -x, +y, -y, +z, -z or x,y,z (the last LOD's billboards contain it;
     /// --view-dirs horizontal is perpendicular to it). glTF is +y.
@@ -66,20 +73,27 @@ pub struct Args {
     /// such as +z; axes may also be separated by ',': "+z,+x").
     #[arg(long, value_name = "horizontal|DIR;DIR...", allow_hyphen_values = true)]
     view_dirs: Option<String>,
-    /// Strength of --view-dirs in [0, 1]: candidates rank by area·((1−s) + s·facing).
-    #[arg(long, default_value_t = 1.0, requires = "view_dirs")]
+    #[arg(long, default_value_t = 1.0, requires = "view_dirs", help = format!(
+        "Strength of --view-dirs in [{}, {}]: candidates rank by area·((1−s) + s·facing)",
+        bb::UNIT_RANGE.start(),
+        bb::UNIT_RANGE.end()
+    ))]
     view_strength: f32,
     /// Also bake a tangent-space normal map per billboard side (stored as a layer of every
     /// atlas, exported as the glTF normalTexture). Pair with --unlit for runtime lighting.
     #[arg(long)]
     normal_map: bool,
-    /// MIP levels stored per atlas, 1–5; allocations are aligned and padded so no stored
-    /// level mixes two billboards.
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = 4, help = format!(
+        "MIP levels stored per atlas, 1–{}; allocations are aligned and padded so no stored \
+         level mixes two billboards",
+        bb::MAX_MIP_LEVELS
+    ))]
     mip_levels: u32,
-    /// Largest atlas side in texels: a power of two, 64–16384 (default: the preset's, else
-    /// 2048).
-    #[arg(long)]
+    #[arg(long, help = format!(
+        "Largest atlas side in texels: a power of two, {}–{} (default: the preset's, else 2048)",
+        bb::MIN_ATLAS_SIZE,
+        bb::MAX_ATLAS_SIZE
+    ))]
     atlas_size: Option<u32>,
     /// Texels per world unit at LOD 0, > 0 (default: the most that fits one atlas per level).
     #[arg(long)]
@@ -91,15 +105,23 @@ pub struct Args {
     /// Bake albedo only, no lighting.
     #[arg(long)]
     unlit: bool,
-    /// Ambient light fraction (the rest is diffuse), in [0, 1].
-    #[arg(long, default_value_t = billow_core::shading::DEFAULT_AMBIENT)]
+    #[arg(long, default_value_t = billow_core::shading::DEFAULT_AMBIENT, help = format!(
+        "Ambient light fraction (the rest is diffuse), in [{}, {}]",
+        bb::UNIT_RANGE.start(),
+        bb::UNIT_RANGE.end()
+    ))]
     ambient: f32,
-    /// K: K×K coverage samples per texel, 1–8.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, help = format!(
+        "K: K×K coverage samples per texel, 1–{}",
+        bb::MAX_SUPERSAMPLE
+    ))]
     supersample: u32,
-    /// Limit each billboard to triangles within this distance of its seed, in foliage
-    /// bounding-sphere radii, > 0 and at most 4 (Lacewell §5; doubled per LOD). Default: no limit.
-    #[arg(long)]
+    #[arg(long, help = format!(
+        "Limit each billboard to triangles within this distance of its seed, in foliage \
+         bounding-sphere radii, > 0 and at most {} (Lacewell §5; doubled per LOD). Default: no \
+         limit",
+        bb::LARGEST_MAX_EXTENT
+    ))]
     max_extent: Option<f32>,
     /// Materials that make up the foliage (default: every alpha MASK/BLEND material).
     #[arg(long, num_args = 1..)]
@@ -244,12 +266,7 @@ fn parse_dir(flag: &str, s: &str) -> Result<Vec3, CliError> {
 }
 
 fn parse_view(s: &str, up: Vec3, strength: f32) -> Result<ViewPreference, CliError> {
-    if !(0.0..=1.0).contains(&strength) {
-        return Err(bad(
-            "--view-strength",
-            format!("must be in [0, 1], got {strength}"),
-        ));
-    }
+    check_view_strength(strength).map_err(|e| bbcloud_error(s, &e))?;
     let dirs = if s.trim().eq_ignore_ascii_case("horizontal") {
         ViewDirs::Horizontal { up }
     } else {
@@ -268,8 +285,11 @@ fn parse_view(s: &str, up: Vec3, strength: f32) -> Result<ViewPreference, CliErr
                 }
             }
         }
-        if d.is_empty() || d.len() > 64 {
-            return Err(bad("--view-dirs", format!("'{s}': 1 to 64 directions")));
+        if d.is_empty() || d.len() > bb::MAX_VIEW_DIRS {
+            return Err(bad(
+                "--view-dirs",
+                format!("'{s}': 1 to {} directions", bb::MAX_VIEW_DIRS),
+            ));
         }
         ViewDirs::Directions(d)
     };
@@ -322,12 +342,9 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     named.push(&args.input);
     named.extend(args.atlas.as_deref());
     depfile::check(args.depfile.as_deref(), &named)?;
-    if !(0.0..=1.0).contains(&args.ambient) {
-        return Err(bad(
-            "--ambient",
-            format!("must be in [0, 1], got {}", args.ambient),
-        ));
-    }
+    let input_shown = args.input.display().to_string();
+    // Before the import: the library checks it again.
+    check_ambient(args.ambient).map_err(|e| bbcloud_error(&input_shown, &e))?;
     let light = if args.unlit {
         None
     } else {

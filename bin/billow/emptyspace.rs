@@ -5,7 +5,10 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use billow::compress::{encode_volume, Compression};
-use billow::emptyspace::{prune, EmptySpaceOptions, EmptySpaceStats, DEFAULT_CELL_COST};
+use billow::emptyspace::{
+    prune, EmptySpaceOptions, EmptySpaceStats, DEFAULT_CELL_COST, MAX_DEPTH, MIN_CELL_COST,
+    MIN_GAIN_RANGE,
+};
 use billow_core::gpu_memory::volume_gpu_bytes;
 use billow_format::{read_file, AssetKind, VolumeAsset};
 use serde::Serialize;
@@ -31,14 +34,18 @@ pub struct Args {
     /// 2-voxel blocks; halved for each coarser tier).
     #[arg(long, default_value_t = 0)]
     min_box: u32,
-    /// Deepest kd-tree level (the root is 0), 0–64.
-    #[arg(long, default_value_t = 24)]
+    // The ranges and defaults in this help are the library's (billow::emptyspace), said once.
+    #[arg(long, default_value_t = EmptySpaceOptions::default().max_depth,
+          help = format!("Deepest kd-tree level (the root is 0), 0–{MAX_DEPTH}"))]
     max_depth: u32,
-    /// Smallest relative cost reduction worth a split, in [0, 1).
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = EmptySpaceOptions::default().min_gain, help = format!(
+        "Smallest relative cost reduction worth a split, in [{}, {})",
+        MIN_GAIN_RANGE.start, MIN_GAIN_RANGE.end
+    ))]
     min_gain: f64,
-    /// Cost of one more box in the kd-tree's split cost, in atlas texels, ≥ 0.
-    #[arg(long, default_value_t = DEFAULT_CELL_COST)]
+    #[arg(long, default_value_t = DEFAULT_CELL_COST, help = format!(
+        "Cost of one more box in the kd-tree's split cost, in atlas texels, ≥ {MIN_CELL_COST}"
+    ))]
     cell_cost: f64,
     /// Most MIP tiers stored as bricks (default: as many as save memory); 0 keeps the
     /// volume whole.

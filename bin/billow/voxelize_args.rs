@@ -54,12 +54,14 @@ pub struct Args {
     #[arg(long, default_value_t = 0.5,
           help = format!("Empty border around the mesh, in voxels, 0–{}", billow::voxelize::MAX_MARGIN))]
     pub(crate) margin: f32,
-    /// Round every side of the grid up to a multiple of N voxels, 1–2048 (the box grows evenly with
-    /// empty voxels). `billow emptyspace` needs even sides, and sides that are multiples of
-    /// 2^k to prune MIP levels 1..k as well. Default: with `--res N` and no `--bounds`, the
-    /// largest of 8, 4, 2, 1 that divides N (so the longest axis stays N: 8 for 128, 256, 512);
-    /// with `--res XxYxZ` or `--bounds`, 1 (the grid is exactly as asked).
-    #[arg(long)]
+    #[arg(long, help = format!(
+        "Round every side of the grid up to a multiple of N voxels, 1–{} (the box grows evenly \
+         with empty voxels). `billow emptyspace` needs even sides, and sides that are multiples \
+         of 2^k to prune MIP levels 1..k as well. Default: with `--res N` and no `--bounds`, the \
+         largest of 8, 4, 2, 1 that divides N (so the longest axis stays N: 8 for 128, 256, \
+         512); with `--res XxYxZ` or `--bounds`, 1 (the grid is exactly as asked)",
+        billow::voxelize::MAX_AXIS
+    ))]
     pub(crate) align: Option<u32>,
     /// Bake exactly this box, `minx,miny,minz,maxx,maxy,maxz` (no margin), e.g. `0,0,0,1,1,1`
     /// for a tileable volume texture used by `billow shell`.

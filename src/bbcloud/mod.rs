@@ -41,7 +41,7 @@ use rayon::prelude::*;
 pub use bake::Shading;
 pub use element::{Element, Plane};
 pub use plane_search::{Found, SearchParams, SearchStats};
-pub use view::{ViewDirs, ViewPreference};
+pub use view::{ViewDirs, ViewPreference, MAX_VIEW_DIRS};
 
 use crate::scene::Scene;
 use assemble::LevelLayout;
@@ -144,6 +144,31 @@ pub enum BbcloudError {
 /// Most bytes of atlas texels (all LOD levels, MIP levels and layers) a bake may make:
 /// 1 GiB (the file is about as large, the bake's peak memory about three times that).
 pub const MAX_ATLAS_BYTES: u64 = 1 << 30;
+
+// The ranges of [`BbcloudOptions`]' fields, each said once: [`estimate`] and [`bake`]
+// refuse a value outside them ([`BbcloudError::BadParameter`]), and `billow bbcloud
+// --help` prints them from these constants.
+
+/// Largest slab half-width `epsilon`, in foliage bounding-sphere radii (it must be above 0).
+pub const MAX_EPSILON: f32 = 2.0;
+/// Most candidate planes per billboard, `samples` (at least 1).
+pub const MAX_SAMPLES: u32 = 1_000_000;
+/// Most LOD levels, `lods` (at least 1).
+pub const MAX_LODS: u32 = 8;
+/// Smallest `atlas_size`, texels (a power of two).
+pub const MIN_ATLAS_SIZE: u32 = 64;
+/// Largest `atlas_size`, texels (a power of two).
+pub const MAX_ATLAS_SIZE: u32 = 16384;
+/// Largest `max_extent`, in foliage bounding-sphere radii (it must be above 0).
+pub const LARGEST_MAX_EXTENT: f32 = 4.0;
+/// Most coverage samples per texel side, `supersample` K (K×K samples; at least 1).
+pub const MAX_SUPERSAMPLE: u32 = 8;
+/// Widest `gutter`, texels.
+pub const MAX_GUTTER: u32 = 16;
+/// Most MIP levels per atlas, `mip_levels` (at least 1).
+pub const MAX_MIP_LEVELS: u32 = 5;
+/// The range of the shading's ambient fraction and of the view preference's strength.
+pub const UNIT_RANGE: std::ops::RangeInclusive<f32> = 0.0..=1.0;
 
 /// Candidate-plane tests per second assumed by [`Estimate::search_seconds`] (measured: the
 /// release build, a few cores).
@@ -264,32 +289,63 @@ pub struct BbcloudStats {
     pub seconds: Seconds,
 }
 
+/// `ambient` within [`UNIT_RANGE`] (as [`estimate`] and [`bake`] check it; a caller may
+/// check it before any heavy work).
+pub fn check_ambient(ambient: f32) -> Result<(), BbcloudError> {
+    check_unit("ambient", ambient)
+}
+
+/// A view preference's `strength` within [`UNIT_RANGE`] (as [`estimate`] and [`bake`]
+/// check it; a caller may check it before any heavy work).
+pub fn check_view_strength(strength: f32) -> Result<(), BbcloudError> {
+    check_unit("view_strength", strength)
+}
+
+fn check_unit(option: &'static str, v: f32) -> Result<(), BbcloudError> {
+    if UNIT_RANGE.contains(&v) {
+        return Ok(());
+    }
+    Err(BbcloudError::BadParameter {
+        option,
+        message: format!(
+            "must be in [{}, {}], got {v}",
+            UNIT_RANGE.start(),
+            UNIT_RANGE.end()
+        ),
+    })
+}
+
 fn check(opts: &BbcloudOptions) -> Result<(), BbcloudError> {
     let bad =
         |option: &'static str, message: String| Err(BbcloudError::BadParameter { option, message });
-    if !(opts.epsilon.is_finite() && opts.epsilon > 0.0 && opts.epsilon <= 2.0) {
+    if !(opts.epsilon.is_finite() && opts.epsilon > 0.0 && opts.epsilon <= MAX_EPSILON) {
         return bad(
             "epsilon",
             format!(
-                "{} is out of range (above 0, at most 2 bounding-sphere radii)",
+                "{} is out of range (above 0, at most {MAX_EPSILON} bounding-sphere radii)",
                 opts.epsilon
             ),
         );
     }
-    if opts.samples == 0 || opts.samples > 1_000_000 {
+    if !(1..=MAX_SAMPLES).contains(&opts.samples) {
         return bad(
             "samples",
-            format!("{} is out of range (1 to 1000000)", opts.samples),
+            format!("{} is out of range (1 to {MAX_SAMPLES})", opts.samples),
         );
     }
-    if !(1..=8).contains(&opts.lods) {
-        return bad("lods", format!("{} is out of range (1 to 8)", opts.lods));
+    if !(1..=MAX_LODS).contains(&opts.lods) {
+        return bad(
+            "lods",
+            format!("{} is out of range (1 to {MAX_LODS})", opts.lods),
+        );
     }
-    if !opts.atlas_size.is_power_of_two() || !(64..=16384).contains(&opts.atlas_size) {
+    if !opts.atlas_size.is_power_of_two()
+        || !(MIN_ATLAS_SIZE..=MAX_ATLAS_SIZE).contains(&opts.atlas_size)
+    {
         return bad(
             "atlas_size",
             format!(
-                "{} is out of range (a power of two from 64 to 16384)",
+                "{} is out of range (a power of two from {MIN_ATLAS_SIZE} to {MAX_ATLAS_SIZE})",
                 opts.atlas_size
             ),
         );
@@ -299,39 +355,55 @@ fn check(opts: &BbcloudOptions) -> Result<(), BbcloudError> {
     }
     if let Some(r) = opts
         .max_extent
-        .filter(|r| !(r.is_finite() && *r > 0.0 && *r <= 4.0))
+        .filter(|r| !(r.is_finite() && *r > 0.0 && *r <= LARGEST_MAX_EXTENT))
     {
         return bad(
             "max_extent",
-            format!("{r} is out of range (above 0, at most 4 bounding-sphere radii)"),
+            format!(
+                "{r} is out of range (above 0, at most {LARGEST_MAX_EXTENT} bounding-sphere radii)"
+            ),
         );
     }
-    if !(1..=8).contains(&opts.supersample) {
+    if !(1..=MAX_SUPERSAMPLE).contains(&opts.supersample) {
         return bad(
             "supersample",
-            format!("{} is out of range (1 to 8)", opts.supersample),
+            format!(
+                "{} is out of range (1 to {MAX_SUPERSAMPLE})",
+                opts.supersample
+            ),
         );
     }
-    if opts.gutter > 16 {
+    if opts.gutter > MAX_GUTTER {
         return bad(
             "gutter",
-            format!("{} is out of range (0 to 16 texels)", opts.gutter),
+            format!("{} is out of range (0 to {MAX_GUTTER} texels)", opts.gutter),
         );
     }
-    if !(1..=5).contains(&opts.mip_levels) {
+    if !(1..=MAX_MIP_LEVELS).contains(&opts.mip_levels) {
         return bad(
             "mip_levels",
-            format!("{} is out of range (1 to 5)", opts.mip_levels),
+            format!(
+                "{} is out of range (1 to {MAX_MIP_LEVELS})",
+                opts.mip_levels
+            ),
         );
     }
+    check_ambient(opts.shading.ambient)?;
     if !(opts.up.is_finite() && (opts.up.length() - 1.0).abs() < 1e-3) {
         return bad("up", "must be a finite unit vector".into());
     }
-    if opts.view.as_ref().is_some_and(|v| !v.is_valid()) {
-        return bad(
-            "view",
-            "must be 1 to 64 finite unit vectors, strength from 0 to 1".into(),
-        );
+    if let Some(v) = &opts.view {
+        check_view_strength(v.strength)?;
+        if !v.is_valid() {
+            return bad(
+                "view",
+                format!(
+                    "must be 1 to {MAX_VIEW_DIRS} finite unit vectors, strength from {} to {}",
+                    UNIT_RANGE.start(),
+                    UNIT_RANGE.end()
+                ),
+            );
+        }
     }
     if let Some(l) = opts.shading.light {
         if !(l.is_finite() && l.length() > 0.0) {

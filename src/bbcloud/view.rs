@@ -29,7 +29,10 @@ pub enum ViewDirs {
     Directions(Vec<Vec3>),
 }
 
-/// A view preference: directions and strength `s` in [0, 1].
+/// Most directions a [`ViewDirs::Directions`] preference may list.
+pub const MAX_VIEW_DIRS: usize = 64;
+
+/// A view preference: directions and strength `s` in [`super::UNIT_RANGE`] ([0, 1]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ViewPreference {
     pub dirs: ViewDirs,
@@ -61,9 +64,11 @@ impl ViewPreference {
         let unit = |v: &Vec3| v.is_finite() && (v.length() - 1.0).abs() < 1e-3;
         let dirs = match &self.dirs {
             ViewDirs::Horizontal { up } => unit(up),
-            ViewDirs::Directions(d) => !d.is_empty() && d.len() <= 64 && d.iter().all(unit),
+            ViewDirs::Directions(d) => {
+                !d.is_empty() && d.len() <= MAX_VIEW_DIRS && d.iter().all(unit)
+            }
         };
-        dirs && (0.0..=1.0).contains(&self.strength)
+        dirs && super::UNIT_RANGE.contains(&self.strength)
     }
 
     /// How the preference is recorded in the asset header.

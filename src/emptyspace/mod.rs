@@ -94,6 +94,17 @@ pub struct EmptySpaceOptions {
     pub memory_limit: u64,
 }
 
+// The ranges of [`EmptySpaceOptions`]' fields, each said once: [`prune`] refuses a value
+// outside them ([`EmptySpaceError::InvalidParam`]), and `billow emptyspace --help` prints
+// them from these constants.
+
+/// Deepest kd-tree level `max_depth` may ask for (the root is 0).
+pub const MAX_DEPTH: u32 = 64;
+/// The range of `min_gain`, the smallest relative cost reduction worth a split.
+pub const MIN_GAIN_RANGE: std::ops::Range<f64> = 0.0..1.0;
+/// The least `cell_cost`, atlas texels (it must be finite).
+pub const MIN_CELL_COST: f64 = 0.0;
+
 /// Default per-box cost, texels.
 pub const DEFAULT_CELL_COST: f64 = 256.0;
 /// Largest atlas side in texels: the smallest 3D-texture limit wgpu guarantees.
@@ -214,21 +225,21 @@ fn params_text(o: &EmptySpaceOptions, tail: u32, boxes: usize, dims: [u32; 3]) -
 }
 
 fn check_options(o: &EmptySpaceOptions) -> Result<(), EmptySpaceError> {
-    if !(0.0..1.0).contains(&o.min_gain) {
+    if !MIN_GAIN_RANGE.contains(&o.min_gain) {
         return Err(EmptySpaceError::InvalidParam(format!(
-            "minimum gain {} not in [0, 1)",
-            o.min_gain
+            "minimum gain {} not in [{}, {})",
+            o.min_gain, MIN_GAIN_RANGE.start, MIN_GAIN_RANGE.end
         )));
     }
-    if !(o.cell_cost >= 0.0 && o.cell_cost.is_finite()) {
+    if !(o.cell_cost >= MIN_CELL_COST && o.cell_cost.is_finite()) {
         return Err(EmptySpaceError::InvalidParam(format!(
-            "cell cost {} must be finite and ≥ 0",
+            "cell cost {} must be finite and ≥ {MIN_CELL_COST}",
             o.cell_cost
         )));
     }
-    if o.max_depth > 64 {
+    if o.max_depth > MAX_DEPTH {
         return Err(EmptySpaceError::InvalidParam(format!(
-            "maximum depth {} is out of range (0 to 64)",
+            "maximum depth {} is out of range (0 to {MAX_DEPTH})",
             o.max_depth
         )));
     }

@@ -140,3 +140,80 @@ pub fn sha256(path: &Path) -> String {
     let bytes = std::fs::read(path).unwrap();
     format!("{:x}", Sha256::digest(bytes))
 }
+
+/// How [`leaf_canopy`] scatters its leaves.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Leaves {
+    /// A canopy (tests/relight_moments.rs): leaves in a ball flattened to 0.6 in y, each
+    /// tilted up to 35° from horizontal (a canopy's leaves face the sky more than the
+    /// horizon), one shade of green, 0.14 wide.
+    Canopy,
+    /// Foliage (tests/voxelize_coverage.rs): leaves of random orientation in a ball of
+    /// radius 1, denser towards the centre, greens that vary, 0.12 wide; and a trunk-like
+    /// square column of four faces below (x, z in [−0.08, 0.08], y from −1.6 to −0.6),
+    /// whose coverage is correlated along every horizontal ray.
+    Foliage,
+}
+
+/// `n` small double-sided opaque square leaves scattered as `leaves` says (the one leafy
+/// scene of the root tests; the same `n`, `seed` and kind give the same scene).
+pub fn leaf_canopy(n: u32, seed: u64, leaves: Leaves) -> billow::scene::Scene {
+    use billow::rng::Pcg32;
+    use billow::scene::{Material, SceneBuilder};
+    use glam::{Vec3, Vec4};
+    let foliage = leaves == Leaves::Foliage;
+    let mut rng = Pcg32::seeded(seed, if foliage { 7 } else { 3 });
+    let mut sb = SceneBuilder::new();
+    let leaf = sb.material(Material {
+        double_sided: true,
+        ..Material::default()
+    });
+    let mesh = sb.mesh("leaves");
+    for _ in 0..n {
+        let p = loop {
+            let p = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0;
+            if p.length_squared() <= 1.0 {
+                break p;
+            }
+        };
+        let (c, nrm, half) = if foliage {
+            let c = p * (0.4 + 0.6 * rng.next_f32());
+            let nrm = (Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0)
+                .normalize_or(Vec3::Y);
+            (c, nrm, 0.06)
+        } else {
+            let tilt = 35f32.to_radians() * rng.next_f32();
+            let phi = std::f32::consts::TAU * rng.next_f32();
+            let nrm = Vec3::new(tilt.sin() * phi.cos(), tilt.cos(), tilt.sin() * phi.sin());
+            (p * Vec3::new(1.0, 0.6, 1.0), nrm, 0.07)
+        };
+        let a = nrm.any_orthonormal_vector() * half;
+        let b = nrm.cross(a);
+        let colour = if foliage {
+            Vec4::new(0.2, 0.4 + 0.4 * rng.next_f32(), 0.1, 1.0)
+        } else {
+            Vec4::new(0.25, 0.6, 0.15, 1.0)
+        };
+        sb.quad(
+            [c - a - b, c + a - b, c + a + b, c - a + b],
+            colour,
+            leaf,
+            mesh,
+        );
+    }
+    if foliage {
+        let bark = sb.mesh("trunk");
+        let (lo, hi, w) = (-1.6f32, -0.6f32, 0.08f32);
+        let c = Vec4::new(0.3, 0.2, 0.1, 1.0);
+        for (p, q) in [
+            (Vec3::new(-w, 0.0, -w), Vec3::new(w, 0.0, -w)),
+            (Vec3::new(w, 0.0, -w), Vec3::new(w, 0.0, w)),
+            (Vec3::new(w, 0.0, w), Vec3::new(-w, 0.0, w)),
+            (Vec3::new(-w, 0.0, w), Vec3::new(-w, 0.0, -w)),
+        ] {
+            let y = |v: Vec3, h: f32| Vec3::new(v.x, h, v.z);
+            sb.quad([y(p, lo), y(q, lo), y(q, hi), y(p, hi)], c, leaf, bark);
+        }
+    }
+    sb.finish()
+}

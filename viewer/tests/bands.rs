@@ -19,29 +19,14 @@ use billow::emptyspace::{prune, EmptySpaceOptions};
 use billow::eval::image::write_comparison_png;
 use billow::eval::metrics::compare;
 use billow::eval::slicer::{render_volume, SlicerParams};
-use billow::eval::ImageF32;
 use billow::import::{import, ImportOptions};
 use billow::scene::Aabb;
+use billow::test_support::max_abs_diff as max_abs;
 use billow::voxelize::{voxelize, Resolution, VoxelizeOptions};
 use billow_format::VolumeAsset;
-use billow_view::{Renderer, RgbaImage, ViewCamera};
-use glam::{Mat4, Vec3, Vec4};
-
-fn image(i: &RgbaImage) -> ImageF32 {
-    ImageF32 {
-        width: i.width,
-        height: i.height,
-        data: i.data.iter().map(|p| Vec4::from_array(*p)).collect(),
-    }
-}
-
-fn max_abs(a: &ImageF32, b: &ImageF32) -> f32 {
-    a.data
-        .iter()
-        .zip(&b.data)
-        .map(|(p, q)| (*p - *q).abs().max_element())
-        .fold(0.0, f32::max)
-}
+use billow_view::Renderer;
+use common::image_f32;
+use glam::{Mat4, Vec3};
 
 #[test]
 fn pruned_volumes_with_lod_bands_draw_like_the_cpu_and_like_the_source() {
@@ -82,11 +67,11 @@ fn pruned_volumes_with_lod_bands_draw_like_the_cpu_and_like_the_source() {
     .enumerate()
     {
         let c = Camera::framed(&bounds, dir, std::f32::consts::FRAC_PI_4, 64, 64, dist);
-        let cam = ViewCamera::from_parts(c.view(), c.fov_y, c.width, c.height, c.near, c.far);
+        let cam = common::view_camera(&c);
         let cpu = render_volume(&pruned, &c, &SlicerParams::default()).expect("CPU render");
         let (g, stats) = rp.render_image(&cam).expect("GPU render");
         let (s, _) = rs.render_image(&cam).expect("GPU render");
-        let (g, s) = (image(&g), image(&s));
+        let (g, s) = (image_f32(&g), image_f32(&s));
         let err = compare(&cpu.image, &g).unwrap();
         let d_cpu = max_abs(&cpu.image, &g);
         let d_src = max_abs(&s, &g);

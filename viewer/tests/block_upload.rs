@@ -20,26 +20,11 @@ mod common;
 use billow::compress::{compress_cloud, compress_volume};
 use billow::eval::image::write_comparison_png;
 use billow::eval::metrics::compare;
-use billow::eval::ImageF32;
+use billow::test_support::max_abs_diff as max_abs;
 use billow_format::{CloudAsset, Mesh};
 use billow_view::{Gpu, Renderer, RgbaImage, ViewCamera};
-use glam::{Mat4, Vec3, Vec4};
-
-fn image(i: &RgbaImage) -> ImageF32 {
-    ImageF32 {
-        width: i.width,
-        height: i.height,
-        data: i.data.iter().map(|p| Vec4::from_array(*p)).collect(),
-    }
-}
-
-fn max_abs(a: &ImageF32, b: &ImageF32) -> f32 {
-    a.data
-        .iter()
-        .zip(&b.data)
-        .map(|(p, q)| (*p - *q).abs().max_element())
-        .fold(0.0, f32::max)
-}
+use common::image_f32;
+use glam::{Mat4, Vec3};
 
 /// Two devices: with the BC features requested (when the adapter has them, and blocks
 /// kept even on a software adapter, which by default uploads compressed textures decoded:
@@ -128,9 +113,9 @@ fn compressed_volumes_draw_the_same_from_blocks_and_decoded() {
         0.1,
         10.0,
     );
-    let b = image(&rb.render_image(&cam).unwrap().0);
-    let d = image(&rd.render_image(&cam).unwrap().0);
-    let r = image(&rr.render_image(&cam).unwrap().0);
+    let b = image_f32(&rb.render_image(&cam).unwrap().0);
+    let d = image_f32(&rd.render_image(&cam).unwrap().0);
+    let r = image_f32(&rr.render_image(&cam).unwrap().0);
     let diff = max_abs(&b, &d);
     let lossy = compare(&r, &d).unwrap().rmse;
     println!("blocks vs decoded max |Δ| {diff:.5}; compressed vs raw RMSE {lossy:.5}");
@@ -176,8 +161,8 @@ fn compressed_moments_draw_the_same_from_blocks_and_decoded() {
         0.1,
         10.0,
     );
-    let b = image(&rb.render_image(&cam).unwrap().0);
-    let d = image(&rd.render_image(&cam).unwrap().0);
+    let b = image_f32(&rb.render_image(&cam).unwrap().0);
+    let d = image_f32(&rd.render_image(&cam).unwrap().0);
     let diff = max_abs(&b, &d);
     println!("moments: blocks vs decoded max |Δ| {diff:.5}");
     if diff > 2.0 / 255.0 {
@@ -230,8 +215,8 @@ fn compressed_bands_draw_the_same_from_blocks_and_decoded() {
         0.1,
         10.0,
     );
-    let b = image(&rb.render_image(&cam).unwrap().0);
-    let d = image(&rd.render_image(&cam).unwrap().0);
+    let b = image_f32(&rb.render_image(&cam).unwrap().0);
+    let d = image_f32(&rd.render_image(&cam).unwrap().0);
     let diff = max_abs(&b, &d);
     assert!(diff <= 2.0 / 255.0, "blocks vs decoded max |Δ| {diff}");
     assert!(d.coverage() > 1e-3, "the ball is drawn");
@@ -304,7 +289,7 @@ fn compressed_clouds_draw_the_same_from_blocks_and_decoded() {
         0
     };
     assert_eq!(nb, want);
-    let (b, d) = (image(&b), image(&d));
+    let (b, d) = (image_f32(&b), image_f32(&d));
     let err = compare(&d, &b).unwrap().rmse;
     println!(
         "cloud blocks vs decoded RMSE {err:.5}, max |Δ| {:.4}, coverage {:.4} {:.4}",

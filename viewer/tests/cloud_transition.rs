@@ -24,19 +24,11 @@ mod common;
 use billow::bbcloud::{bake, BbcloudOptions};
 use billow::camera::Camera;
 use billow::eval::image::write_comparison_png;
-use billow::eval::ImageF32;
 use billow::import::{import, ImportOptions};
 use billow::scene::Aabb;
-use billow_view::{Renderer, RgbaImage, ViewCamera};
-use glam::{Mat4, Vec3, Vec4};
-
-fn image(i: &RgbaImage) -> ImageF32 {
-    ImageF32 {
-        width: i.width,
-        height: i.height,
-        data: i.data.iter().map(|p| Vec4::from_array(*p)).collect(),
-    }
-}
+use billow_view::{Renderer, RgbaImage};
+use common::image_f32;
+use glam::{Mat4, Vec3};
 
 /// Side of the blocks over which coverage is averaged before comparing: the shape of
 /// the silhouette, not the texture detail (the parent level's atlas has half the
@@ -98,7 +90,7 @@ fn a_cloud_mid_transition_morphs_instead_of_popping() {
     };
     // Side view, as Lacewell's plots (view parallel to the ground).
     let c = Camera::framed(&bounds, Vec3::new(-0.9, -0.5, -0.6), 0.8, 96, 96, 1.0);
-    let cam = ViewCamera::from_parts(c.view(), c.fov_y, c.width, c.height, c.near, c.far);
+    let cam = common::view_camera(&c);
     let mut at = |z: f32| {
         r.lod_distance_override = Some(z);
         let (img, stats) = r.render_image(&cam).expect("render");
@@ -125,7 +117,7 @@ fn a_cloud_mid_transition_morphs_instead_of_popping() {
     let out = common::out_dir();
     let fail = |what: &str, a: &RgbaImage, b: &RgbaImage| -> String {
         let p = out.join(format!("{name}.{what}.diff.png"));
-        write_comparison_png(&image(a), &image(b), 4.0, &p).expect("diff image");
+        write_comparison_png(&image_f32(a), &image_f32(b), 4.0, &p).expect("diff image");
         format!("{what}: diff image {}", p.display())
     };
     // Billboard level 1 -> 2 (the crossed pair): the geometry changes a lot.

@@ -15,19 +15,11 @@ mod common;
 
 use billow::camera::Camera;
 use billow::eval::image::write_comparison_png;
-use billow::eval::ImageF32;
 use billow::scene::Aabb;
 use billow_view::mesh_pass::MeshData;
-use billow_view::{Renderer, RgbaImage, ViewCamera};
+use billow_view::Renderer;
+use common::image_f32;
 use glam::{Mat4, Vec3, Vec4};
-
-fn image(i: &RgbaImage) -> ImageF32 {
-    ImageF32 {
-        width: i.width,
-        height: i.height,
-        data: i.data.iter().map(|p| Vec4::from_array(*p)).collect(),
-    }
-}
 
 #[test]
 fn a_mesh_plane_through_a_volume_cuts_it() {
@@ -47,7 +39,7 @@ fn a_mesh_plane_through_a_volume_cuts_it() {
         96,
         1.0,
     );
-    let cam = ViewCamera::from_parts(c.view(), c.fov_y, c.width, c.height, c.near, c.far);
+    let cam = common::view_camera(&c);
     // The ball with its cells split at z = 0.5 (so the front half can be drawn alone).
     let mut full = common::ball_asset(false);
     full.cells = Vec::new();
@@ -74,7 +66,7 @@ fn a_mesh_plane_through_a_volume_cuts_it() {
         }
         let passes = r.passes();
         let (img, _) = r.render_image(&cam).expect("render");
-        (image(&img), passes)
+        (image_f32(&img), passes)
     };
     let (cut, passes) = render(&full, true, gpu);
     assert_eq!(passes, ["mesh", "volume", "resolve"]);

@@ -13,19 +13,14 @@ mod common;
 use billow::camera::Camera;
 use billow::eval::image::write_comparison_png;
 use billow::eval::metrics::compare;
-use billow::eval::slicer::{render_volume, SlicerParams, Spacing as CpuSpacing};
-use billow::eval::ImageF32;
+use billow::eval::slicer::{render_volume, SlicerParams};
 use billow::scene::Aabb;
 use billow_format::VolumeAsset;
 use billow_view::{Renderer, SliceParams, Spacing, ViewCamera};
-use glam::{Mat4, Vec3, Vec4};
+use glam::{Mat4, Vec3};
 
 const RMSE_TOL: f64 = 0.005;
 const MAX_ABS_TOL: f32 = 0.05;
-
-fn to_view_camera(c: &Camera) -> ViewCamera {
-    ViewCamera::from_camera(c)
-}
 
 fn check(
     name: &str,
@@ -35,15 +30,11 @@ fn check(
     min_coverage: f64,
 ) -> Option<()> {
     let gpu = common::gpu_or_skip(name)?;
-    let cpu_spacing = match spacing {
-        Spacing::Adaptive { bias } => CpuSpacing::Adaptive { bias },
-        Spacing::Uniform { spacing } => CpuSpacing::Uniform { spacing },
-    };
     let cpu = render_volume(
         asset,
         cam,
         &SlicerParams {
-            spacing: cpu_spacing,
+            spacing,
             ..Default::default()
         },
     )
@@ -54,12 +45,10 @@ fn check(
         ..Default::default()
     };
     r.add_volume(asset, vec![Mat4::IDENTITY]).expect("upload");
-    let (img, stats) = r.render_image(&to_view_camera(cam)).expect("GPU render");
-    let gpu_img = ImageF32 {
-        width: img.width,
-        height: img.height,
-        data: img.data.iter().map(|p| Vec4::from_array(*p)).collect(),
-    };
+    let (img, stats) = r
+        .render_image(&ViewCamera::from_camera(cam))
+        .expect("GPU render");
+    let gpu_img = common::image_f32(&img);
     let err = compare(&cpu.image, &gpu_img).expect("compare");
     let max_abs = cpu
         .image
@@ -194,8 +183,12 @@ fn the_same_frame_twice_is_bit_identical() {
         vec![Mat4::from_translation(Vec3::new(-0.2, 0.3, 0.0))],
     )
     .expect("upload");
-    let (a, sa) = r.render_image(&to_view_camera(&c)).expect("render");
-    let (b, sb) = r.render_image(&to_view_camera(&c)).expect("render");
+    let (a, sa) = r
+        .render_image(&ViewCamera::from_camera(&c))
+        .expect("render");
+    let (b, sb) = r
+        .render_image(&ViewCamera::from_camera(&c))
+        .expect("render");
     assert_eq!(sa, sb);
     assert_eq!(
         sa.draw_calls, sa.slabs,

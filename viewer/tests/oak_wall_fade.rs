@@ -14,85 +14,26 @@
 
 mod common;
 
-use std::collections::BTreeMap;
-use std::path::PathBuf;
-
-use billow::camera::Camera;
 use billow::eval::image::write_comparison_png;
 use billow::eval::metrics::compare;
 use billow::eval::slicer::{render_decoded_over, OpaqueBackdrop, SlicerParams};
 use billow::eval::volume_sampler::DecodedVolume;
-use billow::eval::ImageF32;
-use billow::import::{import, ImportOptions};
-use billow::voxelize::{voxelize, CombineFn, Preset, Resolution, VoxelizeOptions};
-use billow_format::VolumeAsset;
+use billow::test_support::oak_wall::{camera, oak, WALL};
 use billow_view::mesh_pass::MeshData;
-use billow_view::{Renderer, RgbaImage, ViewCamera};
-use glam::{Mat4, Vec3, Vec4};
+use billow_view::Renderer;
+use common::image_f32;
+use glam::{Mat4, Vec3};
 
 const RMSE_TOL: f64 = 0.005;
 const CUT_RMSE_TOL: f64 = 0.01;
-const WALL: [f32; 4] = [0.5, 0.45, 0.4, 1.0];
-
-fn repo() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-fn oak(res: u32) -> VolumeAsset {
-    if res == 32 {
-        return VolumeAsset::read(&repo().join("fixtures/scenes/oak32.billow")).expect("oak32");
-    }
-    let scene = import(
-        &repo().join("fixtures/oak/eztree_oak_medium.gltf"),
-        &ImportOptions::default(),
-    )
-    .expect("import the oak")
-    .scene;
-    let opts = VoxelizeOptions {
-        resolution: Resolution::Longest(res),
-        combine: CombineFn::Preset(Preset::Opaque),
-        ..VoxelizeOptions::default()
-    };
-    voxelize(&scene, &opts, &|_, _| {})
-        .expect("voxelize")
-        .into_asset("oak_wall_fade", None, BTreeMap::new())
-}
-
-fn camera(size: u32) -> Camera {
-    Camera {
-        eye: Vec3::new(110.0, 60.0, 70.0),
-        target: Vec3::new(0.0, 30.0, 0.0),
-        up: Vec3::Y,
-        fov_y: 45f32.to_radians(),
-        width: size,
-        height: size,
-        near: 1.0,
-        far: 400.0,
-    }
-}
-
-fn image(i: &RgbaImage) -> ImageF32 {
-    ImageF32 {
-        width: i.width,
-        height: i.height,
-        data: i.data.iter().map(|p| Vec4::from_array(*p)).collect(),
-    }
-}
 
 fn check(name: &str, res: u32, size: u32) {
     let Some(gpu) = common::gpu_or_skip(name) else {
         return;
     };
-    let asset = oak(res);
+    let asset = oak(res, "oak_wall_fade");
     let cam = camera(size);
-    let vc = ViewCamera::from_parts(
-        cam.view(),
-        cam.fov_y,
-        cam.width,
-        cam.height,
-        cam.near,
-        cam.far,
-    );
+    let vc = common::view_camera(&cam);
     // wall.obj (2 × 2 in x = 0) scaled by 40, moved down by 1.
     let wall = MeshData::quad(
         Vec3::new(0.0, -1.0, -40.0),
@@ -104,10 +45,10 @@ fn check(name: &str, res: u32, size: u32) {
     r.ambient = 1.0; // unlit wall
     r.add_mesh(&wall).expect("wall");
     let (bare, _) = r.render_image(&vc).expect("wall alone");
-    let bare = image(&bare);
+    let bare = image_f32(&bare);
     r.add_volume(&asset, vec![Mat4::IDENTITY]).expect("oak");
     let (got, stats) = r.render_image(&vc).expect("wall and oak");
-    let got = image(&got);
+    let got = image_f32(&got);
 
     let mut depth = vec![f32::INFINITY; (size * size) as usize];
     for y in 0..size {

@@ -12,32 +12,10 @@
 mod common;
 
 use billow::eval::prism_plane::intersect_prism_plane;
+use billow::test_support::box_positions_z as boxed;
 use billow_view::prism_plane_gpu::intersect_on_gpu;
 
 type P6 = [[f32; 3]; 6];
-
-fn boxed(min: [f32; 3], max: [f32; 3]) -> [P6; 2] {
-    let c = |x: f32, y: f32, z: f32| [x, y, z];
-    let (a, b) = (min, max);
-    [
-        [
-            c(a[0], a[1], a[2]),
-            c(b[0], a[1], a[2]),
-            c(b[0], b[1], a[2]),
-            c(a[0], a[1], b[2]),
-            c(b[0], a[1], b[2]),
-            c(b[0], b[1], b[2]),
-        ],
-        [
-            c(a[0], a[1], a[2]),
-            c(b[0], b[1], a[2]),
-            c(a[0], b[1], a[2]),
-            c(a[0], a[1], b[2]),
-            c(b[0], b[1], b[2]),
-            c(a[0], b[1], b[2]),
-        ],
-    ]
-}
 
 /// uvw = a fixed affine function of the position (distinct per vertex).
 fn uvw_of(p: &P6) -> P6 {

@@ -18,7 +18,7 @@ fn camera() -> ViewCamera {
         max: Vec3::new(1.5, 1.0, 1.0),
     };
     let c = Camera::framed(&bounds, Vec3::new(0.15, -0.1, -1.0), 0.7, 96, 80, 1.0);
-    ViewCamera::from_parts(c.view(), c.fov_y, c.width, c.height, c.near, c.far)
+    common::view_camera(&c)
 }
 
 /// Nine positions: three clusters far apart in depth.

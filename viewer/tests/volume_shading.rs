@@ -16,7 +16,7 @@
 
 mod common;
 
-use billow::camera::{to_view, Camera};
+use billow::camera::Camera;
 use billow::eval::image::write_comparison_png;
 use billow::eval::lighting::VolumeLight;
 use billow::eval::metrics::compare;
@@ -24,10 +24,11 @@ use billow::eval::slicer::{render_volume, SlicerParams};
 use billow::eval::ImageF32;
 use billow::noise_volume::{asteroid, sphere};
 use billow::scene::Aabb;
+use billow::test_support::mean_around as around;
 use billow_core::shading::{DEFAULT_AMBIENT, DEFAULT_LIGHT};
 use billow_format::VolumeAsset;
 use billow_view::{Renderer, ViewCamera};
-use glam::{Mat4, Vec3, Vec4};
+use glam::{Mat4, Vec3};
 
 const AMBIENT: f32 = 0.3;
 const TOL: f32 = 0.05;
@@ -41,10 +42,6 @@ fn box_camera(dir: Vec3, size: u32) -> Camera {
     Camera::framed(&b, dir, std::f32::consts::FRAC_PI_4, size, size, 1.0)
 }
 
-fn to_view_camera(c: &Camera) -> ViewCamera {
-    ViewCamera::from_camera(c)
-}
-
 fn gpu_render(
     gpu: billow_view::Gpu,
     asset: &VolumeAsset,
@@ -55,26 +52,10 @@ fn gpu_render(
     r.light_dir = light.dir;
     r.ambient = light.ambient;
     r.add_volume(asset, vec![Mat4::IDENTITY]).expect("upload");
-    let (img, _) = r.render_image(&to_view_camera(cam)).expect("GPU render");
-    ImageF32 {
-        width: img.width,
-        height: img.height,
-        data: img.data.iter().map(|p| Vec4::from_array(*p)).collect(),
-    }
-}
-
-fn around(img: &ImageF32, cam: &Camera, p: Vec3) -> Vec4 {
-    let (x, y) = cam
-        .view_to_pixel(to_view(&cam.view(), p))
-        .expect("in front of the camera");
-    let (x, y) = (x as i64, y as i64);
-    let mut acc = Vec4::ZERO;
-    for dy in -1..=1 {
-        for dx in -1..=1 {
-            acc += img.data[(x + dx) as usize + img.width as usize * (y + dy) as usize];
-        }
-    }
-    acc / 9.0
+    let (img, _) = r
+        .render_image(&ViewCamera::from_camera(cam))
+        .expect("GPU render");
+    common::image_f32(&img)
 }
 
 #[test]
@@ -238,7 +219,9 @@ fn baking_normals_changes_the_viewers_picture() {
     let shot = |gpu: billow_view::Gpu, asset: &VolumeAsset| {
         let mut r = Renderer::new(gpu);
         r.add_volume(asset, vec![Mat4::IDENTITY]).expect("upload");
-        r.render_image(&to_view_camera(&cam)).expect("render").0
+        r.render_image(&ViewCamera::from_camera(&cam))
+            .expect("render")
+            .0
     };
     let a = shot(gpu, &with);
     let Some(gpu) = common::gpu_or_skip("volume_shading::normals_change_the_picture") else {

@@ -4,7 +4,7 @@
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-use billow_format::{full_mip_count, mip_dims, ColourSpace, Header, Prism, VolumeAsset};
+use billow_format::{full_mip_count, mip_dims, ColourSpace, Header, VolumeAsset};
 use billow_view::Gpu;
 
 /// A test that cannot run says so on stderr (`SKIP: <test>: <reason>`), and fails instead
@@ -35,26 +35,8 @@ pub fn out_dir() -> PathBuf {
 }
 
 /// Two prisms (vertical edges along z) tiling the box `[a, b]`, uvw = position mapped
-/// through `uvw_of`.
-pub fn box_prisms(a: [f32; 3], b: [f32; 3], uvw_of: impl Fn([f32; 3]) -> [f32; 3]) -> Vec<Prism> {
-    let c = |x: f32, y: f32, z: f32| [x, y, z];
-    let tris = [
-        [c(a[0], a[1], 0.0), c(b[0], a[1], 0.0), c(b[0], b[1], 0.0)],
-        [c(a[0], a[1], 0.0), c(b[0], b[1], 0.0), c(a[0], b[1], 0.0)],
-    ];
-    tris.iter()
-        .map(|t| {
-            let pos: [[f32; 3]; 6] = std::array::from_fn(|i| {
-                let v = t[i % 3];
-                [v[0], v[1], if i < 3 { a[2] } else { b[2] }]
-            });
-            Prism {
-                pos,
-                uvw: pos.map(&uvw_of),
-            }
-        })
-        .collect()
-}
+/// through `uvw_of` (the library's test support, shared with the root tests).
+pub use billow::test_support::box_prisms_z as box_prisms;
 
 /// A 16³ fuzzy, coloured ball in `[0,1]³` (sRGB premultiplied, full MIP chain built by
 /// 2×2×2 averaging), cut into 2 × 2 boxes of 2 prisms each (8 cells, shared edges).
@@ -160,4 +142,20 @@ pub fn as_moments(mut asset: VolumeAsset) -> VolumeAsset {
     v.set_normal_kind(Some(billow_format::NormalKind::Moments));
     asset.validate().expect("a valid moments asset");
     asset
+}
+
+/// A GPU render read back ([`billow_view::RgbaImage`]) as the CPU renderers' image, to
+/// compare the two (the same premultiplied linear RGBA, row 0 at the top).
+pub fn image_f32(i: &billow_view::RgbaImage) -> billow::eval::ImageF32 {
+    billow::eval::ImageF32 {
+        width: i.width,
+        height: i.height,
+        data: i.data.iter().map(|p| glam::Vec4::from_array(*p)).collect(),
+    }
+}
+
+/// The viewer's camera for an eval camera, built from its view matrix and projection
+/// parameters (`ViewCamera::from_parts`, as the GPU/CPU pairs compare them).
+pub fn view_camera(c: &billow::camera::Camera) -> billow_view::ViewCamera {
+    billow_view::ViewCamera::from_parts(c.view(), c.fov_y, c.width, c.height, c.near, c.far)
 }
