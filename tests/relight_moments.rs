@@ -13,10 +13,7 @@ use billow::camera::ViewSpec;
 use billow::eval::lighting::EvalLight;
 use billow::eval::suite::{EvalOptions, Evaluator, PreparedAsset};
 use billow::scene::Scene;
-use billow::voxelize::{
-    bake_params, bake_with_normals, voxelize, CombineFn, NormalsMode, Preset, Resolution,
-    VoxelizeOptions,
-};
+use billow::voxelize::{bake_params, CombineFn, NormalsMode, Preset, Resolution, VoxelizeOptions};
 use billow_format::{NormalKind, VolumeAsset};
 use common::{leaf_canopy, Leaves};
 use glam::Vec3;
@@ -28,15 +25,7 @@ fn bake(scene: &Scene, mode: NormalsMode) -> VolumeAsset {
         combine: CombineFn::Preset(Preset::Opaque),
         ..VoxelizeOptions::default()
     };
-    let quiet = |_: billow::voxelize::Stage, _: f32| {};
-    let (volume, _) = bake_with_normals(
-        scene,
-        &mut opts,
-        mode,
-        |o| voxelize(scene, o, &quiet),
-        |v| (v.normal_coherence, v.normals.is_some()),
-    )
-    .expect("bake");
+    let (volume, _) = common::bake_mode(scene, &mut opts, mode);
     let params = bake_params(&volume, &opts, &BTreeMap::new());
     volume.into_asset("test", None, params)
 }

@@ -24,8 +24,7 @@ use billow::scene::{Aabb, Material, Scene, SceneBuilder};
 use billow::voxelize::coverage::{Columns, Model};
 use billow::voxelize::toksvig::AUTO_NORMALS_MIN_COHERENCE;
 use billow::voxelize::{
-    bake_with_normals, voxelize, voxelize_sparse, CombineFn, NormalsMode, Preset, Resolution,
-    VoxelizeOptions,
+    voxelize, voxelize_sparse, CombineFn, NormalsMode, Preset, Resolution, VoxelizeOptions,
 };
 use common::{leaf_canopy, Leaves};
 use glam::{Vec3, Vec4};
@@ -300,15 +299,7 @@ fn auto(scene: &Scene) -> (Option<f32>, Option<bool>, bool) {
         combine: CombineFn::Preset(Preset::Opaque),
         ..VoxelizeOptions::default()
     };
-    let quiet = |_: billow::voxelize::Stage, _: f32| {};
-    let (v, out) = bake_with_normals(
-        scene,
-        &mut opts,
-        NormalsMode::Auto,
-        |o| voxelize(scene, o, &quiet),
-        |v| (v.normal_coherence, v.normals.is_some()),
-    )
-    .expect("auto bake");
+    let (v, out) = common::bake_mode(scene, &mut opts, NormalsMode::Auto);
     assert!(out.kept && out.moments && v.moments, "{out:?}");
     (out.coherence, opts.surface, v.moments)
 }
@@ -369,21 +360,13 @@ fn a_surface_with_coherent_normals_keeps_its_level_0_and_foliage_is_thinned() {
 /// bands), foliage is thinned.
 #[test]
 fn every_normals_mode_judges_whether_a_closed_surface_keeps_its_level_0() {
-    let quiet = |_: billow::voxelize::Stage, _: f32| {};
     let judged = |scene: &Scene, mode: NormalsMode| {
         let mut opts = VoxelizeOptions {
             resolution: Resolution::Longest(32),
             combine: CombineFn::Preset(Preset::Opaque),
             ..VoxelizeOptions::default()
         };
-        let (v, _) = bake_with_normals(
-            scene,
-            &mut opts,
-            mode,
-            |o| voxelize(scene, o, &quiet),
-            |v| (v.normal_coherence, v.normals.is_some()),
-        )
-        .expect("bake");
+        let (v, _) = common::bake_mode(scene, &mut opts, mode);
         (opts.surface, v.coverage.scales[0])
     };
     let torus = billow::procgen::torus(1.0, 0.35, 48, 24);

@@ -217,3 +217,22 @@ pub fn leaf_canopy(n: u32, seed: u64, leaves: Leaves) -> billow::scene::Scene {
     }
     sb.finish()
 }
+
+/// `scene` baked densely as `billow voxelize --normals MODE` decides (`opts` left as the
+/// bake used them: `surface`, `normals`, `moments`), quietly.
+#[allow(dead_code)]
+pub fn bake_mode(
+    scene: &billow::scene::Scene,
+    opts: &mut billow::voxelize::VoxelizeOptions,
+    mode: billow::voxelize::NormalsMode,
+) -> (billow::voxelize::Volume, billow::voxelize::NormalsOutcome) {
+    let quiet = |_: billow::voxelize::Stage, _: f32| {};
+    billow::voxelize::bake_with_normals(
+        scene,
+        opts,
+        mode,
+        |o| billow::voxelize::voxelize(scene, o, &quiet),
+        |v| (v.normal_coherence, v.normals.is_some()),
+    )
+    .expect("bake")
+}
