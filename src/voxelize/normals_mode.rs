@@ -79,6 +79,8 @@ pub fn bake_with_normals<T>(
     opts.moments = matches!(mode, NormalsMode::Auto | NormalsMode::Moments);
     opts.surface = None;
     let mut on_the_bake = false;
+    // The coarse judgement's surface verdict, which `Off` would reach too.
+    let mut judged_surface = None;
     if matches!(mode, NormalsMode::Moments | NormalsMode::Off) {
         // Not judged for the normals, but whether a closed surface keeps its level 0 is
         // the same question: a closed mesh thinned to its coverage opens (the spot with
@@ -100,6 +102,7 @@ pub fn bake_with_normals<T>(
             Ok(NormalsJudgement::Coarse(k)) => {
                 out.coherence = k;
                 opts.surface = Some(toksvig::keeps(k));
+                judged_surface = opts.surface;
             }
             Ok(NormalsJudgement::OnTheBake) => {
                 // One MIP level: judged on a bake with mean normals, then baked with moments.
@@ -118,7 +121,7 @@ pub fn bake_with_normals<T>(
             // Given up: baked exactly as `Off` would bake it.
             opts.normals = false;
             opts.moments = false;
-            opts.surface = None;
+            opts.surface = judged_surface;
             out.coherence = None;
             out.refused = Some(MemoryRefusal::Baking {
                 needed_gib,
