@@ -10,7 +10,7 @@
 //!   magnified voxel. `bias = 1` is the paper. [`Spacing::Uniform`]: constant `d`.
 //!   Slices are placed front to back from the nearest cell depth: `z₀ = z_min + d(z_min)/2`,
 //!   `z_{i+1} = z_i + d(z_i)`, then drawn in reverse.
-//! - MIP level from the spacing: `lod = log2(d / v₀)` clamped to the stored levels,
+//! - MIP level from the spacing ([`slice_lod`]): `lod = log2(d / v₀)` clamped to the stored levels,
 //!   sampled trilinearly within a level and (default [`MipFilter::Linear`]) linearly
 //!   between the two nearest levels.
 //! - Opacity correction: `α' = 1 − (1 − α)^(d/d₀)` with `d₀ = v₀ · 2^lod` the voxel size
@@ -55,7 +55,7 @@ use billow_format::{Prism, VolumeAsset};
 use glam::{Mat3, Vec3, Vec4};
 use rayon::prelude::*;
 
-use billow_core::slicing::slab_fade;
+use billow_core::slicing::{slab_fade, slice_lod};
 
 use super::compositing::over;
 use super::lighting::{volume_diffuse_factor, VolumeLight};
@@ -421,7 +421,7 @@ fn render_sliced(
         frags
     };
     for &(depth, d) in &slices {
-        let lod = (d / v0).log2().clamp(0.0, max_lod);
+        let lod = slice_lod(d, v0, max_lod);
         // The slab this slice stands for; the farthest reaches the end of the range.
         let thickness = match far_z {
             Some((z, t)) if z == depth => t,

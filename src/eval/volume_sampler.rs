@@ -270,7 +270,8 @@ impl DecodedVolume {
     /// level's texel thickness, cap)`, from [`billow_core::slicing::level_weights`] and
     /// [`billow_core::slicing::opaque_optical_depth`]) and summed, `α = 1 − e^(−Σ wᵢ σᵢ)`,
     /// colour the weighted straight colour times `α` (premultiplied). Exactly 1 where every
-    /// texel under the filter is opaque (as [`from_extinction`]).
+    /// texel under the filter is opaque (as [`from_extinction`]):
+    /// [`billow_core::extinction::slab_sample`] of the sum.
     pub fn sample_weighted(&self, weights: [(usize, f32, f32); 2], uvw: Vec3) -> Vec4 {
         let mut e = Vec4::ZERO;
         let mut total = 0.0f32;
@@ -280,12 +281,7 @@ impl DecodedVolume {
                 total += w * (cap - 1e-4);
             }
         }
-        let s = e.w;
-        if !(s > 0.0) {
-            return Vec4::ZERO;
-        }
-        let a = if s >= total { 1.0 } else { -(-s).exp_m1() };
-        (e.truncate() * (a / s)).extend(a)
+        slab_sample(e, 1.0, total)
     }
 
     /// Sample at fractional level `lod` (clamped to the stored levels).
@@ -377,6 +373,8 @@ fn texel_pair(u: f32, n: i64, repeat: bool) -> (usize, usize, f32) {
     };
     (i0 as usize, i1 as usize, t)
 }
+
+use billow_core::extinction::slab_sample;
 
 pub use billow_core::extinction::{
     from_extinction, to_extinction, to_extinction_capped, MAX_OPTICAL_DEPTH,

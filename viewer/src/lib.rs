@@ -38,6 +38,9 @@ pub mod slice_plan;
 pub mod target;
 pub mod texture;
 pub mod texture_bc;
+/// Test support (feature `test-support`, on for the viewer's own tests): not part of the API.
+#[cfg(any(test, feature = "test-support"))]
+pub mod volume_math_gpu;
 pub mod volume_pass;
 pub mod volume_plan;
 pub mod window;
