@@ -14,7 +14,6 @@
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-use billow::camera::{view_set, Camera, ViewDirections};
 use billow::emptyspace::{prune, EmptySpaceOptions, Pruned};
 use billow::eval::image::write_comparisons_png;
 use billow::eval::slicer::{render_decoded, SliceStats, SlicerParams};
@@ -23,6 +22,7 @@ use billow::eval::ImageF32;
 use billow::import::{import, ImportOptions};
 use billow::scene::Aabb;
 use billow::voxelize::{voxelize, Resolution, VoxelizeOptions};
+use billow_core::camera::{view_set, Camera, ViewDirections};
 use billow_format::VolumeAsset;
 use glam::Vec3;
 

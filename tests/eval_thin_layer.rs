@@ -14,11 +14,11 @@
 //! `thin_layer_measurements` (ignored; `cargo test --test eval_thin_layer -- --ignored
 //! --nocapture`) prints the table of docs/eval.md "Thin layers".
 
-use billow::camera::Camera;
 use billow::eval::image::linear_to_srgb;
 use billow::eval::slicer::{render_volume, SlicerParams, Spacing};
 use billow::eval::volume_sampler::MipFilter;
 use billow::eval::ImageF32;
+use billow_core::camera::Camera;
 use billow_format::{full_mip_count, mip_dims, ColourSpace, Header, Prism, VolumeAsset};
 use glam::Vec3;
 

@@ -7,7 +7,6 @@
 
 use std::collections::BTreeMap;
 
-use billow::camera::ViewSpec;
 use billow::eval::lighting::EvalLight;
 use billow::eval::suite::{EvalOptions, Evaluator, PreparedAsset};
 use billow::rng::Pcg32;
@@ -16,6 +15,7 @@ use billow::voxelize::{
     bake_params, bake_with_normals, voxelize, CombineFn, NormalsMode, Preset, Resolution,
     VoxelizeOptions,
 };
+use billow_core::camera::ViewSpec;
 use billow_format::{NormalKind, VolumeAsset};
 use glam::{Vec3, Vec4};
 

@@ -10,11 +10,11 @@
 //! voxel normal (the radial normal at the voxel centre, trilinearly filtered) and the
 //! one-voxel soft edge of the ball.
 
-use billow::camera::{to_view, Camera};
 use billow::eval::lighting::VolumeLight;
 use billow::eval::slicer::{render_volume, SlicerParams};
 use billow::noise_volume::{dust, sphere};
 use billow::scene::Aabb;
+use billow_core::camera::{to_view, Camera};
 use glam::{Vec3, Vec4};
 
 const AMBIENT: f32 = 0.3;
@@ -139,10 +139,10 @@ fn volumes_without_normals_keep_their_baked_colour_bit_for_bit() {
 /// as error.
 #[test]
 fn eval_compares_a_shaded_volume_with_a_reference_lit_the_same_way() {
-    use billow::camera::ViewSpec;
     use billow::eval::lighting::Lighting;
     use billow::eval::suite::{reference_lighting, EvalOptions, Evaluator, PreparedAsset};
     use billow::voxelize::{voxelize, Resolution, VoxelizeOptions};
+    use billow_core::camera::ViewSpec;
     let scene = billow::procgen::torus(1.0, 0.4, 48, 24);
     let opts = VoxelizeOptions {
         resolution: Resolution::Longest(64),

@@ -13,7 +13,6 @@
 //! opacity correction for two blended levels) `opaque` measured +24.8 % / +50.0 % /
 //! +153 %, failing at 1× already.
 
-use billow::camera::{view_set_with, ViewDirections};
 use billow::eval::slicer::{render_decoded, SlicerParams, Spacing};
 use billow::eval::suite::{means_by_distance, EvalOptions, Evaluator, PreparedAsset};
 use billow::eval::volume_sampler::DecodedVolume;
@@ -25,6 +24,7 @@ use billow::voxelize::{
     bake_with_normals, voxelize, voxelize_sparse, CombineFn, NormalsMode, Preset, Resolution,
     VoxelizeOptions,
 };
+use billow_core::camera::{view_set_with, ViewDirections};
 use glam::{Vec3, Vec4};
 
 /// A foliage-like cloud: `n` small double-sided opaque quads of random orientation in a

@@ -5,9 +5,9 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use billow::camera::{parse_direction, Camera};
 use billow::eval::ImageF32;
 use billow::scene::Aabb;
+use billow_core::camera::{parse_direction, Camera};
 use billow_view::{FrameStats, Gpu, SliceParams, Spacing, ViewCamera, ViewError};
 use glam::{Vec3, Vec4};
 use serde::Serialize;

@@ -15,7 +15,7 @@
 //!   between the two nearest levels.
 //! - Opacity correction: `α' = 1 − (1 − α)^(d/d₀)` with `d₀ = v₀ · 2^lod` the voxel size
 //!   of the sampled (clamped, fractional for linear filtering) level; premultiplied colour
-//!   scaled by `α'/α` ([`super::compositing`]).
+//!   scaled by `α'/α` ([`billow_core::compositing`]).
 //! - Each cell ∩ slice polygon comes from [`intersect_prism_plane`]. All its vertices lie
 //!   at the same depth, so the perspective projection is an *affine* map on it and uvw
 //!   interpolates linearly in screen space — no perspective correction needed. The convex
@@ -57,13 +57,13 @@ use rayon::prelude::*;
 
 use billow_core::slicing::{slab_fade, slice_lod};
 
-use super::compositing::over;
 use super::lighting::{volume_diffuse_factor, VolumeLight};
-use super::prism_plane::intersect_prism_plane;
 use super::reference::{sample_offset, validate_camera, Sampling};
 use super::volume_sampler::{DecodedVolume, MipFilter};
 use super::{EvalError, ImageF32};
-use crate::camera::Camera;
+use billow_core::camera::Camera;
+use billow_core::compositing::over;
+use billow_core::prism_plane::intersect_prism_plane;
 use billow_core::shading::moments_diffuse_factor;
 
 /// Slice spacing mode, [`voxel_size`], the per-cell [`normal_matrix`] and

@@ -48,7 +48,6 @@ use serde::Serialize;
 
 use super::{resolve_cloud, resolve_volume, CloudFlags, CloudSettings, Preset};
 use super::{VolumeFlags, VolumeSettings};
-use crate::camera::{view_directions, views_of, ViewDirections, ViewSpec};
 use crate::eval::cloud_render::{CloudRenderer, PreparedCloud};
 use crate::eval::lighting::{light_set, EvalLight, Lighting};
 use crate::eval::metrics::{compare, ImageError};
@@ -59,6 +58,7 @@ use crate::eval::suite::{
 use crate::eval::EvalError;
 use crate::scene::Scene;
 use crate::voxelize::{Resolution, MAX_AXIS};
+use billow_core::camera::{view_directions, views_of, ViewDirections, ViewSpec};
 use billow_core::shading::DEFAULT_AMBIENT;
 
 /// Reference samples per pixel per axis: 4 × 4 = 16, `billow eval`'s default `--spp`.

@@ -6,7 +6,7 @@
 //! intersection in WGSL. Billboard clouds (Lacewell et al. 2006) morph between their
 //! LODs; opaque meshes share the z-buffer; a directional shadow map when asked for.
 //!
-//! Conventions are those of `billow::camera` (view space looks down −Z, wgpu clip
+//! Conventions are those of `billow_core::camera` (view space looks down −Z, wgpu clip
 //! space, row 0 at the top). This crate does not depend on the `billow` library (the
 //! `billow` binary depends on this crate, and a package cannot depend on itself): the
 //! binary converts its camera with [`ViewCamera::from_parts`] and imports meshes itself.

@@ -14,7 +14,6 @@ mod common;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-use billow::camera::Camera;
 use billow::emptyspace::{prune, EmptySpaceOptions};
 use billow::eval::image::write_comparison_png;
 use billow::eval::metrics::compare;
@@ -23,6 +22,7 @@ use billow::eval::ImageF32;
 use billow::import::{import, ImportOptions};
 use billow::scene::Aabb;
 use billow::voxelize::{voxelize, Resolution, VoxelizeOptions};
+use billow_core::camera::Camera;
 use billow_format::VolumeAsset;
 use billow_view::{Renderer, RgbaImage, ViewCamera};
 use glam::{Mat4, Vec3, Vec4};

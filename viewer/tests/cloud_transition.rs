@@ -22,11 +22,11 @@
 mod common;
 
 use billow::bbcloud::{bake, BbcloudOptions};
-use billow::camera::Camera;
 use billow::eval::image::write_comparison_png;
 use billow::eval::ImageF32;
 use billow::import::{import, ImportOptions};
 use billow::scene::Aabb;
+use billow_core::camera::Camera;
 use billow_view::{Renderer, RgbaImage, ViewCamera};
 use glam::{Mat4, Vec3, Vec4};
 

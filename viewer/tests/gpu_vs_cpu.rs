@@ -10,12 +10,12 @@
 
 mod common;
 
-use billow::camera::Camera;
 use billow::eval::image::write_comparison_png;
 use billow::eval::metrics::compare;
 use billow::eval::slicer::{render_volume, SlicerParams, Spacing as CpuSpacing};
 use billow::eval::ImageF32;
 use billow::scene::Aabb;
+use billow_core::camera::Camera;
 use billow_format::VolumeAsset;
 use billow_view::{Renderer, SliceParams, Spacing, ViewCamera};
 use glam::{Mat4, Vec3, Vec4};

@@ -17,7 +17,6 @@ mod common;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-use billow::camera::Camera;
 use billow::eval::image::write_comparison_png;
 use billow::eval::metrics::compare;
 use billow::eval::slicer::{render_decoded_over, OpaqueBackdrop, SlicerParams};
@@ -25,6 +24,7 @@ use billow::eval::volume_sampler::DecodedVolume;
 use billow::eval::ImageF32;
 use billow::import::{import, ImportOptions};
 use billow::voxelize::{voxelize, CombineFn, Preset, Resolution, VoxelizeOptions};
+use billow_core::camera::Camera;
 use billow_format::VolumeAsset;
 use billow_view::mesh_pass::MeshData;
 use billow_view::{Renderer, RgbaImage, ViewCamera};

@@ -11,11 +11,11 @@
 
 mod common;
 
-use billow::camera::Camera;
 use billow::eval::image::{linear_to_srgb, write_comparison_png};
 use billow::eval::metrics::compare;
 use billow::eval::slicer::{render_volume, SlicerParams};
 use billow::eval::ImageF32;
+use billow_core::camera::Camera;
 use billow_format::{full_mip_count, mip_dims, ColourSpace, Header, VolumeAsset};
 use billow_view::{Renderer, ViewCamera};
 use glam::{Mat4, Vec3, Vec4};

@@ -155,7 +155,7 @@ fn wgsl_volume_math_matches_billow_core() {
                 k.e
             ));
         }
-        if !(ratio > 0.0) {
+        if ratio <= 0.0 {
             continue; // a texel has a size (the slab cases' zero ratio)
         }
         let want = to_density(Vec4::from(k.c), ratio);

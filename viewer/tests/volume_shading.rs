@@ -16,7 +16,6 @@
 
 mod common;
 
-use billow::camera::{to_view, Camera};
 use billow::eval::image::write_comparison_png;
 use billow::eval::lighting::VolumeLight;
 use billow::eval::metrics::compare;
@@ -24,6 +23,7 @@ use billow::eval::slicer::{render_volume, SlicerParams};
 use billow::eval::ImageF32;
 use billow::noise_volume::{asteroid, sphere};
 use billow::scene::Aabb;
+use billow_core::camera::{to_view, Camera};
 use billow_core::shading::{DEFAULT_AMBIENT, DEFAULT_LIGHT};
 use billow_format::VolumeAsset;
 use billow_view::{Renderer, ViewCamera};
