@@ -188,7 +188,7 @@ fn the_slicer_draws_the_coverage_the_bakes_model_computes() {
         }
         levels.push(out);
     }
-    let cells = billow::voxelize::box_prisms(
+    let cells = billow_core::cells::box_prisms(
         Vec3::ZERO,
         Vec3::new(dims0[0] as f32, dims0[1] as f32, dims0[2] as f32),
     );

@@ -57,7 +57,7 @@ use rayon::prelude::*;
 
 use billow_core::slicing::{slab_fade, slice_lod};
 
-use super::lighting::{volume_diffuse_factor, VolumeLight};
+use super::lighting::VolumeLight;
 use super::reference::{sample_offset, validate_camera, Sampling};
 use super::volume_sampler::{DecodedVolume, MipFilter};
 use super::{EvalError, ImageF32};
@@ -65,6 +65,7 @@ use billow_core::camera::Camera;
 use billow_core::compositing::over;
 use billow_core::prism_plane::intersect_prism_plane;
 use billow_core::shading::moments_diffuse_factor;
+use billow_core::shading::volume_diffuse_factor;
 
 /// Slice spacing mode, [`voxel_size`], the per-cell [`normal_matrix`] and
 /// [`shade_normal`]: the shared slice planning of the rendering core

@@ -51,7 +51,6 @@ mod ao;
 pub mod asset;
 mod bake;
 pub(crate) mod bricks;
-pub mod cells;
 pub mod combine;
 pub mod coverage;
 pub mod dense;
@@ -79,7 +78,6 @@ pub use ao::{
 };
 pub use asset::{bake_params, bake_params_for};
 pub use bake::{bake, BakeError, BakeHooks, BakeOptions, Baked};
-pub use cells::{box_prisms, Prism};
 pub use combine::{Combine, CombineFn, CombineParseError, Preset};
 pub use coverage::CoverageScales;
 pub use expr::{Expr, ExprError};
