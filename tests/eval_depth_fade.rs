@@ -17,12 +17,13 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use billow::eval::image::write_comparison_png;
-use billow::eval::slicer::{render_decoded_over, OpaqueBackdrop, SlicerParams, Spacing};
+use billow::eval::slicer::{render_decoded_over, OpaqueBackdrop, SlicerParams};
 use billow::eval::volume_sampler::DecodedVolume;
 use billow::eval::ImageF32;
 use billow::import::{import, ImportOptions};
 use billow::voxelize::{voxelize, CombineFn, Preset, Resolution, VoxelizeOptions};
 use billow_core::camera::Camera;
+use billow_core::slicing::Spacing;
 use billow_format::VolumeAsset;
 use glam::{Vec3, Vec4};
 

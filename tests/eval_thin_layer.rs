@@ -15,10 +15,11 @@
 //! --nocapture`) prints the table of docs/eval.md "Thin layers".
 
 use billow::eval::image::linear_to_srgb;
-use billow::eval::slicer::{render_volume, SlicerParams, Spacing};
+use billow::eval::slicer::{render_volume, SlicerParams};
 use billow::eval::volume_sampler::MipFilter;
 use billow::eval::ImageF32;
 use billow_core::camera::Camera;
+use billow_core::slicing::Spacing;
 use billow_format::{full_mip_count, mip_dims, ColourSpace, Header, Prism, VolumeAsset};
 use glam::Vec3;
 

@@ -13,7 +13,7 @@
 //! opacity correction for two blended levels) `opaque` measured +24.8 % / +50.0 % /
 //! +153 %, failing at 1× already.
 
-use billow::eval::slicer::{render_decoded, SlicerParams, Spacing};
+use billow::eval::slicer::{render_decoded, SlicerParams};
 use billow::eval::suite::{means_by_distance, EvalOptions, Evaluator, PreparedAsset};
 use billow::eval::volume_sampler::DecodedVolume;
 use billow::rng::Pcg32;
@@ -25,6 +25,7 @@ use billow::voxelize::{
     VoxelizeOptions,
 };
 use billow_core::camera::{view_set_with, ViewDirections};
+use billow_core::slicing::Spacing;
 use glam::{Vec3, Vec4};
 
 /// A foliage-like cloud: `n` small double-sided opaque quads of random orientation in a

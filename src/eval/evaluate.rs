@@ -39,7 +39,7 @@ use billow_format::{AssetKind, BakedLight, CloudAsset, CloudError, Container, Vo
 use super::cloud_render::{CloudRenderer, PreparedCloud};
 use super::lighting::{EvalLight, Lighting};
 use super::metrics::ImageError;
-use super::slicer::{SlicerParams, Spacing};
+use super::slicer::SlicerParams;
 use super::suite::{
     mean_errors, means_by_distance, means_by_light, reference_lighting, DistanceMeans, EvalOptions,
     Evaluator, LightMeans, MeanErrors, PreparedAsset, ReferenceView, ViewResult, EVAL_FOV_Y,
@@ -47,6 +47,7 @@ use super::suite::{
 use super::{EvalError, ImageF32};
 use crate::scene::Scene;
 use billow_core::camera::ViewSpec;
+use billow_core::slicing::Spacing;
 
 /// What [`evaluate()`] compares with the mesh: a volume or a billboard cloud.
 // One value per evaluation, never in a collection: boxing the cloud would only make callers

@@ -67,10 +67,7 @@ use billow_core::prism_plane::intersect_prism_plane;
 use billow_core::shading::moments_diffuse_factor;
 use billow_core::shading::volume_diffuse_factor;
 
-/// Slice spacing mode, [`voxel_size`], the per-cell [`normal_matrix`] and
-/// [`shade_normal`]: the shared slice planning of the rendering core
-/// ([`billow_core::slicing`], which the viewer uses too), re-exported here.
-pub use billow_core::slicing::{
+use billow_core::slicing::{
     far_slab, level_texel_size, level_weights, normal_matrix, opaque_optical_depth, shade_normal,
     voxel_size, Spacing,
 };

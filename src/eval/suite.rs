@@ -309,9 +309,9 @@ impl PreparedAsset {
         })
     }
 
-    /// World size of a level-0 voxel (see [`super::slicer::voxel_size`]).
+    /// World size of a level-0 voxel (see [`billow_core::slicing::voxel_size`]).
     pub fn voxel_size(&self) -> Option<f32> {
-        super::slicer::voxel_size(&self.cells, self.dims0)
+        billow_core::slicing::voxel_size(&self.cells, self.dims0)
     }
 }
 

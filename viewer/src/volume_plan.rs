@@ -535,7 +535,7 @@ fn restrict_to_bands(
 }
 
 /// The matrix taking a volume's stored normals to view space for one cell: the shared
-/// core's (`billow::eval::slicer::normal_matrix` too). `object_to_view`: the linear part
+/// core's (`billow::eval::slicer`'s too). `object_to_view`: the linear part
 /// of camera view × instance; `shell`: the asset repeats its tile (normals in tile space);
 /// `pos`: the cell in view space.
 pub use billow_core::slicing::normal_matrix;

@@ -12,10 +12,11 @@ mod common;
 
 use billow::eval::image::write_comparison_png;
 use billow::eval::metrics::compare;
-use billow::eval::slicer::{render_volume, SlicerParams, Spacing as CpuSpacing};
+use billow::eval::slicer::{render_volume, SlicerParams};
 use billow::eval::ImageF32;
 use billow::scene::Aabb;
 use billow_core::camera::Camera;
+use billow_core::slicing::Spacing as CpuSpacing;
 use billow_format::VolumeAsset;
 use billow_view::{Renderer, SliceParams, Spacing, ViewCamera};
 use glam::{Mat4, Vec3, Vec4};
