@@ -20,9 +20,9 @@ use billow::eval::slicer::{render_decoded, SliceStats, SlicerParams};
 use billow::eval::volume_sampler::DecodedVolume;
 use billow::eval::ImageF32;
 use billow::import::{import, ImportOptions};
-use billow::scene::Aabb;
 use billow::voxelize::{voxelize, Resolution, VoxelizeOptions};
 use billow_core::camera::{view_set, Camera, ViewDirections};
+use billow_core::Aabb;
 use billow_format::VolumeAsset;
 use glam::Vec3;
 

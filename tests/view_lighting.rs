@@ -13,9 +13,9 @@ use billow::eval::lighting::Lighting;
 use billow::eval::metrics::compare;
 use billow::eval::reference::{ReferenceRenderer, Sampling};
 use billow::import::{import, ImportOptions};
-use billow::scene::Aabb;
 use billow_core::camera::Camera;
 use billow_core::shading::{DEFAULT_AMBIENT, DEFAULT_LIGHT};
+use billow_core::Aabb;
 use common::{run, skip};
 use glam::Vec3;
 

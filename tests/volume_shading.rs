@@ -13,8 +13,8 @@
 use billow::eval::lighting::VolumeLight;
 use billow::eval::slicer::{render_volume, SlicerParams};
 use billow::noise_volume::{dust, sphere};
-use billow::scene::Aabb;
 use billow_core::camera::{to_view, Camera};
+use billow_core::Aabb;
 use glam::{Vec3, Vec4};
 
 const AMBIENT: f32 = 0.3;

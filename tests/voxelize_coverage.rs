@@ -17,7 +17,7 @@ use billow::eval::slicer::{render_decoded, SlicerParams};
 use billow::eval::suite::{means_by_distance, EvalOptions, Evaluator, PreparedAsset};
 use billow::eval::volume_sampler::DecodedVolume;
 use billow::rng::Pcg32;
-use billow::scene::{Aabb, Material, Scene, SceneBuilder};
+use billow::scene::{Material, Scene, SceneBuilder};
 use billow::voxelize::coverage::{Columns, Model};
 use billow::voxelize::toksvig::AUTO_NORMALS_MIN_COHERENCE;
 use billow::voxelize::{
@@ -26,6 +26,7 @@ use billow::voxelize::{
 };
 use billow_core::camera::{view_set_with, ViewDirections};
 use billow_core::slicing::Spacing;
+use billow_core::Aabb;
 use glam::{Vec3, Vec4};
 
 /// A foliage-like cloud: `n` small double-sided opaque quads of random orientation in a

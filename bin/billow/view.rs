@@ -6,8 +6,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use billow::eval::ImageF32;
-use billow::scene::Aabb;
 use billow_core::camera::{parse_direction, Camera};
+use billow_core::Aabb;
 use billow_view::{FrameStats, Gpu, SliceParams, Spacing, ViewCamera, ViewError};
 use glam::{Vec3, Vec4};
 use serde::Serialize;

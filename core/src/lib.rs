@@ -22,10 +22,8 @@
 //! shaders keep their own GPU code (tested against these functions).
 //!
 //! The library and the viewer call these by their paths here (`billow_core::camera`,
-//! `billow_core::prism_plane`, …). Two library modules still re-export a few of them
-//! where their own API names them (`billow::scene::Aabb`; the slicer's `Spacing`,
-//! `voxel_size`, `normal_matrix`, `shade_normal`, `far_slab`, `level_*` and
-//! `opaque_optical_depth`).
+//! `billow_core::prism_plane`, `billow_core::Aabb`, …); the library keeps no re-exports
+//! of them.
 
 pub mod aabb;
 pub mod camera;

@@ -192,7 +192,7 @@ pub fn trunk_scene(asset: &CloudAsset) -> Scene {
         })
         .collect();
     let m = &asset.trunk;
-    let mut bounds = crate::scene::Aabb::EMPTY;
+    let mut bounds = billow_core::Aabb::EMPTY;
     let triangles = m
         .triangles
         .iter()

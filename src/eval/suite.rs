@@ -31,8 +31,9 @@ use super::reference::{ReferenceRenderer, Sampling};
 use super::slicer::{render_decoded, SlicerParams};
 use super::volume_sampler::DecodedVolume;
 use super::{EvalError, ImageF32};
-use crate::scene::{Aabb, Scene};
+use crate::scene::Scene;
 use billow_core::camera::{Camera, ViewSpec};
+use billow_core::Aabb;
 
 /// Vertical field of view of every evaluation view: 45°.
 pub const EVAL_FOV_Y: f32 = std::f32::consts::FRAC_PI_4;

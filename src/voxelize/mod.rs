@@ -94,8 +94,9 @@ use sparse::sparse_level;
 pub use sparse::{voxelize_sparse, SparseVolume};
 
 use crate::emptyspace::sparse::SparseLevel;
-use crate::scene::{Aabb, Scene};
+use crate::scene::Scene;
 use crate::shade;
+use billow_core::Aabb;
 use grid3::Texel;
 
 /// A view direction: the camera on that side of the object, looking at it.

@@ -25,8 +25,8 @@ use billow::bbcloud::{bake, BbcloudOptions};
 use billow::eval::image::write_comparison_png;
 use billow::eval::ImageF32;
 use billow::import::{import, ImportOptions};
-use billow::scene::Aabb;
 use billow_core::camera::Camera;
+use billow_core::Aabb;
 use billow_view::{Renderer, RgbaImage, ViewCamera};
 use glam::{Mat4, Vec3, Vec4};
 
