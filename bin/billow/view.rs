@@ -7,8 +7,9 @@ use std::time::Instant;
 
 use billow::eval::ImageF32;
 use billow_core::camera::{parse_direction, Camera};
+use billow_core::slicing::Spacing;
 use billow_core::Aabb;
-use billow_view::{FrameStats, Gpu, SliceParams, Spacing, ViewCamera, ViewError};
+use billow_view::{FrameStats, Gpu, SliceParams, ViewCamera, ViewError};
 use glam::{Vec3, Vec4};
 use serde::Serialize;
 

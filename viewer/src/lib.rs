@@ -50,5 +50,5 @@ pub use error::ViewError;
 pub use frame_stats::FrameStats;
 pub use gpu::Gpu;
 pub use render::Renderer;
-pub use slice_plan::{SliceParams, Spacing};
+pub use slice_plan::SliceParams;
 pub use target::RgbaImage;

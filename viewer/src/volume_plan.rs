@@ -17,12 +17,12 @@ use billow_format::Prism;
 
 use crate::frame_stats::FrameStats;
 use crate::slab::partition;
-use crate::slice_plan::{slice_depths, voxel_size};
 use crate::volume_pass::{
     FrameUniform, GpuCell, GpuDraw, GpuSlice, GpuVolume, GpuVolumeParams, VolumePass, VolumeStorage,
 };
 use crate::{Gpu, SliceParams, ViewCamera, ViewError};
 use billow_core::slicing::{far_slab, slice_lod};
+use billow_core::slicing::{normal_matrix, slice_depths, voxel_size};
 
 /// Vertices per cell × slice instance: a fan of 3 triangles covers the ≤ 5-gon.
 pub const VERTICES_PER_INSTANCE: u32 = 9;
@@ -533,9 +533,3 @@ fn restrict_to_bands(
         *r = (r.0.max(near), r.1.min(far));
     }
 }
-
-/// The matrix taking a volume's stored normals to view space for one cell: the shared
-/// core's (`billow::eval::slicer`'s too). `object_to_view`: the linear part
-/// of camera view × instance; `shell`: the asset repeats its tile (normals in tile space);
-/// `pos`: the cell in view space.
-pub use billow_core::slicing::normal_matrix;

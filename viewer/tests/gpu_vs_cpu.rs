@@ -16,9 +16,10 @@ use billow::eval::slicer::{render_volume, SlicerParams};
 use billow::eval::ImageF32;
 use billow_core::camera::Camera;
 use billow_core::slicing::Spacing as CpuSpacing;
+use billow_core::slicing::Spacing;
 use billow_core::Aabb;
 use billow_format::VolumeAsset;
-use billow_view::{Renderer, SliceParams, Spacing, ViewCamera};
+use billow_view::{Renderer, SliceParams, ViewCamera};
 use glam::{Mat4, Vec3, Vec4};
 
 const RMSE_TOL: f64 = 0.005;
