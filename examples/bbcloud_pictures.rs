@@ -7,7 +7,7 @@
 use std::path::PathBuf;
 
 use billow::bbcloud::{bake, BbcloudOptions, Shading};
-use billow::camera::Camera;
+use billow_core::camera::Camera;
 use billow::eval::image::write_comparisons_png;
 use billow::eval::reference::{ReferenceRenderer, Sampling};
 use billow::eval::ImageF32;

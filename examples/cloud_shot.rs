@@ -6,7 +6,7 @@
 //!  --eye X,Y,Z --target X,Y,Z --fov DEG --size WxH [--spp N]`
 //!
 //! Camera: right-handed, y up, looking from `eye` at `target`, `fov` the vertical field
-//! of view in degrees, aspect `W/H` (the conventions of `billow::camera` and of a
+//! of view in degrees, aspect `W/H` (the conventions of `billow_core::camera` and of a
 //! three.js `PerspectiveCamera`). The trunk is lit as the asset was baked (header `light`,
 //! `ambient`); the billboards carry their baked lighting. `--spp` samples per pixel (a
 //! square number, stratified; default 16). Output: sRGB PNG, straight alpha, transparent
@@ -15,10 +15,10 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use billow::camera::Camera;
 use billow::eval::cloud_render::{CloudRenderer, PreparedCloud};
 use billow::eval::lighting::Lighting;
 use billow::eval::reference::Sampling;
+use billow_core::camera::Camera;
 use billow_format::{read_file, CloudAsset};
 use glam::Vec3;
 

@@ -22,7 +22,6 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use billow::camera::{view_set, ViewDirections};
 use billow::emptyspace::{prune, EmptySpaceOptions, EmptySpaceStats};
 use billow::eval::suite::{
     mean_errors, EvalOptions, Evaluator, MeanErrors, PreparedAsset, ReferenceView,
@@ -31,6 +30,7 @@ use billow::eval::ImageF32;
 use billow::import::{import, ImportOptions};
 use billow::scene::Scene;
 use billow::voxelize::{voxelize, Resolution, VoxelizeOptions};
+use billow_core::camera::{view_set, ViewDirections};
 use billow_format::VolumeAsset;
 
 const REPEATS: usize = 5;

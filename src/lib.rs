@@ -24,7 +24,6 @@
 //! ```
 pub mod bbcloud;
 pub mod bvh;
-pub mod camera;
 pub mod compress;
 pub mod emptyspace;
 pub mod eval;

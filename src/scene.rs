@@ -139,8 +139,7 @@ pub struct MeshInfo {
     pub triangles: usize,
 }
 
-/// The axis-aligned box: moved to the shared rendering core, re-exported here.
-pub use billow_core::Aabb;
+use billow_core::Aabb;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {

@@ -26,7 +26,7 @@
 //!
 //! # Texture coordinates (the uvw → volume-axis mapping)
 //!
-//! Volumes are **Y-up**, like the box cells of `voxelize` ([`crate::voxelize::box_prisms`],
+//! Volumes are **Y-up**, like the box cells of `voxelize` ([`billow_core::cells::box_prisms`],
 //! extruded along +Y) and like `procgen::fur_tile` (strands rooted in the unit
 //! square of the x–z plane, growing along +Y to height 1). So a shell maps the surface's UV
 //! to the volume's **x and z** and the height fraction to **y**:

@@ -92,11 +92,11 @@ pub fn box_prisms_z(a: [f32; 3], b: [f32; 3], uvw_of: impl Fn([f32; 3]) -> [f32;
 /// CPU and GPU shading tests measure a lit ball there).
 pub fn mean_around(
     img: &crate::eval::ImageF32,
-    cam: &crate::camera::Camera,
+    cam: &billow_core::camera::Camera,
     p: glam::Vec3,
 ) -> glam::Vec4 {
     let (x, y) = cam
-        .view_to_pixel(crate::camera::to_view(&cam.view(), p))
+        .view_to_pixel(billow_core::camera::to_view(&cam.view(), p))
         .expect("in front of the camera");
     let (x, y) = (x as i64, y as i64);
     let mut acc = glam::Vec4::ZERO;

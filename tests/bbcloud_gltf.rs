@@ -6,7 +6,6 @@
 use std::path::{Path, PathBuf};
 
 use billow::bbcloud::{bake, BbcloudOptions, Shading};
-use billow::camera::Camera;
 use billow::eval::image::write_comparisons_png;
 use billow::eval::metrics::compare;
 use billow::eval::reference::{ReferenceRenderer, Sampling};
@@ -17,6 +16,7 @@ use billow::export::{
 };
 use billow::import::{import, ImportOptions};
 use billow::scene::Scene;
+use billow_core::camera::Camera;
 use glam::{Vec3, Vec4};
 
 fn oak_path() -> PathBuf {

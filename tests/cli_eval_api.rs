@@ -7,7 +7,7 @@
 
 mod common;
 
-use billow::camera::{parse_direction, views_of, ViewSpec};
+use billow_core::camera::{parse_direction, views_of, ViewSpec};
 use std::ops::ControlFlow;
 
 use billow::eval::evaluate::{

@@ -14,7 +14,7 @@
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-use billow::camera::{view_set, Camera, ViewDirections};
+use billow_core::camera::{view_set, Camera, ViewDirections};
 use billow::emptyspace::{prune, EmptySpaceOptions, Pruned};
 use billow::eval::image::write_comparisons_png;
 use billow::eval::slicer::{render_decoded, SliceStats, SlicerParams};

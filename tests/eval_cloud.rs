@@ -3,10 +3,10 @@
 
 use std::collections::BTreeMap;
 
-use billow::camera::Camera;
 use billow::eval::cloud_render::{CloudRenderer, PreparedCloud};
 use billow::eval::lighting::Lighting;
 use billow::eval::reference::Sampling;
+use billow_core::camera::Camera;
 use billow_format::{
     Atlas, AtlasRect, Billboard, Bounds, CloudAsset, CloudLevel, ColourSpace, Header, Mesh,
     MeshMaterial, MeshVertex,
@@ -281,7 +281,7 @@ fn an_edge_on_billboard_is_finite_and_covers_no_more_than_its_projection() {
             let corners: Vec<(f32, f32)> = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]
                 .iter()
                 .map(|c| {
-                    let v = billow::camera::to_view(&view, Vec3::new(c[0], c[1], 0.0));
+                    let v = billow_core::camera::to_view(&view, Vec3::new(c[0], c[1], 0.0));
                     cam.view_to_pixel(v).expect("in front of the eye")
                 })
                 .collect();

@@ -13,7 +13,7 @@
 //! [`CUT_RMSE`] (a hard depth test measures 0.0144 at 32³ and 0.0094 at 128³, see
 //! docs/eval.md "Depth fade").
 
-use billow::camera::Camera;
+use billow_core::camera::Camera;
 use billow::eval::image::write_comparison_png;
 use billow::eval::slicer::{render_decoded_over, OpaqueBackdrop, SlicerParams, Spacing};
 use billow::eval::volume_sampler::DecodedVolume;

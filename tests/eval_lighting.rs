@@ -312,8 +312,8 @@ fn scene_lighting_is_the_viewers_mesh_model() {
 /// the slicer) is an error against it rather than shared: the two agree.
 #[test]
 fn the_references_lighting_models_agree_with_the_asset_paths() {
-    use billow::eval::lighting::{diffuse_factor, volume_diffuse_factor};
     use billow::eval::reference::{one_sided, two_sided};
+    use billow_core::shading::{diffuse_factor, volume_diffuse_factor};
     let mut rng = billow::rng::Pcg32::new(7, 11);
     for _ in 0..2000 {
         let mut v = || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0;

@@ -9,7 +9,7 @@
 //! - its area equals the area of the convex hull of *all* f64 crossing points (no point
 //!   lost), within `TOL_REL`·scale².
 
-use billow::eval::prism_plane::{intersect_prism_plane, SlicePolygon};
+use billow_core::prism_plane::{intersect_prism_plane, SlicePolygon};
 use billow::test_support::box_positions_z as boxed;
 use proptest::prelude::*;
 

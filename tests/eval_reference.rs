@@ -6,9 +6,9 @@
 //! samples); interior colour within 2e-3 (8-bit texture quantization is exact here, the
 //! rest is f32 rounding); the 1-spp render counts exactly the pixel centres inside.
 
-use billow::camera::Camera;
 use billow::eval::reference::{raster_1spp, render_reference, Sampling};
 use billow::scene::{AlphaMode, Material, Scene, SceneBuilder, Texture, Vertex, Wrap};
+use billow_core::camera::Camera;
 use glam::{Vec2, Vec3, Vec4};
 
 const FOV: f32 = std::f32::consts::FRAC_PI_4;

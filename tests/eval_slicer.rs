@@ -1,7 +1,7 @@
 //! End to end: a synthetic opaque cube volume (16³, 2 box prisms, full MIP chain) rendered
 //! by the CPU slicer against the reference ray tracer of the equivalent mesh cube.
 
-use billow::camera::{view_set, Camera, ViewDirections};
+use billow_core::camera::{view_set, Camera, ViewDirections};
 use billow::eval::image::linear_to_srgb;
 use billow::eval::metrics::compare;
 use billow::eval::reference::{ReferenceRenderer, Sampling};

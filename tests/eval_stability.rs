@@ -1,8 +1,8 @@
 //! Numerical stability of compositing, opacity correction and ray/triangle tests,
 //! against f64 references with explicit tolerances.
 
-use billow::eval::compositing::{correct_premultiplied, corrected_alpha, over, under};
-use billow::eval::ray_triangle::WatertightRay;
+use billow_core::compositing::{correct_premultiplied, corrected_alpha, over, under};
+use billow_core::ray_triangle::WatertightRay;
 use glam::{DVec4, Vec3, Vec4};
 use proptest::prelude::*;
 

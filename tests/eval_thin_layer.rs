@@ -15,7 +15,7 @@
 //! GPU slicer's test (viewer/tests/thin_layer.rs); `cargo run --release --example
 //! thin_layer_measurements` prints the table of docs/eval.md "Thin layers".
 
-use billow::camera::Camera;
+use billow_core::camera::Camera;
 use billow::eval::slicer::{render_volume, SlicerParams};
 use billow::eval::ImageF32;
 use billow::test_support::thin_layer::{

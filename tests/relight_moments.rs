@@ -9,7 +9,7 @@ mod common;
 
 use std::collections::BTreeMap;
 
-use billow::camera::ViewSpec;
+use billow_core::camera::ViewSpec;
 use billow::eval::lighting::EvalLight;
 use billow::eval::suite::{EvalOptions, Evaluator, PreparedAsset};
 use billow::scene::Scene;

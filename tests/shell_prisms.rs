@@ -272,7 +272,7 @@ fn shell_asset_replaces_cells_bounds_and_params() {
         levels: vec![vec![200; 32], vec![100; 4]],
         normals: None,
         bands: Vec::new(),
-        cells: billow::voxelize::box_prisms(Vec3::ZERO, Vec3::ONE).to_vec(),
+        cells: billow_core::cells::box_prisms(Vec3::ZERO, Vec3::ONE).to_vec(),
     };
     let s = shell(&torus(1.0, 0.35, 16, 8), 0.1, Vec2::new(4.0, 2.0)).unwrap();
     let (bounds, prisms) = (s.bounds, s.prisms.clone());

@@ -8,14 +8,14 @@
 
 mod common;
 
-use billow::camera::Camera;
 use billow::eval::image::{write_comparison_png, ImageF32};
 use billow::eval::lighting::Lighting;
 use billow::eval::metrics::compare;
 use billow::eval::reference::{ReferenceRenderer, Sampling};
 use billow::import::{import, ImportOptions};
-use billow::scene::Aabb;
+use billow_core::camera::Camera;
 use billow_core::shading::{DEFAULT_AMBIENT, DEFAULT_LIGHT};
+use billow_core::Aabb;
 use common::{run, skip};
 use glam::Vec3;
 

@@ -45,7 +45,7 @@ fn banding_of(compression: Compression) -> Vec<Banding> {
         },
     )
     .expect("evaluator");
-    let light = EvalLight::new("ambient", Vec3::new(0.3, 1.0, 0.5), 1.0).expect("light");
+    let light = EvalLight::new("ambient", billow_core::shading::DEFAULT_LIGHT, 1.0).expect("light");
     eval.set_light(&light, false).expect("light");
     [
         ("+y", Vec3::Y),

@@ -10,7 +10,7 @@
 //! voxel normal (the radial normal at the voxel centre, trilinearly filtered) and the
 //! one-voxel soft edge of the ball.
 
-use billow::camera::Camera;
+use billow_core::camera::Camera;
 use billow::eval::lighting::VolumeLight;
 use billow::eval::slicer::{render_volume, SlicerParams};
 use billow::noise_volume::{dust, sphere};
@@ -125,7 +125,7 @@ fn volumes_without_normals_keep_their_baked_colour_bit_for_bit() {
 /// as error.
 #[test]
 fn eval_compares_a_shaded_volume_with_a_reference_lit_the_same_way() {
-    use billow::camera::ViewSpec;
+    use billow_core::camera::ViewSpec;
     use billow::eval::lighting::Lighting;
     use billow::eval::suite::{reference_lighting, EvalOptions, Evaluator, PreparedAsset};
     use billow::voxelize::{voxelize, Resolution, VoxelizeOptions};

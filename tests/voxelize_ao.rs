@@ -3,10 +3,11 @@
 
 use std::collections::BTreeMap;
 
-use billow::scene::{Aabb, AlphaMode, Material, Scene, SceneBuilder, Texture, Wrap};
+use billow::scene::{AlphaMode, Material, Scene, SceneBuilder, Texture, Wrap};
 use billow::voxelize::{
     bake_params, slice_stack, voxelize, Bake, Dir, Resolution, VoxelizeOptions,
 };
+use billow_core::Aabb;
 use glam::{Vec3, Vec4};
 
 /// An axis-aligned square quad perpendicular to `axis` at `depth`, spanning `[lo, hi]` on

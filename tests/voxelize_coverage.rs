@@ -15,7 +15,7 @@
 
 mod common;
 
-use billow::camera::{view_set_with, ViewDirections};
+use billow_core::camera::{view_set_with, ViewDirections};
 use billow::eval::slicer::{render_decoded, SlicerParams, Spacing};
 use billow::eval::suite::{means_by_distance, EvalOptions, Evaluator, PreparedAsset};
 use billow::eval::volume_sampler::DecodedVolume;

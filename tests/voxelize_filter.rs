@@ -4,12 +4,14 @@
 use std::str::FromStr;
 
 use billow::voxelize::grid3::Grid3;
-use billow::voxelize::mip::{downsample, over, taps};
+use billow::voxelize::mip::{downsample, taps};
 use billow::voxelize::quantize::{decode_rgba8, encode_normal, encode_rgba8, srgb_eotf, srgb_oetf};
 use billow::voxelize::toksvig::{average_normal, toksvig_factor};
 use billow::voxelize::{
-    box_prisms, clamp_premultiplied, Combine, CombineFn, CombineParseError, Dir, Expr, Preset,
+    clamp_premultiplied, Combine, CombineFn, CombineParseError, Dir, Expr, Preset,
 };
+use billow_core::cells::box_prisms;
+use billow_core::compositing::over;
 use glam::{Vec3, Vec4};
 use proptest::prelude::*;
 

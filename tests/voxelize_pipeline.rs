@@ -3,8 +3,9 @@
 use std::sync::Arc;
 
 use billow::procgen::truss;
-use billow::scene::{Aabb, AlphaMode, Material, Scene, SceneBuilder};
+use billow::scene::{AlphaMode, Material, Scene, SceneBuilder};
 use billow::voxelize::{voxelize, CombineFn, Expr, Preset, Resolution, Volume, VoxelizeOptions};
+use billow_core::Aabb;
 use glam::{Vec3, Vec4};
 
 fn run(scene: &Scene, opts: &VoxelizeOptions) -> Volume {

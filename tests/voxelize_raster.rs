@@ -1,10 +1,11 @@
 //! Slice rasterization, binning, alpha modes, faces, resolution parsing and grid fitting.
 
-use billow::scene::{Aabb, AlphaMode, Material, Scene, SceneBuilder};
+use billow::scene::{AlphaMode, Material, Scene, SceneBuilder};
 use billow::voxelize::{
     fit_grid, grid_for, slice_stack, voxelize, Dir, Resolution, ResolutionError, SliceStack,
     VoxelizeError, VoxelizeOptions,
 };
+use billow_core::Aabb;
 use glam::{Vec3, Vec4};
 
 fn material(alpha_mode: AlphaMode, double_sided: bool) -> Material {

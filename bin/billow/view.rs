@@ -5,10 +5,11 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use billow::camera::{parse_direction, Camera};
 use billow::eval::ImageF32;
-use billow::scene::Aabb;
-use billow_view::{FrameStats, Gpu, SliceParams, Spacing, ViewCamera, ViewError};
+use billow_core::camera::{parse_direction, Camera};
+use billow_core::slicing::Spacing;
+use billow_core::Aabb;
+use billow_view::{FrameStats, Gpu, SliceParams, ViewCamera, ViewError};
 use glam::{Vec3, Vec4};
 use serde::Serialize;
 

@@ -12,8 +12,8 @@ use billow::export::{
 use billow::import::{import, ImportOptions, Imported};
 use billow::presets::{resolve_volume, Preset, Source, VolumeFlags};
 use billow::provenance::{source_info, with_companions};
-use billow::scene::Aabb;
 use billow::voxelize::{default_align, Bake, Baked, CombineFn, Resolution, VoxelizeOptions};
+use billow_core::Aabb;
 use glam::Vec3;
 use serde::Serialize;
 

@@ -1,6 +1,4 @@
 //! An axis-aligned box (the scene's bounds, what the camera frames).
-//!
-//! Re-exported as `billow::scene::Aabb`.
 
 // `!(a <= b)` comparisons are deliberate: an empty (inverted or NaN) box is empty.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]

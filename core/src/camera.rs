@@ -21,7 +21,8 @@
 //! orthographic mode for the shadow map) builds its view and projection with them and
 //! converts to its uniform layout, so the two renderers cannot drift apart.
 //!
-//! This module is re-exported as `billow::camera` (the path it had before it moved here).
+//! The library and the viewer use it from here (`billow::camera`, the path it had before
+//! it moved here, is gone).
 
 // `!(a < b)` comparisons are deliberate: they also catch NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]

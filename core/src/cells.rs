@@ -9,8 +9,7 @@
 //! `(min.x, min.z)`–`(max.x, max.z)` diagonal. `uvw = (p − min) / (max − min)`, so the
 //! volume's texture coordinates span [0, 1]³ over the box.
 //!
-//! Used by the voxelizer, the empty-space pass and the procedural volumes; re-exported as
-//! `billow::voxelize::cells` (and `billow::voxelize::box_prisms`).
+//! Used by the voxelizer, the empty-space pass and the procedural volumes.
 
 use glam::Vec3;
 

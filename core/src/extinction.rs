@@ -49,19 +49,55 @@ pub fn to_extinction_capped(c: Vec4, cap: f32) -> Vec4 {
 
 /// Back from [`to_extinction`] space to premultiplied RGBA: `α = 1 − e^(−σ)`, colour
 /// `(σ·c)/σ · α`. `σ` within 1e-4 of [`MAX_OPTICAL_DEPTH`] (every texel under the
-/// filter opaque) gives α = 1 exactly.
+/// filter opaque) gives α = 1 exactly. [`slab_sample`] over one texel.
 #[inline]
 pub fn from_extinction(e: Vec4) -> Vec4 {
+    slab_sample(e, 1.0, MAX_OPTICAL_DEPTH - 1e-4)
+}
+
+/// The optical depth at or above which the viewer's filtered sample of textures stored
+/// as f16 is opaque: the CPU's `MAX_OPTICAL_DEPTH − 1e-4` lowered by one f16 step
+/// (2⁻⁸ at 6.2), so that a footprint of opaque texels stored as f16 (6.234375) and
+/// filtered with the hardware's weights still gives α = 1 (`volume_math.wgsl`'s
+/// `OPAQUE_OPTICAL_DEPTH`, tested equal by `viewer/tests/volume_math_gpu.rs`).
+pub const OPAQUE_F16_OPTICAL_DEPTH: f32 = 6.2304;
+
+/// A filtered extinction-space sample `e = (σ·c, σ)` over a slab `ratio` texels thick,
+/// back to premultiplied RGBA: `α = 1 − e^(−σ·ratio)`, colour `(σ·c)/σ · α`; `α = 1`
+/// exactly where `σ ≥ opaque` (every texel under the filter opaque). The CPU sampler
+/// passes its level-weighted sum (`ratio` 1, `opaque` the weighted caps); the viewer's
+/// `slab_sample` (`volume_math.wgsl`) is this with [`OPAQUE_F16_OPTICAL_DEPTH`], tested
+/// against it by `viewer/tests/volume_math_gpu.rs`. Zero for an empty sample or a slab
+/// of no thickness.
+#[inline]
+pub fn slab_sample(e: Vec4, ratio: f32, opaque: f32) -> Vec4 {
     let s = e.w;
-    if !(s > 0.0) {
+    if !(s > 0.0) || !(ratio > 0.0) {
         return Vec4::ZERO;
     }
-    let a = if s >= MAX_OPTICAL_DEPTH - 1e-4 {
+    let a = if s >= opaque {
         1.0
     } else {
-        -(-s).exp_m1()
+        -(-s * ratio).exp_m1()
     };
     (e.truncate() * (a / s)).extend(a)
+}
+
+/// [`to_extinction`] of a texel of a MIP level whose texels are `ratio` level-0 texels in
+/// size ([`crate::slicing::level_size_ratio`]), its optical depth per level-0 texel (a
+/// density: `σ / ratio`), opaque texels at [`MAX_OPTICAL_DEPTH`] whatever the level
+/// ([`crate::slicing::opaque_optical_depth`]). What the viewer's volume textures hold
+/// (`billow_view::volume_pass::extinction_levels`) and its filter by loads computes
+/// (`volume_loads.wgsl`'s `to_extinction`, tested against this by
+/// `viewer/tests/volume_math_gpu.rs`); `ratio` 1 is [`to_extinction`].
+#[inline]
+pub fn to_density(c: Vec4, ratio: f32) -> Vec4 {
+    let e = to_extinction_capped(c, MAX_OPTICAL_DEPTH * ratio);
+    if ratio != 1.0 {
+        e / ratio
+    } else {
+        e
+    }
 }
 
 /// The sRGB EOTF of an 8-bit value (IEC 61966-2-1), computed in f64 and rounded to f32:

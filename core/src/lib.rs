@@ -21,10 +21,9 @@
 //! format crate for its cell type ([`billow_format::Prism`]) alone. The viewer's WGSL
 //! shaders keep their own GPU code (tested against these functions).
 //!
-//! The library keeps its old paths as re-exports (`billow::camera`,
-//! `billow::eval::prism_plane`, `billow::eval::ray_triangle`, `billow::eval::compositing`,
-//! `billow::scene::Aabb`, `billow::voxelize::box_prisms`, the slicer's `Spacing` and
-//! `voxel_size`, `billow::eval::lighting::diffuse_factor`), so code written against them compiles unchanged.
+//! The library and the viewer call these by their paths here (`billow_core::camera`,
+//! `billow_core::prism_plane`, `billow_core::Aabb`, …); the library keeps no re-exports
+//! of them.
 
 pub mod aabb;
 pub mod camera;

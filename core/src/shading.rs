@@ -9,8 +9,9 @@ use glam::Vec3;
 /// default scene light, the reference's and the CPU slicer's, and the billboard bake's.
 pub const DEFAULT_LIGHT: Vec3 = Vec3::new(0.3, 1.0, 0.5);
 
-/// Ambient fraction of [`DEFAULT_LIGHT`] (the unshadowed part of the light).
-pub const DEFAULT_AMBIENT: f32 = 0.3;
+/// Ambient fraction of [`DEFAULT_LIGHT`] (the unshadowed part of the light): the format's
+/// default for a baked light's ambient ([`billow_format::DEFAULT_AMBIENT`]), one value.
+pub const DEFAULT_AMBIENT: f32 = billow_format::DEFAULT_AMBIENT;
 
 /// `ambient + (1 − ambient) · |n·light|`: the one lighting model of billow — the
 /// billboard bake's factor, the reference's, and the viewer's mesh pass (two-sided Lambert;

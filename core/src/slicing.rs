@@ -9,6 +9,7 @@
 //! - Slices front to back from the nearest cell depth ([`slice_depths`]): `z₀ = z_min +
 //!   d(z_min)/2`, `z_{i+1} = z_i + d(z_i)` while `z < z_max`; the renderers draw them in
 //!   reverse.
+//! - The MIP level a slice samples ([`slice_lod`]): `λ = clamp(log2(d/v₀), 0, L)`.
 //! - Stored normals → view space per cell: [`normal_matrix`], [`shade_normal`].
 
 // `!(a < b)` comparisons are deliberate: they also catch NaN.
@@ -78,6 +79,19 @@ pub fn voxel_size(cells: &[Prism], dims: [u32; 3]) -> Option<f32> {
 /// `2^level` where a side was rounded down), and this is their geometric mean.
 pub fn level_texel_size(cells: &[Prism], dims0: [u32; 3], level: u32) -> Option<f32> {
     voxel_size(cells, billow_format::mip_dims(dims0, level))
+}
+
+/// The MIP level `λ` a slice of spacing `d` samples: `clamp(log2(d / v₀), 0, max_lod)`,
+/// `v₀` the asset's level-0 voxel size ([`voxel_size`]; for LOD bands the finest over the
+/// bands, SPEC §8.6) and `max_lod` its last level. One rule for the CPU slicer
+/// (`billow::eval::slicer`) and the viewer's volume plan; `volume.wgsl` (its
+/// `volume_math.wgsl`'s `slice_lod`) is tested against it
+/// (`viewer/tests/volume_math_gpu.rs`). A banded asset draws each slice with the band
+/// whose `[first_level, next band's first_level)` holds `λ`, sampling its texture at
+/// `λ − first_level`.
+#[inline]
+pub fn slice_lod(d: f32, v0: f32, max_lod: f32) -> f32 {
+    (d / v0).log2().clamp(0.0, max_lod)
 }
 
 /// The opacity correction of one slice, agreeing with the bake's coverage-keeping levels
@@ -157,7 +171,7 @@ pub fn far_slab(z: f32, d: f32, z_max: f32) -> f32 {
 
 /// Slice depths and spacings `(depth, d)`, **front to back**, over `[z_min, z_max]`.
 /// `pixel_size_at(z)`: the world size of one pixel at view depth `z` (the camera's,
-/// e.g. [`crate::camera::Camera::pixel_size_at`]); `v0`: [`voxel_size`]; at most
+/// e.g. [`billow_core::camera::Camera::pixel_size_at`]); `v0`: [`voxel_size`]; at most
 /// `limit` slices.
 pub fn slice_depths(
     pixel_size_at: impl Fn(f32) -> f32,
@@ -249,7 +263,8 @@ pub fn shade_normal(nmat: Mat3, n: Vec3) -> Vec3 {
 /// The part of a slab from `slab0`, `thickness` deep, in front of an opaque surface at
 /// view distance `z`: `clamp((z − slab0)/thickness, 0, 1)` (1 without a surface). A slice
 /// stands for its slab, so it fades as the slab meets the surface (the CPU slicer's, and
-/// the viewer's `depth_fade` in `volume.wgsl`).
+/// the viewer's `depth_fade` in `volume_math.wgsl`, tested against this by
+/// `viewer/tests/volume_math_gpu.rs`).
 #[inline]
 pub fn slab_fade(z: f32, slab0: f32, thickness: f32) -> f32 {
     if !(z < f32::INFINITY) {
@@ -277,6 +292,16 @@ mod tests {
             (slab_fade(3.5, 3.0, 0.0), slab_fade(2.5, 3.0, 0.0)),
             (1.0, 0.0)
         );
+    }
+
+    /// `λ = log2(d/v₀)` between 0 and the last level.
+    #[test]
+    fn slice_lod_is_the_clamped_log_of_spacing_over_voxel() {
+        assert_eq!(slice_lod(4.0, 1.0, 6.0), 2.0);
+        assert_eq!(slice_lod(0.5, 1.0, 6.0), 0.0);
+        assert_eq!(slice_lod(1e9, 1.0, 6.0), 6.0);
+        assert_eq!(slice_lod(0.75, 0.25, 0.0), 0.0);
+        assert!((slice_lod(3.0, 1.0, 6.0) - 3f32.log2()).abs() < 1e-7);
     }
 
     /// Uniform spacing: `z₀ = z_min + d/2`, then steps of `d`, front to back, below

@@ -9,13 +9,13 @@ use std::path::Path;
 use std::time::Instant;
 
 use billow::bbcloud::{bake, BbcloudOptions};
-use billow::camera::{view_directions, views_of, ViewDirections, ViewSpec};
 use billow::eval::cloud_render::{CloudRenderer, PreparedCloud};
 use billow::eval::lighting::Lighting;
 use billow::eval::suite::{
     mean_errors, EvalOptions, Evaluator, MeanErrors, ReferenceView, ViewResult,
 };
 use billow::import::{import, ImportOptions};
+use billow_core::camera::{view_directions, views_of, ViewDirections, ViewSpec};
 use billow_format::CloudAsset;
 
 use crate::plot::{charts_svg, Chart, Series};

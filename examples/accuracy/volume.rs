@@ -6,14 +6,14 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
-use billow::camera::{view_set, ViewDirections};
-use billow::eval::slicer::Spacing;
 use billow::eval::suite::{
     mean_errors, means_by_distance, EvalOptions, Evaluator, MeanErrors, PreparedAsset,
     ReferenceView, ViewResult,
 };
 use billow::import::{import, ImportOptions};
 use billow::voxelize::{voxelize, CombineFn, Preset, Resolution, VoxelizeOptions};
+use billow_core::camera::{view_set, ViewDirections};
+use billow_core::slicing::Spacing;
 use billow_format::VolumeAsset;
 
 #[derive(Clone, Copy, Debug, PartialEq)]

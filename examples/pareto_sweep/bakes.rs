@@ -6,16 +6,16 @@ use std::collections::BTreeMap;
 use std::time::Instant;
 
 use billow::bbcloud::{bake as bake_cloud, BbcloudOptions};
-use billow::camera::{view_directions, views_of, ViewDirections};
 use billow::compress::{compress_cloud, compress_volume};
 use billow::eval::cloud_render::{CloudRenderer, PreparedCloud};
 use billow::eval::lighting::Lighting;
-use billow::eval::slicer::Spacing;
 use billow::eval::suite::{
     mean_errors, EvalOptions, Evaluator, MeanErrors, PreparedAsset, ReferenceView, ViewResult,
 };
 use billow::scene::Scene;
 use billow::voxelize::{voxelize, CombineFn, Resolution, VoxelizeOptions};
+use billow_core::camera::{view_directions, views_of, ViewDirections};
+use billow_core::slicing::Spacing;
 
 use super::{instr, Point, DISTANCES, TREE};
 

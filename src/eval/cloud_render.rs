@@ -43,14 +43,14 @@ use billow_format::{CloudAsset, ColourSpace};
 use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
-use super::compositing::under;
 use super::lighting::Lighting;
 use super::reference::{per_axis, sample_offset, validate_camera, ReferenceRenderer, Sampling};
 use super::{EvalError, ImageF32};
 use crate::bbcloud::atlas::ALPHA_CUTOFF;
-use crate::camera::Camera;
 use crate::scene::{AlphaMode, Material, Scene, Texture, Triangle, Vertex, Wrap};
 use crate::texture::srgb_to_linear_lut;
+use billow_core::camera::Camera;
+use billow_core::compositing::under;
 
 /// One decoded atlas: per MIP level `(width, height, texels)`, linear premultiplied.
 struct DecodedAtlas {
@@ -192,7 +192,7 @@ pub fn trunk_scene(asset: &CloudAsset) -> Scene {
         })
         .collect();
     let m = &asset.trunk;
-    let mut bounds = crate::scene::Aabb::EMPTY;
+    let mut bounds = billow_core::Aabb::EMPTY;
     let triangles = m
         .triangles
         .iter()
@@ -527,7 +527,7 @@ impl<'a> CloudRenderer<'a> {
                     f32::NEG_INFINITY,
                 ];
                 for c in corners {
-                    match camera.view_to_pixel(crate::camera::to_view(&view, c)) {
+                    match camera.view_to_pixel(billow_core::camera::to_view(&view, c)) {
                         Some((x, y)) if x.is_finite() && y.is_finite() => {
                             b = [b[0].min(x), b[1].min(y), b[2].max(x), b[3].max(y)];
                         }

@@ -10,7 +10,7 @@
 //! ```no_run
 //! use std::path::Path;
 //!
-//! use billow::camera::{view_set, ViewDirections};
+//! use billow_core::camera::{view_set, ViewDirections};
 //! use billow::eval::evaluate::{evaluate, Asset, EvaluateHooks, EvaluateOptions};
 //! use billow::import::{import, ImportOptions};
 //!
@@ -39,14 +39,15 @@ use billow_format::{AssetKind, BakedLight, CloudAsset, CloudError, Container, Vo
 use super::cloud_render::{CloudRenderer, PreparedCloud};
 use super::lighting::{EvalLight, Lighting};
 use super::metrics::ImageError;
-use super::slicer::{SlicerParams, Spacing};
+use super::slicer::SlicerParams;
 use super::suite::{
     mean_errors, means_by_distance, means_by_light, reference_lighting, DistanceMeans, EvalOptions,
     Evaluator, LightMeans, MeanErrors, PreparedAsset, ReferenceView, ViewResult, EVAL_FOV_Y,
 };
 use super::{EvalError, ImageF32};
-use crate::camera::ViewSpec;
 use crate::scene::Scene;
+use billow_core::camera::ViewSpec;
+use billow_core::slicing::Spacing;
 
 /// What [`evaluate()`] compares with the mesh: a volume or a billboard cloud.
 // One value per evaluation, never in a collection: boxing the cloud would only make callers
@@ -103,7 +104,7 @@ pub struct EvaluateOptions {
     /// **level-0 voxels** of the asset (world units when it has no voxel size). Unused for
     /// clouds.
     pub spacing: Spacing,
-    /// The views, in order (`--views`, `--distances`; [`crate::camera::views_of`]).
+    /// The views, in order (`--views`, `--distances`; [`billow_core::camera::views_of`]).
     pub views: Vec<ViewSpec>,
     pub lighting: ReferenceLighting,
     /// Billboard clouds: only this LOD level (`--lod`); `None`: every level. A volume

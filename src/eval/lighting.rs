@@ -16,12 +16,12 @@
 //!   viewer and its billboards baked with the same light look alike.
 //!
 //! - [`Lighting::Volume`]: the runtime shading of a volume that carries normals
-//!   ([`volume_diffuse_factor`]): `albedo · (ambient + (1 − ambient) · max(n·L, 0))`, the
+//!   ([`billow_core::shading::volume_diffuse_factor`]): `albedo · (ambient + (1 − ambient) · max(n·L, 0))`, the
 //!   **one-sided** Lambert of the interpolated shading normal, turned towards the viewer on
 //!   the back face of a double-sided triangle (as the voxelizer captures it,
 //!   `src/voxelize/fragments.rs`). The CPU slicer ([`super::slicer`]) and the viewer's
 //!   volume pass (`viewer/src/shaders/volume.wgsl`) shade with the voxel's
-//!   Toksvig-filtered normal instead; see [`volume_diffuse_factor`].
+//!   Toksvig-filtered normal instead; see [`billow_core::shading::volume_diffuse_factor`].
 //!
 //! [`Lighting::for_volume`] and [`Lighting::for_cloud`] read the choice from an asset's
 //! header parameters (`bake`, `ao_rays`, `ao_distance`, `ao_seed`; `light`, `ambient`) and,
@@ -188,11 +188,6 @@ pub fn parse_light_set(text: &str, ambient: f32) -> Result<Vec<EvalLight>, Light
     Ok(out)
 }
 
-/// The two lighting models (two-sided Lambert of leaf cards and meshes, one-sided Lambert
-/// of the Toksvig normal of a volume voxel): pure math of the shared core
-/// ([`billow_core::shading`], which the billboard bake uses too), re-exported here.
-pub use billow_core::shading::{diffuse_factor, volume_diffuse_factor};
-
 fn num<T: std::str::FromStr>(
     params: &BTreeMap<String, String>,
     key: &str,
@@ -356,6 +351,7 @@ impl Lighting {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use billow_core::shading::{diffuse_factor, volume_diffuse_factor};
 
     #[test]
     fn volume_params() {

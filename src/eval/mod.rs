@@ -2,21 +2,18 @@
 //! volume assets (VB paper §3.3), image metrics and image output.
 //!
 //! Every image here is **premultiplied linear RGBA, f32**, transparent background
-//! ([`image::ImageF32`]). The camera conventions are in [`crate::camera`].
+//! ([`image::ImageF32`]). The camera conventions are in [`billow_core::camera`].
 //!
 //! `billow eval` as one call is [`evaluate()`] ([`evaluate::EvaluateOptions`] in, an
 //! [`evaluate::Evaluation`] out); [`suite`] holds its parts.
 
 pub mod banding;
 pub mod cloud_render;
-pub mod compositing;
 pub mod error;
 pub mod evaluate;
 pub mod image;
 pub mod lighting;
 pub mod metrics;
-pub mod prism_plane;
-pub mod ray_triangle;
 pub mod reference;
 pub mod slicer;
 pub mod ssim;

@@ -13,7 +13,7 @@
 //! - Single-sided triangles are visible only from their counter-clockwise side;
 //!   double-sided ones from both.
 //! - Rays start at the camera's near plane and end at its far plane (`t` = view depth,
-//!   see [`crate::camera`]), like a rasterizer's clipping.
+//!   see [`billow_core::camera`]), like a rasterizer's clipping.
 //! - Pixels average `n × n` stratified jittered samples (default 4 × 4 = 16 spp), the
 //!   jitter a fixed hash of (pixel, sample): deterministic. [`Sampling::Centre`] is one
 //!   sample at the pixel centre: what a renderer without anti-aliasing shows.
@@ -34,12 +34,12 @@ use obvhs::bvh2::Bvh2;
 use obvhs::ray::{Ray, RayHit};
 use rayon::prelude::*;
 
-use super::compositing::under;
 use super::lighting::{voxel_stream, Lighting};
-use super::ray_triangle::{TriangleHit, WatertightRay};
 use super::{EvalError, ImageF32};
 use crate::bvh::scene_bvh;
-use crate::camera::Camera;
+use billow_core::camera::Camera;
+use billow_core::compositing::under;
+use billow_core::ray_triangle::{TriangleHit, WatertightRay};
 use crate::material::{validate_scene, Shader};
 use crate::scene::{AlphaMode, Scene};
 

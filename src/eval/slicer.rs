@@ -10,12 +10,12 @@
 //!   magnified voxel. `bias = 1` is the paper. [`Spacing::Uniform`]: constant `d`.
 //!   Slices are placed front to back from the nearest cell depth: `z₀ = z_min + d(z_min)/2`,
 //!   `z_{i+1} = z_i + d(z_i)`, then drawn in reverse.
-//! - MIP level from the spacing: `lod = log2(d / v₀)` clamped to the stored levels,
+//! - MIP level from the spacing ([`slice_lod`]): `lod = log2(d / v₀)` clamped to the stored levels,
 //!   sampled trilinearly within a level and (default [`MipFilter::Linear`]) linearly
 //!   between the two nearest levels.
 //! - Opacity correction: `α' = 1 − (1 − α)^(d/d₀)` with `d₀ = v₀ · 2^lod` the voxel size
 //!   of the sampled (clamped, fractional for linear filtering) level; premultiplied colour
-//!   scaled by `α'/α` ([`super::compositing`]).
+//!   scaled by `α'/α` ([`billow_core::compositing`]).
 //! - Each cell ∩ slice polygon comes from [`intersect_prism_plane`]. All its vertices lie
 //!   at the same depth, so the perspective projection is an *affine* map on it and uvw
 //!   interpolates linearly in screen space — no perspective correction needed. The convex
@@ -55,21 +55,19 @@ use billow_format::{Prism, VolumeAsset};
 use glam::{Mat3, Vec3, Vec4};
 use rayon::prelude::*;
 
-use billow_core::slicing::slab_fade;
+use billow_core::slicing::{slab_fade, slice_lod};
 
-use super::compositing::over;
-use super::lighting::{volume_diffuse_factor, VolumeLight};
-use super::prism_plane::intersect_prism_plane;
+use super::lighting::VolumeLight;
 use super::reference::{sample_offset, validate_camera, Sampling};
 use super::volume_sampler::{DecodedVolume, MipFilter};
 use super::{EvalError, ImageF32};
-use crate::camera::Camera;
+use billow_core::camera::Camera;
+use billow_core::compositing::over;
+use billow_core::prism_plane::intersect_prism_plane;
 use billow_core::shading::moments_diffuse_factor;
+use billow_core::shading::volume_diffuse_factor;
 
-/// Slice spacing mode, [`voxel_size`], the per-cell [`normal_matrix`] and
-/// [`shade_normal`]: the shared slice planning of the rendering core
-/// ([`billow_core::slicing`], which the viewer uses too), re-exported here.
-pub use billow_core::slicing::{
+use billow_core::slicing::{
     far_slab, level_texel_size, level_weights, normal_matrix, opaque_optical_depth, shade_normal,
     voxel_size, Spacing,
 };
@@ -421,7 +419,7 @@ fn render_sliced(
         frags
     };
     for &(depth, d) in &slices {
-        let lod = (d / v0).log2().clamp(0.0, max_lod);
+        let lod = slice_lod(d, v0, max_lod);
         // The slab this slice stands for; the farthest reaches the end of the range.
         let thickness = match far_z {
             Some((z, t)) if z == depth => t,

@@ -1,7 +1,7 @@
 //! The evaluation harness behind `billow eval`: a source mesh and a volume asset rendered
 //! from the same views and compared (docs/eval.md).
 //!
-//! - Every view is framed on the **source mesh's** bounds ([`crate::camera::Camera::framed`]),
+//! - Every view is framed on the **source mesh's** bounds ([`billow_core::camera::Camera::framed`]),
 //!   so the reference images do not depend on the asset (its margin, resolution) and can be
 //!   reused for many assets of the same mesh ([`Evaluator::reference`]).
 //! - Reference: [`ReferenceRenderer`] with `n × n` stratified samples per pixel, unlit or
@@ -31,8 +31,9 @@ use super::reference::{ReferenceRenderer, Sampling};
 use super::slicer::{render_decoded, SlicerParams};
 use super::volume_sampler::DecodedVolume;
 use super::{EvalError, ImageF32};
-use crate::camera::{Camera, ViewSpec};
-use crate::scene::{Aabb, Scene};
+use crate::scene::Scene;
+use billow_core::camera::{Camera, ViewSpec};
+use billow_core::Aabb;
 
 /// Vertical field of view of every evaluation view: 45°.
 pub const EVAL_FOV_Y: f32 = std::f32::consts::FRAC_PI_4;
@@ -309,9 +310,9 @@ impl PreparedAsset {
         })
     }
 
-    /// World size of a level-0 voxel (see [`super::slicer::voxel_size`]).
+    /// World size of a level-0 voxel (see [`billow_core::slicing::voxel_size`]).
     pub fn voxel_size(&self) -> Option<f32> {
-        super::slicer::voxel_size(&self.cells, self.dims0)
+        billow_core::slicing::voxel_size(&self.cells, self.dims0)
     }
 }
 

@@ -212,7 +212,7 @@ impl DecodedVolume {
     }
 
     /// Trilinear sample of level `level` (clamped to the last level) at `uvw`, filtered
-    /// in **extinction space** (see [`to_extinction`]): the result is `(σ·c, σ)`, the
+    /// in **extinction space** (see [`billow_core::extinction::to_extinction`]): the result is `(σ·c, σ)`, the
     /// weighted sum of the eight texels' extinction-weighted straight colours.
     pub fn sample_level_extinction(&self, level: usize, uvw: Vec3) -> Vec4 {
         self.sample_level_extinction_capped(level, uvw, MAX_OPTICAL_DEPTH)
@@ -239,7 +239,7 @@ impl DecodedVolume {
 
     /// The sample the slicer composites: like [`DecodedVolume::sample`] but filtered in
     /// extinction space (trilinear within a level and linear between levels on
-    /// [`to_extinction`] values), returned as premultiplied RGBA ([`from_extinction`]).
+    /// [`billow_core::extinction::to_extinction`] values), returned as premultiplied RGBA ([`billow_core::extinction::from_extinction`]).
     pub fn sample_opacity(&self, lod: f32, uvw: Vec3, filter: MipFilter) -> Vec4 {
         let max = (self.levels.len() - 1) as f32;
         let lod = if lod.is_finite() {
@@ -270,7 +270,8 @@ impl DecodedVolume {
     /// level's texel thickness, cap)`, from [`billow_core::slicing::level_weights`] and
     /// [`billow_core::slicing::opaque_optical_depth`]) and summed, `α = 1 − e^(−Σ wᵢ σᵢ)`,
     /// colour the weighted straight colour times `α` (premultiplied). Exactly 1 where every
-    /// texel under the filter is opaque (as [`from_extinction`]).
+    /// texel under the filter is opaque (as [`billow_core::extinction::from_extinction`]):
+    /// [`billow_core::extinction::slab_sample`] of the sum.
     pub fn sample_weighted(&self, weights: [(usize, f32, f32); 2], uvw: Vec3) -> Vec4 {
         let mut e = Vec4::ZERO;
         let mut total = 0.0f32;
@@ -280,12 +281,7 @@ impl DecodedVolume {
                 total += w * (cap - 1e-4);
             }
         }
-        let s = e.w;
-        if !(s > 0.0) {
-            return Vec4::ZERO;
-        }
-        let a = if s >= total { 1.0 } else { -(-s).exp_m1() };
-        (e.truncate() * (a / s)).extend(a)
+        slab_sample(e, 1.0, total)
     }
 
     /// Sample at fractional level `lod` (clamped to the stored levels).
@@ -378,8 +374,8 @@ fn texel_pair(u: f32, n: i64, repeat: bool) -> (usize, usize, f32) {
     (i0 as usize, i1 as usize, t)
 }
 
-pub use billow_core::extinction::{
-    from_extinction, to_extinction, to_extinction_capped, MAX_OPTICAL_DEPTH,
+use billow_core::extinction::{
+    from_extinction, slab_sample, to_extinction_capped, MAX_OPTICAL_DEPTH,
 };
 
 #[cfg(test)]

@@ -2,7 +2,7 @@
 
 use billow_format::{CloudAsset, VolumeAsset};
 
-use crate::camera::ViewSpec;
+use billow_core::camera::ViewSpec;
 use crate::eval::cloud_render::{CloudRenderer, PreparedCloud};
 use crate::eval::lighting::{EvalLight, Lighting};
 use crate::eval::metrics::{compare, ImageError};

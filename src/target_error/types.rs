@@ -2,7 +2,7 @@
 
 use serde::Serialize;
 
-use crate::camera::{view_directions, views_of, ViewDirections, ViewSpec};
+use billow_core::camera::{view_directions, views_of, ViewDirections, ViewSpec};
 use crate::eval::lighting::{light_set, EvalLight};
 use crate::eval::EvalError;
 use crate::presets::Preset;

@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 
 use glam::Vec3;
 
-use crate::camera::Camera;
+use billow_core::camera::Camera;
 use crate::import::{import, ImportOptions};
 use crate::voxelize::{voxelize, CombineFn, Preset, Resolution, VoxelizeOptions};
 use billow_format::VolumeAsset;

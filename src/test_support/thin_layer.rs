@@ -6,7 +6,7 @@
 
 use glam::Vec3;
 
-use crate::camera::Camera;
+use billow_core::camera::Camera;
 use crate::eval::image::linear_to_srgb;
 use crate::eval::ImageF32;
 use billow_format::{full_mip_count, mip_dims, ColourSpace, Header, VolumeAsset};

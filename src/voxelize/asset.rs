@@ -7,8 +7,8 @@ use billow_format::{
     VolumeHeader,
 };
 
-use super::cells::box_prisms;
 use super::{Bake, GridSpec, Volume, VoxelizeOptions};
+use billow_core::cells::box_prisms;
 
 /// The bake parameters `voxelize` records in the header (`res`, `combine`, `supersample`,
 /// `normals`, `margin`, `dims`; with AO also `bake = ao`, `ao_rays`, `ao_distance` (scene

@@ -23,7 +23,7 @@ use std::str::FromStr;
 
 use glam::Vec3;
 
-use crate::scene::Aabb;
+use billow_core::Aabb;
 
 /// Largest number of voxels along one axis.
 pub const MAX_AXIS: u32 = 2048;

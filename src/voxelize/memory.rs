@@ -239,9 +239,9 @@ pub(super) fn estimate_bytes(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::Aabb;
     use crate::scene::{Material, SceneBuilder, Vertex};
     use crate::voxelize::{grid_for, slice_stack, Dir, Resolution};
+    use billow_core::Aabb;
     use glam::Vec2;
     use glam::{Vec3, Vec4};
     use proptest::prelude::*;

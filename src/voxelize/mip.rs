@@ -31,10 +31,6 @@ use super::grid3::{Disjoint, Grid3, Texel};
 use super::slices::DirSlices;
 use super::Dir;
 
-/// Premultiplied `front over back`: the shared core's one `over`
-/// ([`billow_core::compositing::over`]), re-exported here.
-pub use billow_core::compositing::over;
-
 /// The children a parent covers along one axis: `(child index, fraction of it inside)`.
 pub type Taps = Vec<Vec<(usize, f32)>>;
 

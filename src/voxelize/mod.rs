@@ -51,7 +51,6 @@ mod ao;
 pub mod asset;
 mod bake;
 pub(crate) mod brick_grid;
-pub mod cells;
 pub mod combine;
 pub mod coverage;
 pub mod dense;
@@ -79,7 +78,6 @@ pub use ao::{
 };
 pub use asset::{bake_params, bake_params_for};
 pub use bake::{bake, BakeError, BakeHooks, BakeOptions, Baked};
-pub use cells::{box_prisms, Prism};
 pub use combine::{Combine, CombineFn, CombineParseError, Preset};
 pub use coverage::CoverageScales;
 pub use expr::{Expr, ExprError};
@@ -96,7 +94,8 @@ use sparse::sparse_level;
 pub use sparse::{voxelize_sparse, SparseVolume};
 
 use crate::material;
-use crate::scene::{Aabb, Scene};
+use crate::scene::Scene;
+use billow_core::Aabb;
 use crate::sparse_level::SparseLevel;
 use grid3::Texel;
 

@@ -3,7 +3,8 @@
 
 use billow::bbcloud::Element;
 use billow::rng::Pcg32;
-use billow::scene::{Aabb, AlphaMode, Material, Scene, Triangle, Vertex};
+use billow::scene::{AlphaMode, Material, Scene, Triangle, Vertex};
+use billow_core::Aabb;
 use glam::{Vec2, Vec3, Vec4};
 
 /// The bundled oak, from the library's package or the CLI's (bin/billow).

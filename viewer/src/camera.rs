@@ -1,6 +1,6 @@
 //! The camera as the renderer needs it: a view matrix and a perspective (or, for the
 //! shadow map, orthographic) projection. The view, perspective and pixel-size math is the
-//! shared core's ([`billow_core::camera`], also `billow::camera::Camera`'s): one
+//! shared core's ([`billow_core::camera`]): one
 //! implementation; this type adds the orthographic mode and the checks the renderer needs,
 //! and the renderer converts it to its uniform layout.
 
@@ -28,7 +28,7 @@ pub struct ViewCamera {
 }
 
 impl ViewCamera {
-    /// From the parts of a `billow::camera::Camera` (`view()`, `fov_y`, size, near, far).
+    /// From the parts of a `billow_core::camera::Camera` (`view()`, `fov_y`, size, near, far).
     pub fn from_parts(
         view: Mat4,
         fov_y: f32,
@@ -49,7 +49,7 @@ impl ViewCamera {
         }
     }
 
-    /// The perspective camera of a core camera (`billow::camera::Camera`): its view,
+    /// The perspective camera of a core camera (`billow_core::camera::Camera`): its view,
     /// field of view, size and clip distances.
     pub fn from_camera(c: &billow_core::camera::Camera) -> Self {
         Self {
@@ -77,7 +77,7 @@ impl ViewCamera {
     }
 
     /// A look-at camera; the view matrix is [`billow_core::camera::look_at`]'s (as
-    /// `billow::camera::Camera::view`).
+    /// `billow_core::camera::Camera::view`).
     #[allow(clippy::too_many_arguments)]
     pub fn look_at(
         eye: Vec3,
@@ -110,7 +110,7 @@ impl ViewCamera {
     }
 
     /// View → clip (wgpu depth 0..1): [`billow_core::camera::perspective`] (as
-    /// `billow::camera::Camera::projection`), or the orthographic projection.
+    /// `billow_core::camera::Camera::projection`), or the orthographic projection.
     pub fn projection(&self) -> Mat4 {
         if let Some(hh) = self.ortho_half_height {
             let range = self.far - self.near;

@@ -6,7 +6,7 @@
 //! intersection in WGSL. Billboard clouds (Lacewell et al. 2006) morph between their
 //! LODs; opaque meshes share the z-buffer; a directional shadow map when asked for.
 //!
-//! Conventions are those of `billow::camera` (view space looks down −Z, wgpu clip
+//! Conventions are those of `billow_core::camera` (view space looks down −Z, wgpu clip
 //! space, row 0 at the top). This crate does not depend on the `billow` library (the
 //! `billow` binary depends on this crate, and a package cannot depend on itself): the
 //! binary converts its camera with [`ViewCamera::from_parts`] and imports meshes itself.
@@ -38,6 +38,9 @@ pub mod slice_plan;
 pub mod target;
 pub mod texture;
 pub mod texture_bc;
+/// Test support (feature `test-support`, on for the viewer's own tests): not part of the API.
+#[cfg(any(test, feature = "test-support"))]
+pub mod volume_math_gpu;
 pub mod volume_pass;
 pub mod volume_plan;
 pub mod window;
@@ -47,5 +50,5 @@ pub use error::ViewError;
 pub use frame_stats::FrameStats;
 pub use gpu::Gpu;
 pub use render::Renderer;
-pub use slice_plan::{SliceParams, Spacing};
+pub use slice_plan::SliceParams;
 pub use target::RgbaImage;

@@ -1,6 +1,6 @@
 //! Runs the WGSL prism/plane intersection (shaders/prism_plane.wgsl, the one the volume
 //! pass uses) in a compute pass and reads the polygons back — for testing it against
-//! the Rust reference (`billow::eval::prism_plane`).
+//! the Rust reference (`billow_core::prism_plane`).
 
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;

@@ -3,7 +3,7 @@
 //! `billow::eval::slicer` uses, so the GPU draws the same slices; this module adds the
 //! viewer's parameters ([`SliceParams`]).
 //!
-//! - `v₀` ([`voxel_size`]): the world size of a level-0 voxel, minimum over the cells.
+//! - `v₀` ([`billow_core::slicing::voxel_size`]): the world size of a level-0 voxel, minimum over the cells.
 //! - Adaptive spacing at depth `z`: `d(z) = bias · max(pixel_size(z), v₀)`; uniform: `d`.
 //! - Slices front to back from the nearest cell depth: `z₀ = z_min + d(z_min)/2`,
 //!   `z_{i+1} = z_i + d(z_i)` while `z < z_max`, then drawn back to front.
@@ -12,7 +12,7 @@
 
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-pub use billow_core::slicing::{slice_depths, voxel_size, Spacing};
+use billow_core::slicing::Spacing;
 
 use crate::ViewError;
 

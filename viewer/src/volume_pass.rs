@@ -137,9 +137,10 @@ pub fn shader_source(n: usize, loads: bool) -> String {
         ""
     };
     format!(
-        "{}\n{}\n{}\n{}\n{}",
+        "{}\n{}\n{}\n{}\n{}\n{}",
         include_str!("shaders/prism_plane.wgsl"),
         include_str!("shaders/shadow_lookup.wgsl"),
+        include_str!("shaders/volume_math.wgsl"),
         loads_src,
         sampler,
         include_str!("shaders/volume.wgsl")
@@ -703,7 +704,7 @@ pub const EXTINCTION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Fl
 /// and opaque texels hold [`billow_core::extinction::MAX_OPTICAL_DEPTH`] at every level
 /// (`billow_core::slicing::opaque_optical_depth`). A ratio of 1 stores `extinction_texel`.
 pub fn extinction_levels(levels: &[Vec<u8>], ratios: &[f32], srgb: bool) -> Vec<Vec<u8>> {
-    use billow_core::extinction::{srgb8_to_linear, to_extinction_capped, MAX_OPTICAL_DEPTH};
+    use billow_core::extinction::{srgb8_to_linear, to_density};
     let lin: [f32; 256] = std::array::from_fn(|v| {
         if srgb {
             srgb8_to_linear(v as u8)
@@ -720,10 +721,7 @@ pub fn extinction_levels(levels: &[Vec<u8>], ratios: &[f32], srgb: bool) -> Vec<
             let sigma: [(f32, f32); 256] = std::array::from_fn(|a| {
                 let alpha = a as f32 / 255.0;
                 let c = glam::Vec4::new(0.0, 0.0, 0.0, alpha);
-                let mut s = to_extinction_capped(c, MAX_OPTICAL_DEPTH * r).w;
-                if r != 1.0 {
-                    s /= r;
-                }
+                let s = to_density(c, r).w;
                 (s, if a > 0 { s / alpha } else { 0.0 })
             });
             let mut out = Vec::with_capacity(bytes.len() * 2);

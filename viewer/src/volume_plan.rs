@@ -17,12 +17,12 @@ use billow_format::Prism;
 
 use crate::frame_stats::FrameStats;
 use crate::slab::partition;
-use crate::slice_plan::{slice_depths, voxel_size};
 use crate::volume_pass::{
     FrameUniform, GpuCell, GpuDraw, GpuSlice, GpuVolume, GpuVolumeParams, VolumePass, VolumeStorage,
 };
 use crate::{Gpu, SliceParams, ViewCamera, ViewError};
-use billow_core::slicing::far_slab;
+use billow_core::slicing::{far_slab, slice_lod};
+use billow_core::slicing::{normal_matrix, slice_depths, voxel_size};
 
 /// Vertices per cell × slice instance: a fan of 3 triangles covers the ≤ 5-gon.
 pub const VERTICES_PER_INSTANCE: u32 = 9;
@@ -506,7 +506,7 @@ fn outside_window(pos: &[[f32; 3]; 6], window: Option<(f32, f32)>) -> bool {
 }
 
 /// A banded asset draws each slice with one band (SPEC §8.6): clip each cell's depth
-/// range to the slices whose LOD `λ = clamp(log2(d/v₀), 0, L)` falls in its band's
+/// range to the slices whose LOD `λ = clamp(log2(d/v₀), 0, L)` ([`slice_lod`]) falls in its band's
 /// `[f_b, f_{b+1})`; a cell whose band no slice uses gets an empty range (`lo > hi`) and
 /// no slab lists it. `slices` are back to front (depth decreasing, λ non-increasing).
 /// The vertex shader checks the band again, so this only saves work.
@@ -521,7 +521,7 @@ fn restrict_to_bands(
         if q[2] < 0.0 && q[3] >= 1e29 {
             continue; // the only band
         }
-        let lambda = |d: f32| (d / q[0]).log2().clamp(0.0, q[1]);
+        let lambda = |d: f32| slice_lod(d, q[0], q[1]);
         // Back-to-front indices: λ is non-increasing along the list.
         let first = slices.partition_point(|s| lambda(s.1) >= q[3]);
         let last = slices.partition_point(|s| lambda(s.1) >= q[2]);
@@ -533,9 +533,3 @@ fn restrict_to_bands(
         *r = (r.0.max(near), r.1.min(far));
     }
 }
-
-/// The matrix taking a volume's stored normals to view space for one cell: the shared
-/// core's (`billow::eval::slicer::normal_matrix` too). `object_to_view`: the linear part
-/// of camera view × instance; `shell`: the asset repeats its tile (normals in tile space);
-/// `pos`: the cell in view space.
-pub use billow_core::slicing::normal_matrix;

@@ -28,7 +28,8 @@ use winit::window::{Window, WindowId};
 use crate::content::Content;
 use crate::overlay::Resolve;
 use crate::target::Target;
-use crate::{FrameStats, Gpu, Renderer, SliceParams, Spacing, ViewCamera, ViewError};
+use crate::{FrameStats, Gpu, Renderer, SliceParams, ViewCamera, ViewError};
+use billow_core::slicing::Spacing;
 
 /// An orbit camera: `target`, `distance`, `yaw` about +Y, `pitch` above the horizon.
 #[derive(Clone, Copy, Debug, PartialEq)]

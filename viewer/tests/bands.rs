@@ -14,7 +14,7 @@ mod common;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-use billow::camera::Camera;
+use billow_core::camera::Camera;
 use billow::emptyspace::{prune, EmptySpaceOptions};
 use billow::eval::image::write_comparison_png;
 use billow::eval::metrics::compare;

@@ -22,7 +22,7 @@
 mod common;
 
 use billow::bbcloud::{bake, BbcloudOptions};
-use billow::camera::Camera;
+use billow_core::camera::Camera;
 use billow::eval::image::write_comparison_png;
 use billow::import::{import, ImportOptions};
 use billow::scene::Aabb;

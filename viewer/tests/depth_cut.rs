@@ -13,7 +13,7 @@
 
 mod common;
 
-use billow::camera::Camera;
+use billow_core::camera::Camera;
 use billow::eval::image::write_comparison_png;
 use billow::scene::Aabb;
 use billow_view::mesh_pass::MeshData;

@@ -10,7 +10,7 @@
 
 mod common;
 
-use billow::camera::Camera;
+use billow_core::camera::Camera;
 use billow::eval::image::write_comparison_png;
 use billow::eval::metrics::compare;
 use billow::eval::slicer::{render_volume, SlicerParams};

@@ -1,5 +1,5 @@
 //! The WGSL prism/plane intersection (run in a compute pass, read back) against the Rust
-//! reference `billow::eval::prism_plane::intersect_prism_plane`, on the hard cases of the
+//! reference `billow_core::prism_plane::intersect_prism_plane`, on the hard cases of the
 //! stability suite (tests/eval_prism_plane.rs): planes on cap faces, vertical edges
 //! parallel to the plane, planes through vertices and diagonals, degenerate prisms,
 //! huge and tiny coordinates, inverted prisms; plus seeded random prisms cut through
@@ -11,7 +11,7 @@
 
 mod common;
 
-use billow::eval::prism_plane::intersect_prism_plane;
+use billow_core::prism_plane::intersect_prism_plane;
 use billow::test_support::box_positions_z as boxed;
 use billow_view::prism_plane_gpu::intersect_on_gpu;
 

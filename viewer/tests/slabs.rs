@@ -6,8 +6,8 @@
 
 mod common;
 
-use billow::camera::Camera;
-use billow::scene::Aabb;
+use billow_core::camera::Camera;
+use billow_core::Aabb;
 use billow_view::{FrameStats, Renderer, RgbaImage, SliceParams, ViewCamera};
 use glam::{Mat4, Vec3};
 

@@ -11,9 +11,10 @@
 
 mod common;
 
+use billow_core::slicing::Spacing;
 use billow_format::{full_mip_count, mip_dims, ColourSpace, Header, VolumeAsset};
 use billow_view::prism_plane_gpu::intersect_on_gpu;
-use billow_view::{Renderer, SliceParams, Spacing, ViewCamera};
+use billow_view::{Renderer, SliceParams, ViewCamera};
 use glam::{Mat4, Vec3};
 
 const FOV: f32 = std::f32::consts::FRAC_PI_4;

@@ -16,7 +16,7 @@
 
 mod common;
 
-use billow::camera::Camera;
+use billow_core::camera::Camera;
 use billow::eval::image::write_comparison_png;
 use billow::eval::lighting::VolumeLight;
 use billow::eval::metrics::compare;

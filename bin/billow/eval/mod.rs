@@ -8,7 +8,6 @@ use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use billow::camera::{parse_direction, view_directions, views_of, ViewDirections, ViewSpec};
 use billow::eval::evaluate;
 use billow::eval::evaluate::{
     Asset, EvaluateError, EvaluateHooks, EvaluateOptions, EvaluateProgress, Evaluation,
@@ -17,11 +16,12 @@ use billow::eval::evaluate::{
 };
 use billow::eval::image::comparisons_png_bytes;
 use billow::eval::lighting::{parse_light_set, EvalLight, LightSetError};
-use billow::eval::slicer::Spacing;
 use billow::eval::suite::{
     mean_errors, view_file_stem, DistanceMeans, LightMeans, MeanErrors, ViewResult, EVAL_FOV_Y,
 };
 use billow::import::{import, ImportOptions, Imported};
+use billow_core::camera::{parse_direction, view_directions, views_of, ViewDirections, ViewSpec};
+use billow_core::slicing::Spacing;
 use billow_format::{read_file, Container};
 use glam::Vec3;
 use serde::Serialize;

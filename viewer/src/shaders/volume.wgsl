@@ -1,11 +1,13 @@
 // Volumetric billboards, the paper's GPU slicing (§3.3): one instance per slice × cell
 // of a draw, a fixed budget of 9 vertices (a fan of 3 triangles covers the ≤ 5-gon);
 // the vertex shader intersects its cell with its slice plane (prism_plane.wgsl,
-// prepended, with shadow_lookup.wgsl and the texture-slot switch `sample_volume`).
-// Opacity correction, MIP choice, extinction-space filtering and the depth fade as
-// src/eval/slicer.rs and src/eval/volume_sampler.rs. Volumes with normals are shaded at
-// runtime (VB §3.2): albedo × (ambient + (1 − ambient) · shadow · max(n̄·L, 0)) with n̄ the
-// Toksvig normal (src/eval/lighting.rs::volume_diffuse_factor).
+// prepended, with shadow_lookup.wgsl, volume_math.wgsl and the texture-slot switch
+// `sample_volume`). Opacity correction, MIP choice (slice_lod), extinction-space
+// filtering (slab_sample) and the depth fade (depth_fade) as src/eval/slicer.rs and
+// src/eval/volume_sampler.rs: those three are volume_math.wgsl's copies of billow-core's
+// functions, tested against them (viewer/tests/volume_math_gpu.rs). Volumes with normals
+// are shaded at runtime (VB §3.2): albedo × (ambient + (1 − ambient) · shadow ·
+// max(n̄·L, 0)) with n̄ the Toksvig normal (billow_core::shading::volume_diffuse_factor).
 
 struct Frame {
     proj: mat4x4<f32>,
@@ -77,7 +79,7 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
     let vol = params.p;
     // The slice's LOD λ (SPEC §8.6): a banded asset draws each slice with one band.
     let d = slice.zd.y;
-    let lambda = clamp(log2(d / params.q.x), 0.0, params.q.y);
+    let lambda = slice_lod(d, params.q.x, params.q.y);
     let in_band = lambda >= params.q.z && lambda < params.q.w;
     var poly = intersect_prism_plane(&c, slice.zd.x);
     let tri = vi / 3u;
@@ -104,7 +106,7 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
     // extinction_levels), so the slab takes its thickness over that texel's size of them
     // (billow_core::slicing::level_weights).
     let v0 = vol.x;
-    let lod = clamp(log2(d / v0), 0.0, vol.y);
+    let lod = slice_lod(d, v0, vol.y);
     let thickness = slice.zd.z;
     out.lod_ratio = vec4<f32>(lod, thickness / params.r.x, -slice.zd.x - 0.5 * d, thickness);
     out.slot = vec2<u32>(u32(vol.z), u32(vol.w));
@@ -113,58 +115,6 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
     out.n1 = vec3<f32>(c.uvw[3].w, c.uvw[4].w, c.uvw[5].w);
     out.n2 = vec3<f32>(c.pos[1].w, c.pos[2].w, c.pos[3].w);
     return out;
-}
-
-// ln(1 + x) and exp(x) − 1 with full relative precision for small |x| (WGSL has neither).
-fn log1p_(x: f32) -> f32 {
-    let u = 1.0 + x;
-    if u == 1.0 {
-        return x;
-    }
-    return log(u) * x / (u - 1.0);
-}
-
-fn expm1_(x: f32) -> f32 {
-    let u = exp(x);
-    if u == 1.0 {
-        return x;
-    }
-    let um = u - 1.0;
-    if um == -1.0 {
-        return -1.0;
-    }
-    return um * x / log(u);
-}
-
-
-// Extinction-space filtering (billow_core::extinction, src/eval/volume_sampler.rs): a
-// texel is (σ·c, σ), σ = −ln(1 − α) capped at ln 510, c its straight colour, its optical
-// depth divided by the texel's size in level-0 voxels (a density; opaque texels hold
-// ln 510 at every level), filtered trilinearly within a level and linearly between
-// levels, and turned back into premultiplied RGBA here for the slab the slice stands for. `sample_volume` (volume_pass.rs) returns the filtered sample:
-// the texture unit's trilinear sample of a texture stored in extinction space
-// (Rgba16Float), or for BC7 block textures eight converted loads per level
-// (volume_loads.wgsl). Filtering α instead gives a one-voxel opaque layer an optical
-// depth of only 2: thin layers turn see-through.
-const MAX_OPTICAL_DEPTH: f32 = 6.234411;
-// σ at or above this is opaque (α = 1): the CPU's MAX_OPTICAL_DEPTH − 1e-4, lowered by
-// one f16 step (2^-8 at 6.2) so that a footprint of opaque texels stored as f16
-// (6.234375) and filtered with the hardware's weights still gives α = 1.
-const OPAQUE_OPTICAL_DEPTH: f32 = 6.2304;
-
-// The filtered density e over a slab `ratio` level-0 voxels thick: α = 1 − e^(−σ·ratio),
-// colour (σ·c)/σ · α; opaque (α = 1) where every texel under the filter is
-// (src/eval/volume_sampler.rs, sample_weighted).
-fn slab_sample(e: vec4<f32>, ratio: f32) -> vec4<f32> {
-    let s = e.a;
-    if !(s > 0.0) || !(ratio > 0.0) {
-        return vec4<f32>(0.0);
-    }
-    var a = 1.0;
-    if s < OPAQUE_OPTICAL_DEPTH {
-        a = -expm1_(-s * ratio);
-    }
-    return vec4<f32>(e.rgb * (a / s), a);
 }
 
 fn sample_corrected(in: VOut, ratio: f32) -> vec4<f32> {
@@ -181,18 +131,6 @@ fn scene_distance(frag: vec2<f32>) -> f32 {
     }
     let p = frame.proj;
     return (p[3][2] - z * p[3][3]) / (p[2][2] - z * p[2][3]);
-}
-
-// The part of the slice's slab, from view distance slab0 and `thickness` deep, in front
-// of the surface at distance z (src/eval/slicer.rs slab_fade).
-fn depth_fade(z: f32, slab0: f32, thickness: f32) -> f32 {
-    if z >= 3.0e38 {
-        return 1.0;
-    }
-    if !(thickness > 0.0) {
-        return select(0.0, 1.0, slab0 < z);
-    }
-    return clamp((z - slab0) / thickness, 0.0, 1.0);
 }
 
 // The Toksvig normal at the fragment in view space: the filtered (α·n̄, α) over α (the

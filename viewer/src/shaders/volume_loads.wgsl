@@ -4,7 +4,8 @@
 // (src/eval/volume_sampler.rs, sample_level_extinction), linear between levels; each
 // level's optical depth divided by its texels' size in level-0 voxels, opaque texels at
 // ln 510 (volume_pass.rs, extinction_levels, does the same on upload).
-// MAX_OPTICAL_DEPTH and log1p_ come from volume.wgsl.
+// MAX_OPTICAL_DEPTH and log1p_ come from volume_math.wgsl. to_extinction is
+// billow_core::extinction::to_density (viewer/tests/volume_math_gpu.rs).
 
 fn to_extinction(c: vec4<f32>, ratio: f32) -> vec4<f32> {
     let a = min(c.a, 1.0);

@@ -156,6 +156,6 @@ pub fn image_f32(i: &billow_view::RgbaImage) -> billow::eval::ImageF32 {
 
 /// The viewer's camera for an eval camera, built from its view matrix and projection
 /// parameters (`ViewCamera::from_parts`, as the GPU/CPU pairs compare them).
-pub fn view_camera(c: &billow::camera::Camera) -> billow_view::ViewCamera {
+pub fn view_camera(c: &billow_core::camera::Camera) -> billow_view::ViewCamera {
     billow_view::ViewCamera::from_parts(c.view(), c.fov_y, c.width, c.height, c.near, c.far)
 }

@@ -1,0 +1,43 @@
+// Compute entry point that runs volume_math.wgsl's functions (and volume_loads.wgsl's
+// to_extinction) on a list of cases, for the test against billow-core
+// (viewer/tests/volume_math_gpu.rs). Prepended with volume_math.wgsl and volume_loads.wgsl.
+
+struct MathCase {
+    // slice_lod(x, y, z); w: the ratio of slab_sample and to_extinction
+    lod: vec4<f32>,
+    // depth_fade(x, y, z)
+    fade: vec4<f32>,
+    // slab_sample's filtered extinction-space sample
+    e: vec4<f32>,
+    // to_extinction's premultiplied texel
+    c: vec4<f32>,
+}
+
+struct MathOut {
+    // x: slice_lod, y: depth_fade, z: MAX_OPTICAL_DEPTH, w: OPAQUE_OPTICAL_DEPTH
+    scalars: vec4<f32>,
+    slab: vec4<f32>,
+    extinction: vec4<f32>,
+}
+
+@group(0) @binding(0) var<storage, read> cases: array<MathCase>;
+@group(0) @binding(1) var<storage, read_write> results: array<MathOut>;
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if i >= arrayLength(&cases) {
+        return;
+    }
+    let k = cases[i];
+    var o: MathOut;
+    o.scalars = vec4<f32>(
+        slice_lod(k.lod.x, k.lod.y, k.lod.z),
+        depth_fade(k.fade.x, k.fade.y, k.fade.z),
+        MAX_OPTICAL_DEPTH,
+        OPAQUE_OPTICAL_DEPTH,
+    );
+    o.slab = slab_sample(k.e, k.lod.w);
+    o.extinction = to_extinction(k.c, k.lod.w);
+    results[i] = o;
+}
