@@ -7,13 +7,13 @@
 use std::path::PathBuf;
 
 use billow::bbcloud::{bake, BbcloudOptions, Shading};
-use billow_core::camera::Camera;
 use billow::eval::image::write_comparisons_png;
 use billow::eval::reference::{ReferenceRenderer, Sampling};
 use billow::eval::ImageF32;
 use billow::export::{write_cloud_glb, GltfOptions};
 use billow::import::{import, ImportOptions};
 use billow::scene::Scene;
+use billow_core::camera::Camera;
 use glam::Vec3;
 
 fn oak_path() -> PathBuf {

@@ -6,9 +6,10 @@
 //!
 //! `cargo run --release --example thin_layer_measurements`
 
-use billow::eval::slicer::{render_volume, SlicerParams, Spacing};
+use billow::eval::slicer::{render_volume, SlicerParams};
 use billow::eval::volume_sampler::MipFilter;
 use billow::test_support::thin_layer::{camera, coverage, plane_asset, Chain, FAR, N, NEAR};
+use billow_core::slicing::Spacing;
 use billow_format::VolumeAsset;
 
 fn main() {

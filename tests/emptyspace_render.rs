@@ -14,16 +14,16 @@
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-use billow_core::camera::{view_set, Camera, ViewDirections};
 use billow::emptyspace::{prune, EmptySpaceOptions, Pruned};
 use billow::eval::image::write_comparisons_png;
 use billow::eval::slicer::{render_decoded, SliceStats, SlicerParams};
 use billow::eval::volume_sampler::DecodedVolume;
 use billow::eval::ImageF32;
 use billow::import::{import, ImportOptions};
-use billow::scene::Aabb;
 use billow::test_support::max_abs_diff as max_abs;
 use billow::voxelize::{voxelize, Resolution, VoxelizeOptions};
+use billow_core::camera::{view_set, Camera, ViewDirections};
+use billow_core::Aabb;
 use billow_format::VolumeAsset;
 use glam::Vec3;
 

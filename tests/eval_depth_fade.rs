@@ -13,12 +13,13 @@
 //! [`CUT_RMSE`] (a hard depth test measures 0.0144 at 32³ and 0.0094 at 128³, see
 //! docs/eval.md "Depth fade").
 
-use billow_core::camera::Camera;
 use billow::eval::image::write_comparison_png;
-use billow::eval::slicer::{render_decoded_over, OpaqueBackdrop, SlicerParams, Spacing};
+use billow::eval::slicer::{render_decoded_over, OpaqueBackdrop, SlicerParams};
 use billow::eval::volume_sampler::DecodedVolume;
 use billow::eval::ImageF32;
 use billow::test_support::oak_wall::{camera, oak, WALL};
+use billow_core::camera::Camera;
+use billow_core::slicing::Spacing;
 use glam::Vec4;
 
 const CUT_RMSE: f64 = 0.008;

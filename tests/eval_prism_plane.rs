@@ -9,8 +9,8 @@
 //! - its area equals the area of the convex hull of *all* f64 crossing points (no point
 //!   lost), within `TOL_REL`·scale².
 
-use billow_core::prism_plane::{intersect_prism_plane, SlicePolygon};
 use billow::test_support::box_positions_z as boxed;
+use billow_core::prism_plane::{intersect_prism_plane, SlicePolygon};
 use proptest::prelude::*;
 
 /// Relative tolerance (f32 has 6e-8; a lerp costs a few ulps).

@@ -1,14 +1,16 @@
 //! End to end: a synthetic opaque cube volume (16³, 2 box prisms, full MIP chain) rendered
 //! by the CPU slicer against the reference ray tracer of the equivalent mesh cube.
 
-use billow_core::camera::{view_set, Camera, ViewDirections};
 use billow::eval::image::linear_to_srgb;
 use billow::eval::metrics::compare;
 use billow::eval::reference::{ReferenceRenderer, Sampling};
-use billow::eval::slicer::{render_decoded_in_depth_range, render_volume, SlicerParams, Spacing};
+use billow::eval::slicer::{render_decoded_in_depth_range, render_volume, SlicerParams};
 use billow::eval::volume_sampler::{DecodedVolume, MipFilter};
-use billow::scene::{Aabb, AlphaMode, Material, Scene, SceneBuilder, Vertex};
+use billow::scene::{AlphaMode, Material, Scene, SceneBuilder, Vertex};
 use billow::test_support::box_prisms_z;
+use billow_core::camera::{view_set, Camera, ViewDirections};
+use billow_core::slicing::Spacing;
+use billow_core::Aabb;
 use billow_format::{full_mip_count, mip_dims, ColourSpace, Header, Prism, VolumeAsset};
 use glam::{Vec2, Vec3, Vec4};
 

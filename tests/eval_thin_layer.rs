@@ -15,12 +15,12 @@
 //! GPU slicer's test (viewer/tests/thin_layer.rs); `cargo run --release --example
 //! thin_layer_measurements` prints the table of docs/eval.md "Thin layers".
 
-use billow_core::camera::Camera;
 use billow::eval::slicer::{render_volume, SlicerParams};
 use billow::eval::ImageF32;
 use billow::test_support::thin_layer::{
     camera, coverage, plane_asset, Chain, AREA_TOL, FAR, NEAR, ROW_TOL,
 };
+use billow_core::camera::Camera;
 use billow_format::VolumeAsset;
 
 fn render(asset: &VolumeAsset, cam: &Camera, params: &SlicerParams) -> ImageF32 {

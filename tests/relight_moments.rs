@@ -9,11 +9,11 @@ mod common;
 
 use std::collections::BTreeMap;
 
-use billow_core::camera::ViewSpec;
 use billow::eval::lighting::EvalLight;
 use billow::eval::suite::{EvalOptions, Evaluator, PreparedAsset};
 use billow::scene::Scene;
 use billow::voxelize::{bake_params, CombineFn, NormalsMode, Preset, Resolution, VoxelizeOptions};
+use billow_core::camera::ViewSpec;
 use billow_format::{NormalKind, VolumeAsset};
 use common::{leaf_canopy, Leaves};
 use glam::Vec3;

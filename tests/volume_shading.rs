@@ -10,12 +10,12 @@
 //! voxel normal (the radial normal at the voxel centre, trilinearly filtered) and the
 //! one-voxel soft edge of the ball.
 
-use billow_core::camera::Camera;
 use billow::eval::lighting::VolumeLight;
 use billow::eval::slicer::{render_volume, SlicerParams};
 use billow::noise_volume::{dust, sphere};
-use billow::scene::Aabb;
 use billow::test_support::mean_around as around;
+use billow_core::camera::Camera;
+use billow_core::Aabb;
 use glam::{Vec3, Vec4};
 
 const AMBIENT: f32 = 0.3;
@@ -125,10 +125,10 @@ fn volumes_without_normals_keep_their_baked_colour_bit_for_bit() {
 /// as error.
 #[test]
 fn eval_compares_a_shaded_volume_with_a_reference_lit_the_same_way() {
-    use billow_core::camera::ViewSpec;
     use billow::eval::lighting::Lighting;
     use billow::eval::suite::{reference_lighting, EvalOptions, Evaluator, PreparedAsset};
     use billow::voxelize::{voxelize, Resolution, VoxelizeOptions};
+    use billow_core::camera::ViewSpec;
     let scene = billow::procgen::torus(1.0, 0.4, 48, 24);
     let opts = VoxelizeOptions {
         resolution: Resolution::Longest(64),

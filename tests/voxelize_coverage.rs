@@ -15,17 +15,19 @@
 
 mod common;
 
-use billow_core::camera::{view_set_with, ViewDirections};
-use billow::eval::slicer::{render_decoded, SlicerParams, Spacing};
+use billow::eval::slicer::{render_decoded, SlicerParams};
 use billow::eval::suite::{means_by_distance, EvalOptions, Evaluator, PreparedAsset};
 use billow::eval::volume_sampler::DecodedVolume;
 use billow::rng::Pcg32;
-use billow::scene::{Aabb, Material, Scene, SceneBuilder};
+use billow::scene::{Material, Scene, SceneBuilder};
 use billow::voxelize::coverage::{Columns, Model};
 use billow::voxelize::toksvig::AUTO_NORMALS_MIN_COHERENCE;
 use billow::voxelize::{
     voxelize, voxelize_sparse, CombineFn, NormalsMode, Preset, Resolution, VoxelizeOptions,
 };
+use billow_core::camera::{view_set_with, ViewDirections};
+use billow_core::slicing::Spacing;
+use billow_core::Aabb;
 use common::{leaf_canopy, Leaves};
 use glam::{Vec3, Vec4};
 
@@ -144,7 +146,7 @@ fn the_slicer_draws_the_coverage_the_bakes_model_computes() {
         }
         levels.push(out);
     }
-    let cells = billow::voxelize::box_prisms(
+    let cells = billow_core::cells::box_prisms(
         Vec3::ZERO,
         Vec3::new(dims0[0] as f32, dims0[1] as f32, dims0[2] as f32),
     );

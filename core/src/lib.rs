@@ -22,7 +22,7 @@
 //! shaders keep their own GPU code (tested against these functions).
 //!
 //! The library and the viewer call these by their paths here (`billow_core::camera`,
-//! `billow_core::prism_plane`, `billow_core::Aabb`, …); the library keeps no re-exports
+//! `crate::prism_plane`, `billow_core::Aabb`, …); the library keeps no re-exports
 //! of them.
 
 pub mod aabb;

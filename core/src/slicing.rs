@@ -171,7 +171,7 @@ pub fn far_slab(z: f32, d: f32, z_max: f32) -> f32 {
 
 /// Slice depths and spacings `(depth, d)`, **front to back**, over `[z_min, z_max]`.
 /// `pixel_size_at(z)`: the world size of one pixel at view depth `z` (the camera's,
-/// e.g. [`billow_core::camera::Camera::pixel_size_at`]); `v0`: [`voxel_size`]; at most
+/// e.g. [`crate::camera::Camera::pixel_size_at`]); `v0`: [`voxel_size`]; at most
 /// `limit` slices.
 pub fn slice_depths(
     pixel_size_at: impl Fn(f32) -> f32,

@@ -289,13 +289,13 @@ pub struct BbcloudStats {
     pub seconds: Seconds,
 }
 
-/// `ambient` within [`UNIT_RANGE`] (as [`estimate`] and [`bake`] check it; a caller may
+/// `ambient` within [`UNIT_RANGE`] (as [`estimate`] and [`bake()`] check it; a caller may
 /// check it before any heavy work).
 pub fn check_ambient(ambient: f32) -> Result<(), BbcloudError> {
     check_unit("ambient", ambient)
 }
 
-/// A view preference's `strength` within [`UNIT_RANGE`] (as [`estimate`] and [`bake`]
+/// A view preference's `strength` within [`UNIT_RANGE`] (as [`estimate`] and [`bake()`]
 /// check it; a caller may check it before any heavy work).
 pub fn check_view_strength(strength: f32) -> Result<(), BbcloudError> {
     check_unit("view_strength", strength)

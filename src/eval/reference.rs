@@ -37,11 +37,11 @@ use rayon::prelude::*;
 use super::lighting::{voxel_stream, Lighting};
 use super::{EvalError, ImageF32};
 use crate::bvh::scene_bvh;
+use crate::material::{validate_scene, Shader};
+use crate::scene::{AlphaMode, Scene};
 use billow_core::camera::Camera;
 use billow_core::compositing::under;
 use billow_core::ray_triangle::{TriangleHit, WatertightRay};
-use crate::material::{validate_scene, Shader};
-use crate::scene::{AlphaMode, Scene};
 
 /// Pixel sampling pattern.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -2,7 +2,6 @@
 
 use billow_format::{CloudAsset, VolumeAsset};
 
-use billow_core::camera::ViewSpec;
 use crate::eval::cloud_render::{CloudRenderer, PreparedCloud};
 use crate::eval::lighting::{EvalLight, Lighting};
 use crate::eval::metrics::{compare, ImageError};
@@ -12,6 +11,7 @@ use crate::eval::suite::{
 };
 use crate::eval::EvalError;
 use crate::scene::Scene;
+use billow_core::camera::ViewSpec;
 
 use super::types::*;
 /// The reference views of one lighting, rendered once.

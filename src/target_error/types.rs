@@ -2,10 +2,10 @@
 
 use serde::Serialize;
 
-use billow_core::camera::{view_directions, views_of, ViewDirections, ViewSpec};
 use crate::eval::lighting::{light_set, EvalLight};
 use crate::eval::EvalError;
 use crate::presets::Preset;
+use billow_core::camera::{view_directions, views_of, ViewDirections, ViewSpec};
 use billow_core::shading::DEFAULT_AMBIENT;
 
 /// Reference samples per pixel per axis: 4 × 4 = 16, `billow eval`'s default `--spp`.

@@ -6,9 +6,9 @@ use std::collections::BTreeMap;
 
 use glam::Vec3;
 
-use billow_core::camera::Camera;
 use crate::import::{import, ImportOptions};
 use crate::voxelize::{voxelize, CombineFn, Preset, Resolution, VoxelizeOptions};
+use billow_core::camera::Camera;
 use billow_format::VolumeAsset;
 
 /// The wall's colour (linear RGBA, opaque).

@@ -6,9 +6,9 @@
 
 use glam::Vec3;
 
-use billow_core::camera::Camera;
 use crate::eval::image::linear_to_srgb;
 use crate::eval::ImageF32;
+use billow_core::camera::Camera;
 use billow_format::{full_mip_count, mip_dims, ColourSpace, Header, VolumeAsset};
 
 /// Voxels per side.

@@ -95,8 +95,8 @@ pub use sparse::{voxelize_sparse, SparseVolume};
 
 use crate::material;
 use crate::scene::Scene;
-use billow_core::Aabb;
 use crate::sparse_level::SparseLevel;
+use billow_core::Aabb;
 use grid3::Texel;
 
 /// A view direction: the camera on that side of the object, looking at it.

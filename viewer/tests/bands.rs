@@ -14,15 +14,15 @@ mod common;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-use billow_core::camera::Camera;
 use billow::emptyspace::{prune, EmptySpaceOptions};
 use billow::eval::image::write_comparison_png;
 use billow::eval::metrics::compare;
 use billow::eval::slicer::{render_volume, SlicerParams};
 use billow::import::{import, ImportOptions};
-use billow::scene::Aabb;
 use billow::test_support::max_abs_diff as max_abs;
 use billow::voxelize::{voxelize, Resolution, VoxelizeOptions};
+use billow_core::camera::Camera;
+use billow_core::Aabb;
 use billow_format::VolumeAsset;
 use billow_view::Renderer;
 use common::image_f32;

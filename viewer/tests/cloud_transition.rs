@@ -22,10 +22,10 @@
 mod common;
 
 use billow::bbcloud::{bake, BbcloudOptions};
-use billow_core::camera::Camera;
 use billow::eval::image::write_comparison_png;
 use billow::import::{import, ImportOptions};
-use billow::scene::Aabb;
+use billow_core::camera::Camera;
+use billow_core::Aabb;
 use billow_view::{Renderer, RgbaImage};
 use common::image_f32;
 use glam::{Mat4, Vec3};

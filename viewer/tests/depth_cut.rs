@@ -13,9 +13,9 @@
 
 mod common;
 
-use billow_core::camera::Camera;
 use billow::eval::image::write_comparison_png;
-use billow::scene::Aabb;
+use billow_core::camera::Camera;
+use billow_core::Aabb;
 use billow_view::mesh_pass::MeshData;
 use billow_view::Renderer;
 use common::image_f32;

@@ -10,13 +10,14 @@
 
 mod common;
 
-use billow_core::camera::Camera;
 use billow::eval::image::write_comparison_png;
 use billow::eval::metrics::compare;
 use billow::eval::slicer::{render_volume, SlicerParams};
-use billow::scene::Aabb;
+use billow_core::camera::Camera;
+use billow_core::slicing::Spacing;
+use billow_core::Aabb;
 use billow_format::VolumeAsset;
-use billow_view::{Renderer, SliceParams, Spacing, ViewCamera};
+use billow_view::{Renderer, SliceParams, ViewCamera};
 use glam::{Mat4, Vec3};
 
 const RMSE_TOL: f64 = 0.005;

@@ -11,8 +11,8 @@
 
 mod common;
 
-use billow_core::prism_plane::intersect_prism_plane;
 use billow::test_support::box_positions_z as boxed;
+use billow_core::prism_plane::intersect_prism_plane;
 use billow_view::prism_plane_gpu::intersect_on_gpu;
 
 type P6 = [[f32; 3]; 6];

@@ -16,16 +16,16 @@
 
 mod common;
 
-use billow_core::camera::Camera;
 use billow::eval::image::write_comparison_png;
 use billow::eval::lighting::VolumeLight;
 use billow::eval::metrics::compare;
 use billow::eval::slicer::{render_volume, SlicerParams};
 use billow::eval::ImageF32;
 use billow::noise_volume::{asteroid, sphere};
-use billow::scene::Aabb;
 use billow::test_support::mean_around as around;
+use billow_core::camera::Camera;
 use billow_core::shading::{DEFAULT_AMBIENT, DEFAULT_LIGHT};
+use billow_core::Aabb;
 use billow_format::VolumeAsset;
 use billow_view::{Renderer, ViewCamera};
 use glam::{Mat4, Vec3};
