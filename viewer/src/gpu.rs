@@ -310,6 +310,32 @@ impl Gpu {
             .map(|_| ())
             .map_err(|e| ViewError::Gpu(e.to_string()))
     }
+
+    /// Maps `buffer` (`MAP_READ`, its copies already submitted) once the queue is idle,
+    /// hands its bytes to `read` and unmaps it.
+    pub fn read_mapped<T>(
+        &self,
+        buffer: &wgpu::Buffer,
+        read: impl FnOnce(&[u8]) -> T,
+    ) -> Result<T, ViewError> {
+        let slice = buffer.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.wait()?;
+        rx.recv()
+            .map_err(|e| ViewError::Gpu(e.to_string()))?
+            .map_err(|e| ViewError::Gpu(format!("read-back: {e}")))?;
+        let out = {
+            let bytes = slice
+                .get_mapped_range()
+                .map_err(|e| ViewError::Gpu(format!("read-back: {e}")))?;
+            read(&bytes)
+        };
+        buffer.unmap();
+        Ok(out)
+    }
 }
 
 /// A buffer kept from frame to frame and written with `queue.write_buffer`; made again,

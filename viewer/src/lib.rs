@@ -16,6 +16,8 @@
 pub mod animate;
 pub mod camera;
 pub mod cloud_pass;
+#[cfg(any(test, feature = "test-support"))]
+mod compute_check;
 pub mod content;
 pub mod error;
 pub mod frame_stats;

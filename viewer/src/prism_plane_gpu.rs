@@ -3,9 +3,8 @@
 //! the Rust reference (`billow_core::prism_plane`).
 
 use bytemuck::{Pod, Zeroable};
-use wgpu::util::DeviceExt;
 
-use crate::layout::shader;
+use crate::compute_check::run_cases;
 use crate::volume_pass::GpuCell;
 use crate::{Gpu, ViewError};
 
@@ -37,26 +36,6 @@ pub type PrismCase = ([[f32; 3]; 6], [[f32; 3]; 6], f32);
 
 /// Intersects each `(prism positions, uvw, z_slice)` on the GPU.
 pub fn intersect_on_gpu(gpu: &Gpu, cases: &[PrismCase]) -> Result<Vec<GpuPolygon>, ViewError> {
-    if cases.is_empty() {
-        return Ok(Vec::new());
-    }
-    let device = &gpu.device;
-    let module = shader(
-        device,
-        "prism_plane_check.wgsl",
-        &[
-            include_str!("shaders/prism_plane.wgsl"),
-            include_str!("shaders/prism_plane_check.wgsl"),
-        ],
-    );
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("prism/plane check"),
-        layout: None,
-        module: &module,
-        entry_point: Some("main"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
     let input: Vec<Case> = cases
         .iter()
         .map(|(p, t, z)| Case {
@@ -64,63 +43,15 @@ pub fn intersect_on_gpu(gpu: &Gpu, cases: &[PrismCase]) -> Result<Vec<GpuPolygon
             z: [*z, 0.0, 0.0, 0.0],
         })
         .collect();
-    let inb = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("cases"),
-        contents: bytemuck::cast_slice(&input),
-        usage: wgpu::BufferUsages::STORAGE,
-    });
-    let size = (cases.len() * std::mem::size_of::<OutPoly>()) as u64;
-    let outb = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("polygons"),
-        size,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let readb = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("polygons read-back"),
-        size,
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
-    let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: inb.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: outb.as_entire_binding(),
-            },
+    let out: Vec<OutPoly> = run_cases(
+        gpu,
+        "prism_plane_check.wgsl",
+        &[
+            include_str!("shaders/prism_plane.wgsl"),
+            include_str!("shaders/prism_plane_check.wgsl"),
         ],
-    });
-    let mut enc = device.create_command_encoder(&Default::default());
-    {
-        let mut cp = enc.begin_compute_pass(&Default::default());
-        cp.set_pipeline(&pipeline);
-        cp.set_bind_group(0, &bind, &[]);
-        cp.dispatch_workgroups((cases.len() as u32).div_ceil(64), 1, 1);
-    }
-    enc.copy_buffer_to_buffer(&outb, 0, &readb, 0, size);
-    gpu.queue.submit([enc.finish()]);
-    let slice = readb.slice(..);
-    let (tx, rx) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |r| {
-        let _ = tx.send(r);
-    });
-    gpu.wait()?;
-    rx.recv()
-        .map_err(|e| ViewError::Gpu(e.to_string()))?
-        .map_err(|e| ViewError::Gpu(format!("read-back: {e}")))?;
-    let out: Vec<OutPoly> = {
-        let view = slice
-            .get_mapped_range()
-            .map_err(|e| ViewError::Gpu(format!("read-back: {e}")))?;
-        bytemuck::cast_slice(&view).to_vec()
-    };
-    readb.unmap();
+        &input,
+    )?;
     Ok(out
         .iter()
         .map(|o| GpuPolygon {

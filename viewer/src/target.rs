@@ -89,28 +89,19 @@ impl Target {
             },
         );
         gpu.queue.submit([enc.finish()]);
-        let slice = buffer.slice(..);
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
-        gpu.wait()?;
-        rx.recv()
-            .map_err(|e| ViewError::Gpu(e.to_string()))?
-            .map_err(|e| ViewError::Gpu(format!("read-back: {e}")))?;
-        let bytes = slice
-            .get_mapped_range()
-            .map_err(|e| ViewError::Gpu(format!("read-back: {e}")))?;
-        let mut data = Vec::with_capacity((self.width * self.height) as usize);
-        for y in 0..self.height as usize {
-            let r = &bytes[y * padded as usize..y * padded as usize + row as usize];
-            for px in r.chunks_exact(8) {
-                let h = |i: usize| half::f16::from_le_bytes([px[2 * i], px[2 * i + 1]]).to_f32();
-                data.push([h(0), h(1), h(2), h(3)]);
+        let (width, height) = (self.width as usize, self.height as usize);
+        let data = gpu.read_mapped(&buffer, |bytes| {
+            let mut data = Vec::with_capacity(width * height);
+            for y in 0..height {
+                let r = &bytes[y * padded as usize..y * padded as usize + row as usize];
+                for px in r.chunks_exact(8) {
+                    let h =
+                        |i: usize| half::f16::from_le_bytes([px[2 * i], px[2 * i + 1]]).to_f32();
+                    data.push([h(0), h(1), h(2), h(3)]);
+                }
             }
-        }
-        drop(bytes);
-        buffer.unmap();
+            data
+        })?;
         Ok(RgbaImage {
             width: self.width,
             height: self.height,

@@ -1,0 +1,74 @@
+//! The compute pass behind the WGSL-against-core checks ([`crate::prism_plane_gpu`],
+//! [`crate::volume_math_gpu`]): one storage buffer of cases in (binding 0), one of results
+//! out (binding 1), one invocation per case in workgroups of 64, read back.
+
+use bytemuck::Pod;
+use wgpu::util::DeviceExt;
+
+use crate::layout::shader;
+use crate::{Gpu, ViewError};
+
+/// Runs the entry point `main` of the shader made of `sources` (named `name`) over
+/// `cases` and returns one `Out` per case.
+pub(crate) fn run_cases<In: Pod, Out: Pod>(
+    gpu: &Gpu,
+    name: &str,
+    sources: &[&str],
+    cases: &[In],
+) -> Result<Vec<Out>, ViewError> {
+    if cases.is_empty() {
+        return Ok(Vec::new());
+    }
+    let device = &gpu.device;
+    let module = shader(device, name, sources);
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(name),
+        layout: None,
+        module: &module,
+        entry_point: Some("main"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    let inb = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("cases"),
+        contents: bytemuck::cast_slice(cases),
+        usage: wgpu::BufferUsages::STORAGE,
+    });
+    let size = (cases.len() * std::mem::size_of::<Out>()) as u64;
+    let outb = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("results"),
+        size,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let readb = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("results read-back"),
+        size,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: inb.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: outb.as_entire_binding(),
+            },
+        ],
+    });
+    let mut enc = device.create_command_encoder(&Default::default());
+    {
+        let mut cp = enc.begin_compute_pass(&Default::default());
+        cp.set_pipeline(&pipeline);
+        cp.set_bind_group(0, &bind, &[]);
+        cp.dispatch_workgroups((cases.len() as u32).div_ceil(64), 1, 1);
+    }
+    enc.copy_buffer_to_buffer(&outb, 0, &readb, 0, size);
+    gpu.queue.submit([enc.finish()]);
+    gpu.read_mapped(&readb, |bytes| bytemuck::cast_slice(bytes).to_vec())
+}
