@@ -8,26 +8,15 @@ use std::path::PathBuf;
 
 use billow::bbcloud::{bake, BbcloudOptions, Shading};
 use billow::eval::image::write_comparisons_png;
-use billow::eval::reference::{ReferenceRenderer, Sampling};
 use billow::eval::ImageF32;
 use billow::export::{write_cloud_glb, GltfOptions};
 use billow::import::{import, ImportOptions};
-use billow::scene::Scene;
+use billow::test_support::reference_renders;
 use billow_core::camera::Camera;
 use glam::Vec3;
 
 fn oak_path() -> PathBuf {
     billow::test_support::repo().join("fixtures/oak/eztree_oak_medium.gltf")
-}
-
-fn render_all(scene: &Scene, cams: &[Camera]) -> Vec<ImageF32> {
-    let r = ReferenceRenderer::new(scene);
-    cams.iter()
-        .map(|c| {
-            r.render(c, Sampling::Stratified { per_axis: 3 })
-                .expect("render")
-        })
-        .collect()
 }
 
 fn main() {
@@ -59,9 +48,9 @@ fn main() {
         .iter()
         .map(|&d| Camera::framed(&source.bounds, d, 0.6, 320, 320, 1.0))
         .collect();
-    let reference = render_all(&source, &cams);
+    let reference = reference_renders(&source, &cams);
     let cloud = import(&glb, &ImportOptions::default()).unwrap().scene;
-    let lod0 = render_all(&cloud, &cams);
+    let lod0 = reference_renders(&cloud, &cams);
     for (i, name) in ["front", "diagonal"].iter().enumerate() {
         write_comparisons_png(
             &reference[i],
@@ -99,7 +88,7 @@ fn main() {
         let p = dir.path().join(format!("lod{l}.glb"));
         write_cloud_glb(&one, &p, &GltfOptions::default()).unwrap();
         let s = import(&p, &ImportOptions::default()).unwrap().scene;
-        lods.push(render_all(&s, &cams[..1]).remove(0));
+        lods.push(reference_renders(&s, &cams[..1]).remove(0));
     }
     let refs: Vec<&ImageF32> = lods.iter().collect();
     write_comparisons_png(&reference[0], &refs, 4.0, &out.join("oak_lods_front.png")).unwrap();

@@ -116,3 +116,21 @@ pub fn max_abs_diff(a: &crate::eval::ImageF32, b: &crate::eval::ImageF32) -> f32
         .map(|(p, q)| (*p - *q).abs().max_element())
         .fold(0.0, f32::max)
 }
+
+/// The ray-traced reference of `scene` from each camera, 3 × 3 stratified samples per
+/// pixel (the billboard-cloud tests' and pictures' renders).
+pub fn reference_renders(
+    scene: &crate::scene::Scene,
+    cams: &[billow_core::camera::Camera],
+) -> Vec<crate::eval::ImageF32> {
+    let r = crate::eval::reference::ReferenceRenderer::new(scene);
+    cams.iter()
+        .map(|c| {
+            r.render(
+                c,
+                crate::eval::reference::Sampling::Stratified { per_axis: 3 },
+            )
+            .expect("render")
+        })
+        .collect()
+}

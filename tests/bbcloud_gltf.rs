@@ -8,7 +8,6 @@ use std::path::{Path, PathBuf};
 use billow::bbcloud::{bake, BbcloudOptions, Shading};
 use billow::eval::image::write_comparisons_png;
 use billow::eval::metrics::compare;
-use billow::eval::reference::{ReferenceRenderer, Sampling};
 use billow::eval::ImageF32;
 use billow::export::{
     cloud_glb_bytes, cloud_gltf_bytes, write_cloud_glb, write_cloud_gltf, GltfContainer,
@@ -16,6 +15,7 @@ use billow::export::{
 };
 use billow::import::{import, ImportOptions};
 use billow::scene::Scene;
+use billow::test_support::reference_renders;
 use billow_core::camera::Camera;
 use glam::{Vec3, Vec4};
 
@@ -68,16 +68,6 @@ fn views(scene: &Scene) -> Vec<Camera> {
     .iter()
     .map(|&d| Camera::framed(&scene.bounds, d, 0.6, 128, 128, 1.0))
     .collect()
-}
-
-fn render_all(scene: &Scene, cams: &[Camera]) -> Vec<ImageF32> {
-    let r = ReferenceRenderer::new(scene);
-    cams.iter()
-        .map(|c| {
-            r.render(c, Sampling::Stratified { per_axis: 3 })
-                .expect("render")
-        })
-        .collect()
 }
 
 /// Mean over views of the RMSE (premultiplied RGBA) of 4×-downsampled renders.
@@ -166,8 +156,8 @@ fn glb_is_valid_gltf_and_renders_like_the_source() {
 
     // 3. Renders close to the source; broken exports do not.
     let cams = views(&source);
-    let reference = render_all(&source, &cams);
-    let good = render_all(&cloud, &cams);
+    let reference = reference_renders(&source, &cams);
+    let good = reference_renders(&cloud, &cams);
     let mut flipped = cloud.clone();
     for t in flipped.triangles.iter_mut() {
         if flipped.materials[t.material as usize]
@@ -185,8 +175,8 @@ fn glb_is_valid_gltf_and_renders_like_the_source() {
     no_back
         .triangles
         .retain(|t| !mats[t.material as usize].name.ends_with("/back"));
-    let flipped_img = render_all(&flipped, &cams);
-    let no_back_img = render_all(&no_back, &cams);
+    let flipped_img = reference_renders(&flipped, &cams);
+    let no_back_img = reference_renders(&no_back, &cams);
     let (e_good, e_flip, e_back) = (
         error(&reference, &good),
         error(&reference, &flipped_img),
