@@ -12,8 +12,10 @@
 mod accessor;
 mod gltf;
 mod images;
+mod mtl;
 mod obj;
 mod report;
+mod text;
 
 pub use report::{ImportReport, TextureReport, Warning};
 

@@ -30,7 +30,6 @@
 //! UV `v` is flipped (OBJ's origin is bottom-left, the scene's top-left). Vertex
 //! colours (`v x y z r g b`) are taken as linear.
 
-use std::borrow::Cow;
 use std::cell::RefCell;
 use std::collections::HashMap;
 use std::io::Cursor;
@@ -38,6 +37,8 @@ use std::path::{Path, PathBuf};
 
 use glam::{Vec2, Vec3, Vec4};
 
+use super::mtl::{parse_mtl, MtlMaterial, MtlNotes, UNNAMED_MATERIAL};
+use super::text::{decode_text, shown};
 use super::{face_normal, images, reserve, resolve_relative, Ctx, ImportError};
 use crate::scene::{AlphaMode, Material, SceneBuilder, Texture, Triangle, Vertex};
 
@@ -384,62 +385,6 @@ const OBJ_OPTIONS: tobj::LoadOptions = tobj::LoadOptions {
     ignore_lines: true,
 };
 
-/// Name given to an unnamed material (a bare `newmtl`, as Blender 2.61 writes for a
-/// material without a name); a bare `usemtl` selects it.
-const UNNAMED_MATERIAL: &str = "(unnamed)";
-
-/// The text of an OBJ or MTL file: UTF-8, its byte-order mark dropped and bytes that are
-/// not UTF-8 (a Latin-1 `©`) replaced by U+FFFD, or UTF-16, little or big endian, told by
-/// its byte-order mark or, without one, by NUL bytes in every other byte (as ASCII text in
-/// UTF-16 has; text in UTF-8 has none).
-fn decode_text(raw: &[u8]) -> Cow<'_, str> {
-    let utf16 = match raw {
-        [0xEF, 0xBB, 0xBF, rest @ ..] => return String::from_utf8_lossy(rest),
-        [0xFF, 0xFE, rest @ ..] => Some((rest, false)),
-        [0xFE, 0xFF, rest @ ..] => Some((rest, true)),
-        _ => utf16_without_bom(raw).map(|big_endian| (raw, big_endian)),
-    };
-    match utf16 {
-        None => String::from_utf8_lossy(raw),
-        Some((bytes, big_endian)) => {
-            let units = bytes.chunks_exact(2).map(|c| {
-                if big_endian {
-                    u16::from_be_bytes([c[0], c[1]])
-                } else {
-                    u16::from_le_bytes([c[0], c[1]])
-                }
-            });
-            Cow::Owned(
-                char::decode_utf16(units)
-                    .map(|c| c.unwrap_or(char::REPLACEMENT_CHARACTER))
-                    .collect(),
-            )
-        }
-    }
-}
-
-/// Whether text without a byte-order mark looks like UTF-16: `Some(big_endian)` when at
-/// least three quarters of the odd (LE) or even (BE) bytes of its first 4 KiB are NUL and
-/// almost none of the others.
-fn utf16_without_bom(raw: &[u8]) -> Option<bool> {
-    let head = &raw[..raw.len().min(4096) & !1];
-    let pairs = head.len() / 2;
-    if pairs < 2 {
-        return None;
-    }
-    let zeros = |k: usize| head.iter().skip(k).step_by(2).filter(|&&b| b == 0).count();
-    let (even, odd) = (zeros(0), zeros(1));
-    let mostly = |n: usize| 4 * n >= 3 * pairs;
-    let hardly = |n: usize| 16 * n <= pairs;
-    if mostly(odd) && hardly(even) {
-        Some(false)
-    } else if mostly(even) && hardly(odd) {
-        Some(true)
-    } else {
-        None
-    }
-}
-
 /// Statement keywords of the OBJ format (including free-form geometry, which billow does
 /// not import): a line starting with anything else is not understood.
 const OBJ_KEYWORDS: &[&str] = &[
@@ -558,26 +503,6 @@ impl ObjScan {
     }
 }
 
-/// A line as a message shows it: at most 60 characters, control characters escaped.
-fn shown(line: &str) -> String {
-    let line = line.trim();
-    let mut out: String = line
-        .chars()
-        .take(60)
-        .flat_map(|c| {
-            if c.is_control() {
-                c.escape_debug().collect::<Vec<_>>()
-            } else {
-                vec![c]
-            }
-        })
-        .collect();
-    if line.chars().count() > 60 {
-        out.push('…');
-    }
-    out
-}
-
 /// The OBJ text with the statements tobj would mishandle rewritten, and what it holds
 /// ([`ObjScan`]): a bare `usemtl` selects [`UNNAMED_MATERIAL`] (tobj requires a name); `p`
 /// and `l` statements are blanked (billow imports faces only, and tobj would make a
@@ -636,236 +561,6 @@ fn tolerate_obj(text: &str) -> (String, ObjScan) {
         out.push_str(line);
     }
     (out, scan)
-}
-
-/// One MTL material, with what billow takes from it.
-#[derive(Clone, Debug)]
-struct MtlMaterial {
-    name: String,
-    kd: Option<[f32; 3]>,
-    d: Option<f32>,
-    tr: Option<f32>,
-    /// `map_Kd` and `map_d` as written (options and all).
-    map_kd: Option<String>,
-    map_d: Option<String>,
-    /// The library's folder: texture paths are relative to it.
-    dir: PathBuf,
-}
-
-/// What parsing a library noticed: statements it could not use, and how much it held.
-#[derive(Debug, Default)]
-struct MtlNotes {
-    /// Statements ignored because their values do not parse: (line number, text, problem).
-    bad: Vec<(usize, String, String)>,
-    /// Non-blank lines that are not comments.
-    statements: usize,
-    materials: usize,
-    /// Statements whose keyword is not MTL, and the first of them.
-    unknown: usize,
-    first_unknown: Option<(usize, String)>,
-    first_statement: Option<(usize, String)>,
-}
-
-impl MtlNotes {
-    /// The warnings about library `p`: its first bad statement (and how many more), and a
-    /// library that holds statements but no material.
-    fn warnings(&self, p: &Path) -> Vec<String> {
-        let mut out = Vec::new();
-        if let Some((line, text, problem)) = self.bad.first() {
-            let more = match self.bad.len() - 1 {
-                0 => String::new(),
-                1 => " (and 1 more such statement)".into(),
-                n => format!(" (and {n} more such statements)"),
-            };
-            out.push(format!(
-                "material library {}: line {line}: '{}': {problem}; the statement is ignored{more}",
-                p.display(),
-                shown(text)
-            ));
-        }
-        // A library with statements but no material (an empty one says nothing).
-        let described = match (&self.first_unknown, &self.first_statement) {
-            (Some(u), _) => Some((
-                format!(
-                    "{} of its {} statements are not MTL",
-                    self.unknown, self.statements
-                ),
-                u,
-            )),
-            (None, Some(s)) => Some((
-                format!("none of its {} statements is `newmtl`", self.statements),
-                s,
-            )),
-            (None, None) => None,
-        };
-        if let (0, Some((what, (line, text)))) = (self.materials, described) {
-            out.push(format!(
-                "material library {} defines no material: {what} (the first, line {line}: '{}')",
-                p.display(),
-                shown(text)
-            ));
-        }
-        out
-    }
-}
-
-/// Statement keywords of the MTL format (lower case; matched without regard to case) that
-/// billow reads or knowingly ignores.
-const MTL_KEYWORDS: &[&str] = &[
-    "newmtl",
-    "ka",
-    "kd",
-    "ks",
-    "ke",
-    "tf",
-    "d",
-    "tr",
-    "ns",
-    "ni",
-    "illum",
-    "sharpness",
-    "map_ka",
-    "map_kd",
-    "map_ks",
-    "map_ke",
-    "map_ns",
-    "map_d",
-    "map_tr",
-    "map_bump",
-    "bump",
-    "disp",
-    "decal",
-    "refl",
-    "map_refl",
-    "map_aat",
-    "pr",
-    "pm",
-    "ps",
-    "pc",
-    "pcr",
-    "aniso",
-    "anisor",
-    "norm",
-    "map_pr",
-    "map_pm",
-    "map_ps",
-    "map_norm",
-];
-
-/// Parses an MTL library, statement by statement: a statement whose values do not parse
-/// is noted ([`MtlNotes::bad`]) and ignored, never the whole library. Colours (`Ka`, `Kd`,
-/// `Ks`, `Ke`, `Tf`) take one value (grey: g = b = r), three, or `xyz` and CIE XYZ values;
-/// `d` takes `-halo`; a bare `newmtl` names [`UNNAMED_MATERIAL`]; a texture statement
-/// without a file name says nothing. Statements before the first `newmtl` are ignored.
-fn parse_mtl(text: &str, dir: &Path) -> (Vec<MtlMaterial>, MtlNotes) {
-    let mut materials: Vec<MtlMaterial> = Vec::new();
-    let mut notes = MtlNotes::default();
-    for (n, line) in text.lines().enumerate() {
-        let t = line.trim();
-        if t.is_empty() || t.starts_with('#') {
-            continue;
-        }
-        notes.statements += 1;
-        notes.first_statement.get_or_insert((n + 1, t.to_string()));
-        let (keyword, rest) = t.split_once(char::is_whitespace).unwrap_or((t, ""));
-        let rest = rest.trim();
-        let keyword = keyword.to_ascii_lowercase();
-        if keyword == "newmtl" {
-            materials.push(MtlMaterial {
-                name: if rest.is_empty() {
-                    UNNAMED_MATERIAL.to_string()
-                } else {
-                    rest.to_string()
-                },
-                kd: None,
-                d: None,
-                tr: None,
-                map_kd: None,
-                map_d: None,
-                dir: dir.to_path_buf(),
-            });
-            continue;
-        }
-        if !MTL_KEYWORDS.contains(&keyword.as_str()) {
-            notes.unknown += 1;
-            notes.first_unknown.get_or_insert((n + 1, t.to_string()));
-            continue;
-        }
-        let Some(m) = materials.last_mut() else {
-            continue;
-        };
-        let file = || (!rest.is_empty()).then(|| rest.to_string());
-        let r: Result<(), String> = match keyword.as_str() {
-            "ka" | "ks" | "ke" | "tf" => mtl_colour(rest).map(drop),
-            "kd" => mtl_colour(rest).map(|c| m.kd = Some(c)),
-            "d" => {
-                let v = rest.strip_prefix("-halo").map_or(rest, str::trim_start);
-                mtl_number(v).map(|v| m.d = Some(v))
-            }
-            "tr" => mtl_number(rest).map(|v| m.tr = Some(v)),
-            "map_kd" => {
-                m.map_kd = file().or(m.map_kd.take());
-                Ok(())
-            }
-            "map_d" => {
-                m.map_d = file().or(m.map_d.take());
-                Ok(())
-            }
-            _ => Ok(()),
-        };
-        if let Err(problem) = r {
-            notes.bad.push((n + 1, t.to_string(), problem));
-        }
-    }
-    notes.materials = materials.len();
-    (materials, notes)
-}
-
-/// One number, the first word of `s`.
-fn mtl_number(s: &str) -> Result<f32, String> {
-    let w = s.split_whitespace().next().ok_or("a number is missing")?;
-    w.parse::<f32>()
-        .map_err(|_| format!("'{w}' is not a number"))
-}
-
-/// An MTL colour: `r [g b]` (one value is grey), or `xyz x [y z]` (CIE XYZ, turned into
-/// linear sRGB); `spectral` curves are not supported.
-fn mtl_colour(s: &str) -> Result<[f32; 3], String> {
-    let mut words = s.split_whitespace().peekable();
-    let xyz = match words.peek() {
-        Some(&"spectral") => return Err("spectral colours (.rfl files) are not supported".into()),
-        Some(&"xyz") => {
-            words.next();
-            true
-        }
-        _ => false,
-    };
-    let values = words
-        .map(|w| {
-            w.parse::<f32>()
-                .map_err(|_| format!("'{w}' is not a number"))
-        })
-        .collect::<Result<Vec<f32>, String>>()?;
-    let c = match values[..] {
-        [v] => [v; 3],
-        [r, g, b, ..] => [r, g, b],
-        _ => {
-            return Err(format!(
-                "a colour is one value (grey) or three (r g b), not {}",
-                values.len()
-            ))
-        }
-    };
-    Ok(if xyz {
-        let [x, y, z] = c;
-        [
-            3.240_454_2 * x - 1.537_138_5 * y - 0.498_531_4 * z,
-            -0.969_266 * x + 1.876_010_8 * y + 0.041_556 * z,
-            0.055_643_4 * x - 0.204_025_9 * y + 1.057_225_2 * z,
-        ]
-    } else {
-        c
-    })
 }
 
 /// `"line N: '<text>': "` for the first line of `text` at which `parse` (run on a prefix
