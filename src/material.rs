@@ -99,6 +99,33 @@ impl<'a> Shader<'a> {
         if let Some(t) = m.base_color_texture {
             c *= Taps::new(&self.textures[t as usize], uv).filtered(self.lut);
         }
+        Self::finish(m, c)
+    }
+
+    /// The base-colour texture of `m` sampled at `uv` (bilinear, linear RGB and straight
+    /// alpha: the factor [`Shader::shade_tested`] multiplies in), or `None` without one.
+    #[inline(always)]
+    pub(crate) fn texel(&self, m: &Material, uv: Vec2) -> Option<Vec4> {
+        let t = m.base_color_texture?;
+        Some(Taps::new(&self.textures[t as usize], uv).filtered(self.lut))
+    }
+
+    /// [`Shader::shade_tested`] with the texture's term given: `texel` stands for the
+    /// texture's colour over the fragment (the mean of its samples' [`Shader::texel`]s).
+    #[inline(always)]
+    pub(crate) fn shade_texel(
+        &self,
+        m: &Material,
+        texel: Vec4,
+        vertex_color: Vec4,
+    ) -> Option<Vec4> {
+        Self::finish(m, m.base_color_factor * vertex_color * texel)
+    }
+
+    /// Straight linear `c` (factor × vertex colour × texture) made premultiplied by the
+    /// alpha mode, or `None` when invisible.
+    #[inline(always)]
+    fn finish(m: &Material, c: Vec4) -> Option<Vec4> {
         let rgb = c.truncate().clamp(Vec3::ZERO, Vec3::ONE);
         let a = match m.alpha_mode {
             AlphaMode::Opaque | AlphaMode::Mask { .. } => 1.0,

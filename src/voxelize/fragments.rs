@@ -80,6 +80,9 @@ struct Frag {
     u: u32,
     /// Which directions see it (bit 0: +, bit 1: −), as [`TriSetup::vis`].
     vis: u8,
+    /// Whether `rgba` is already shaded (a textured `Mask` fragment, shaded with the mean
+    /// of its samples' texels by [`fragment`]).
+    shaded: bool,
 }
 
 /// Per-thread buffers of [`raster_row`] (kept between rows).
@@ -522,7 +525,14 @@ fn split_at_planes<const K: usize, const AVX: bool>(
 }
 
 /// The samples of `gmask` that pass the `Mask` alpha test at `cutoff` (alpha channel
-/// only, per sample); `e` and `off` as in [`fragment`].
+/// only, per sample), and the sum of their [`Shader::texel`]s (zero without a texture);
+/// `e` and `off` as in [`fragment`].
+///
+/// The texels are summed so that the fragment is shaded with their mean: a cut-out
+/// texture's colour is correlated with where it passes (a leaf's rim, filtered against
+/// the cut-away background, is lighter than its middle), and one shading point at the
+/// samples' centroid lies in the middle. Shaded there, the oak's leaves came out 10 %
+/// darker than the ray-traced mesh, which shades every sample.
 #[inline(always)]
 fn alpha_test(
     shader: &Shader<'_>,
@@ -531,9 +541,10 @@ fn alpha_test(
     e: [i64; 3],
     off: &[[i64; 64]; 3],
     gmask: u64,
-) -> u64 {
+) -> (u64, Vec4) {
     let (uvs, cols_v) = (&t.uvs, &t.cols);
     let mut gmask = gmask;
+    let mut texels = Vec4::ZERO;
     let mut bits = gmask;
     while bits != 0 {
         let b = bits.trailing_zeros();
@@ -545,9 +556,11 @@ fn alpha_test(
         let va = cols_v[0].w * b0 + cols_v[1].w * b1 + cols_v[2].w * b2;
         if !shader.mask_pass(t.m, cutoff, uv, va) {
             gmask &= !(1 << b);
+        } else if let Some(c) = shader.texel(t.m, uv) {
+            texels += c;
         }
     }
-    gmask
+    (gmask, texels)
 }
 
 /// The fragment of the samples `gmask` in `slice` of pixel column `i` (edge values `e` at
@@ -565,8 +578,9 @@ fn fragment<const K: usize>(
 ) -> Option<(Frag, [f32; 3])> {
     let s = t.s;
     let mut gmask = gmask;
+    let mut texels = Vec4::ZERO;
     if let Some(cutoff) = t.cutoff {
-        gmask = alpha_test(shader, t, cutoff, e, off, gmask);
+        (gmask, texels) = alpha_test(shader, t, cutoff, e, off, gmask);
         if gmask == 0 {
             return None;
         }
@@ -588,15 +602,24 @@ fn fragment<const K: usize>(
         }
     }
     let dk = depth_key(depth as f32, false) as u64;
+    // A textured cut-out: shaded here, with its passed samples' mean texel.
+    let shaded = t.cutoff.is_some() && t.m.base_color_texture.is_some();
+    let rgba = if shaded {
+        let mean = texels / gmask.count_ones() as f32;
+        shader.shade_texel(t.m, mean, col)?
+    } else {
+        col
+    };
     let f = Frag {
         key: (slice as u64) << 32 | dk,
         mask: gmask,
         tri: s.tri,
         material: s.material,
-        rgba: col,
+        rgba,
         uv,
         u: i as u32,
         vis: s.vis,
+        shaded,
     };
     Some((f, bw))
 }

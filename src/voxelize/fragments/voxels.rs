@@ -47,7 +47,12 @@ impl Scratch {
         self.start.clear();
         self.start.resize(depth_n as usize + 1, 0);
         for f in self.frags.iter_mut() {
-            match shader.shade_tested(shader.material(f.material), f.uv, f.rgba) {
+            let shaded = if f.shaded {
+                Some(f.rgba)
+            } else {
+                shader.shade_tested(shader.material(f.material), f.uv, f.rgba)
+            };
+            match shaded {
                 Some(c) => {
                     f.rgba = c;
                     self.start[(f.key >> 32) as usize + 1] += 1;
