@@ -174,8 +174,14 @@ fn moments_cosine(in: VOut) -> f32 {
     if !(len > 0.0) {
         return 0.0;
     }
-    let u = ll / len;
-    return sqrt(clamp(dot(s.xyz, u * u) / tr, 0.0, 1.0));
+    let l2 = (ll / len) * (ll / len);
+    // billow_core::shading::moments_diffuse_factor: √q where the normals share an axis,
+    // E|n·L| band-limited to the second moment where they spread, blended by concentration.
+    let m = s.xyz / tr;
+    let q = clamp(dot(m, l2), 0.0, 1.0);
+    let w = clamp((3.0 * dot(m, m) - 1.0) * 0.5, 0.0, 1.0);
+    let spread = min(3.0 / 16.0 + 15.0 / 16.0 * q, 1.0);
+    return w * sqrt(q) + (1.0 - w) * spread;
 }
 
 @fragment
