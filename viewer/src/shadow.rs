@@ -48,12 +48,19 @@ pub const CASCADE_RATIO: f32 = 8.0;
 pub const SHADOW_SPACING_BIAS: f32 = 4.0;
 /// Opacity at which a shadow slice occludes. A depth map cannot composite, so each
 /// slab (of [`SHADOW_SPACING_BIAS`]× the viewer's spacing) occludes on its own where its
-/// opacity reaches this. Calibrated against the meshes' own shadows once the volumes'
-/// levels kept the mesh's coverage (2026-12-05, `make demo`'s scene, ground pixels in
-/// shadow): the oak volume 1,729 at 0.5 and 4,152 at 0.3 against the mesh's 4,459; the
-/// generated tree 2,843 and 4,776 against 5,285. (0.5 had matched the volumes of before,
-/// which were 10–50 % too dense at the shadow slices' MIP levels: the oak 3,670.)
-pub const SHADOW_ALPHA_CUTOFF: f32 = 0.3;
+/// opacity reaches this. Calibrated against the meshes' own shadows:
+/// - 2026-12-05, once the volumes' levels kept the mesh's coverage (`make demo`'s scene,
+///   ground pixels in shadow): the oak volume 1,729 at 0.5 and 4,152 at 0.3 against the
+///   mesh's 4,459; the generated tree 2,843 and 4,776 against 5,285. (0.5 had matched the
+///   volumes of before, which were 10–50 % too dense at the shadow slices' MIP levels.)
+/// - 2026-12-06, once the volumes' albedo and cosine matched the mesh's (docs/relight.md):
+///   0.25. The ground's shadow mass (Σ of 1 − shadowed / unshadowed over the ground, seen
+///   from above) against the mesh's under the lights (1, 0.6, 0) and (0.3, 1, 0.5): the
+///   oak 0.975 / 0.749 at 0.3, 1.002 / 0.837 at 0.25, 1.026 / 0.909 at 0.2; the tree
+///   0.975 / 0.854 at 0.3, 0.980 / 0.896 at 0.25. The oak's canopy against the mesh's
+///   from `+x-y-z` under the four standard lights: +8.4, +8.5, −0.8, +3.3 % at 0.3;
+///   +2.3, +1.3, −8.2, −1.9 % at 0.25; −3.3, −5.5, −15.4, −6.2 % at 0.2.
+pub const SHADOW_ALPHA_CUTOFF: f32 = 0.25;
 
 /// Group 2 of every receiving pipeline: the depth atlas, its comparison sampler and the
 /// cascades' [`CascadeUniform`].
