@@ -1,6 +1,7 @@
 //! The compute pass behind the WGSL-against-core checks ([`crate::prism_plane_gpu`],
-//! [`crate::volume_math_gpu`]): one storage buffer of cases in (binding 0), one of results
-//! out (binding 1), one invocation per case in workgroups of 64, read back.
+//! [`crate::shading_gpu`], [`crate::volume_math_gpu`]): one storage buffer of cases in
+//! (binding 0), one of results out (binding 1), one invocation per case in workgroups of
+//! 64, read back.
 
 use bytemuck::Pod;
 use wgpu::util::DeviceExt;
