@@ -80,7 +80,7 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
     // The slice's LOD λ (SPEC §8.6): a banded asset draws each slice with one band.
     let d = slice.zd.y;
     let lambda = slice_lod(d, params.q.x, params.q.y);
-    let in_band = lambda >= params.q.z && lambda < params.q.w;
+    let in_band = band_holds(params.q.zw, lambda);
     var poly = intersect_prism_plane(&c, slice.zd.x);
     let tri = vi / 3u;
     let corner = vi % 3u;

@@ -9,6 +9,13 @@ fn slice_lod(d: f32, v0: f32, max_lod: f32) -> f32 {
     return clamp(log2(d / v0), 0.0, max_lod);
 }
 
+// Whether a slice of LOD lambda draws the band whose slice-LOD range is
+// [range.x, range.y) (billow_core::slicing::band_lod_range, SPEC §8.6):
+// billow_core::slicing::band_holds.
+fn band_holds(range: vec2<f32>, lambda: f32) -> bool {
+    return lambda >= range.x && lambda < range.y;
+}
+
 // ln(1 + x) and exp(x) − 1 with full relative precision for small |x| (WGSL has neither).
 fn log1p_(x: f32) -> f32 {
     let u = 1.0 + x;

@@ -11,6 +11,8 @@ struct MathCase {
     e: vec4<f32>,
     // to_extinction's premultiplied texel
     c: vec4<f32>,
+    // band_holds(xy, z)
+    band: vec4<f32>,
 }
 
 struct MathOut {
@@ -18,6 +20,8 @@ struct MathOut {
     scalars: vec4<f32>,
     slab: vec4<f32>,
     extinction: vec4<f32>,
+    // x: band_holds (1 or 0)
+    band: vec4<f32>,
 }
 
 @group(0) @binding(0) var<storage, read> cases: array<MathCase>;
@@ -39,5 +43,6 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     );
     o.slab = slab_sample(k.e, k.lod.w);
     o.extinction = to_extinction(k.c, k.lod.w);
+    o.band = vec4<f32>(select(0.0, 1.0, band_holds(k.band.xy, k.band.z)), 0.0, 0.0, 0.0);
     results[i] = o;
 }
