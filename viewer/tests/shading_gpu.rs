@@ -55,12 +55,13 @@ fn cases() -> Vec<ShadingCase> {
 
 #[test]
 fn wgsl_diffuse_factor_matches_billow_core() {
-    let Some(gpu) = common::gpu_or_skip("wgsl_diffuse_factor_matches_billow_core") else {
+    let Some((cases, out)) = common::check_on_gpu(
+        "wgsl_diffuse_factor_matches_billow_core",
+        cases(),
+        diffuse_factor_on_gpu,
+    ) else {
         return;
     };
-    let cases = cases();
-    let out = diffuse_factor_on_gpu(&gpu, &cases).expect("run the check shader");
-    assert_eq!(out.len(), cases.len());
     let mut bad = Vec::new();
     let mut worst = 0f32;
     for (k, &got) in cases.iter().zip(&out) {

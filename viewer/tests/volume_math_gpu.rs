@@ -133,12 +133,13 @@ fn close(a: Vec4, b: Vec4, tol: f32) -> bool {
 
 #[test]
 fn wgsl_volume_math_matches_billow_core() {
-    let Some(gpu) = common::gpu_or_skip("wgsl_volume_math_matches_billow_core") else {
+    let Some((cases, out)) = common::check_on_gpu(
+        "wgsl_volume_math_matches_billow_core",
+        cases(),
+        volume_math_on_gpu,
+    ) else {
         return;
     };
-    let cases = cases();
-    let out = volume_math_on_gpu(&gpu, &cases).expect("run the check shader");
-    assert_eq!(out.len(), cases.len());
     let mut bad = Vec::new();
     let (mut worst_lod, mut worst_slab, mut worst_ext) = (0f32, 0f32, 0f32);
     for (k, o) in cases.iter().zip(&out) {
