@@ -32,48 +32,22 @@ pub(super) fn upload(
     let cs = asset.header.colour_space;
     let dims0 = asset.level_dims(0);
     let moments = asset.has_moments();
-    let direct =
-        blocks.filter(|b| b.colour.len() == asset.levels.len() && gpu.block_upload(dims0, true));
-    let mut out = vec![match direct {
-        Some(b) => {
-            check_3d(gpu, dims0, b.colour.len() as u32)?;
-            let texture = upload_bc7(
-                gpu,
-                "volume (BC7)",
-                dims0,
-                wgpu::TextureDimension::D3,
-                &b.colour,
-                cs == ColourSpace::SrgbPremultiplied,
-            );
-            let view = texture.create_view(&Default::default());
-            let (normals, moments_bc) = normal_slot(
-                gpu,
-                dims0,
-                &asset.levels,
-                asset.normals.as_deref(),
-                moments.then_some(b.normals.as_deref()).flatten(),
-            );
-            GpuVolume {
-                dims0,
-                levels: b.colour.len() as u32,
-                repeat,
-                texture,
-                view,
-                normals,
-                moments,
-                moments_bc,
-                storage: VolumeStorage::Blocks,
-            }
-        }
-        None => upload_levels(
-            gpu,
-            dims0,
-            &asset.levels,
-            (asset.normals.as_deref(), moments),
-            cs,
-            repeat,
-        )?,
-    }];
+    let direct = blocks
+        .filter(|b| b.colour.len() == asset.levels.len() && gpu.block_upload(dims0, true))
+        .map(|b| (&b.colour[..], b.normals.as_deref()));
+    let base = Texels {
+        dims: dims0,
+        levels: &asset.levels,
+        normals: asset.normals.as_deref(),
+    };
+    let mut out = vec![upload_texture(
+        gpu,
+        "volume (BC7)",
+        base,
+        direct,
+        (cs, moments),
+        repeat,
+    )?];
     // Compressed bands (format 1.3): uploaded as their blocks where the device allows it.
     let band_blocks = blocks
         .map(|b| b.bands.as_slice())
@@ -81,50 +55,79 @@ pub(super) fn upload(
     for (i, b) in asset.bands.iter().enumerate() {
         let direct = band_blocks
             .map(|bb| &bb[i])
-            .filter(|bb| bb.colour.len() == b.levels.len() && gpu.block_upload(b.dims, true));
+            .filter(|bb| bb.colour.len() == b.levels.len() && gpu.block_upload(b.dims, true))
+            .map(|bb| (&bb.colour[..], bb.normals.as_deref()));
+        let band = Texels {
+            dims: b.dims,
+            levels: &b.levels,
+            normals: b.normals.as_deref(),
+        };
         // Bands address their textures with clamp-to-edge (SPEC §8.6).
-        out.push(match direct {
-            Some(bb) => {
-                check_3d(gpu, b.dims, bb.colour.len() as u32)?;
-                let texture = upload_bc7(
-                    gpu,
-                    "volume band (BC7)",
-                    b.dims,
-                    wgpu::TextureDimension::D3,
-                    &bb.colour,
-                    cs == ColourSpace::SrgbPremultiplied,
-                );
-                let view = texture.create_view(&Default::default());
-                let (normals, moments_bc) = normal_slot(
-                    gpu,
-                    b.dims,
-                    &b.levels,
-                    b.normals.as_deref(),
-                    moments.then_some(bb.normals.as_deref()).flatten(),
-                );
-                GpuVolume {
-                    dims0: b.dims,
-                    levels: bb.colour.len() as u32,
-                    repeat: false,
-                    texture,
-                    view,
-                    normals,
-                    moments,
-                    moments_bc,
-                    storage: VolumeStorage::Blocks,
-                }
-            }
-            None => upload_levels(
-                gpu,
-                b.dims,
-                &b.levels,
-                (b.normals.as_deref(), moments),
-                cs,
-                false,
-            )?,
-        });
+        out.push(upload_texture(
+            gpu,
+            "volume band (BC7)",
+            band,
+            direct,
+            (cs, moments),
+            false,
+        )?);
     }
     Ok(out)
+}
+
+/// The MIP levels of a texture, one byte vector each (texels or BC7 blocks).
+type Levels<'a> = &'a [Vec<u8>];
+
+/// One texture of an asset (its base or a band) as the reader decoded it: level-0 size,
+/// RGBA8 levels and the stored normals.
+struct Texels<'a> {
+    dims: [u32; 3],
+    levels: Levels<'a>,
+    normals: Option<Levels<'a>>,
+}
+
+/// Uploads `t` as its BC7 `blocks` where given (colour, and the normals' blocks; `label`
+/// names the texture), else as its decoded texels in extinction space ([`upload_levels`]);
+/// `(cs, moments)`: the asset's colour space, and whether its normals are moments.
+fn upload_texture(
+    gpu: &Gpu,
+    label: &str,
+    t: Texels,
+    blocks: Option<(Levels, Option<Levels>)>,
+    (cs, moments): (ColourSpace, bool),
+    repeat: bool,
+) -> Result<GpuVolume, ViewError> {
+    let Some((colour, normal_blocks)) = blocks else {
+        return upload_levels(gpu, t.dims, t.levels, (t.normals, moments), cs, repeat);
+    };
+    check_3d(gpu, t.dims, colour.len() as u32)?;
+    let texture = upload_bc7(
+        gpu,
+        label,
+        t.dims,
+        wgpu::TextureDimension::D3,
+        colour,
+        cs == ColourSpace::SrgbPremultiplied,
+    );
+    let view = texture.create_view(&Default::default());
+    let (normals, moments_bc) = normal_slot(
+        gpu,
+        t.dims,
+        t.levels,
+        t.normals,
+        moments.then_some(normal_blocks).flatten(),
+    );
+    Ok(GpuVolume {
+        dims0: t.dims,
+        levels: colour.len() as u32,
+        repeat,
+        texture,
+        view,
+        normals,
+        moments,
+        moments_bc,
+        storage: VolumeStorage::Blocks,
+    })
 }
 
 /// A `dims0` volume with `count` levels fits a 3D texture of the device.
