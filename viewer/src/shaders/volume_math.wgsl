@@ -1,5 +1,5 @@
 // The volume pass's pure functions, prepended to volume.wgsl (and volume_loads.wgsl) by
-// volume_pass.rs and to volume_math_check.wgsl by volume_math_gpu.rs, which runs them in
+// volume_pass/mod.rs and to volume_math_check.wgsl by volume_math_gpu.rs, which runs them in
 // a compute pass for viewer/tests/volume_math_gpu.rs: each is the WGSL copy of a
 // billow-core function (shaders cannot call Rust), tested against it there.
 
@@ -42,7 +42,7 @@ fn expm1_(x: f32) -> f32 {
 // depth divided by the texel's size in level-0 voxels (a density; opaque texels hold
 // ln 510 at every level), filtered trilinearly within a level and linearly between
 // levels, and turned back into premultiplied RGBA for the slab the slice stands for
-// (slab_sample). `sample_volume` (volume_pass.rs) returns the filtered sample: the
+// (slab_sample). `sample_volume` (volume_pass/mod.rs) returns the filtered sample: the
 // texture unit's trilinear sample of a texture stored in extinction space (Rgba16Float),
 // or for BC7 block textures eight converted loads per level (volume_loads.wgsl).
 // Filtering α instead gives a one-voxel opaque layer an optical depth of only 2: thin
