@@ -1,5 +1,5 @@
 //! What a renderer holds on the GPU for an asset: the texture bytes `billow view` allocates
-//! (`viewer/src/volume_pass.rs` and `viewer/src/cloud_pass/upload.rs` upload by these
+//! (`viewer/src/volume_pass/textures.rs` and `viewer/src/cloud_pass/upload.rs` upload by these
 //! rules, and `viewer/tests/gpu_memory.rs` checks the sums against the textures they
 //! create), on a device with BC7 support and on one without.
 //!

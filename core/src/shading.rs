@@ -1,6 +1,6 @@
 //! The lighting models of billow, pure math shared by the billboard bake
 //! (`billow::bbcloud`), the reference renderer and CPU slicer (`billow::eval`), and mirrored
-//! by the viewer's shaders (`mesh.wgsl`, `volume.wgsl`). Re-exported as
+//! by the viewer's shaders (`shading.wgsl`, `volume.wgsl`). Re-exported as
 //! `billow::eval::lighting::{diffuse_factor, volume_diffuse_factor}`.
 
 use glam::Vec3;
@@ -14,9 +14,10 @@ pub const DEFAULT_LIGHT: Vec3 = Vec3::new(0.3, 1.0, 0.5);
 pub const DEFAULT_AMBIENT: f32 = billow_format::DEFAULT_AMBIENT;
 
 /// `ambient + (1 − ambient) · |n·light|`: the one lighting model of billow — the
-/// billboard bake's factor, the reference's, and the viewer's mesh pass (two-sided Lambert;
-/// `viewer/src/shaders/mesh.wgsl`, which also multiplies the diffuse term by shadow
-/// visibility).
+/// billboard bake's factor, the reference's, and the viewer's mesh and cloud passes
+/// (two-sided Lambert; `viewer/src/shaders/shading.wgsl`, which also multiplies the
+/// diffuse term by shadow visibility, tested against this in
+/// `viewer/tests/shading_gpu.rs`).
 #[inline]
 pub fn diffuse_factor(n: Vec3, light: Vec3, ambient: f32) -> f32 {
     ambient + (1.0 - ambient) * n.dot(light).abs()

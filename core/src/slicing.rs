@@ -94,6 +94,41 @@ pub fn slice_lod(d: f32, v0: f32, max_lod: f32) -> f32 {
     (d / v0).log2().clamp(0.0, max_lod)
 }
 
+/// The slice-LOD range `[lo, hi)` over which `band` of an asset draws its slices (SPEC
+/// §8.6), `first_levels` the first level of each of its textures in order (the base
+/// texture's 0, then each LOD band's, strictly increasing): `[f_b, f_{b+1})`, the base's
+/// open below (`lo = −1`: every [`slice_lod`] is at least 0) and the last's above
+/// (`hi = 1e30`). The viewer's plan puts it in each band's uniform; [`slice_band`] and the
+/// viewer's `volume.wgsl` (its `volume_math.wgsl`'s `band_holds`, tested against
+/// [`band_holds`] in `viewer/tests/volume_math_gpu.rs`) pick bands by it.
+pub fn band_lod_range(first_levels: &[u32], band: usize) -> [f32; 2] {
+    let lo = if band == 0 {
+        -1.0
+    } else {
+        first_levels[band] as f32
+    };
+    let hi = first_levels.get(band + 1).map_or(1e30, |&f| f as f32);
+    [lo, hi]
+}
+
+/// Whether a slice of LOD `lod` ([`slice_lod`]) draws the band whose slice-LOD range is
+/// `range` ([`band_lod_range`]): `lo ≤ lod < hi`.
+#[inline]
+pub fn band_holds(range: [f32; 2], lod: f32) -> bool {
+    lod >= range[0] && lod < range[1]
+}
+
+/// The band a slice of LOD `lod` draws (SPEC §8.6), `first_levels` as for
+/// [`band_lod_range`]: the one whose range holds `lod` — the last starting at or below
+/// it — and the base texture (0) where none does (a NaN `lod`). The CPU slicer's choice;
+/// the viewer's plan and shader draw each band over exactly the slices whose LOD its
+/// range holds.
+pub fn slice_band(first_levels: &[u32], lod: f32) -> usize {
+    (0..first_levels.len())
+        .rposition(|b| band_holds(band_lod_range(first_levels, b), lod))
+        .unwrap_or(0)
+}
+
 /// The opacity correction of one slice, agreeing with the bake's coverage-keeping levels
 /// (`billow::voxelize::coverage`): a texel of level `l` holds the optical depth `σ` of
 /// its own thickness `s_l` ([`level_texel_size`]), so a slice standing for a slab of
@@ -306,6 +341,25 @@ mod tests {
 
     /// Uniform spacing: `z₀ = z_min + d/2`, then steps of `d`, front to back, below
     /// `z_max`; the limit is an error naming more than it.
+    #[test]
+    fn each_slice_draws_the_last_band_starting_at_or_below_its_lod() {
+        for levels in [&[0u32][..], &[0, 2], &[0, 1, 3], &[0, 3, 4, 7]] {
+            for k in 0..=40 {
+                let lod = k as f32 * 0.25;
+                let want = levels.iter().rposition(|&f| f as f32 <= lod).unwrap_or(0);
+                assert_eq!(slice_band(levels, lod), want, "{levels:?} at {lod}");
+                // Exactly one band's range holds each LOD: the one slice_band picks.
+                for b in 0..levels.len() {
+                    let holds = band_holds(band_lod_range(levels, b), lod);
+                    assert_eq!(holds, b == want, "{levels:?} band {b} at {lod}");
+                }
+            }
+            assert_eq!(slice_band(levels, f32::NAN), 0);
+        }
+        assert_eq!(band_lod_range(&[0, 2, 5], 0), [-1.0, 2.0]);
+        assert_eq!(band_lod_range(&[0, 2, 5], 2), [5.0, 1e30]);
+    }
+
     #[test]
     fn uniform_slices_start_half_a_step_in_and_stop_at_the_limit() {
         let s = Spacing::Uniform { spacing: 0.5 };

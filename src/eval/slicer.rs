@@ -39,7 +39,8 @@
 //! - **LOD bands** (formats/SPEC.md §8.6, pruned volumes): `v₀` is the smallest
 //!   `voxel_size(band cells) / 2^first_level` over the base texture and its bands, slices
 //!   span every band's cells, `lod` is clamped to the asset's last level, and each slice
-//!   draws only the band with the largest `first_level ≤ lod`, sampling its texture at
+//!   draws only the band with the largest `first_level ≤ lod` ([`slice_band`], the rule
+//!   the viewer's plan and shader share), sampling its texture at
 //!   `lod − first_level`; opacity correction uses the slice's `lod`.
 //! - **Runtime shading** ([`SlicerParams::light`]) of a volume that stores normals: its
 //!   colour is albedo, multiplied by [`volume_diffuse_factor`] of the Toksvig normal
@@ -55,7 +56,7 @@ use billow_format::{Prism, VolumeAsset};
 use glam::{Mat3, Vec3, Vec4};
 use rayon::prelude::*;
 
-use billow_core::slicing::{slab_fade, slice_lod};
+use billow_core::slicing::{slab_fade, slice_band, slice_lod};
 
 use super::lighting::VolumeLight;
 use super::reference::{sample_offset, validate_camera, Sampling};
@@ -378,6 +379,7 @@ fn render_sliced(
     let last = parts.last().expect("the base part");
     let max_lod = (last.first_level as usize + last.vol.level_count() - 1) as f32;
     let vols: Vec<&DecodedVolume> = parts.iter().map(|p| p.vol).collect();
+    let first_levels: Vec<u32> = parts.iter().map(|p| p.first_level).collect();
     // Per part, the world size of a texel of each of its levels (the opacity correction's
     // `s_l`); a level without one (degenerate cells) takes `v₀ · 2^level`.
     let sizes: Vec<Vec<f32>> = parts
@@ -427,10 +429,7 @@ fn render_sliced(
         };
         let z = -depth;
         // The band this slice draws: the last one starting at or below `lod`.
-        let band = parts
-            .iter()
-            .rposition(|p| p.first_level as f32 <= lod)
-            .unwrap_or(0);
+        let band = slice_band(&first_levels, lod);
         let part_lod = lod - parts[band].first_level as f32;
         let weights = level_weights(
             part_lod,

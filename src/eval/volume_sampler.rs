@@ -18,7 +18,7 @@
 //! alpha-weighted mean of the normals in the footprint, the filter the voxelizer's MIP
 //! levels use (`src/voxelize/toksvig.rs`): an empty neighbour does not shorten a surface's
 //! normal, unlike filtering `n̄` itself. The viewer uploads the same `(α·n̄, α)` texels
-//! (`Rgba16Float`, viewer/src/volume_pass.rs).
+//! (`Rgba16Float`, viewer/src/volume_pass/textures.rs).
 
 // `!(a < b)` comparisons are deliberate: they also catch NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]

@@ -2,9 +2,9 @@
 //! pipeline, with every MIP level kept as 8³ bricks ([`SparseLevel`]) instead of a dense
 //! grid, handed to [`crate::emptyspace::prune_sparse`] without a dense volume in between.
 
+use super::pipeline::{voxelize_as, Output};
 use super::{
-    brick_grid, quantize, voxelize_as, CombineFn, GridSpec, Output, Stage, Volume, VoxelizeError,
-    VoxelizeOptions, VoxelizeStats,
+    quantize, CombineFn, GridSpec, Stage, Volume, VoxelizeError, VoxelizeOptions, VoxelizeStats,
 };
 use crate::scene::Scene;
 use crate::sparse_level::SparseLevel;
@@ -133,39 +133,4 @@ pub fn voxelize_sparse(
         }
     });
     Ok(v)
-}
-
-/// One sparse level from the colour and normal accumulators' bricks (each `(bricks,
-/// 4 · B3 bytes per brick)`); both come from the same layouts in the same order, so their
-/// brick lists agree, but a difference is merged all the same.
-pub(super) fn sparse_level(
-    dims: [usize; 3],
-    (bricks, colour): (Vec<u32>, Vec<u8>),
-    normals: Option<(Vec<u32>, Vec<u8>)>,
-) -> SparseLevel {
-    let Some((nb, nbytes)) = normals else {
-        return SparseLevel::from_bricks(dims, bricks, colour, None);
-    };
-    if nb == bricks {
-        return SparseLevel::from_bricks(dims, bricks, colour, Some(nbytes));
-    }
-    let per = 4 * brick_grid::B3;
-    let mut all = bricks.clone();
-    let mut c = colour;
-    let at: std::collections::HashMap<u32, usize> =
-        bricks.iter().enumerate().map(|(i, &b)| (b, i)).collect();
-    for &b in &nb {
-        if !at.contains_key(&b) {
-            all.push(b);
-            c.resize(c.len() + per, 0);
-        }
-    }
-    let at: std::collections::HashMap<u32, usize> =
-        all.iter().enumerate().map(|(i, &b)| (b, i)).collect();
-    let mut n = vec![0u8; all.len() * per];
-    for (i, &b) in nb.iter().enumerate() {
-        let j = at[&b];
-        n[j * per..(j + 1) * per].copy_from_slice(&nbytes[i * per..(i + 1) * per]);
-    }
-    SparseLevel::from_bricks(dims, all, c, Some(n))
 }

@@ -1,6 +1,7 @@
 //! The compute pass behind the WGSL-against-core checks ([`crate::prism_plane_gpu`],
-//! [`crate::volume_math_gpu`]): one storage buffer of cases in (binding 0), one of results
-//! out (binding 1), one invocation per case in workgroups of 64, read back.
+//! [`crate::shading_gpu`], [`crate::volume_math_gpu`]): one storage buffer of cases in
+//! (binding 0), one of results out (binding 1), one invocation per case in workgroups of
+//! 64, read back.
 
 use bytemuck::Pod;
 use wgpu::util::DeviceExt;
@@ -8,8 +9,9 @@ use wgpu::util::DeviceExt;
 use crate::layout::shader;
 use crate::{Gpu, ViewError};
 
-/// Runs the entry point `main` of the shader made of `sources` (named `name`) over
-/// `cases` and returns one `Out` per case.
+/// Runs the check made of `sources` (named `name`: WGSL declaring `Case`, `Out` and
+/// `fn check(k: Case) -> Out`) over `cases`, with the entry point of
+/// `shaders/compute_check.wgsl` appended, and returns one `Out` per case.
 pub(crate) fn run_cases<In: Pod, Out: Pod>(
     gpu: &Gpu,
     name: &str,
@@ -20,7 +22,9 @@ pub(crate) fn run_cases<In: Pod, Out: Pod>(
         return Ok(Vec::new());
     }
     let device = &gpu.device;
-    let module = shader(device, name, sources);
+    let mut all = sources.to_vec();
+    all.push(include_str!("shaders/compute_check.wgsl"));
+    let module = shader(device, name, &all);
     let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some(name),
         layout: None,

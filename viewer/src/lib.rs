@@ -34,6 +34,9 @@ pub mod particles;
 pub mod prism_plane_gpu;
 pub mod render;
 pub mod scene;
+/// Test support (feature `test-support`, on for the viewer's own tests): not part of the API.
+#[cfg(any(test, feature = "test-support"))]
+pub mod shading_gpu;
 pub mod shadow;
 pub mod slab;
 pub mod slice_plan;

@@ -141,6 +141,7 @@ impl MeshPass {
             "mesh.wgsl",
             &[
                 include_str!("shaders/shadow_lookup.wgsl"),
+                include_str!("shaders/shading.wgsl"),
                 include_str!("shaders/mesh.wgsl"),
             ],
         );

@@ -1,5 +1,5 @@
 //! Runs the volume pass's pure WGSL functions (`shaders/volume_math.wgsl`: the slice LOD,
-//! the depth fade, the slab's conversion out of extinction space; and
+//! the band a slice draws, the depth fade, the slab's conversion out of extinction space; and
 //! `shaders/volume_loads.wgsl`'s conversion into it) in a compute pass and reads the
 //! results back — for testing them against the billow-core functions they copy
 //! (`viewer/tests/volume_math_gpu.rs`), as [`crate::prism_plane_gpu`] does for the
@@ -23,6 +23,8 @@ pub struct MathCase {
     pub e: [f32; 4],
     /// `to_extinction`'s premultiplied RGBA texel.
     pub c: [f32; 4],
+    /// `band_holds(range, lambda)`: `[lo, hi, lambda, _]`.
+    pub band: [f32; 4],
 }
 
 /// What the GPU computed for one [`MathCase`].
@@ -35,6 +37,8 @@ pub struct MathOut {
     pub slab: [f32; 4],
     /// `to_extinction(c, ratio)`: `(σ·c, σ)`, σ per level-0 texel.
     pub extinction: [f32; 4],
+    /// x: `band_holds` (1 or 0).
+    pub band: [f32; 4],
 }
 
 /// Evaluates each case on the GPU.

@@ -21,7 +21,7 @@ use crate::volume_pass::{
     FrameUniform, GpuCell, GpuDraw, GpuSlice, GpuVolume, GpuVolumeParams, VolumePass, VolumeStorage,
 };
 use crate::{Gpu, SliceParams, ViewCamera, ViewError};
-use billow_core::slicing::{far_slab, slice_lod};
+use billow_core::slicing::{band_lod_range, far_slab, slice_lod};
 use billow_core::slicing::{normal_matrix, slice_depths, voxel_size};
 
 /// Vertices per cell × slice instance: a fan of 3 triangles covers the ≤ 5-gon.
@@ -304,11 +304,11 @@ pub fn plan(
             // Stored normals → view space (src/eval/slicer.rs::normal_matrix): box assets
             // through the instance and the camera; shells per cell.
             let object_to_view = Mat3::from_mat4(camera.view * *m);
+            let first_levels: Vec<u32> = v.bands.iter().map(|b| b.first_level).collect();
             for (bi, (b, w)) in v.bands.iter().zip(&world).enumerate() {
                 let entry = vparams.len() as u32;
                 let shaded = b.gpu.normals.is_some();
-                let lo = if bi == 0 { -1.0 } else { b.first_level as f32 };
-                let hi = v.bands.get(bi + 1).map_or(1e30, |n| n.first_level as f32);
+                let [lo, hi] = band_lod_range(&first_levels, bi);
                 vparams.push(GpuVolumeParams {
                     p: [
                         v0 * (b.first_level as f32).exp2(),
@@ -506,8 +506,11 @@ fn outside_window(pos: &[[f32; 3]; 6], window: Option<(f32, f32)>) -> bool {
 }
 
 /// A banded asset draws each slice with one band (SPEC §8.6): clip each cell's depth
-/// range to the slices whose LOD `λ = clamp(log2(d/v₀), 0, L)` ([`slice_lod`]) falls in its band's
-/// `[f_b, f_{b+1})`; a cell whose band no slice uses gets an empty range (`lo > hi`) and
+/// range to the slices whose LOD `λ = clamp(log2(d/v₀), 0, L)` ([`slice_lod`]) its band's
+/// range `[f_b, f_{b+1})` holds ([`band_lod_range`],
+/// [`billow_core::slicing::band_holds`]: the band [`billow_core::slicing::slice_band`]
+/// picks for the CPU slicer); a cell whose band no
+/// slice uses gets an empty range (`lo > hi`) and
 /// no slab lists it. `slices` are back to front (depth decreasing, λ non-increasing).
 /// The vertex shader checks the band again, so this only saves work.
 fn restrict_to_bands(
@@ -522,7 +525,8 @@ fn restrict_to_bands(
             continue; // the only band
         }
         let lambda = |d: f32| slice_lod(d, q[0], q[1]);
-        // Back-to-front indices: λ is non-increasing along the list.
+        // Back-to-front indices: λ is non-increasing along the list, so the slices whose
+        // λ the range holds (band_holds) follow every λ ≥ hi and precede every λ < lo.
         let first = slices.partition_point(|s| lambda(s.1) >= q[3]);
         let last = slices.partition_point(|s| lambda(s.1) >= q[2]);
         if first >= last {

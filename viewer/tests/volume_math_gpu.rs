@@ -5,6 +5,10 @@
 //! - `slice_lod` ↔ [`billow_core::slicing::slice_lod`], the per-slice MIP level the CPU
 //!   slicer and the viewer's plan use: within 4 ulp-ish (`2e-6 · (1 + |λ|)`) — the GPU's
 //!   `log2` is not correctly rounded — and exactly 0 and `max_lod` where clamped;
+//! - `band_holds` ↔ [`billow_core::slicing::band_holds`] over the ranges
+//!   [`billow_core::slicing::band_lod_range`] gives banded assets, at and around each
+//!   band's first level: exactly (that the ranges hold the band
+//!   [`billow_core::slicing::slice_band`] picks is the core's own test);
 //! - `depth_fade` ↔ [`billow_core::slicing::slab_fade`] (no surface: the shader's 3e38,
 //!   the core's infinity): within 1e-6;
 //! - `slab_sample` ↔ [`billow_core::extinction::slab_sample`] with
@@ -19,12 +23,15 @@ mod common;
 use billow_core::extinction::{
     slab_sample, to_density, MAX_OPTICAL_DEPTH, OPAQUE_F16_OPTICAL_DEPTH,
 };
-use billow_core::slicing::{slab_fade, slice_lod};
+use billow_core::slicing::{band_holds, band_lod_range, slab_fade, slice_lod};
 use billow_view::volume_math_gpu::{volume_math_on_gpu, MathCase};
 use glam::Vec4;
 
 /// The shader's "no surface" distance (`volume.wgsl`, `scene_distance`).
 const NO_SURFACE: f32 = 3.0e38;
+
+/// The first levels of the textures of banded assets (the base's 0, then each band's).
+const BAND_LEVELS: [&[u32]; 4] = [&[0], &[0, 2], &[0, 1, 3], &[0, 3, 4, 7]];
 
 fn cases() -> Vec<MathCase> {
     let mut lods = Vec::new();
@@ -73,11 +80,24 @@ fn cases() -> Vec<MathCase> {
             texels.push(([0.8 * a, 0.3 * a, 0.05 * a, a], ratio));
         }
     }
+    let mut bands = Vec::new();
+    for levels in BAND_LEVELS {
+        for b in 0..levels.len() {
+            let [lo, hi] = band_lod_range(levels, b);
+            for f in levels.iter().chain(&[9]) {
+                let f = *f as f32;
+                for lambda in [f, f - 1e-6, f + 1e-6, f - 0.5, f + 0.25, 0.0] {
+                    bands.push([lo, hi, lambda, 0.0]);
+                }
+            }
+        }
+    }
     let n = lods
         .len()
         .max(fades.len())
         .max(slabs.len())
-        .max(texels.len());
+        .max(texels.len())
+        .max(bands.len());
     (0..n)
         .map(|i| {
             let l = lods[i % lods.len()];
@@ -98,6 +118,7 @@ fn cases() -> Vec<MathCase> {
                 },
                 e,
                 c,
+                band: bands[i % bands.len()],
             }
         })
         .collect()
@@ -112,12 +133,13 @@ fn close(a: Vec4, b: Vec4, tol: f32) -> bool {
 
 #[test]
 fn wgsl_volume_math_matches_billow_core() {
-    let Some(gpu) = common::gpu_or_skip("wgsl_volume_math_matches_billow_core") else {
+    let Some((cases, out)) = common::check_on_gpu(
+        "wgsl_volume_math_matches_billow_core",
+        cases(),
+        volume_math_on_gpu,
+    ) else {
         return;
     };
-    let cases = cases();
-    let out = volume_math_on_gpu(&gpu, &cases).expect("run the check shader");
-    assert_eq!(out.len(), cases.len());
     let mut bad = Vec::new();
     let (mut worst_lod, mut worst_slab, mut worst_ext) = (0f32, 0f32, 0f32);
     for (k, o) in cases.iter().zip(&out) {
@@ -131,6 +153,14 @@ fn wgsl_volume_math_matches_billow_core() {
         let clamped = lod == 0.0 || lod == k.lod[2];
         if (clamped && got != lod) || (got - lod).abs() > 2e-6 * (1.0 + lod.abs()) {
             bad.push(format!("slice_lod{:?}: gpu {got}, core {lod}", &k.lod[..3]));
+        }
+        let [lo, hi, lambda, _] = k.band;
+        let holds = band_holds([lo, hi], lambda);
+        if (o.band[0] == 1.0) != holds {
+            bad.push(format!(
+                "band_holds([{lo}, {hi}], {lambda}): gpu {}, core {holds}",
+                o.band[0]
+            ));
         }
         let z = if k.fade[0] >= NO_SURFACE {
             f32::INFINITY
@@ -181,6 +211,7 @@ fn wgsl_volume_math_matches_billow_core() {
     let counts: Vec<String> = [
         "constants",
         "slice_lod",
+        "band_holds",
         "depth_fade",
         "slab_sample",
         "to_extinction",

@@ -5,7 +5,8 @@ use billow::eval::evaluate::{EvaluateOptions, Evaluation};
 use billow::eval::suite::{DistanceMeans, MeanErrors, ViewResult};
 use serde::Serialize;
 
-use super::{emit, lights_json, print_rows, Args, Head, LightJson, LightingJson, Means, Seconds};
+use super::table::print_rows;
+use super::{emit, lights_json, Args, Head, LightJson, LightingJson, Means, Seconds};
 use crate::exit::CliError;
 use crate::staged::Staged;
 

@@ -1,8 +1,15 @@
 //! `billow eval SOURCE ASSET`: how close a volume or billboard-cloud asset looks to its
 //! source mesh, view by view, against a supersampled ray-traced reference (docs/eval.md).
-//! Volumes here, clouds in [`cloud`].
+//! Volumes here, clouds in [`cloud`]; the flags' parsing in [`parse`], the table on
+//! stdout in [`table`] (each uses this file's `Args` and JSON records, one way).
 
 mod cloud;
+mod parse;
+mod table;
+
+pub(crate) use parse::{bad, parse_lights, spp_per_axis};
+pub use parse::{parse_distances, parse_size, parse_spacing, parse_views};
+use table::print_table;
 
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
@@ -15,18 +22,15 @@ use billow::eval::evaluate::{
     REFERENCE_SAMPLES_PER_SECOND,
 };
 use billow::eval::image::comparisons_png_bytes;
-use billow::eval::lighting::{parse_light_set, EvalLight, LightSetError};
+use billow::eval::lighting::EvalLight;
 use billow::eval::suite::{
-    mean_errors, view_file_stem, DistanceMeans, LightMeans, MeanErrors, ViewResult, EVAL_FOV_Y,
+    view_file_stem, DistanceMeans, LightMeans, MeanErrors, ViewResult, EVAL_FOV_Y,
 };
 use billow::import::{import, ImportOptions, Imported};
-use billow_core::camera::{parse_direction, view_directions, views_of, ViewDirections, ViewSpec};
-use billow_core::slicing::Spacing;
 use billow_format::{read_file, Container};
-use glam::Vec3;
 use serde::Serialize;
 
-use crate::exit::{usage, CliError, Code};
+use crate::exit::{CliError, Code};
 use crate::output::{print_json, progress, refuse_file_as_folder, warn};
 use crate::staged::{out_err, Staged};
 use crate::Ctx;
@@ -191,194 +195,6 @@ pub(crate) fn image_stem(light: Option<&EvalLight>, view: &str) -> String {
         Some(l) => view_file_stem(&format!("{}_{view}", l.name)),
         None => view_file_stem(view),
     }
-}
-
-pub(crate) fn bad(flag: &str, e: impl std::fmt::Display) -> CliError {
-    CliError::new(Code::BadParameter, format!("{flag}: {e}"))
-}
-
-/// `--light`/`--lights`/`--ambient`: the lights to evaluate under, or `None` (the asset's
-/// own lighting, `--lighting`).
-pub(crate) fn parse_lights(args: &Args) -> Result<Option<Vec<EvalLight>>, CliError> {
-    if !(args.ambient.is_finite() && (0.0..=1.0).contains(&args.ambient)) {
-        return Err(bad(
-            "--ambient",
-            format!("{} is out of range (0 to 1)", args.ambient),
-        ));
-    }
-    let vector = |flag: &str, text: &str| -> Result<Vec3, CliError> {
-        let v: Vec<f32> = text
-            .split(',')
-            .map(|x| x.trim().parse::<f32>())
-            .collect::<Result<_, _>>()
-            .map_err(|e| usage(flag, format!("'{text}': {e} (expected X,Y,Z)")))?;
-        match v[..] {
-            [x, y, z] => Ok(Vec3::new(x, y, z)),
-            _ => Err(usage(flag, format!("'{text}': expected X,Y,Z"))),
-        }
-    };
-    let light = |flag: &str, name: String, dir: Vec3| {
-        EvalLight::new(name, dir, args.ambient).ok_or_else(|| {
-            bad(
-                flag,
-                format!("({}, {}, {}) is not a direction", dir.x, dir.y, dir.z),
-            )
-        })
-    };
-    if let Some(l) = &args.light {
-        let dir = vector("--light", l)?;
-        return Ok(Some(vec![light("--light", "light".into(), dir)?]));
-    }
-    let Some(set) = &args.lights else {
-        if args.shadows {
-            return Err(usage("--shadows", "needs --light or --lights"));
-        }
-        return Ok(None);
-    };
-    parse_light_set(set, args.ambient)
-        .map(Some)
-        .map_err(|e| match e {
-            LightSetError::Syntax(m) => usage("--lights", m),
-            LightSetError::NotADirection(m) => bad("--lights", m),
-        })
-}
-
-/// `WxH`, each 1..=4096.
-pub fn parse_size(s: &str) -> Result<(u32, u32), CliError> {
-    let (w, h) = s
-        .split_once(['x', 'X'])
-        .ok_or_else(|| usage("--size", format!("'{s}': expected WxH, e.g. 128x128")))?;
-    let p = |v: &str| -> Result<u32, CliError> {
-        let n: u32 = v
-            .trim()
-            .parse()
-            .map_err(|e| usage("--size", format!("'{s}': {e}")))?;
-        if !(1..=4096).contains(&n) {
-            return Err(bad(
-                "--size",
-                format!("'{s}': each side must be 1 to 4096 pixels"),
-            ));
-        }
-        Ok(n)
-    };
-    Ok((p(w)?, p(h)?))
-}
-
-/// `1,4,16`: positive finite factors up to 1000.
-pub fn parse_distances(s: &str) -> Result<Vec<f32>, CliError> {
-    let mut out: Vec<f32> = Vec::new();
-    for part in s.split(',') {
-        let f: f32 = part
-            .trim()
-            .parse()
-            .map_err(|e| usage("--distances", format!("'{part}': {e}")))?;
-        if !(f.is_finite() && f > 0.0 && f <= 1000.0) {
-            return Err(bad(
-                "--distances",
-                format!("'{part}': a factor must be above 0 and at most 1000"),
-            ));
-        }
-        if !out.contains(&f) {
-            out.push(f);
-        }
-    }
-    Ok(out)
-}
-
-/// See `--views`.
-pub fn parse_views(s: &str, distances: &[f32]) -> Result<Vec<ViewSpec>, CliError> {
-    let mut out: Vec<ViewSpec> = Vec::new();
-    let mut push = |v: ViewSpec| {
-        if !out.iter().any(|o| o.name == v.name) {
-            out.push(v);
-        }
-    };
-    for item in s.split(',').map(str::trim) {
-        let set = match item {
-            "axes" => Some(ViewDirections::Axes),
-            "diagonals" => Some(ViewDirections::Diagonals),
-            "all" => Some(ViewDirections::All),
-            _ => None,
-        };
-        if let Some(set) = set {
-            views_of(view_directions(set), distances)
-                .into_iter()
-                .for_each(&mut push);
-            continue;
-        }
-        let unknown = || {
-            usage(
-                "--views",
-                format!(
-                    "unknown view '{item}': expected axes, diagonals, all, a direction like +x or \
-                     +x-y+z, or a view like +x@4x"
-                ),
-            )
-        };
-        let (dir_name, factor) = match item.split_once('@') {
-            Some((d, f)) => {
-                let f = f.strip_suffix('x').ok_or_else(unknown)?;
-                // A factor out of range is that (8); anything else does not parse (2).
-                let f = parse_distances(f).map_err(|e| {
-                    if e.code == Code::BadParameter {
-                        e
-                    } else {
-                        unknown()
-                    }
-                })?;
-                (d, Some(f[0]))
-            }
-            None => (item, None),
-        };
-        let dir = parse_direction(dir_name).ok_or_else(unknown)?;
-        let factors = factor.map_or_else(|| distances.to_vec(), |f| vec![f]);
-        views_of(vec![(dir_name.to_string(), dir)], &factors)
-            .into_iter()
-            .for_each(&mut push);
-    }
-    Ok(out)
-}
-
-/// See `--spacing` (a uniform spacing in level-0 voxels: [`EvaluateOptions::spacing`]).
-pub fn parse_spacing(s: &str) -> Result<Spacing, CliError> {
-    let (mode, arg) = match s.split_once(':') {
-        Some((m, a)) => (m.trim(), Some(a.trim())),
-        None => (s.trim(), None),
-    };
-    let num = |a: Option<&str>| -> Result<f32, CliError> {
-        let Some(a) = a else { return Ok(1.0) };
-        let v: f32 = a
-            .parse()
-            .map_err(|e| usage("--spacing", format!("'{s}': {e}")))?;
-        if !(v.is_finite() && (0.01..=100.0).contains(&v)) {
-            return Err(bad(
-                "--spacing",
-                format!("'{s}': the factor must be between 0.01 and 100"),
-            ));
-        }
-        Ok(v)
-    };
-    match mode {
-        "adaptive" => Ok(Spacing::Adaptive { bias: num(arg)? }),
-        "uniform" => {
-            let v = num(arg)?;
-            Ok(Spacing::Uniform { spacing: v })
-        }
-        _ => Err(usage(
-            "--spacing",
-            format!("'{s}': expected adaptive, adaptive:BIAS, uniform or uniform:VOXELS"),
-        )),
-    }
-}
-
-pub(crate) fn spp_per_axis(spp: u32) -> Result<u32, CliError> {
-    let n = (1..=16).find(|n| n * n == spp);
-    n.ok_or_else(|| {
-        bad(
-            "--spp",
-            format!("{spp} is not a square number from 1 to 256 (e.g. 1, 4, 9, 16, 64)"),
-        )
-    })
 }
 
 /// Reads an asset's container (Volume or Cloud; a newer format is exit 5).
@@ -693,146 +509,4 @@ fn volume_output(
         images: head.images,
     };
     emit(args, stage, &summary, print_table)
-}
-
-/// `(112x128x112)` for a volume, `(grid 112x128x112, pruned into an 84x128x74 atlas)`
-/// for a pruned one (its level-0 texture is the atlas, the grid is in its `dims` param).
-fn dims_text(s: &Summary) -> String {
-    let d = s.asset_dims;
-    let atlas = format!("{}x{}x{}", d[0], d[1], d[2]);
-    let pruned = s.asset_params.contains_key("emptyspace");
-    match s.asset_params.get("dims") {
-        Some(grid) if pruned && *grid != atlas => {
-            format!("grid {grid}, pruned into an {atlas} atlas")
-        }
-        _ => atlas,
-    }
-}
-
-fn print_table(s: &Summary) {
-    outln!(
-        "{} vs {} ({}), {}x{} px, {} spp reference, spacing {}",
-        s.asset,
-        s.source,
-        dims_text(s),
-        s.size[0],
-        s.size[1],
-        s.reference_spp,
-        s.spacing
-    );
-    outln!(
-        "{}",
-        crate::output::gpu_line(s.gpu_bytes, s.gpu_bytes_no_bc)
-    );
-    for n in &s.notes {
-        outln!("note: {n}");
-    }
-    let totals = (s.seconds.reference, s.seconds.asset, s.slices, s.fragments);
-    print_rows(
-        &s.views,
-        &s.by_distance,
-        &s.lights,
-        &s.mean,
-        totals,
-        "slices",
-    );
-    outln!(
-        "RMSE/PSNR on premultiplied linear RGBA; cov% = asset coverage vs reference; lum% = its \
-         mean covered luminance vs the reference's; SSIM on luma; FLIP over black. Total {:.2} s.",
-        s.seconds.total
-    );
-}
-
-/// The table of views, per-distance means and the mean; `count` names the 4th timing
-/// column (`slices` for volumes, `bboards` for clouds: billboards hit).
-pub(crate) fn print_rows(
-    views: &[ViewResult],
-    by_distance: &[DistanceMeans],
-    lights: &[LightJson],
-    mean: &Means,
-    totals: (f64, f64, usize, u64),
-    count: &str,
-) {
-    // Under lights the view column names the light too (`sun-east +x@4x`).
-    let w = if lights.is_empty() { 14 } else { 24 };
-    outln!(
-        "{:<w$} {:>7} {:>6} {:>6} {:>7} {:>7} {:>6} {:>6} | {:>7} {:>6} {:>6} | {:>7} {:>7} {:>6} {:>9}",
-        "view",
-        "RMSE",
-        "PSNR",
-        "|Δα|",
-        "cov%",
-        "lum%",
-        "SSIM",
-        "FLIP",
-        "1spp",
-        "PSNR",
-        "SSIM",
-        "ref s",
-        "asset s",
-        count,
-        "fragments"
-    );
-    let row = |name: &str, a: &MeanErrors, r: &MeanErrors, tail: String| {
-        outln!(
-            "{:<w$} {:>7.4} {:>6.2} {:>6.4} {:>+7.2} {:>+7.2} {:>6.3} {:>6.4} | {:>7.4} {:>6.2} {:>6.3} |{}",
-            name,
-            a.rmse,
-            a.psnr,
-            a.mean_abs_alpha,
-            100.0 * a.coverage_rel_diff,
-            100.0 * a.luminance_rel_diff,
-            a.ssim_luma,
-            a.flip,
-            r.rmse,
-            r.psnr,
-            r.ssim_luma,
-            tail
-        );
-    };
-    let tail =
-        |rs: f64, as_: f64, sl: usize, fr: u64| format!(" {rs:>7.2} {as_:>7.2} {sl:>6} {fr:>9}");
-    for v in views {
-        let a = mean_errors([&v.asset]);
-        let r = v
-            .raster_1spp
-            .as_ref()
-            .map_or_else(MeanErrors::default, |e| mean_errors([e]));
-        let count = if count == "slices" {
-            v.slices
-        } else {
-            v.polygons
-        };
-        let t = tail(v.seconds.reference, v.seconds.asset, count, v.fragments);
-        let name = match &v.light {
-            Some(l) => format!("{l} {}", v.view),
-            None => v.view.clone(),
-        };
-        row(&name, &a, &r, t);
-    }
-    for m in by_distance {
-        let r = m.raster_1spp.unwrap_or_default();
-        row(
-            &format!("mean @{}x", m.distance_factor),
-            &m.asset,
-            &r,
-            String::new(),
-        );
-    }
-    for l in lights {
-        let r = l.means.raster_1spp.unwrap_or_default();
-        row(
-            &format!("mean {}", l.name),
-            &l.means.asset,
-            &r,
-            String::new(),
-        );
-    }
-    let t = tail(totals.0, totals.1, totals.2, totals.3);
-    let name = if lights.is_empty() {
-        "mean"
-    } else {
-        "mean over the lights"
-    };
-    row(name, &mean.asset, &mean.raster_1spp, t);
 }

@@ -312,6 +312,7 @@ impl CloudPass {
             "cloud.wgsl",
             &[
                 include_str!("../shaders/shadow_lookup.wgsl"),
+                include_str!("../shaders/shading.wgsl"),
                 include_str!("../shaders/cloud.wgsl"),
             ],
         );

@@ -1,7 +1,7 @@
 // Billboard clouds (Lacewell et al. 2006): instanced quads (or the foliage base mesh)
 // whose vertices slide toward their parent billboard by the instance's morph factor (in
 // this vertex shader: the per-asset vertex buffers never change); alpha-tested,
-// depth-writing, opaque. shadow_lookup.wgsl is prepended.
+// depth-writing, opaque. shadow_lookup.wgsl and shading.wgsl are prepended.
 
 struct Frame {
     view_proj: mat4x4<f32>,
@@ -103,14 +103,19 @@ fn visibility(i: VOut) -> f32 {
     return 1.0;
 }
 
-// The mesh pass's light factor (mesh.wgsl fs_main): ambient + (1 − ambient)·|N·L|·vis.
+// Baked lighting: only the shadow scales the colour, ambient + (1 − ambient)·vis.
+fn shadow_factor(i: VOut) -> f32 {
+    return frame.light.w + (1.0 - frame.light.w) * visibility(i);
+}
+
+// The mesh pass's light factor (mesh.wgsl fs_main, shading.wgsl's diffuse_factor):
+// ambient + (1 − ambient)·|N·L|·vis; a zero normal is lit as if it faced the light.
 fn lambert_factor(n: vec3<f32>, i: VOut) -> f32 {
-    var lambert = 1.0;
     let len = length(n);
     if len > 0.0 {
-        lambert = abs(dot(n / len, frame.light.xyz));
+        return diffuse_factor(n / len, frame.light.xyz, frame.light.w, visibility(i));
     }
-    return frame.light.w + (1.0 - frame.light.w) * lambert * visibility(i);
+    return shadow_factor(i);
 }
 
 // The foliage base mesh: alpha-tested, lit like meshes (two-sided Lambert + ambient).
@@ -134,7 +139,7 @@ fn fs_billboard(i: VOut) -> @location(0) vec4<f32> {
         discard;
     }
     let albedo = c.rgb / c.a;
-    var k = frame.light.w + (1.0 - frame.light.w) * visibility(i);
+    var k = shadow_factor(i);
     if dr.params.z > 0.5 {
         let nn = normalize(i.normal);
         let tt = normalize(i.tangent.xyz);

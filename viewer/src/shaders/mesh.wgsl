@@ -1,7 +1,8 @@
 // Opaque meshes: base colour × vertex colour × texture, alpha-masked materials discard;
-// one directional light (two-sided Lambert) plus ambient, linear colour, shadowed when
-// the frame has a shadow map (shadow_lookup.wgsl is prepended). A zero normal marks an
-// unlit vertex: its base colour is drawn as it is, no Lambert, no shadow.
+// one directional light (two-sided Lambert, shading.wgsl's diffuse_factor) plus ambient,
+// linear colour, shadowed when the frame has a shadow map (shadow_lookup.wgsl and
+// shading.wgsl are prepended). A zero normal marks an unlit vertex: its base colour is
+// drawn as it is, no Lambert, no shadow.
 
 struct MeshFrame {
     view_proj: mat4x4<f32>,
@@ -68,11 +69,11 @@ fn fs_main(i: VOut) -> @location(0) vec4<f32> {
         // shadow, the base colour is the final colour.
         return vec4<f32>(c.rgb, 1.0);
     }
-    var lambert = abs(dot(i.normal / len, mf.light.xyz));
+    var vis = 1.0;
     if mf.flags.x > 0.5 {
-        lambert = lambert * shadow_visibility(i.shadow_clip, mf.flags.z);
+        vis = shadow_visibility(i.shadow_clip, mf.flags.z);
     }
-    let k = mf.light.w + (1.0 - mf.light.w) * lambert;
+    let k = diffuse_factor(i.normal / len, mf.light.xyz, mf.light.w, vis);
     return vec4<f32>(c.rgb * k, 1.0);
 }
 

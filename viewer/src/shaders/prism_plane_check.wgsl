@@ -1,33 +1,26 @@
-// Compute entry point that runs intersect_prism_plane on a list of cases, for the test
-// against the Rust reference. Prepended with prism_plane.wgsl.
+// The check of prism_plane.wgsl's intersect_prism_plane against the Rust reference
+// (viewer/tests/prism_plane_gpu.rs): prepended with prism_plane.wgsl, followed by
+// compute_check.wgsl's entry point.
 
 struct Case {
     cell: Cell,
     z: vec4<f32>,
 }
 
-struct OutPoly {
+struct Out {
     count: vec4<u32>,
     pos: array<vec4<f32>, 5>,
     uvw: array<vec4<f32>, 5>,
 }
 
-@group(0) @binding(0) var<storage, read> cases: array<Case>;
-@group(0) @binding(1) var<storage, read_write> results: array<OutPoly>;
-
-@compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
-    if i >= arrayLength(&cases) {
-        return;
-    }
-    var c = cases[i].cell;
-    var p = intersect_prism_plane(&c, cases[i].z.x);
-    var o: OutPoly;
+fn check(k: Case) -> Out {
+    var c = k.cell;
+    var p = intersect_prism_plane(&c, k.z.x);
+    var o: Out;
     o.count = vec4<u32>(p.count, 0u, 0u, 0u);
-    for (var k = 0u; k < 5u; k++) {
-        o.pos[k] = vec4<f32>(p.pos[k], 0.0);
-        o.uvw[k] = vec4<f32>(p.uvw[k], 0.0);
+    for (var j = 0u; j < 5u; j++) {
+        o.pos[j] = vec4<f32>(p.pos[j], 0.0);
+        o.uvw[j] = vec4<f32>(p.uvw[j], 0.0);
     }
-    results[i] = o;
+    return o;
 }

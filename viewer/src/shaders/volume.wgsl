@@ -80,7 +80,7 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
     // The slice's LOD λ (SPEC §8.6): a banded asset draws each slice with one band.
     let d = slice.zd.y;
     let lambda = slice_lod(d, params.q.x, params.q.y);
-    let in_band = lambda >= params.q.z && lambda < params.q.w;
+    let in_band = band_holds(params.q.zw, lambda);
     var poly = intersect_prism_plane(&c, slice.zd.x);
     let tri = vi / 3u;
     let corner = vi % 3u;
@@ -102,7 +102,7 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
     out.shadow_clip = frame.view_to_shadow * p;
     out.uvw = poly.uvw[k];
     // MIP level from the spacing (the band's own LOD λ − f_b); the opacity correction:
-    // the textures hold optical depths per level-0 texel (volume_pass.rs,
+    // the textures hold optical depths per level-0 texel (volume_pass/textures.rs,
     // extinction_levels), so the slab takes its thickness over that texel's size of them
     // (billow_core::slicing::level_weights).
     let v0 = vol.x;
@@ -110,7 +110,7 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
     let thickness = slice.zd.z;
     out.lod_ratio = vec4<f32>(lod, thickness / params.r.x, -slice.zd.x - 0.5 * d, thickness);
     out.slot = vec2<u32>(u32(vol.z), u32(vol.w));
-    // The normal matrix rows (volume_pass.rs, GpuCell::with_normal_matrix).
+    // The normal matrix rows (volume_pass/gpu_types.rs, GpuCell::with_normal_matrix).
     out.n0 = vec3<f32>(c.uvw[0].w, c.uvw[1].w, c.uvw[2].w);
     out.n1 = vec3<f32>(c.uvw[3].w, c.uvw[4].w, c.uvw[5].w);
     out.n2 = vec3<f32>(c.pos[1].w, c.pos[2].w, c.pos[3].w);

@@ -1,9 +1,9 @@
-// The filter by loads of the volume pass (prepended by volume_pass.rs only when some
+// The filter by loads of the volume pass (prepended by volume_pass/mod.rs only when some
 // texture is BC7 blocks of premultiplied texels, flag 4): eight texel loads per level,
 // each taken to extinction space, weighted with the CPU's texel addressing
 // (src/eval/volume_sampler.rs, sample_level_extinction), linear between levels; each
 // level's optical depth divided by its texels' size in level-0 voxels, opaque texels at
-// ln 510 (volume_pass.rs, extinction_levels, does the same on upload).
+// ln 510 (volume_pass/textures.rs, extinction_levels, does the same on upload).
 // MAX_OPTICAL_DEPTH and log1p_ come from volume_math.wgsl. to_extinction is
 // billow_core::extinction::to_density (viewer/tests/volume_math_gpu.rs).
 

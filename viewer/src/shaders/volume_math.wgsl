@@ -1,5 +1,5 @@
 // The volume pass's pure functions, prepended to volume.wgsl (and volume_loads.wgsl) by
-// volume_pass.rs and to volume_math_check.wgsl by volume_math_gpu.rs, which runs them in
+// volume_pass/mod.rs and to volume_math_check.wgsl by volume_math_gpu.rs, which runs them in
 // a compute pass for viewer/tests/volume_math_gpu.rs: each is the WGSL copy of a
 // billow-core function (shaders cannot call Rust), tested against it there.
 
@@ -7,6 +7,13 @@
 // billow_core::slicing::slice_lod.
 fn slice_lod(d: f32, v0: f32, max_lod: f32) -> f32 {
     return clamp(log2(d / v0), 0.0, max_lod);
+}
+
+// Whether a slice of LOD lambda draws the band whose slice-LOD range is
+// [range.x, range.y) (billow_core::slicing::band_lod_range, SPEC §8.6):
+// billow_core::slicing::band_holds.
+fn band_holds(range: vec2<f32>, lambda: f32) -> bool {
+    return lambda >= range.x && lambda < range.y;
 }
 
 // ln(1 + x) and exp(x) − 1 with full relative precision for small |x| (WGSL has neither).
@@ -35,7 +42,7 @@ fn expm1_(x: f32) -> f32 {
 // depth divided by the texel's size in level-0 voxels (a density; opaque texels hold
 // ln 510 at every level), filtered trilinearly within a level and linearly between
 // levels, and turned back into premultiplied RGBA for the slab the slice stands for
-// (slab_sample). `sample_volume` (volume_pass.rs) returns the filtered sample: the
+// (slab_sample). `sample_volume` (volume_pass/mod.rs) returns the filtered sample: the
 // texture unit's trilinear sample of a texture stored in extinction space (Rgba16Float),
 // or for BC7 block textures eight converted loads per level (volume_loads.wgsl).
 // Filtering α instead gives a one-voxel opaque layer an optical depth of only 2: thin

@@ -1,8 +1,8 @@
-// Compute entry point that runs volume_math.wgsl's functions (and volume_loads.wgsl's
-// to_extinction) on a list of cases, for the test against billow-core
-// (viewer/tests/volume_math_gpu.rs). Prepended with volume_math.wgsl and volume_loads.wgsl.
+// The check of volume_math.wgsl's functions (and volume_loads.wgsl's to_extinction)
+// against billow-core (viewer/tests/volume_math_gpu.rs): prepended with volume_math.wgsl
+// and volume_loads.wgsl, followed by compute_check.wgsl's entry point.
 
-struct MathCase {
+struct Case {
     // slice_lod(x, y, z); w: the ratio of slab_sample and to_extinction
     lod: vec4<f32>,
     // depth_fade(x, y, z)
@@ -11,26 +11,21 @@ struct MathCase {
     e: vec4<f32>,
     // to_extinction's premultiplied texel
     c: vec4<f32>,
+    // band_holds(xy, z)
+    band: vec4<f32>,
 }
 
-struct MathOut {
+struct Out {
     // x: slice_lod, y: depth_fade, z: MAX_OPTICAL_DEPTH, w: OPAQUE_OPTICAL_DEPTH
     scalars: vec4<f32>,
     slab: vec4<f32>,
     extinction: vec4<f32>,
+    // x: band_holds (1 or 0)
+    band: vec4<f32>,
 }
 
-@group(0) @binding(0) var<storage, read> cases: array<MathCase>;
-@group(0) @binding(1) var<storage, read_write> results: array<MathOut>;
-
-@compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
-    if i >= arrayLength(&cases) {
-        return;
-    }
-    let k = cases[i];
-    var o: MathOut;
+fn check(k: Case) -> Out {
+    var o: Out;
     o.scalars = vec4<f32>(
         slice_lod(k.lod.x, k.lod.y, k.lod.z),
         depth_fade(k.fade.x, k.fade.y, k.fade.z),
@@ -39,5 +34,6 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     );
     o.slab = slab_sample(k.e, k.lod.w);
     o.extinction = to_extinction(k.c, k.lod.w);
-    results[i] = o;
+    o.band = vec4<f32>(select(0.0, 1.0, band_holds(k.band.xy, k.band.z)), 0.0, 0.0, 0.0);
+    return o;
 }

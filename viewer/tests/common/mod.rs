@@ -27,6 +27,19 @@ pub fn gpu_or_skip(test: &str) -> Option<Gpu> {
     }
 }
 
+/// The cases of a WGSL-against-core check with what the GPU computed for each (`run`,
+/// one result a case), or `None` after [`skip`] when no adapter exists.
+pub fn check_on_gpu<C, O>(
+    test: &str,
+    cases: Vec<C>,
+    run: impl FnOnce(&Gpu, &[C]) -> Result<Vec<O>, billow_view::ViewError>,
+) -> Option<(Vec<C>, Vec<O>)> {
+    let gpu = gpu_or_skip(test)?;
+    let out = run(&gpu, &cases).expect("run the check shader");
+    assert_eq!(out.len(), cases.len(), "one result a case");
+    Some((cases, out))
+}
+
 /// Where failing tests write their diff images.
 pub fn out_dir() -> PathBuf {
     let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("view-tests");
