@@ -168,14 +168,17 @@ fn killed_bakes_leave_all_old_or_all_new_outputs() {
         "a run killed mid-write leaves its temporary files (recognisable by name)"
     );
 
-    // Stale temporaries of dead processes go with the next run for the same outputs; one of
-    // a live process (this test's) and one of another output stay.
+    // Stale temporaries of dead processes go with the next run for the same outputs, and so
+    // do their write probes; one of a live process (this test's) and one of another output
+    // stay.
     let mut dead = Command::new("true").spawn().unwrap();
     let dead_pid = dead.id();
     dead.wait().unwrap();
     let planted = [
         format!(".v.billow.{dead_pid}-0.billow.tmp"),
         format!(".v.ktx2.{dead_pid}-7.billow.tmp"),
+        // A write probe (`output::probe_writable`) a kill -9 caught.
+        format!(".probe.{dead_pid}-3.billow.tmp"),
     ];
     let kept = [
         format!(".v.billow.{}-0.billow.tmp", std::process::id()),

@@ -113,7 +113,7 @@ fn writable_destination(flag: &str, out: &Path) -> Result<(), CliError> {
 fn probe_writable(dir: &Path) -> std::io::Result<()> {
     crate::signals::watch(dir);
     let probe = dir.join(format!(
-        ".probe.{}-{}.billow.tmp",
+        ".{PROBE}.{}-{}.billow.tmp",
         std::process::id(),
         PROBES.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
     ));
@@ -123,6 +123,10 @@ fn probe_writable(dir: &Path) -> std::io::Result<()> {
         .open(&probe)?;
     std::fs::remove_file(&probe)
 }
+
+/// The destination name a write probe's temporary stands for (`.probe.<pid>-<n>.billow.tmp`);
+/// the staging of the next run that writes into the folder sweeps a dead run's probes.
+pub const PROBE: &str = "probe";
 
 static PROBES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 

@@ -121,11 +121,18 @@ impl Staged {
         Ok(())
     }
 
-    /// Removes the temporaries a killed earlier run left for `dest`.
+    /// Removes the temporaries a killed earlier run left for `dest`, and the write probes
+    /// (`crate::output::PROBE`) a killed run left in its folder.
     fn sweep(&mut self, dest: &Path) {
         let dir = folder(dest).to_path_buf();
         let stale = self.stale.entry(dir).or_insert_with_key(|d| stale_in(d));
-        for t in stale.remove(&file_name(dest)).unwrap_or_default() {
+        let probes = stale.remove(crate::output::PROBE).unwrap_or_default();
+        for t in stale
+            .remove(&file_name(dest))
+            .unwrap_or_default()
+            .into_iter()
+            .chain(probes)
+        {
             let _ = std::fs::remove_file(t);
         }
     }
