@@ -585,9 +585,10 @@ impl RowCtx<'_> {
                 .sample_normal(p.lod, uvw, self.filter)
                 .unwrap_or(Vec3::ZERO);
             let k = if vol.moments {
-                // The light in the volume's own axes: n_view·L = n·(Mᵀ L).
+                // The light and the view axis in the volume's own axes: n_view·L = n·(Mᵀ L).
                 let light = (m.transpose() * l).normalize_or_zero();
-                moments_diffuse_factor(n, light, ambient, 1.0)
+                let view = (m.transpose() * Vec3::Z).normalize_or_zero();
+                moments_diffuse_factor(n, light, view, ambient, 1.0)
             } else {
                 volume_diffuse_factor(shade_normal(m, n), l, ambient, 1.0)
             };

@@ -5,11 +5,20 @@
 //! within `1e-6` (the GPU's dot product may fuse its multiply-adds). Unshadowed
 //! (visibility 1) it is the core function itself; shadowed, the shader scales the
 //! diffuse term `|n·light|` (the core's factor at zero ambient) by the visibility.
+//!
+//! `moments_cosine_of` ↔ [`billow_core::shading::moments_diffuse_factor`] at ambient 0 and
+//! visibility 1 (the volume pass multiplies the rest in): moments from one axis to an even
+//! spread, lights and view axes over the sphere, within `2e-5` (the GPU's `acos`, `sin`
+//! and `sqrt` are not correctly rounded).
 
 mod common;
 
-use billow_core::shading::{diffuse_factor, DEFAULT_AMBIENT, DEFAULT_LIGHT};
-use billow_view::shading_gpu::{diffuse_factor_on_gpu, ShadingCase};
+use billow_core::shading::{
+    diffuse_factor, moments_diffuse_factor, DEFAULT_AMBIENT, DEFAULT_LIGHT,
+};
+use billow_view::shading_gpu::{
+    diffuse_factor_on_gpu, moments_cosine_on_gpu, MomentsCase, ShadingCase,
+};
 use glam::Vec3;
 
 /// `n` unit directions spread over the sphere (a Fibonacci lattice).
@@ -76,6 +85,66 @@ fn wgsl_diffuse_factor_matches_billow_core() {
         if (got - want).abs() > 1e-6 {
             bad.push(format!(
                 "diffuse_factor({n}, {light}, {ambient}, {visibility}): gpu {got}, core {want}"
+            ));
+        }
+    }
+    eprintln!("{} cases; worst |Δ| {worst:e}", cases.len());
+    assert!(
+        bad.is_empty(),
+        "{} mismatches, the first:\n{}",
+        bad.len(),
+        bad[..bad.len().min(20)].join("\n")
+    );
+}
+
+fn moments_cases() -> Vec<MomentsCase> {
+    let dirs = sphere(24);
+    let mut ms = vec![
+        Vec3::X,
+        Vec3::Y,
+        Vec3::splat(1.0 / 3.0),
+        Vec3::new(0.5, 0.5, 0.0),
+        Vec3::new(0.1, 0.8, 0.1),
+        Vec3::new(0.0, 0.0, 0.0),
+        // Filtered against empty texels: a trace below 1.
+        Vec3::new(0.05, 0.2, 0.1),
+    ];
+    ms.extend(dirs.iter().step_by(3).map(|d| *d * *d));
+    let mut out = Vec::new();
+    for m in &ms {
+        for light in &dirs {
+            for axis in dirs.iter().step_by(2).chain([&(Vec3::Z * 3.0)]) {
+                out.push(MomentsCase {
+                    m: m.extend(0.0).to_array(),
+                    light: light.extend(0.0).to_array(),
+                    axis: axis.extend(0.0).to_array(),
+                });
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn wgsl_moments_cosine_matches_billow_core() {
+    let Some((cases, out)) = common::check_on_gpu(
+        "wgsl_moments_cosine_matches_billow_core",
+        moments_cases(),
+        moments_cosine_on_gpu,
+    ) else {
+        return;
+    };
+    let mut bad = Vec::new();
+    let mut worst = 0f32;
+    for (k, &got) in cases.iter().zip(&out) {
+        let m = Vec3::from_slice(&k.m[..3]);
+        let light = Vec3::from_slice(&k.light[..3]);
+        let view = Vec3::from_slice(&k.axis[..3]).normalize();
+        let want = moments_diffuse_factor(m, light, view, 0.0, 1.0);
+        worst = worst.max((got - want).abs());
+        if (got - want).abs() > 2e-5 {
+            bad.push(format!(
+                "moments_cosine_of({m}, {light}, {view}): gpu {got}, core {want}"
             ));
         }
     }

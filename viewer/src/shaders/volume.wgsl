@@ -155,18 +155,14 @@ fn toksvig_normal(in: VOut) -> vec3<f32> {
 }
 
 // The two-sided cosine of a volume storing normal moments (flag 8; SPEC §8.4a;
-// core/src/shading.rs::moments_diffuse_factor): √(m·(L∘L) / tr m), m the filtered moments
-// as stored (E[n∘n]; flag 16: their BC7 blocks, unorm of the snorm bytes XOR 0x80, mapped
-// back by v = (255·u − 128)/127), L in the volume's own axes (Mᵀ·L, M the normal matrix
-// whose rows are n0, n1, n2).
+// core/src/shading.rs::moments_diffuse_factor) from m, the filtered moments as stored
+// (E[n∘n]; flag 16: their BC7 blocks, unorm of the snorm bytes XOR 0x80, mapped back by
+// v = (255·u − 128)/127), with L and the camera's view axis in the volume's own axes
+// (Mᵀ·L and Mᵀ·z, M the normal matrix whose rows are n0, n1, n2).
 fn moments_cosine(in: VOut) -> f32 {
     var s = sample_normals(in.slot.x, (in.slot.y & 1u) != 0u, in.uvw, in.lod_ratio.x);
     if (in.slot.y & 16u) != 0u {
         s = vec4<f32>(s.xyz * (255.0 / 127.0) - vec3<f32>(128.0 / 127.0), 0.0);
-    }
-    let tr = s.x + s.y + s.z;
-    if !(tr > 1e-6) {
-        return 0.0;
     }
     let l = frame.light.xyz;
     let ll = in.n0 * l.x + in.n1 * l.y + in.n2 * l.z;
@@ -174,14 +170,7 @@ fn moments_cosine(in: VOut) -> f32 {
     if !(len > 0.0) {
         return 0.0;
     }
-    let l2 = (ll / len) * (ll / len);
-    // billow_core::shading::moments_diffuse_factor: √q where the normals share an axis,
-    // E|n·L| band-limited to the second moment where they spread, blended by concentration.
-    let m = s.xyz / tr;
-    let q = clamp(dot(m, l2), 0.0, 1.0);
-    let w = clamp((3.0 * dot(m, m) - 1.0) * 0.5, 0.0, 1.0);
-    let spread = min(3.0 / 16.0 + 15.0 / 16.0 * q, 1.0);
-    return w * sqrt(q) + (1.0 - w) * spread;
+    return moments_cosine_of(s.xyz, ll / len, in.n2);
 }
 
 @fragment

@@ -145,9 +145,10 @@ pub fn shader_source(n: usize, loads: bool) -> String {
         ""
     };
     format!(
-        "{}\n{}\n{}\n{}\n{}\n{}",
+        "{}\n{}\n{}\n{}\n{}\n{}\n{}",
         include_str!("../shaders/prism_plane.wgsl"),
         include_str!("../shaders/shadow_lookup.wgsl"),
+        include_str!("../shaders/shading.wgsl"),
         include_str!("../shaders/volume_math.wgsl"),
         loads_src,
         sampler,
