@@ -51,7 +51,8 @@ pub fn volume_diffuse_factor(n: Vec3, light: Vec3, ambient: f32, visibility: f32
 /// `u = m / (mx + my + mz)`, `q = u·(L∘L)` (`≈ E[(n·L)²]`) and the view `V`:
 ///
 /// `c = w·√q + (1 − w)·min(g·min(3/16 + 15/16·q, 1), 1)`, `w = clamp((3·u·u − 1) / 2, 0, 1)`,
-/// `g = 8/(3π)·(sin γ + (π/2 − γ)·cos γ)`, `cos γ = |u·(V∘L)| / √(u·(V∘V) · q)`.
+/// `g = 8/(3π)·(sin γ + (π/2 − γ)·cos γ)` ([`spread_view_factor`]),
+/// `cos γ = |u·(V∘L)| / √(u·(V∘V) · q)`.
 ///
 /// - `√q` is exact for normals that share one direction along an axis (`√E[(n·L)²]` of a
 ///   single normal is `|n·L|`, whatever the view), and overshoots where they spread:
@@ -96,9 +97,8 @@ pub fn moments_diffuse_factor(
     ambient + (1.0 - ambient) * visibility * cosine
 }
 
-/// `g` of [`moments_diffuse_factor`]: `8/(3π)·(sin γ + (π/2 − γ)·cos γ)` with `cos γ` the
-/// correlation of `n·V` and `n·L` under the normalised moments `u` (`q = u·(L∘L)`); 1 when
-/// either variance is 0 or not finite.
+/// `g` of [`moments_diffuse_factor`] with `cos γ` the correlation of `n·V` and `n·L` under
+/// the normalised moments `u` (`q = u·(L∘L)`); 1 when either variance is 0 or not finite.
 #[inline]
 fn view_factor(u: Vec3, light: Vec3, view: Vec3, q: f32) -> f32 {
     let vv = u.dot(view * view);
@@ -106,9 +106,19 @@ fn view_factor(u: Vec3, light: Vec3, view: Vec3, q: f32) -> f32 {
     if !(d > 1e-12 && d.is_finite()) {
         return 1.0;
     }
-    let c = (u.dot(view * light).abs() / d).min(1.0);
-    let gamma = c.acos();
-    8.0 / (3.0 * std::f32::consts::PI) * (gamma.sin() + (std::f32::consts::FRAC_PI_2 - gamma) * c)
+    spread_view_factor((u.dot(view * light).abs() / d).min(1.0))
+}
+
+/// `g(c) = 8/(3π)·(sin γ + (π/2 − γ)·c)`, `c = cos γ ∈ [0, 1]`, as the polynomial shaders
+/// evaluate cheaply: `sin γ + (π/2 − γ)·c = √(1 − c²) + c·asin c = 1 + c²/2 + c⁴/24 +
+/// c⁶/80 + …` (its derivative is `asin c`), cut after `c⁶` and closed with the `c⁸` term
+/// that makes it exact at `c = 1` (π/2): within 0.18 % of the closed form everywhere.
+#[inline]
+pub fn spread_view_factor(c: f32) -> f32 {
+    const K8: f32 = std::f32::consts::FRAC_PI_2 - (1.0 + 1.0 / 2.0 + 1.0 / 24.0 + 1.0 / 80.0);
+    let c2 = c * c;
+    let s = 1.0 + c2 * (1.0 / 2.0 + c2 * (1.0 / 24.0 + c2 * (1.0 / 80.0 + c2 * K8)));
+    8.0 / (3.0 * std::f32::consts::PI) * s
 }
 
 #[cfg(test)]
@@ -160,7 +170,8 @@ mod tests {
     /// Leaves spread evenly over the sphere (a Fibonacci lattice) and leaves tilted from
     /// the vertical by 0–60°, facing either way: the shading against the f64 mean of what
     /// the mesh shows, over lights and views, ambient 0.3 — mean and worst relative error,
-    /// bounded at what was measured (sphere +0.00003 % / 0.012 %, canopy +1.0 % / 8.7 %).
+    /// bounded at what was measured (sphere +0.02 % / 0.11 %: the polynomial of the view
+    /// factor; canopy +1.0 % / 8.7 %).
     /// Without the view factor `g` they were −3.1 % / 15.2 % and −0.2 % / 15.3 % (the
     /// view's weighting); with `√q` alone +5.0 % / 17.9 % and +4.3 % / 16.2 % (the Jensen
     /// overshoot of √E[x²]).
@@ -192,7 +203,7 @@ mod tests {
             Vec3::new(1.0, 0.0, 1.0).normalize(),
         ];
         for (name, normals, mean_tol, worst_tol) in [
-            ("sphere", &sphere, 0.001, 0.001),
+            ("sphere", &sphere, 0.001, 0.002),
             ("canopy", &canopy, 0.015, 0.09),
         ] {
             let mut errs = Vec::new();
@@ -234,6 +245,20 @@ mod tests {
             let want = 4.0 / (3.0 * std::f32::consts::PI);
             assert!((across - want).abs() < 1e-5, "{l}: {across}");
         }
+    }
+
+    #[test]
+    fn the_view_factor_polynomial_is_within_0_18_percent_of_the_closed_form() {
+        let mut worst = 0f64;
+        for i in 0..=10_000 {
+            let c = f64::from(i) / 10_000.0;
+            let exact = 8.0 / (3.0 * std::f64::consts::PI) * ((1.0 - c * c).sqrt() + c * c.asin());
+            let got = f64::from(spread_view_factor(c as f32));
+            worst = worst.max((got / exact - 1.0).abs());
+        }
+        assert!(worst < 0.0018, "{worst}");
+        let one = f64::from(spread_view_factor(1.0)) - 4.0 / 3.0;
+        assert!(one.abs() < 1e-6, "{one}");
     }
 
     #[test]

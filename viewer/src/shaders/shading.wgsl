@@ -28,9 +28,8 @@ fn moments_cosine_of(m: vec3<f32>, light: vec3<f32>, axis: vec3<f32>) -> f32 {
     return w * sqrt(q) + (1.0 - w) * min(spread, 1.0);
 }
 
-// billow_core::shading's view_factor: 8/(3π)·(sin γ + (π/2 − γ)·cos γ), cos γ the
-// correlation of n·V and n·L under the normalised moments u (q = u·(L∘L)); 1 where it is
-// undefined.
+// billow_core::shading's view_factor: spread_view_factor(cos γ), cos γ the correlation of
+// n·V and n·L under the normalised moments u (q = u·(L∘L)); 1 where it is undefined.
 fn moments_view_factor(u: vec3<f32>, light: vec3<f32>, axis: vec3<f32>, q: f32) -> f32 {
     let al = length(axis);
     if !(al > 0.0) {
@@ -42,6 +41,10 @@ fn moments_view_factor(u: vec3<f32>, light: vec3<f32>, axis: vec3<f32>, q: f32) 
         return 1.0;
     }
     let c = min(abs(dot(u, v * light)) / d, 1.0);
-    let gamma = acos(c);
-    return 8.0 / (3.0 * 3.14159265) * (sin(gamma) + (1.57079633 - gamma) * c);
+    // billow_core::shading::spread_view_factor: 8/(3π)·(√(1 − c²) + c·asin c) as a
+    // polynomial in c², exact at c = 1.
+    let c2 = c * c;
+    let k8 = 1.57079633 - (1.0 + 1.0 / 2.0 + 1.0 / 24.0 + 1.0 / 80.0);
+    let s = 1.0 + c2 * (1.0 / 2.0 + c2 * (1.0 / 24.0 + c2 * (1.0 / 80.0 + c2 * k8)));
+    return 8.0 / (3.0 * 3.14159265) * s;
 }
