@@ -96,8 +96,8 @@ impl<'a> Shader<'a> {
     #[inline(always)]
     pub(crate) fn shade_tested(&self, m: &Material, uv: Vec2, vertex_color: Vec4) -> Option<Vec4> {
         let mut c = m.base_color_factor * vertex_color;
-        if let Some(t) = m.base_color_texture {
-            c *= Taps::new(&self.textures[t as usize], uv).filtered(self.lut);
+        if let Some(t) = self.texel(m, uv) {
+            c *= t;
         }
         Self::finish(m, c)
     }
