@@ -153,13 +153,15 @@ fn killed_bakes_leave_all_old_or_all_new_outputs() {
     // a moment before the bake and which the next run sweeps), and the moment any output
     // is replaced.
     restore();
-    let staging = |d: &Path| temps(d).into_iter().any(|t| !t.starts_with(".probe."));
-    let killed = kill_when(bake(d, res), full * 4, || staging(d));
+    let staging = |d: &Path| -> Vec<String> {
+        temps(d)
+            .into_iter()
+            .filter(|t| !t.starts_with(".probe."))
+            .collect()
+    };
+    let killed = kill_when(bake(d, res), full * 4, || !staging(d).is_empty());
     check("kill at the first temporary file".into(), killed);
-    let stale: Vec<String> = temps(d)
-        .into_iter()
-        .filter(|t| !t.starts_with(".probe."))
-        .collect();
+    let stale = staging(d);
     assert_eq!(hashes(d), old, "killed before any rename");
     for out in OUTS {
         restore();
