@@ -152,9 +152,13 @@ struct ScreenPoly {
     /// Index of the band (0 = the base texture) whose texture this polygon samples.
     band: usize,
     /// Normal frame → view space of the polygon's cell ([`normal_matrix`]), when it is
-    /// shaded.
-    nmat: Option<Mat3>,
+    /// shaded, with the light and the view axis in the cell's own axes (`Mᵀ·L`, `Mᵀ·z`,
+    /// unit: what moments are lit with).
+    nmat: Option<CellFrame>,
 }
+
+/// A shaded cell's normal matrix and its `[light, view axis]` in the cell's own axes.
+type CellFrame = (Mat3, [Vec3; 2]);
 
 /// The base texture or one LOD band: what a slice may draw.
 struct Part<'a> {
@@ -334,17 +338,24 @@ fn render_sliced(
                 .collect()
         })
         .collect();
-    let nmats: Vec<Option<Vec<Mat3>>> = parts
+    let nmats: Vec<Option<Vec<CellFrame>>> = parts
         .iter()
         .zip(&cam_cells)
         .map(|(part, cc)| {
             let shell = part.vol.repeat[0] || part.vol.repeat[2];
-            (light_view.is_some() && part.vol.has_normals()).then(|| {
+            let (l, _) = light_view.filter(|_| part.vol.has_normals())?;
+            Some(
                 cc.iter()
                     .zip(part.cells)
-                    .map(|(c, cell)| normal_matrix(object_to_view, shell, c, &cell.uvw))
-                    .collect()
-            })
+                    .map(|(c, cell)| {
+                        let m = normal_matrix(object_to_view, shell, c, &cell.uvw);
+                        // The light and the view axis in the cell's own axes: n_view·L =
+                        // n·(Mᵀ L).
+                        let axes = [l, Vec3::Z].map(|v| (m.transpose() * v).normalize_or_zero());
+                        (m, axes)
+                    })
+                    .collect(),
+            )
         })
         .collect();
     let (mut z_min, mut z_max) = (f32::INFINITY, f32::NEG_INFINITY);
@@ -579,15 +590,12 @@ impl RowCtx<'_> {
         }
         let w = p.weights.map(|(l, w, cap)| (l, w * fade, cap));
         let mut s = self.vols[p.band].sample_weighted(w, uvw);
-        if let (Some(m), Some((l, ambient))) = (p.nmat, self.light) {
+        if let (Some((m, [light, view])), Some((l, ambient))) = (p.nmat, self.light) {
             let vol = &self.vols[p.band];
             let n = vol
                 .sample_normal(p.lod, uvw, self.filter)
                 .unwrap_or(Vec3::ZERO);
             let k = if vol.moments {
-                // The light and the view axis in the volume's own axes: n_view·L = n·(Mᵀ L).
-                let light = (m.transpose() * l).normalize_or_zero();
-                let view = (m.transpose() * Vec3::Z).normalize_or_zero();
                 moments_diffuse_factor(n, light, view, ambient, 1.0)
             } else {
                 volume_diffuse_factor(shade_normal(m, n), l, ambient, 1.0)
