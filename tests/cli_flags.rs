@@ -183,6 +183,7 @@ fn case(command: &str, flag: &str) -> Option<Case> {
             extra: &["--view-dirs", "+z"],
         },
         ("bbcloud", "normal-map") | ("bbcloud", "unlit") => SWITCH,
+        ("bbcloud", "flatten") => keyword("bogus"),
         ("bbcloud", "mip-levels") => both("abc", "6"),
         ("bbcloud", "atlas-size") => both("abc", "1000"),
         ("bbcloud", "texel-density") => both("abc", "-1"),

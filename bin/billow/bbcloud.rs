@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use billow::bbcloud::{
     self as bb, bake, check_ambient, check_view_strength, estimate, BbcloudOptions, BbcloudStats,
-    Estimate, Shading, Stage, ViewDirs, ViewPreference, MAX_ATLAS_BYTES,
+    Estimate, Flatten, Shading, Stage, ViewDirs, ViewPreference, MAX_ATLAS_BYTES,
 };
 use billow::compress::{compress_cloud, Compression};
 use billow::export::gltf::cloud_gltf_bytes_with;
@@ -83,6 +83,11 @@ pub struct Args {
     /// atlas, exported as the glTF normalTexture). Pair with --unlit for runtime lighting.
     #[arg(long)]
     normal_map: bool,
+    /// How triangles are laid onto their billboard: "unfold" turns each leaf into the
+    /// plane about its centre, keeping its area and so the mesh's coverage; "project"
+    /// projects it orthographically (the paper's; a leaf tilted by θ keeps cos θ of its area)
+    #[arg(long, value_name = "unfold|project", default_value = "unfold")]
+    flatten: String,
     #[arg(long, default_value_t = 4, help = format!(
         "MIP levels stored per atlas, 1–{}; allocations are aligned and padded so no stored \
          level mixes two billboards",
@@ -193,6 +198,8 @@ struct Summary<'a> {
     gpu_bytes_no_bc: u64,
     mip_levels: u32,
     normal_map: bool,
+    /// How triangles were laid onto their billboards (`--flatten`).
+    flatten: &'static str,
     stats: &'a BbcloudStats,
     estimate: Estimate,
     seconds_import: f64,
@@ -315,6 +322,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let resolved = resolve_cloud(preset, &flags);
     let target = target_options(&args.target)?;
     let compression: Compression = args.compress.parse().map_err(|e| usage("--compress", e))?;
+    let flatten: Flatten = args.flatten.parse().map_err(|e| usage("--flatten", e))?;
     let gltf_container = args
         .gltf
         .as_deref()
@@ -374,6 +382,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         view,
         normal_map: args.normal_map,
         mip_levels: args.mip_levels,
+        flatten,
         ..BbcloudOptions::default()
     };
     if args.normal_map && light.is_some() {
@@ -547,6 +556,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         seed: args.seed,
         mip_levels: args.mip_levels,
         normal_map: args.normal_map,
+        flatten: opts.flatten.name(),
         billboards_per_lod: stats.levels.iter().map(|l| l.billboards).collect(),
         atlas_fill_per_lod: stats.levels.iter().map(|l| l.fill).collect(),
         texels: stats.levels.iter().map(|l| l.texels).sum(),

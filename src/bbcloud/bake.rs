@@ -61,6 +61,9 @@ pub struct Job<'a> {
     pub width: u32,
     pub height: u32,
     pub triangles: &'a [u32],
+    /// Where each of `triangles` is drawn from (its vertices turned into the plane,
+    /// [`super::unfold`]).
+    pub positions: &'a [[Vec3; 3]],
     /// The scene's textures decoded for sampling (`None`: not used by the foliage).
     pub textures: &'a [Option<Decoded<'a>>],
 }
@@ -112,11 +115,10 @@ pub fn render(scene: &Scene, job: &Job<'_>, k: u32, shading: &Shading, normals: 
         )
     };
     let mut prep: Vec<Prepared> = Vec::with_capacity(job.triangles.len());
-    for &ti in job.triangles {
-        let t = &scene.triangles[ti as usize];
+    for (&ti, pos) in job.triangles.iter().zip(job.positions) {
         let (mut p, mut z) = ([Vec2::ZERO; 3], [0.0; 3]);
         for j in 0..3 {
-            (p[j], z[j]) = to2(t.v[j].position);
+            (p[j], z[j]) = to2(pos[j]);
         }
         let area = (p[1] - p[0]).perp_dot(p[2] - p[0]);
         if area.is_nan() || area.abs() <= 1e-12 {

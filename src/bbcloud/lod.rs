@@ -16,6 +16,7 @@ use glam::Vec3;
 use super::element::{Element, Plane};
 use super::plane_search::{search, SearchParams, SearchStats};
 use super::rect::{trim, PlaneRect};
+use super::unfold::{unfold, Flatten};
 use super::view::ViewPreference;
 use crate::scene::Scene;
 
@@ -27,6 +28,10 @@ pub struct Board {
     pub rect: PlaneRect,
     /// Scene triangle indices it is textured from, ascending.
     pub sources: Vec<u32>,
+    /// Where each source triangle is textured from (turned into the plane by
+    /// [`super::unfold`], or where it is with [`Flatten::Project`]), one entry per `sources`
+    /// entry.
+    pub unfolded: Vec<[Vec3; 3]>,
     /// Elements the search put on it (triangles for level 0, child billboards otherwise).
     pub elements: u32,
     /// Index of the parent within the next level.
@@ -56,16 +61,27 @@ pub fn bounding_sphere(scene: &Scene, tris: &[u32]) -> (Vec3, f32) {
     (c, r)
 }
 
-fn make_board(scene: &Scene, plane: Plane, sources: Vec<u32>, elements: u32) -> Board {
-    let pts: Vec<Vec3> = sources
-        .iter()
-        .flat_map(|&t| scene.triangles[t as usize].v.iter().map(|v| v.position))
-        .collect();
+fn make_board(
+    scene: &Scene,
+    plane: Plane,
+    sources: Vec<u32>,
+    elements: u32,
+    flatten: Flatten,
+) -> Board {
+    let unfolded = match flatten {
+        Flatten::Project => sources
+            .iter()
+            .map(|&t| scene.triangles[t as usize].v.map(|v| v.position))
+            .collect(),
+        Flatten::Unfold => unfold(scene, &sources, plane.normal),
+    };
+    let pts: Vec<Vec3> = unfolded.iter().flatten().copied().collect();
     let rect = trim(&plane, &pts);
     Board {
         plane,
         rect,
         sources,
+        unfolded,
         elements,
         parent: None,
     }
@@ -98,6 +114,8 @@ pub struct ChainParams {
     pub view: Option<ViewPreference>,
     /// Unit up axis of the last level's two vertical billboards.
     pub up: Vec3,
+    /// How the billboards' triangles are laid onto their planes.
+    pub flatten: Flatten,
 }
 
 /// Build every level's billboards (planes, trimmed rectangles, sources, parents).
@@ -135,6 +153,7 @@ pub fn build_chain(
                         },
                         leaves.to_vec(),
                         c,
+                        p.flatten,
                     )
                 })
                 .collect();
@@ -185,7 +204,13 @@ pub fn build_chain(
                     prev.boards[m as usize].parent = Some(bi as u32);
                 }
             }
-            boards.push(make_board(scene, f.plane, sources, f.members.len() as u32));
+            boards.push(make_board(
+                scene,
+                f.plane,
+                sources,
+                f.members.len() as u32,
+                p.flatten,
+            ));
         }
         levels.push(Level {
             boards,

@@ -27,6 +27,7 @@ pub mod plane_search;
 pub mod rect;
 pub mod sampler;
 pub mod slab;
+pub mod unfold;
 pub mod view;
 
 use std::collections::BTreeMap;
@@ -41,6 +42,7 @@ use rayon::prelude::*;
 pub use bake::Shading;
 pub use element::{Element, Plane};
 pub use plane_search::{Found, SearchParams, SearchStats};
+pub use unfold::Flatten;
 pub use view::{ViewDirs, ViewPreference, MAX_VIEW_DIRS};
 
 use crate::scene::Scene;
@@ -83,6 +85,9 @@ pub struct BbcloudOptions {
     pub up: Vec3,
     /// Also bake a tangent-space normal map per billboard side (SPEC §9.4).
     pub normal_map: bool,
+    /// How triangles are laid onto their billboard: turned into the plane (the default,
+    /// which keeps their area and so the mesh's coverage) or projected (the paper's).
+    pub flatten: Flatten,
 }
 
 impl Default for BbcloudOptions {
@@ -106,6 +111,7 @@ impl Default for BbcloudOptions {
             view: None,
             up: Vec3::Y,
             normal_map: false,
+            flatten: Flatten::Unfold,
         }
     }
 }
@@ -503,6 +509,7 @@ pub fn bake(
         max_extent: opts.max_extent.map(|r| r * radius.max(1e-12)),
         view: opts.view.clone(),
         up: opts.up.normalize(),
+        flatten: opts.flatten,
     };
     let levels = build_chain(scene, &leaves, centre, &chain, &|l, a, n| {
         progress(Stage::Search { level: l }, a as f32 / n.max(1) as f32)
@@ -596,6 +603,7 @@ pub fn bake(
                 width: w,
                 height: h,
                 triangles: &board.sources,
+                positions: &board.unfolded,
                 textures: &textures,
             };
             let out = bake::render(
@@ -690,6 +698,7 @@ pub fn params(o: &BbcloudOptions) -> BTreeMap<String, String> {
         put("max_extent", r.to_string());
     }
     put("mip_align", align.to_string());
+    put("flatten", o.flatten.name().into());
     // The baked light, as every reader reads it (SPEC §9).
     match o.shading.light {
         Some(l) => BakedLight::Directional {
