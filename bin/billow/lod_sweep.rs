@@ -173,6 +173,9 @@ impl Dolly<'_> {
             far,
         );
         self.r.lod_distance_override = lod;
+        // The mesh's coverage frames (level 0 forced) sample its textures at level 0: its
+        // MIP chain draws its alpha-tested leaves 10 % thin here (`mesh_texture_level0`).
+        self.r.mesh_texture_level0 = lod == Some(0.0);
         // A forced level is shown alone (coverage frames), not dissolving.
         self.r.dissolve_override = lod.map(|_| 0.0);
         let stats = self.r.render(&self.target, &cam).map_err(internal)?;

@@ -260,7 +260,7 @@ impl Renderer {
             },
             flags: [
                 f32::from(u8::from(shadowed)),
-                0.0,
+                f32::from(u8::from(self.mesh_texture_level0)),
                 lookup.map_or(0.0, |w| w.1),
                 0.0,
             ],

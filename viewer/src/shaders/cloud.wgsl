@@ -8,7 +8,8 @@ struct Frame {
     world_to_shadow: mat4x4<f32>,
     // xyz: direction towards the light, w: ambient
     light: vec4<f32>,
-    // x: 1 = receive shadows, z: depth bias
+    // x: 1 = receive shadows, y: 1 = textures at MIP level 0 only (reference frames),
+    // z: depth bias
     flags: vec4<f32>,
 }
 
@@ -91,7 +92,11 @@ fn dissolved(i: VOut) -> bool {
 fn texel(i: VOut) -> vec4<f32> {
     var c = dr.color;
     if dr.params.w > 0.5 {
-        c = c * textureSample(tex, smp, i.uv);
+        if frame.flags.y > 0.5 {
+            c = c * textureSampleLevel(tex, smp, i.uv, 0.0);
+        } else {
+            c = c * textureSample(tex, smp, i.uv);
+        }
     }
     return c;
 }

@@ -9,7 +9,8 @@ struct MeshFrame {
     world_to_shadow: mat4x4<f32>,
     // xyz: direction towards the light (unit), w: ambient
     light: vec4<f32>,
-    // x: 1 = receive shadows, z: depth bias
+    // x: 1 = receive shadows, y: 1 = textures at MIP level 0 only (reference frames),
+    // z: depth bias
     flags: vec4<f32>,
 }
 
@@ -52,7 +53,11 @@ fn vs_main(v: VIn) -> VOut {
 fn base_colour(i: VOut) -> vec4<f32> {
     var c = i.color;
     if material.params.y > 0.5 {
-        c = c * textureSample(base_tex, base_smp, i.uv);
+        if mf.flags.y > 0.5 {
+            c = c * textureSampleLevel(base_tex, base_smp, i.uv, 0.0);
+        } else {
+            c = c * textureSample(base_tex, base_smp, i.uv);
+        }
     }
     return c;
 }
