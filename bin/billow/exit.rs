@@ -62,6 +62,12 @@ impl CliError {
     }
 }
 
+impl std::fmt::Display for CliError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
 /// A [`VoxelizeError`] as the command's error: an option's error names the flag it came
 /// from (`--supersample: 9 is out of range (1 to 8)`), the rest the input file.
 pub fn voxelize_error(input: &str, e: &VoxelizeError) -> CliError {
