@@ -34,6 +34,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::exit::{CliError, Code};
+use crate::staged::{out_err, Staged};
 
 /// One path, escaped for a Makefile rule.
 fn escape(flag: &str, p: &Path) -> Result<String, CliError> {
@@ -75,6 +76,29 @@ pub fn check(depfile: Option<&Path>, paths: &[&Path]) -> Result<(), CliError> {
         for p in paths {
             escape("--depfile", p)?;
         }
+    }
+    Ok(())
+}
+
+/// [`check`] for the files an import read beside the mesh.
+pub fn check_read(depfile: Option<&Path>, read: &[PathBuf]) -> Result<(), CliError> {
+    check(
+        depfile,
+        &read.iter().map(PathBuf::as_path).collect::<Vec<_>>(),
+    )
+}
+
+/// With `depfile`, stages its rule ([`render`]) with the other outputs.
+pub fn stage(
+    stage: &mut Staged,
+    depfile: Option<&Path>,
+    targets: &[&Path],
+    input: &Path,
+    (read, missing): (&[PathBuf], &[PathBuf]),
+) -> Result<(), CliError> {
+    if let Some(d) = depfile {
+        let text = render(targets, input, read, missing)?;
+        stage.stage(d, text.as_bytes()).map_err(|e| out_err(d, e))?;
     }
     Ok(())
 }

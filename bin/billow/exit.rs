@@ -115,6 +115,11 @@ pub fn bbcloud_error(input: &str, e: &BbcloudError) -> CliError {
     }
 }
 
+/// A value that parses but is out of range for `flag` (exit 8).
+pub fn bad(flag: &str, e: impl Display) -> CliError {
+    CliError::new(Code::BadParameter, format!("{flag}: {e}"))
+}
+
 /// A value that does not parse as what `flag` takes (exit 2, like clap's own errors).
 pub fn usage(flag: &str, e: impl Display) -> CliError {
     CliError::new(Code::Usage, format!("{flag}: {e}"))
