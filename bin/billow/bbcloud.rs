@@ -464,15 +464,43 @@ fn export<'a>(
     Ok((pngs, glb))
 }
 
+/// The files the command writes, each with its flag (`--atlas` apart: a folder).
+fn outputs(args: &Args) -> Vec<(&'static str, &Path)> {
+    let mut outputs = vec![("-o", args.output.as_path())];
+    outputs.extend(args.gltf.as_deref().map(|g| ("--gltf", g)));
+    outputs.extend(args.depfile.as_deref().map(|g| ("--depfile", g)));
+    outputs
+}
+
+/// The cloud as written and its BC7 blocks: the compressed copy `--target-error` measured
+/// already, else `asset` compressed as `--compress` says.
+fn compressed_asset(
+    mut asset: CloudAsset,
+    compressed: Option<(Box<CloudAsset>, CloudBlocks)>,
+    compression: Compression,
+) -> (CloudAsset, Option<CloudBlocks>) {
+    let blocks = match compressed {
+        Some((c, b)) => {
+            asset = *c;
+            Some(b)
+        }
+        None => (compression == Compression::Bc).then(|| {
+            asset.header.set_compress("bc7");
+            compress_cloud(&mut asset)
+        }),
+    };
+    (asset, blocks)
+}
+
 /// Writes every file: to a temporary name first, all renamed into place only when all are
 /// written, so a failure leaves no new file (and no new folder) behind. Returns the atlas
-/// PNGs written.
+/// PNGs written, as shown.
 fn write_outputs(
     args: &Args,
     bytes: &[u8],
     (pngs, glb): (&[(String, Vec<u8>)], Option<(&PathBuf, Vec<u8>)>),
     report: &ImportReport,
-) -> Result<Vec<PathBuf>, CliError> {
+) -> Result<Vec<String>, CliError> {
     let mut stage = Staged::new(&args.output);
     let mut atlas_paths = Vec::new();
     if let Some(dir) = &args.atlas {
@@ -506,15 +534,16 @@ fn write_outputs(
         read,
     )?;
     stage.commit_or_fail()?;
-    Ok(atlas_paths)
+    Ok(atlas_paths
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect())
 }
 
 pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let start = Instant::now();
     let plan = plan(&args)?;
-    let mut outputs = vec![("-o", args.output.as_path())];
-    outputs.extend(args.gltf.as_deref().map(|g| ("--gltf", g)));
-    outputs.extend(args.depfile.as_deref().map(|g| ("--depfile", g)));
+    let outputs = outputs(&args);
     let atlas = args.atlas.as_deref();
     let depfile = args.depfile.as_deref();
     refuse_outputs(
@@ -551,7 +580,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         }
     };
     let Cloud {
-        mut asset,
+        asset,
         stats,
         cost,
         compressed,
@@ -562,28 +591,14 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let seconds_export = export_start.elapsed().as_secs_f64();
 
     let compress_start = Instant::now();
-    let blocks = match compressed {
-        // --target-error measured the compressed cloud already.
-        Some((c, b)) => {
-            asset = *c;
-            Some(b)
-        }
-        None => (plan.compression == Compression::Bc).then(|| {
-            asset.header.set_compress("bc7");
-            compress_cloud(&mut asset)
-        }),
-    };
+    let (asset, blocks) = compressed_asset(asset, compressed, plan.compression);
     let seconds_compress = compress_start.elapsed().as_secs_f64();
     let gpu = billow_core::gpu_memory::cloud_gpu_bytes(&asset, blocks.is_some());
     let write_start = Instant::now();
     let bytes = asset
         .to_bytes_with(blocks.as_ref())
         .map_err(|e| CliError::new(Code::Internal, e))?;
-    let atlas_paths = write_outputs(&args, &bytes, (&pngs, glb), &report)?;
-    let atlas_files: Vec<String> = atlas_paths
-        .iter()
-        .map(|p| p.display().to_string())
-        .collect();
+    let atlas_files = write_outputs(&args, &bytes, (&pngs, glb), &report)?;
     let seconds_write = write_start.elapsed().as_secs_f64();
 
     let from = |s| settings_source(target.as_ref(), s);
