@@ -522,18 +522,12 @@ fn write_outputs(
     stage
         .stage(&args.output, bytes)
         .map_err(|e| out_err(&args.output, e))?;
-    let mut targets = vec![args.output.as_path()];
-    targets.extend(args.gltf.as_deref());
-    targets.extend(atlas_paths.iter().map(PathBuf::as_path));
-    let read = (report.files.as_slice(), report.missing.as_slice());
-    depfile::stage(
-        &mut stage,
-        args.depfile.as_deref(),
-        &targets,
-        &args.input,
-        read,
-    )?;
-    stage.commit_or_fail()?;
+    let targets = (
+        args.output.as_path(),
+        args.gltf.as_deref(),
+        atlas_paths.as_slice(),
+    );
+    depfile::commit(stage, args.depfile.as_deref(), targets, &args.input, report)?;
     Ok(atlas_paths
         .iter()
         .map(|p| p.display().to_string())

@@ -33,6 +33,8 @@
 
 use std::path::{Path, PathBuf};
 
+use billow::import::ImportReport;
+
 use crate::exit::{CliError, Code};
 use crate::staged::{out_err, Staged};
 
@@ -88,19 +90,24 @@ pub fn check_read(depfile: Option<&Path>, read: &[PathBuf]) -> Result<(), CliErr
     )
 }
 
-/// With `depfile`, stages its rule ([`render`]) with the other outputs.
-pub fn stage(
-    stage: &mut Staged,
+/// Commits `stage`'s outputs, with `depfile` its rule ([`render`]) among them: the targets
+/// are `output`, `also` and `written`, the prerequisites `input` and what `report` says the
+/// import read.
+pub fn commit(
+    mut stage: Staged,
     depfile: Option<&Path>,
-    targets: &[&Path],
+    (output, also, written): (&Path, Option<&Path>, &[PathBuf]),
     input: &Path,
-    (read, missing): (&[PathBuf], &[PathBuf]),
+    report: &ImportReport,
 ) -> Result<(), CliError> {
     if let Some(d) = depfile {
-        let text = render(targets, input, read, missing)?;
+        let mut targets = vec![output];
+        targets.extend(also);
+        targets.extend(written.iter().map(PathBuf::as_path));
+        let text = render(&targets, input, &report.files, &report.missing)?;
         stage.stage(d, text.as_bytes()).map_err(|e| out_err(d, e))?;
     }
-    Ok(())
+    stage.commit_or_fail()
 }
 
 /// The depfile's text: `targets` depend on `input` and then `read`, and are out of date as

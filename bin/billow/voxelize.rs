@@ -359,18 +359,12 @@ fn write_outputs(
             written.push(path);
         }
     }
-    let mut targets = vec![args.output.as_path()];
-    targets.extend(args.ktx2.as_deref());
-    targets.extend(written.iter().map(PathBuf::as_path));
-    let read = (report.files.as_slice(), report.missing.as_slice());
-    depfile::stage(
-        &mut stage,
-        args.depfile.as_deref(),
-        &targets,
-        &args.input,
-        read,
-    )?;
-    stage.commit_or_fail()?;
+    let targets = (
+        args.output.as_path(),
+        args.ktx2.as_deref(),
+        written.as_slice(),
+    );
+    depfile::commit(stage, args.depfile.as_deref(), targets, &args.input, report)?;
     Ok(bytes)
 }
 
