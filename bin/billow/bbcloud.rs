@@ -420,15 +420,19 @@ fn read_input(
     Ok((imported, source))
 }
 
+/// An atlas PNG: its file name and bytes.
+type AtlasPng = (String, Vec<u8>);
+/// The `--gltf` file: its path and bytes.
+type Glb<'a> = Option<(&'a PathBuf, Vec<u8>)>;
+
 /// The exports, encoded before anything is written so a failure leaves no output: the
 /// atlas PNGs (once for both the .glb and the `--atlas` dump) and the `--gltf` file.
-#[allow(clippy::type_complexity)]
 fn export<'a>(
     args: &'a Args,
     plan: &Plan,
     asset: &CloudAsset,
     scene: &billow::scene::Scene,
-) -> Result<(Vec<(String, Vec<u8>)>, Option<(&'a PathBuf, Vec<u8>)>), CliError> {
+) -> Result<(Vec<AtlasPng>, Glb<'a>), CliError> {
     let pngs = if args.atlas.is_some() || args.gltf.is_some() {
         let place = args
             .atlas
@@ -498,7 +502,7 @@ fn compressed_asset(
 fn write_outputs(
     args: &Args,
     bytes: &[u8],
-    (pngs, glb): (&[(String, Vec<u8>)], Option<(&PathBuf, Vec<u8>)>),
+    (pngs, glb): (&[AtlasPng], Glb),
     report: &ImportReport,
 ) -> Result<Vec<String>, CliError> {
     let mut stage = Staged::new(&args.output);
