@@ -1,7 +1,7 @@
 //! `billow bbcloud IN -o OUT.billow`: a stochastic billboard cloud (Lacewell et al. 2006)
 //! of a mesh's foliage, plus its other triangles kept as a mesh.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use billow::bbcloud::{
@@ -12,22 +12,24 @@ use billow::compress::{compress_cloud, Compression};
 use billow::export::gltf::cloud_gltf_bytes_with;
 use billow::export::straight;
 use billow::export::{GltfAlpha, GltfContainer, GltfOptions};
-use billow::import::{import, ImportOptions, Imported};
-use billow::presets::{resolve_cloud, CloudFlags, CloudSettings, Preset, Source};
+use billow::import::{import, ImportOptions, ImportReport, Imported};
+use billow::presets::{resolve_cloud, CloudFlags, CloudSettings, Preset, ResolvedCloud, Source};
 use billow::provenance::{source_info_all, tool_version};
-use billow::target_error::{search_cloud, short, TargetOptions, Trial};
+use billow::target_error::{search_cloud, short, TargetOptions};
 use billow_format::{CloudAsset, CloudBlocks};
 use glam::Vec3;
 use serde::Serialize;
 
-use crate::depfile;
-use crate::exit::{bbcloud_error, usage, CliError, Code};
-use crate::output::{
-    print_json, progress, refuse_clobbering, refuse_clobbering_read, refuse_file_as_folder, warn,
+use crate::bake_steps::{
+    imported, parse_compress, parse_preset, print_summary, refuse_outputs, settings_preset,
+    settings_source,
 };
+use crate::depfile;
+use crate::exit::{bad, bbcloud_error, usage, CliError, Code};
+use crate::output::{progress, warn};
 use crate::progress::{self, Monotone};
 use crate::staged::{out_err, Staged};
-use crate::target::{search_failed, target_options, trial_line, TargetArgs, TargetSummary};
+use crate::target::{run_search, target_options, TargetArgs, TargetSummary};
 use crate::Ctx;
 
 #[derive(clap::Args, Debug)]
@@ -213,10 +215,6 @@ struct Summary<'a> {
     warnings: Vec<String>,
 }
 
-fn bad(flag: &str, e: impl std::fmt::Display) -> CliError {
-    CliError::new(Code::BadParameter, format!("{flag}: {e}"))
-}
-
 /// `--light`'s default, `billow_core::shading::DEFAULT_LIGHT` as the flag spells it.
 fn default_light() -> String {
     let l = billow_core::shading::DEFAULT_LIGHT;
@@ -306,14 +304,20 @@ fn parse_view(s: &str, up: Vec3, strength: f32) -> Result<ViewPreference, CliErr
 /// A plane search expected to take longer than this (seconds) is announced with a warning.
 const SLOW_SECONDS: f64 = 60.0;
 
-pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
-    let start = Instant::now();
-    let preset = args
-        .preset
-        .as_deref()
-        .map(str::parse::<Preset>)
-        .transpose()
-        .map_err(|e| usage("--preset", e))?;
+/// What the flags ask for, checked before any work (the bake's own options apart).
+struct Plan {
+    preset: Option<Preset>,
+    flags: CloudFlags,
+    resolved: ResolvedCloud,
+    target: Option<TargetOptions>,
+    compression: Compression,
+    gltf_container: GltfContainer,
+}
+
+/// `--preset` and the settings it resolves, `--target-error`, `--compress` and `--gltf`'s
+/// container, in the order their errors are reported.
+fn plan(args: &Args) -> Result<Plan, CliError> {
+    let preset = parse_preset(args.preset.as_deref())?;
     let flags = CloudFlags {
         epsilon: args.epsilon,
         samples: args.samples,
@@ -321,8 +325,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     };
     let resolved = resolve_cloud(preset, &flags);
     let target = target_options(&args.target)?;
-    let compression: Compression = args.compress.parse().map_err(|e| usage("--compress", e))?;
-    let flatten: Flatten = args.flatten.parse().map_err(|e| usage("--flatten", e))?;
+    let compression = parse_compress(&args.compress)?;
     let gltf_container = args
         .gltf
         .as_deref()
@@ -339,17 +342,23 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         })
         .transpose()?
         .unwrap_or_default();
-    let mut outputs = vec![("-o", args.output.as_path())];
-    outputs.extend(args.gltf.as_deref().map(|g| ("--gltf", g)));
-    outputs.extend(args.depfile.as_deref().map(|g| ("--depfile", g)));
-    refuse_clobbering(&[&args.input], &outputs)?;
-    if let Some(dir) = &args.atlas {
-        refuse_file_as_folder("--atlas", dir)?;
-    }
-    let mut named: Vec<&std::path::Path> = outputs.iter().map(|(_, p)| *p).collect();
-    named.push(&args.input);
-    named.extend(args.atlas.as_deref());
-    depfile::check(args.depfile.as_deref(), &named)?;
+    Ok(Plan {
+        preset,
+        flags,
+        resolved,
+        target,
+        compression,
+        gltf_container,
+    })
+}
+
+/// The bake's options from `settings` (the resolved ε, N and atlas size) and the flags;
+/// warns when a normal map is baked with lighting.
+fn bake_options(
+    args: &Args,
+    ctx: &Ctx,
+    settings: &CloudSettings,
+) -> Result<BbcloudOptions, CliError> {
     let input_shown = args.input.display().to_string();
     // Before the import: the library checks it again.
     check_ambient(args.ambient).map_err(|e| bbcloud_error(&input_shown, &e))?;
@@ -359,17 +368,18 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         Some(parse_light(&args.light)?)
     };
     let up = parse_dir("--up", &args.up)?;
+    let flatten: Flatten = args.flatten.parse().map_err(|e| usage("--flatten", e))?;
     let view = args
         .view_dirs
         .as_deref()
         .map(|s| parse_view(s, up, args.view_strength))
         .transpose()?;
-    let mut opts = BbcloudOptions {
-        epsilon: resolved.settings.epsilon,
-        samples: resolved.settings.samples,
+    let opts = BbcloudOptions {
+        epsilon: settings.epsilon,
+        samples: settings.samples,
         seed: args.seed,
         lods: args.lods,
-        atlas_size: resolved.settings.atlas_size,
+        atlas_size: settings.atlas_size,
         texel_density: args.texel_density,
         shading: Shading {
             light,
@@ -392,68 +402,53 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
              billboards again; bake with --unlit for runtime lighting",
         );
     }
-    let input = args.input.display().to_string();
-    let Imported { scene, report } = import(
-        &args.input,
-        &ImportOptions {
-            strict: args.strict,
-        },
-    )
-    .map_err(|e| CliError::new(Code::from(&e), &e))?;
-    refuse_clobbering_read(&args.input, &report.files, &outputs)?;
-    for w in &report.warnings {
-        warn(ctx, &format!("{input}: {}", w.message));
-    }
-    depfile::check(
-        args.depfile.as_deref(),
-        &report
-            .files
-            .iter()
-            .map(PathBuf::as_path)
-            .collect::<Vec<_>>(),
-    )?;
-    let source = source_info_all(&args.input, &report.files)
-        .map_err(|e| CliError::new(Code::InputIo, format!("{input}: cannot read: {e}")))?;
-    let seconds_import = start.elapsed().as_secs_f64();
+    Ok(opts)
+}
 
-    let (cloud, target_summary) = match &target {
-        None => (
-            bake_once(&scene, &opts, &args, ctx, &input, source, None)?,
-            None,
-        ),
-        Some(t) => {
-            let (cloud, chosen, summary) = bake_to_target(
-                &scene,
-                &opts,
-                &args,
-                &flags,
-                t,
-                compression,
-                ctx,
-                &input,
-                &source,
-            )?;
-            opts = chosen;
-            (cloud, Some(summary))
-        }
+/// Imports the mesh, refusing outputs that would replace a file it read; returns it with
+/// its provenance.
+fn read_input(
+    args: &Args,
+    ctx: &Ctx,
+    outputs: &[(&str, &Path)],
+    input: &str,
+) -> Result<(Imported, billow_format::SourceInfo), CliError> {
+    let options = ImportOptions {
+        strict: args.strict,
     };
-    let Cloud {
-        mut asset,
-        stats,
-        cost,
-        compressed,
-    } = cloud;
+    let imported = imported(
+        &args.input,
+        input,
+        import(&args.input, &options),
+        outputs,
+        ctx,
+    )?;
+    depfile::check_read(args.depfile.as_deref(), &imported.report.files)?;
+    let source = source_info_all(&args.input, &imported.report.files)
+        .map_err(|e| CliError::new(Code::InputIo, format!("{input}: cannot read: {e}")))?;
+    Ok((imported, source))
+}
 
-    // Everything is encoded before anything is written, so a failure leaves no output.
-    // The atlas PNGs are encoded once for both the .glb and the --atlas dump.
-    let export_start = Instant::now();
+/// An atlas PNG: its file name and bytes.
+type AtlasPng = (String, Vec<u8>);
+/// The `--gltf` file: its path and bytes.
+type Glb<'a> = Option<(&'a PathBuf, Vec<u8>)>;
+
+/// The exports, encoded before anything is written so a failure leaves no output: the
+/// atlas PNGs (once for both the .glb and the `--atlas` dump) and the `--gltf` file.
+fn export<'a>(
+    args: &'a Args,
+    plan: &Plan,
+    asset: &CloudAsset,
+    scene: &billow::scene::Scene,
+) -> Result<(Vec<AtlasPng>, Glb<'a>), CliError> {
     let pngs = if args.atlas.is_some() || args.gltf.is_some() {
         let place = args
             .atlas
             .as_ref()
             .or(args.gltf.as_ref())
             .expect("one of them");
-        straight::atlas_pngs(&asset).map_err(|e| {
+        straight::atlas_pngs(asset).map_err(|e| {
             CliError::new(
                 Code::Internal,
                 format!("{}: cannot encode PNG: {e}", place.display()),
@@ -470,20 +465,34 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
                     GltfAlphaArg::Mask => GltfAlpha::Mask { cutoff: 0.5 },
                     GltfAlphaArg::Blend => GltfAlpha::Blend,
                 },
-                container: gltf_container,
-                source: Some(&scene),
+                container: plan.gltf_container,
+                source: Some(scene),
             };
             let png_bytes: Vec<Vec<u8>> = pngs.iter().map(|(_, b)| b.clone()).collect();
-            let bytes = cloud_gltf_bytes_with(&asset, &opts, Some(&png_bytes))
+            let bytes = cloud_gltf_bytes_with(asset, &opts, Some(&png_bytes))
                 .map_err(|e| CliError::new(Code::Internal, format!("{}: {e}", path.display())))?;
             Some((path, bytes))
         }
     };
-    let seconds_export = export_start.elapsed().as_secs_f64();
+    Ok((pngs, glb))
+}
 
-    let compress_start = Instant::now();
+/// The files the command writes, each with its flag (`--atlas` apart: a folder).
+fn outputs(args: &Args) -> Vec<(&'static str, &Path)> {
+    let mut outputs = vec![("-o", args.output.as_path())];
+    outputs.extend(args.gltf.as_deref().map(|g| ("--gltf", g)));
+    outputs.extend(args.depfile.as_deref().map(|g| ("--depfile", g)));
+    outputs
+}
+
+/// The cloud as written and its BC7 blocks: the compressed copy `--target-error` measured
+/// already, else `asset` compressed as `--compress` says.
+fn compressed_asset(
+    mut asset: CloudAsset,
+    compressed: Option<(Box<CloudAsset>, CloudBlocks)>,
+    compression: Compression,
+) -> (CloudAsset, Option<CloudBlocks>) {
     let blocks = match compressed {
-        // --target-error measured the compressed cloud already.
         Some((c, b)) => {
             asset = *c;
             Some(b)
@@ -493,14 +502,18 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             compress_cloud(&mut asset)
         }),
     };
-    let seconds_compress = compress_start.elapsed().as_secs_f64();
-    let gpu = billow_core::gpu_memory::cloud_gpu_bytes(&asset, blocks.is_some());
-    let write_start = Instant::now();
-    let bytes = asset
-        .to_bytes_with(blocks.as_ref())
-        .map_err(|e| CliError::new(Code::Internal, e))?;
-    // Every file goes to a temporary name first; all are renamed into place only when all
-    // are written, so a failure leaves no new file (and no new folder) behind.
+    (asset, blocks)
+}
+
+/// Writes every file: to a temporary name first, all renamed into place only when all are
+/// written, so a failure leaves no new file (and no new folder) behind. Returns the atlas
+/// PNGs written, as shown.
+fn write_outputs(
+    args: &Args,
+    bytes: &[u8],
+    (pngs, glb): (&[AtlasPng], Glb),
+    report: &ImportReport,
+) -> Result<Vec<String>, CliError> {
     let mut stage = Staged::new(&args.output);
     let mut atlas_paths = Vec::new();
     if let Some(dir) = &args.atlas {
@@ -510,7 +523,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
                 format!("{}: cannot create directory: {e}", dir.display()),
             )
         })?;
-        for (name, png) in &pngs {
+        for (name, png) in pngs {
             let p = dir.join(name);
             stage.stage(&p, png).map_err(|e| out_err(&p, e))?;
             atlas_paths.push(p);
@@ -520,39 +533,95 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         stage.stage(path, glb).map_err(|e| out_err(path, e))?;
     }
     stage
-        .stage(&args.output, &bytes)
+        .stage(&args.output, bytes)
         .map_err(|e| out_err(&args.output, e))?;
-    if let Some(d) = &args.depfile {
-        let mut targets = vec![args.output.as_path()];
-        targets.extend(args.gltf.as_deref());
-        targets.extend(atlas_paths.iter().map(PathBuf::as_path));
-        let text = depfile::render(&targets, &args.input, &report.files, &report.missing)?;
-        stage.stage(d, text.as_bytes()).map_err(|e| out_err(d, e))?;
-    }
-    stage.commit_or_fail()?;
-    let atlas_files: Vec<String> = atlas_paths
+    let targets = (
+        args.output.as_path(),
+        args.gltf.as_deref(),
+        atlas_paths.as_slice(),
+    );
+    depfile::commit(stage, args.depfile.as_deref(), targets, &args.input, report)?;
+    Ok(atlas_paths
         .iter()
         .map(|p| p.display().to_string())
-        .collect();
+        .collect())
+}
+
+pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
+    let start = Instant::now();
+    let plan = plan(&args)?;
+    let outputs = outputs(&args);
+    let atlas = args.atlas.as_deref();
+    let depfile = args.depfile.as_deref();
+    refuse_outputs(
+        &args.input,
+        &outputs,
+        atlas.map(|d| ("--atlas", d)),
+        depfile,
+        atlas,
+    )?;
+    let mut opts = bake_options(&args, ctx, &plan.resolved.settings)?;
+    let input = args.input.display().to_string();
+    let (Imported { scene, report }, source) = read_input(&args, ctx, &outputs, &input)?;
+    let seconds_import = start.elapsed().as_secs_f64();
+
+    let (cloud, target) = match &plan.target {
+        None => (
+            bake_once(&scene, &opts, &args, ctx, &input, source, None)?,
+            None,
+        ),
+        Some(t) => {
+            let (cloud, chosen, summary) = bake_to_target(
+                &scene,
+                &opts,
+                &args,
+                &plan.flags,
+                t,
+                plan.compression,
+                ctx,
+                &input,
+                &source,
+            )?;
+            opts = chosen;
+            (cloud, Some(summary))
+        }
+    };
+    let Cloud {
+        asset,
+        stats,
+        cost,
+        compressed,
+    } = cloud;
+
+    let export_start = Instant::now();
+    let (pngs, glb) = export(&args, &plan, &asset, &scene)?;
+    let seconds_export = export_start.elapsed().as_secs_f64();
+
+    let compress_start = Instant::now();
+    let (asset, blocks) = compressed_asset(asset, compressed, plan.compression);
+    let seconds_compress = compress_start.elapsed().as_secs_f64();
+    let gpu = billow_core::gpu_memory::cloud_gpu_bytes(&asset, blocks.is_some());
+    let write_start = Instant::now();
+    let bytes = asset
+        .to_bytes_with(blocks.as_ref())
+        .map_err(|e| CliError::new(Code::Internal, e))?;
+    let atlas_files = write_outputs(&args, &bytes, (&pngs, glb), &report)?;
     let seconds_write = write_start.elapsed().as_secs_f64();
 
-    let by_target = target_summary.is_some();
-    let from = |s: Source| if by_target { Source::Target } else { s };
+    let from = |s| settings_source(target.as_ref(), s);
     let summary = Summary {
         input,
         output: args.output.display().to_string(),
-        preset: target_summary
-            .as_ref()
-            .map_or(preset, |t: &TargetSummary| t.chosen_preset),
+        preset: settings_preset(target.as_ref(), plan.preset),
         epsilon: opts.epsilon,
         samples: opts.samples,
         atlas_size: opts.atlas_size,
         settings_from: SettingsFrom {
-            epsilon: from(resolved.epsilon_from),
-            samples: from(resolved.samples_from),
-            atlas_size: from(resolved.atlas_size_from),
+            epsilon: from(plan.resolved.epsilon_from),
+            samples: from(plan.resolved.samples_from),
+            atlas_size: from(plan.resolved.atlas_size_from),
         },
-        target: target_summary,
+        target,
         seed: args.seed,
         mip_levels: args.mip_levels,
         normal_map: args.normal_map,
@@ -575,28 +644,27 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         seconds_total: start.elapsed().as_secs_f64(),
         warnings: report.messages(),
     };
-    if let (Some(t), false) = (&summary.target, ctx.quiet) {
-        eprintln!("{}", t.line());
-    }
-    if args.json {
-        print_json(&summary)?;
-    } else if !ctx.quiet {
-        eprintln!(
-            "{}: {} foliage triangles -> billboards per LOD {:?}, atlas fill {:?}, {} kept triangles, {:.1} MiB in {:.2} s",
-            summary.output,
-            stats.foliage_triangles,
-            summary.billboards_per_lod,
-            summary.atlas_fill_per_lod.iter().map(|f| format!("{:.1}%", 100.0 * f)).collect::<Vec<_>>(),
-            stats.kept_triangles,
-            bytes.len() as f64 / (1 << 20) as f64,
-            summary.seconds_total
-        );
-        eprintln!(
-            "  {}",
-            crate::output::gpu_line(summary.gpu_bytes, summary.gpu_bytes_no_bc)
-        );
-    }
-    Ok(())
+    print_summary(ctx, args.json, summary.target.as_ref(), &summary, || {
+        print_text(&summary)
+    })
+}
+
+/// The summary on stderr: what the bake made, its size and time, and its GPU memory.
+fn print_text(s: &Summary) {
+    eprintln!(
+        "{}: {} foliage triangles -> billboards per LOD {:?}, atlas fill {:?}, {} kept triangles, {:.1} MiB in {:.2} s",
+        s.output,
+        s.stats.foliage_triangles,
+        s.billboards_per_lod,
+        s.atlas_fill_per_lod.iter().map(|f| format!("{:.1}%", 100.0 * f)).collect::<Vec<_>>(),
+        s.stats.kept_triangles,
+        s.bytes as f64 / (1 << 20) as f64,
+        s.seconds_total
+    );
+    eprintln!(
+        "  {}",
+        crate::output::gpu_line(s.gpu_bytes, s.gpu_bytes_no_bc)
+    );
 }
 
 /// One bake: the cloud, its statistics and the estimate it was checked against; with
@@ -745,16 +813,9 @@ fn bake_to_target(
         .len() as u64;
         Ok::<_, CliError>((Tried { cloud, opts: o }, bytes))
     };
-    let mut on_trial = |t: &Trial| {
-        if !ctx.quiet {
-            eprintln!("{}", trial_line(target.error, t));
-        }
-    };
-    let found = search_cloud(scene, flags, target, &mut bake, &mut on_trial).map_err(|e| {
-        let output = args.output.display().to_string();
-        search_failed(e, target, args.json.then_some((input, &output)), input)
-    })?;
-    let summary = TargetSummary::new(target, &found);
-    let Tried { cloud, opts } = found.asset;
+    let (Tried { cloud, opts }, summary) =
+        run_search(target, ctx, (args.json, input, &args.output), |on_trial| {
+            search_cloud(scene, flags, target, &mut bake, on_trial)
+        })?;
     Ok((cloud, opts, summary))
 }

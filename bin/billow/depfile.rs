@@ -33,7 +33,10 @@
 
 use std::path::{Path, PathBuf};
 
+use billow::import::ImportReport;
+
 use crate::exit::{CliError, Code};
+use crate::staged::{out_err, Staged};
 
 /// One path, escaped for a Makefile rule.
 fn escape(flag: &str, p: &Path) -> Result<String, CliError> {
@@ -77,6 +80,34 @@ pub fn check(depfile: Option<&Path>, paths: &[&Path]) -> Result<(), CliError> {
         }
     }
     Ok(())
+}
+
+/// [`check`] for the files an import read beside the mesh.
+pub fn check_read(depfile: Option<&Path>, read: &[PathBuf]) -> Result<(), CliError> {
+    check(
+        depfile,
+        &read.iter().map(PathBuf::as_path).collect::<Vec<_>>(),
+    )
+}
+
+/// Commits `stage`'s outputs, with `depfile` its rule ([`render`]) among them: the targets
+/// are `output`, `also` and `written`, the prerequisites `input` and what `report` says the
+/// import read.
+pub fn commit(
+    mut stage: Staged,
+    depfile: Option<&Path>,
+    (output, also, written): (&Path, Option<&Path>, &[PathBuf]),
+    input: &Path,
+    report: &ImportReport,
+) -> Result<(), CliError> {
+    if let Some(d) = depfile {
+        let mut targets = vec![output];
+        targets.extend(also);
+        targets.extend(written.iter().map(PathBuf::as_path));
+        let text = render(&targets, input, &report.files, &report.missing)?;
+        stage.stage(d, text.as_bytes()).map_err(|e| out_err(d, e))?;
+    }
+    stage.commit_or_fail()
 }
 
 /// The depfile's text: `targets` depend on `input` and then `read`, and are out of date as

@@ -13,8 +13,9 @@ use billow_core::gpu_memory::volume_gpu_bytes;
 use billow_format::{read_file, AssetKind, VolumeAsset};
 use serde::Serialize;
 
+use crate::bake_steps::parse_compress;
 use crate::depfile;
-use crate::exit::{usage, CliError, Code};
+use crate::exit::{CliError, Code};
 use crate::output::{print_json, refuse_clobbering, warn};
 use crate::staged::{out_err, Staged};
 use crate::Ctx;
@@ -86,7 +87,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let start = Instant::now();
     let mut outputs = vec![("-o", args.output.as_path())];
     outputs.extend(args.depfile.as_deref().map(|d| ("--depfile", d)));
-    let compression: Compression = args.compress.parse().map_err(|e| usage("--compress", e))?;
+    let compression: Compression = parse_compress(&args.compress)?;
     refuse_clobbering(&[&args.input], &outputs)?;
     depfile::check(args.depfile.as_deref(), &[&args.input, &args.output])?;
     let shown = args.input.display().to_string();
@@ -165,35 +166,41 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     if args.json {
         print_json(&summary)?;
     } else if !ctx.quiet {
-        let s = &summary.stats;
-        let pct = |a: u64, b: u64| 100.0 * (b as f64 / a.max(1) as f64 - 1.0);
-        eprintln!(
-            "{}: {} boxes, {} bands ({} cells), atlas {}x{}x{} from {}x{}x{}, voxels drawn {:.1}% of the source's, GPU textures {} -> {} bytes ({:+.1}%; without BC7 {} -> {}), file {} -> {} bytes ({:+.1}%){}",
-            summary.output,
-            s.boxes,
-            s.bands.len(),
-            s.cells,
-            s.atlas_dims[0],
-            s.atlas_dims[1],
-            s.atlas_dims[2],
-            s.source_dims[0],
-            s.source_dims[1],
-            s.source_dims[2],
-            100.0 * s.voxels_kept as f64 / s.voxels_before.max(1) as f64,
-            summary.gpu_bytes_before,
-            summary.gpu_bytes_after,
-            pct(summary.gpu_bytes_before, summary.gpu_bytes_after),
-            summary.gpu_bytes_before_no_bc,
-            summary.gpu_bytes_after_no_bc,
-            summary.file_bytes_before,
-            summary.file_bytes_after,
-            pct(summary.file_bytes_before, summary.file_bytes_after),
-            if s.kept_whole {
-                "; kept whole"
-            } else {
-                ""
-            }
-        );
+        print_text(&summary);
     }
     Ok(())
+}
+
+/// The summary on stderr: the boxes and bands, the atlas, what is drawn, and the GPU and
+/// file sizes before and after.
+fn print_text(summary: &Summary) {
+    let s = &summary.stats;
+    let pct = |a: u64, b: u64| 100.0 * (b as f64 / a.max(1) as f64 - 1.0);
+    eprintln!(
+        "{}: {} boxes, {} bands ({} cells), atlas {}x{}x{} from {}x{}x{}, voxels drawn {:.1}% of the source's, GPU textures {} -> {} bytes ({:+.1}%; without BC7 {} -> {}), file {} -> {} bytes ({:+.1}%){}",
+        summary.output,
+        s.boxes,
+        s.bands.len(),
+        s.cells,
+        s.atlas_dims[0],
+        s.atlas_dims[1],
+        s.atlas_dims[2],
+        s.source_dims[0],
+        s.source_dims[1],
+        s.source_dims[2],
+        100.0 * s.voxels_kept as f64 / s.voxels_before.max(1) as f64,
+        summary.gpu_bytes_before,
+        summary.gpu_bytes_after,
+        pct(summary.gpu_bytes_before, summary.gpu_bytes_after),
+        summary.gpu_bytes_before_no_bc,
+        summary.gpu_bytes_after_no_bc,
+        summary.file_bytes_before,
+        summary.file_bytes_after,
+        pct(summary.file_bytes_before, summary.file_bytes_after),
+        if s.kept_whole {
+            "; kept whole"
+        } else {
+            ""
+        }
+    );
 }

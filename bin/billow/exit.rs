@@ -62,6 +62,12 @@ impl CliError {
     }
 }
 
+impl std::fmt::Display for CliError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
 /// A [`VoxelizeError`] as the command's error: an option's error names the flag it came
 /// from (`--supersample: 9 is out of range (1 to 8)`), the rest the input file.
 pub fn voxelize_error(input: &str, e: &VoxelizeError) -> CliError {
@@ -107,6 +113,11 @@ pub fn bbcloud_error(input: &str, e: &BbcloudError) -> CliError {
         }
         _ => CliError::new(Code::from(e), format!("{input}: {e}")),
     }
+}
+
+/// A value that parses but is out of range for `flag` (exit 8).
+pub fn bad(flag: &str, e: impl Display) -> CliError {
+    CliError::new(Code::BadParameter, format!("{flag}: {e}"))
 }
 
 /// A value that does not parse as what `flag` takes (exit 2, like clap's own errors).

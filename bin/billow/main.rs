@@ -5,6 +5,7 @@
 mod stdout;
 
 mod alloc;
+mod bake_steps;
 mod bbcloud;
 mod compare;
 mod depfile;
@@ -26,6 +27,7 @@ mod view_steps;
 mod voxelize;
 mod voxelize_args;
 mod voxelize_bake;
+mod voxelize_summary;
 
 use std::process::ExitCode;
 

@@ -6,12 +6,13 @@ use std::path::PathBuf;
 use billow::compress::{encode_volume, Compression};
 use billow::import::{import, ImportOptions, Imported};
 use billow::shell::{shell, shell_asset, with_surface_normals};
-use billow_format::VolumeAsset;
+use billow_format::{VolumeAsset, VolumeBlocks};
 use glam::Vec2;
 use serde::Serialize;
 
+use crate::bake_steps::parse_compress;
 use crate::depfile;
-use crate::exit::{usage, CliError, Code};
+use crate::exit::{CliError, Code};
 use crate::output::{print_json, refuse_clobbering, refuse_clobbering_read, warn};
 use crate::staged::{out_err, Staged};
 use crate::Ctx;
@@ -63,7 +64,7 @@ struct Summary {
 }
 
 pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
-    let compression: Compression = args.compress.parse().map_err(|e| usage("--compress", e))?;
+    let compression: Compression = parse_compress(&args.compress)?;
     let mut outputs = vec![("-o", args.output.as_path())];
     outputs.extend(args.depfile.as_deref().map(|d| ("--depfile", d)));
     refuse_clobbering(&[&args.surface, &args.volume], &outputs)?;
@@ -71,18 +72,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         args.depfile.as_deref(),
         &[&args.surface, &args.volume, &args.output],
     )?;
-    let tiles: Vec<f32> = args
-        .tiles
-        .split(',')
-        .map(|p| p.trim().parse::<f32>())
-        .collect::<Result<_, _>>()
-        .map_err(|e| CliError::new(Code::Usage, format!("--tiles '{}': {e}", args.tiles)))?;
-    let [u, v] = tiles[..] else {
-        return Err(CliError::new(
-            Code::Usage,
-            format!("--tiles '{}': expected two numbers U,V", args.tiles),
-        ));
-    };
+    let tiles = parse_tiles(&args.tiles)?;
     let Imported {
         scene: surface,
         report,
@@ -94,20 +84,13 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     )
     .map_err(|e| CliError::new(Code::from(&e), &e))?;
     refuse_clobbering_read(&args.surface, &report.files, &outputs)?;
-    depfile::check(
-        args.depfile.as_deref(),
-        &report
-            .files
-            .iter()
-            .map(PathBuf::as_path)
-            .collect::<Vec<_>>(),
-    )?;
+    depfile::check_read(args.depfile.as_deref(), &report.files)?;
     for w in &report.warnings {
         warn(ctx, &format!("{}: {}", args.surface.display(), w.message));
     }
     let (volume, volume_blocks) = VolumeAsset::read_with_blocks(&args.volume)
         .map_err(|e| CliError::new(Code::from(&e), &e))?;
-    let s = shell(&surface, args.height, Vec2::new(u, v))
+    let s = shell(&surface, args.height, tiles)
         .map_err(|e| CliError::new(Code::from(&e), format!("{}: {e}", args.surface.display())))?;
     let (skipped, mirrored, folded) = (s.skipped, s.mirrored, s.folded);
     if mirrored > 0 {
@@ -126,20 +109,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     if args.surface_normals {
         with_surface_normals(&mut asset);
     }
-    // The shell's texture is the volume's: its blocks are reused, not encoded again.
-    let blocks = match compression {
-        Compression::None => {
-            asset.header.clear_compress();
-            None
-        }
-        Compression::Bc => {
-            asset.header.set_compress("bc7");
-            Some(match volume_blocks.filter(|_| !args.surface_normals) {
-                Some(b) => b,
-                None => encode_volume(&mut asset),
-            })
-        }
-    };
+    let blocks = shell_blocks(&mut asset, volume_blocks, compression, args.surface_normals);
     let bytes = asset
         .to_bytes_with(blocks.as_ref())
         .map_err(|e| CliError::new(Code::Internal, e))?;
@@ -171,4 +141,43 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         );
     }
     Ok(())
+}
+
+/// `--tiles U,V`.
+fn parse_tiles(s: &str) -> Result<Vec2, CliError> {
+    let tiles: Vec<f32> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| CliError::new(Code::Usage, format!("--tiles '{s}': {e}")))?;
+    let [u, v] = tiles[..] else {
+        return Err(CliError::new(
+            Code::Usage,
+            format!("--tiles '{s}': expected two numbers U,V"),
+        ));
+    };
+    Ok(Vec2::new(u, v))
+}
+
+/// The shell's BC7 blocks as `--compress` says: the shell's texture is the volume's, so its
+/// blocks are reused, not encoded again (unless `--surface-normals` changed the texels).
+fn shell_blocks(
+    asset: &mut VolumeAsset,
+    volume_blocks: Option<VolumeBlocks>,
+    compression: Compression,
+    surface_normals: bool,
+) -> Option<VolumeBlocks> {
+    match compression {
+        Compression::None => {
+            asset.header.clear_compress();
+            None
+        }
+        Compression::Bc => {
+            asset.header.set_compress("bc7");
+            Some(match volume_blocks.filter(|_| !surface_normals) {
+                Some(b) => b,
+                None => encode_volume(asset),
+            })
+        }
+    }
 }

@@ -282,3 +282,25 @@ pub(crate) fn search_failed<E: Into<CliError>>(
         SearchError::Judge(e) => CliError::new(Code::from(&e), format!("{input}: {e}")),
     }
 }
+
+/// Runs a `--target-error` search (`search` is given the printer of each trial's line on
+/// stderr): the chosen bake and what was tried, or the failure as [`search_failed`] says
+/// (`json`: the command's `--json`; `input`, `output`: as shown).
+pub(crate) fn run_search<S, A, E: Into<CliError>>(
+    target: &TargetOptions,
+    ctx: &crate::Ctx,
+    (json, input, output): (bool, &str, &std::path::Path),
+    search: impl FnOnce(&mut dyn FnMut(&Trial)) -> Result<Found<S, A>, SearchError<E>>,
+) -> Result<(A, TargetSummary), CliError> {
+    let mut on_trial = |t: &Trial| {
+        if !ctx.quiet {
+            eprintln!("{}", trial_line(target.error, t));
+        }
+    };
+    let found = search(&mut on_trial).map_err(|e| {
+        let output = output.display().to_string();
+        search_failed(e, target, json.then_some((input, &output)), input)
+    })?;
+    let summary = TargetSummary::new(target, &found);
+    Ok((found.asset, summary))
+}

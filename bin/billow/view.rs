@@ -9,12 +9,14 @@ use billow::eval::ImageF32;
 use billow_core::camera::{parse_direction, Camera};
 use billow_core::slicing::Spacing;
 use billow_core::Aabb;
+use billow_view::content::Content;
+use billow_view::scene::SceneFile;
 use billow_view::{FrameStats, Gpu, SliceParams, ViewCamera, ViewError};
 use glam::{Vec3, Vec4};
 use serde::Serialize;
 
 use crate::eval::parse_size;
-use crate::exit::{usage, CliError, Code};
+use crate::exit::{bad, usage, CliError, Code};
 use crate::output::{print_json, refuse_clobbering, refuse_clobbering_read};
 use crate::view_load::{load_content, load_scene};
 use crate::view_steps::{self, Steps};
@@ -163,10 +165,6 @@ struct Startup {
     total: f64,
 }
 
-fn bad(flag: &str, e: impl std::fmt::Display) -> CliError {
-    CliError::new(Code::BadParameter, format!("{flag}: {e}"))
-}
-
 fn parse_vec3(flag: &str, s: &str) -> Result<Vec3, CliError> {
     let v: Vec<f32> = s
         .split(',')
@@ -248,13 +246,13 @@ fn view_err(e: ViewError) -> CliError {
     CliError::new(Code::from(&e), e)
 }
 
-pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
-    let started = Instant::now();
-    if let Some(shot) = &args.screenshot {
-        refuse_clobbering(&[&args.target], &[("--screenshot", shot)])?;
-        crate::output::image_out("--screenshot", shot)?;
-    }
-    let mut steps = Steps::stderr(ctx.quiet || args.print_passes);
+/// Reads the scene and its assets with the flags that change them (`--shadows`,
+/// `--particle-layer`, `--particle-mode`, `--dissolve`), refusing a screenshot that would
+/// replace a file it read; returns them and how long the reading took.
+fn load(
+    args: &Args,
+    steps: &mut Steps,
+) -> Result<(SceneFile, Content, std::time::Duration), CliError> {
     steps.start("reading the scene and its assets");
     let mut scene = load_scene(&args.target)?;
     match args.shadows.as_deref() {
@@ -263,7 +261,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
         Some("off") => scene.shadows = false,
         Some(o) => return Err(usage("--shadows", format!("'{o}': expected on or off"))),
     }
-    override_particles(&mut scene, &args)?;
+    override_particles(&mut scene, args)?;
     let mut read = Vec::new();
     let mut content = load_content(&scene, &mut read)?;
     let read_time = steps.end();
@@ -275,25 +273,32 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     if let Some(shot) = &args.screenshot {
         refuse_clobbering_read(&args.target, &read, &[("--screenshot", shot)])?;
     }
-    let passes = content.passes();
-    if args.print_passes {
-        if args.json {
-            #[derive(Serialize)]
-            struct Passes<'a> {
-                target: String,
-                passes: &'a [&'static str],
-            }
-            return print_json(&Passes {
-                target: args.target.display().to_string(),
-                passes: &passes,
-            });
+    Ok((scene, content, read_time))
+}
+
+/// `--print-passes`: the passes a frame runs, one a line (or `--json`).
+fn print_passes(args: &Args, passes: &[&'static str]) -> Result<(), CliError> {
+    if args.json {
+        #[derive(Serialize)]
+        struct Passes<'a> {
+            target: String,
+            passes: &'a [&'static str],
         }
-        for p in &passes {
-            outln!("{p}");
-        }
-        return Ok(());
+        return print_json(&Passes {
+            target: args.target.display().to_string(),
+            passes,
+        });
     }
-    let (width, height) = parse_size(&args.size)?;
+    for p in passes {
+        outln!("{p}");
+    }
+    Ok(())
+}
+
+/// The flags' values and combinations checked, in the order their errors are reported;
+/// returns the frame size and the slice spacing.
+fn check_flags(args: &Args) -> Result<((u32, u32), Spacing), CliError> {
+    let size = parse_size(&args.size)?;
     let spacing = parse_spacing(&args.spacing)?;
     if !(args.distance.is_finite() && args.distance > 0.0) {
         return Err(bad("--distance", "must be > 0"));
@@ -327,6 +332,12 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             return Err(bad("--sweep-fill", format!("{f}: must be in (0, 4]")));
         }
     }
+    check_modes(args)?;
+    Ok((size, spacing))
+}
+
+/// `--lod-sweep`, `--headless` and `--screenshot` together.
+fn check_modes(args: &Args) -> Result<(), CliError> {
     if args.lod_sweep.is_some() && (args.screenshot.is_some() || args.lod_distance.is_some()) {
         return Err(usage(
             "--lod-sweep",
@@ -345,6 +356,15 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             "screenshots are taken headless: add --headless",
         ));
     }
+    Ok(())
+}
+
+/// `--eye`, `--look-at`, `--view` and `--background` (else the scene's, each in [0, 1]).
+#[allow(clippy::type_complexity)]
+fn view_flags(
+    args: &Args,
+    scene: &SceneFile,
+) -> Result<(Option<Vec3>, Option<Vec3>, Vec3, Option<Vec3>), CliError> {
     let eye = args
         .eye
         .as_deref()
@@ -370,24 +390,19 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     if background.is_some_and(|b| !(b.min_element() >= 0.0 && b.max_element() <= 1.0)) {
         return Err(bad("--background", "components must be in [0, 1]"));
     }
-    let params = SliceParams {
-        spacing,
-        partition: !args.no_partition,
-        slab_min_slices: args.slab_min_slices,
-        ..Default::default()
-    };
-    let bounds = match content.bounds() {
-        Some((min, max)) => Aabb { min, max },
-        None => Aabb::EMPTY,
-    };
+    Ok((eye, look_at, view_dir, background))
+}
 
-    // Camera: --eye, else the scene's, else framed like the eval's views.
-    let fov_deg = args
-        .fov
-        .or(scene.camera.as_ref().map(|c| c.fov_deg))
-        .unwrap_or(45.0);
-    let fov = fov_deg.to_radians();
-    let framed = Camera::framed(&bounds, view_dir, fov, width, height, args.distance);
+/// The camera: `--eye`, else the scene's, else framed like the eval's views (`--view`,
+/// `--distance`); `--look-at` overrides the target. Returns it with its eye and target.
+fn camera(
+    args: &Args,
+    scene: &SceneFile,
+    bounds: &Aabb,
+    (eye, look_at, view_dir): (Option<Vec3>, Option<Vec3>, Vec3),
+    (fov, width, height): (f32, u32, u32),
+) -> (ViewCamera, Vec3, Vec3) {
+    let framed = Camera::framed(bounds, view_dir, fov, width, height, args.distance);
     let radius = if bounds.is_empty() {
         1.0
     } else {
@@ -408,7 +423,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             target,
         )
     };
-    let (camera, cam_eye, cam_target) = match (eye, &scene.camera) {
+    match (eye, &scene.camera) {
         (Some(e), _) => look(e, look_at.unwrap_or(centre), Vec3::Y, None, None),
         (None, Some(c)) => look(
             Vec3::from(c.eye),
@@ -428,17 +443,54 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
                 c.target,
             )
         }
-    };
-    // Mesa's device-select Vulkan layer probes a Wayland display server and prints a
-    // misleading "error: XDG_RUNTIME_DIR is invalid or not set" on stderr without one,
-    // in a window as well as headless (the window needs no such probe: winit picks the
-    // display). Skip the layer unless the user chose otherwise (no other thread reads
-    // the environment here).
+    }
+}
+
+/// Mesa's device-select Vulkan layer probes a Wayland display server and prints a
+/// misleading "error: XDG_RUNTIME_DIR is invalid or not set" on stderr without one, in a
+/// window as well as headless (the window needs no such probe: winit picks the display).
+/// Skips the layer unless the user chose otherwise (no other thread reads the environment
+/// here).
+fn skip_device_select() {
     if std::env::var_os("NODEVICE_SELECT").is_none()
         && std::env::var_os("XDG_RUNTIME_DIR").is_none()
     {
         std::env::set_var("NODEVICE_SELECT", "1");
     }
+}
+
+pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
+    let started = Instant::now();
+    if let Some(shot) = &args.screenshot {
+        refuse_clobbering(&[&args.target], &[("--screenshot", shot)])?;
+        crate::output::image_out("--screenshot", shot)?;
+    }
+    let mut steps = Steps::stderr(ctx.quiet || args.print_passes);
+    let (scene, content, read_time) = load(&args, &mut steps)?;
+    let passes = content.passes();
+    if args.print_passes {
+        return print_passes(&args, &passes);
+    }
+    let ((width, height), spacing) = check_flags(&args)?;
+    let (eye, look_at, view_dir, background) = view_flags(&args, &scene)?;
+    let params = SliceParams {
+        spacing,
+        partition: !args.no_partition,
+        slab_min_slices: args.slab_min_slices,
+        ..Default::default()
+    };
+    let bounds = match content.bounds() {
+        Some((min, max)) => Aabb { min, max },
+        None => Aabb::EMPTY,
+    };
+    let fov_deg = args
+        .fov
+        .or(scene.camera.as_ref().map(|c| c.fov_deg))
+        .unwrap_or(45.0);
+    let fov = fov_deg.to_radians();
+    let views = (eye, look_at, view_dir);
+    let (camera, cam_eye, cam_target) = camera(&args, &scene, &bounds, views, (fov, width, height));
+    skip_device_select();
     if let Some(dir) = &args.lod_sweep {
         return run_sweep(
             &args,
@@ -461,46 +513,134 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
             (ctx, steps),
         );
     }
+    let shot = Shot {
+        content: &content,
+        camera: &camera,
+        params: (params, fov),
+        size: (width, height),
+        background,
+        passes,
+    };
+    run_headless(&args, ctx, shot, steps, (started, read_time))
+}
+
+/// What a headless frame shows and how.
+struct Shot<'a> {
+    content: &'a Content,
+    camera: &'a ViewCamera,
+    params: (SliceParams, f32),
+    size: (u32, u32),
+    background: Option<Vec3>,
+    passes: Vec<&'static str>,
+}
+
+/// `--headless --screenshot OUT.png`: renders `--frames` frames, writes the last and
+/// prints the summary.
+fn run_headless(
+    args: &Args,
+    ctx: &Ctx,
+    shot: Shot,
+    mut steps: Steps,
+    (started, read_time): (Instant, std::time::Duration),
+) -> Result<(), CliError> {
     let out = args.screenshot.as_ref().expect("checked above");
     let frames = args.frames.unwrap_or(1);
-
+    let (width, height) = shot.size;
     let (gpu, adapter_time) = steps.run("requesting the GPU adapter", Gpu::headless);
     let gpu = gpu.map_err(view_err)?;
     let adapter = gpu.describe();
-    let (mut r, build) = build(&content, gpu, (params, fov), &mut steps)?;
+    let (mut r, build) = build(shot.content, gpu, shot.params, &mut steps)?;
     r.lod_distance_override = args.lod_distance;
     r.set_wireframe(args.wireframe);
     r.time = args.time;
     let target = billow_view::target::Target::new(&r.gpu, width, height);
-    let mut stats = FrameStats::default();
-    let (mut total, mut min, mut first) = (0.0f64, f64::INFINITY, None);
-    let mut first_done = None;
-    for k in 0..frames {
-        steps.start(match k {
-            0 => "rendering the first frame".to_string(),
-            _ => format!("rendering frame {} of {frames}", k + 1),
-        });
-        let t = Instant::now();
-        stats = r.render(&target, &camera).map_err(view_err)?;
-        r.gpu.wait().map_err(view_err)?;
-        let s = t.elapsed().as_secs_f64();
-        steps.end();
-        total += s;
-        min = min.min(s);
-        first.get_or_insert(s);
-        first_done.get_or_insert_with(|| started.elapsed());
-    }
+    let timed = render_frames(&mut r, &target, shot.camera, frames, &mut steps, started)?;
     drop(steps);
     let startup = Startup {
         read: view_steps::ms(read_time),
         adapter: view_steps::ms(adapter_time),
         upload: view_steps::ms(build[0]),
         pipelines: view_steps::ms(build[1]),
-        first_frame: 1e3 * first.unwrap_or(0.0),
-        total: view_steps::ms(first_done.unwrap_or_default()),
+        first_frame: 1e3 * timed.first.unwrap_or(0.0),
+        total: view_steps::ms(timed.first_done.unwrap_or_default()),
     };
     let img = r.read(&target).map_err(view_err)?;
     let record = r.record();
+    write_screenshot(img, shot.background, out)?;
+    let summary = Summary {
+        target: args.target.display().to_string(),
+        screenshot: Some(out.display().to_string()),
+        adapter,
+        width,
+        height,
+        passes: shot.passes,
+        record,
+        frames,
+        frame_ms_mean: 1e3 * timed.total / f64::from(frames),
+        frame_ms_min: 1e3 * timed.min,
+        frame_ms_first: 1e3 * timed.first.unwrap_or(0.0),
+        startup_ms: startup,
+        stats: timed.stats,
+    };
+    if args.json {
+        print_json(&summary)?;
+    } else if !ctx.quiet {
+        print_text(&summary, out);
+    }
+    Ok(())
+}
+
+/// The frames' times (seconds) and the last frame's statistics.
+struct Timed {
+    stats: FrameStats,
+    total: f64,
+    min: f64,
+    first: Option<f64>,
+    /// When the first frame was done, from the start of the command.
+    first_done: Option<std::time::Duration>,
+}
+
+/// Renders `frames` frames, each timed until the GPU is done.
+fn render_frames(
+    r: &mut billow_view::Renderer,
+    target: &billow_view::target::Target,
+    camera: &ViewCamera,
+    frames: u32,
+    steps: &mut Steps,
+    started: Instant,
+) -> Result<Timed, CliError> {
+    let mut t = Timed {
+        stats: FrameStats::default(),
+        total: 0.0,
+        min: f64::INFINITY,
+        first: None,
+        first_done: None,
+    };
+    for k in 0..frames {
+        steps.start(match k {
+            0 => "rendering the first frame".to_string(),
+            _ => format!("rendering frame {} of {frames}", k + 1),
+        });
+        let t0 = Instant::now();
+        t.stats = r.render(target, camera).map_err(view_err)?;
+        r.gpu.wait().map_err(view_err)?;
+        let s = t0.elapsed().as_secs_f64();
+        steps.end();
+        t.total += s;
+        t.min = t.min.min(s);
+        t.first.get_or_insert(s);
+        t.first_done.get_or_insert_with(|| started.elapsed());
+    }
+    Ok(t)
+}
+
+/// Writes the frame to `out` (PNG or as its extension says), composited over `background`
+/// when given, atomically.
+fn write_screenshot(
+    img: billow_view::RgbaImage,
+    background: Option<Vec3>,
+    out: &std::path::Path,
+) -> Result<(), CliError> {
     let bg = background.map(|b| b.extend(1.0));
     let image = ImageF32 {
         width: img.width,
@@ -527,43 +667,27 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     stage
         .stage(out, &png)
         .map_err(|e| crate::staged::out_err(out, e))?;
-    stage.commit_or_fail()?;
-    let summary = Summary {
-        target: args.target.display().to_string(),
-        screenshot: Some(out.display().to_string()),
-        adapter,
-        width,
-        height,
-        passes,
-        record,
-        frames,
-        frame_ms_mean: 1e3 * total / f64::from(frames),
-        frame_ms_min: 1e3 * min,
-        frame_ms_first: 1e3 * first.unwrap_or(0.0),
-        startup_ms: startup,
-        stats,
-    };
-    if args.json {
-        print_json(&summary)?;
-    } else if !ctx.quiet {
-        let s = &summary.stats;
-        eprintln!(
-            "{}: {}x{} on {}, {} slices in {} slabs, {} cells, {} draws, {:.1} ms/frame (min {:.1}, {} frames) -> {}",
-            summary.target,
-            width,
-            height,
-            summary.adapter,
-            s.slices,
-            s.slabs,
-            s.cells,
-            s.draw_calls,
-            summary.frame_ms_mean,
-            summary.frame_ms_min,
-            frames,
-            out.display()
-        );
-    }
-    Ok(())
+    stage.commit_or_fail()
+}
+
+/// The headless summary on stderr.
+fn print_text(summary: &Summary, out: &std::path::Path) {
+    let s = &summary.stats;
+    eprintln!(
+        "{}: {}x{} on {}, {} slices in {} slabs, {} cells, {} draws, {:.1} ms/frame (min {:.1}, {} frames) -> {}",
+        summary.target,
+        summary.width,
+        summary.height,
+        summary.adapter,
+        s.slices,
+        s.slabs,
+        s.cells,
+        s.draw_calls,
+        summary.frame_ms_mean,
+        summary.frame_ms_min,
+        summary.frames,
+        out.display()
+    );
 }
 
 /// `content` on `gpu`, its upload and pipeline steps told to `steps`; returns the

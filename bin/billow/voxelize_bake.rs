@@ -5,7 +5,7 @@
 
 use billow::compress::Compression;
 use billow::presets::{VolumeFlags, VolumeSettings};
-use billow::target_error::{search_volume, TargetOptions, Trial};
+use billow::target_error::{search_volume, TargetOptions};
 use billow::voxelize::{
     bake, default_align, BakeError, BakeHooks, BakeOptions, Baked, NormalsMode, Stage,
     VoxelizeOptions,
@@ -14,7 +14,7 @@ use billow::voxelize::{
 use crate::exit::{voxelize_error, CliError, Code};
 use crate::output::{progress, warn};
 use crate::progress::{self, Monotone};
-use crate::target::{search_failed, trial_line, TargetSummary};
+use crate::target::{run_search, TargetSummary};
 use crate::voxelize_args::{Args, NormalsArg};
 use crate::Ctx;
 
@@ -122,16 +122,9 @@ pub(crate) fn bake_to_target(
             .map_err(|e| CliError::new(Code::Internal, e))?;
         Ok::<_, CliError>((Tried(run), bytes))
     };
-    let mut on_trial = |t: &Trial| {
-        if !ctx.quiet {
-            eprintln!("{}", trial_line(target.error, t));
-        }
-    };
-    let found = search_volume(scene, flags, target, &mut bake_one, &mut on_trial).map_err(|e| {
-        let output = args.output.display().to_string();
-        search_failed(e, target, args.json.then_some((input, &output)), input)
-    })?;
-    let summary = TargetSummary::new(target, &found);
-    let Tried(run) = found.asset;
+    let (Tried(run), summary) =
+        run_search(target, ctx, (args.json, input, &args.output), |on_trial| {
+            search_volume(scene, flags, target, &mut bake_one, on_trial)
+        })?;
     Ok((run, summary))
 }

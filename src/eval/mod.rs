@@ -13,6 +13,7 @@ pub mod error;
 pub mod evaluate;
 pub mod image;
 pub mod lighting;
+pub mod lod_sweep;
 pub mod metrics;
 pub mod reference;
 pub mod slicer;

@@ -19,6 +19,7 @@ pub mod cloud_pass;
 #[cfg(any(test, feature = "test-support"))]
 mod compute_check;
 pub mod content;
+pub mod dolly;
 pub mod error;
 pub mod frame_stats;
 pub mod gpu;
