@@ -142,6 +142,7 @@ impl MeshPass {
             &[
                 include_str!("shaders/shadow_lookup.wgsl"),
                 include_str!("shaders/shading.wgsl"),
+                include_str!("shaders/alpha_hash.wgsl"),
                 include_str!("shaders/mesh.wgsl"),
             ],
         );
@@ -190,19 +191,12 @@ impl MeshPass {
     }
 
     pub fn upload(&self, gpu: &Gpu, mesh: &MeshData) -> Result<GpuMesh, ViewError> {
-        let materials = mesh_materials(mesh);
         let views: Vec<wgpu::TextureView> = mesh
             .textures
             .iter()
-            .enumerate()
-            .map(|(i, t)| {
-                let mut t = t.clone();
-                t.coverage_cutoff = materials
-                    .iter()
-                    .find(|m| m.texture == Some(i as u32) && m.alpha_cutoff.is_some())
-                    .and_then(|m| m.alpha_cutoff);
-                upload_rgba8_mips(gpu, &t, "mesh texture").create_view(&Default::default())
-            })
+            // Plain MIPs: alpha-masked materials are tested hashed where they are used
+            // (alpha_hash.wgsl).
+            .map(|t| upload_rgba8_mips(gpu, t, "mesh texture").create_view(&Default::default()))
             .collect();
         self.upload_with_views(gpu, mesh, &views)
     }

@@ -2,10 +2,14 @@
 //! chain built on the CPU (2×2 box filter of linear values; straight-alpha textures are
 //! weighted by alpha so transparent texels do not darken their neighbours).
 //!
-//! Alpha-tested textures keep their coverage down the chain (Castaño, "Computing alpha
-//! mipmaps", 2010): averaging alpha and testing it against the same cut-off makes thin
-//! cut-outs (leaves) vanish at a distance, so each level's alpha is scaled so that the
-//! fraction of texels passing the cut-off equals level 0's.
+//! Computed levels are plain averages, alpha-tested textures too: a level's alpha is then
+//! the share of its area that is covered, which the meshes' hashed alpha test
+//! (`shaders/alpha_hash.wgsl`) draws in expectation. Until 2026-12-06 each level's alpha
+//! was instead scaled so that the share of texels passing a fixed cut-off stayed level 0's
+//! (Castaño, "Computing alpha mipmaps", 2010); a leaf smaller than a pixel then drew all of
+//! itself or nothing, and the oak's mesh drew −3 / −18 / +18 % of the ray-traced mesh's
+//! coverage at 1× / 4× / 16× (640×480; docs/viewer.md, "Alpha-tested meshes at a
+//! distance").
 
 use crate::Gpu;
 
@@ -57,9 +61,6 @@ pub struct TextureData {
     pub premultiplied: bool,
     /// MIP levels 1.. when the asset brings its own (level 0 is `texels`).
     pub mips: Vec<Vec<u8>>,
-    /// The alpha-test cut-off the texture is drawn with, if any: computed MIP levels
-    /// then preserve the coverage at that cut-off.
-    pub coverage_cutoff: Option<f32>,
 }
 
 impl TextureData {
@@ -71,7 +72,6 @@ impl TextureData {
             texels,
             premultiplied: false,
             mips: Vec::new(),
-            coverage_cutoff: None,
         }
     }
 
@@ -141,34 +141,6 @@ fn downsample(src: &[u8], w: u32, h: u32, premultiplied: bool) -> Vec<u8> {
     out
 }
 
-/// Fraction of texels whose alpha (scaled by `scale`) reaches `cutoff`.
-fn coverage(texels: &[u8], cutoff: f32, scale: f32) -> f64 {
-    let n = texels.len() / 4;
-    let pass = texels
-        .chunks_exact(4)
-        .filter(|p| f32::from(p[3]) / 255.0 * scale >= cutoff)
-        .count();
-    pass as f64 / n.max(1) as f64
-}
-
-/// Scales `level`'s alpha so its coverage at `cutoff` matches `target` (bisection on
-/// the scale in [0, 8]).
-fn preserve_coverage(level: &mut [u8], cutoff: f32, target: f64) {
-    let (mut lo, mut hi) = (0.0f32, 8.0f32);
-    for _ in 0..24 {
-        let mid = 0.5 * (lo + hi);
-        if coverage(level, cutoff, mid) < target {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    let s = hi;
-    for p in level.chunks_exact_mut(4) {
-        p[3] = (f32::from(p[3]) * s).round().min(255.0) as u8;
-    }
-}
-
 /// Writes level `level` (`w`×`h` RGBA8 texels, tightly packed) of a 2D texture.
 pub fn write_level(gpu: &Gpu, tex: &wgpu::Texture, level: u32, texels: &[u8], (w, h): (u32, u32)) {
     gpu.queue.write_texture(
@@ -226,13 +198,7 @@ pub fn upload_rgba8_mips(gpu: &Gpu, t: &TextureData, label: &str) -> wgpu::Textu
         }
         let next = match t.mips.get(l as usize) {
             Some(m) => m.clone(),
-            None => {
-                let mut m = downsample(&level, w, h, t.premultiplied);
-                if let (Some(c), false) = (t.coverage_cutoff, t.premultiplied) {
-                    preserve_coverage(&mut m, c, coverage(&t.texels, c, 1.0));
-                }
-                m
-            }
+            None => downsample(&level, w, h, t.premultiplied),
         };
         (w, h) = ((w / 2).max(1), (h / 2).max(1));
         level = next;
@@ -255,13 +221,6 @@ mod tests {
         let p = downsample(&src, 2, 2, true);
         assert_eq!(p[3], 64);
         assert!(p[0] < 255 && p[0] > 64, "{p:?}");
-        // Coverage-preserving MIPs: a 1-in-4 pattern of opaque texels averages to alpha
-        // 0.25, which a 0.5 cut-off would drop; scaled, the level keeps level 0's 25 %.
-        let mut m = downsample(&src, 2, 2, false);
-        let before = coverage(&m, 0.5, 1.0);
-        preserve_coverage(&mut m, 0.5, 0.25);
-        assert_eq!(before, 0.0);
-        assert!(m[3] >= 128, "{m:?}");
         // Odd sizes fold the last row and column in.
         let odd = vec![200u8; 3 * 3 * 4];
         assert_eq!(downsample(&odd, 3, 3, false), vec![200; 4]);

@@ -313,6 +313,7 @@ impl CloudPass {
             &[
                 include_str!("../shaders/shadow_lookup.wgsl"),
                 include_str!("../shaders/shading.wgsl"),
+                include_str!("../shaders/alpha_hash.wgsl"),
                 include_str!("../shaders/cloud.wgsl"),
             ],
         );

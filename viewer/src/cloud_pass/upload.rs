@@ -252,7 +252,6 @@ impl CloudPass {
                     texels: a.mips[0].clone(),
                     premultiplied: true,
                     mips,
-                    coverage_cutoff: None,
                 };
                 upload_rgba8_mips(gpu, &t, "cloud atlas").create_view(&Default::default())
             })
@@ -292,20 +291,9 @@ impl CloudPass {
         let mesh_textures: Vec<wgpu::TextureView> = asset
             .textures
             .iter()
-            .enumerate()
-            .map(|(i, t)| {
-                let mut d = TextureData::straight(t.width, t.height, t.texels.clone());
-                d.coverage_cutoff = asset
-                    .materials
-                    .iter()
-                    .find(|m| m.texture == Some(i as u32) && m.alpha_mode != 0)
-                    .map(|m| {
-                        if m.alpha_mode == 1 {
-                            m.alpha_cutoff
-                        } else {
-                            0.5
-                        }
-                    });
+            .map(|t| {
+                // Plain MIPs: the foliage mesh's alpha test is hashed where they are used.
+                let d = TextureData::straight(t.width, t.height, t.texels.clone());
                 upload_rgba8_mips(gpu, &d, "cloud mesh texture").create_view(&Default::default())
             })
             .collect();

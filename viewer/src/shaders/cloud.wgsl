@@ -1,7 +1,9 @@
 // Billboard clouds (Lacewell et al. 2006): instanced quads (or the foliage base mesh)
 // whose vertices slide toward their parent billboard by the instance's morph factor (in
 // this vertex shader: the per-asset vertex buffers never change); alpha-tested,
-// depth-writing, opaque. shadow_lookup.wgsl and shading.wgsl are prepended.
+// depth-writing, opaque (the foliage base mesh's test hashed where its texture is
+// minified, as the mesh pass's). shadow_lookup.wgsl, shading.wgsl and alpha_hash.wgsl are
+// prepended.
 
 struct Frame {
     view_proj: mat4x4<f32>,
@@ -51,6 +53,7 @@ struct VOut {
     @location(3) tangent: vec4<f32>,
     // x: dissolve t, y: 1 = incoming level (cloud_pass module docs, "Dissolve")
     @location(4) @interpolate(flat) dissolve: vec2<f32>,
+    @location(5) world: vec3<f32>,
 }
 
 @vertex
@@ -65,6 +68,7 @@ fn vs_main(v: VIn) -> VOut {
     o.normal = (model * vec4<f32>(v.normal, 0.0)).xyz;
     o.tangent = vec4<f32>((model * vec4<f32>(v.tangent.xyz, 0.0)).xyz, v.tangent.w);
     o.dissolve = v.morph.yz;
+    o.world = w.xyz;
     return o;
 }
 
@@ -123,11 +127,21 @@ fn lambert_factor(n: vec3<f32>, i: VOut) -> f32 {
     return shadow_factor(i);
 }
 
+// The alpha test's threshold: billboards (premultiplied atlases, whose MIPs keep level 0's
+// drawn coverage) test against the cut-off; the foliage base mesh's straight textures (plain
+// MIPs) against alpha_threshold's hash where minified.
+fn cut(i: VOut) -> f32 {
+    let size = vec2<f32>(textureDimensions(tex));
+    let t = alpha_threshold(dr.params.x, i.uv, size, i.world);
+    return select(t, dr.params.x, dr.params.y > 0.5 || dr.params.w < 0.5 || dr.params.x <= 0.0);
+}
+
 // The foliage base mesh: alpha-tested, lit like meshes (two-sided Lambert + ambient).
 @fragment
 fn fs_foliage(i: VOut) -> @location(0) vec4<f32> {
+    let threshold = cut(i);
     let c = texel(i);
-    if c.a < dr.params.x || dissolved(i) {
+    if c.a < threshold || dissolved(i) {
         discard;
     }
     return vec4<f32>(c.rgb * lambert_factor(i.normal, i), 1.0);
@@ -156,11 +170,12 @@ fn fs_billboard(i: VOut) -> @location(0) vec4<f32> {
 
 @fragment
 fn fs_shadow(i: VOut) {
+    let threshold = cut(i);
     var a = dr.color.a;
     if dr.params.w > 0.5 {
         a = a * textureSample(tex, alpha_smp, i.uv).a;
     }
-    if a < dr.params.x || dissolved(i) {
+    if a < threshold || dissolved(i) {
         discard;
     }
 }

@@ -1,7 +1,8 @@
-// Opaque meshes: base colour × vertex colour × texture, alpha-masked materials discard;
+// Opaque meshes: base colour × vertex colour × texture, alpha-masked materials discard
+// (hashed where the texture is minified: alpha_hash.wgsl);
 // one directional light (two-sided Lambert, shading.wgsl's diffuse_factor) plus ambient,
-// linear colour, shadowed when the frame has a shadow map (shadow_lookup.wgsl and
-// shading.wgsl are prepended). A zero normal marks an unlit vertex: its base colour is
+// linear colour, shadowed when the frame has a shadow map (shadow_lookup.wgsl,
+// shading.wgsl and alpha_hash.wgsl are prepended). A zero normal marks an unlit vertex: its base colour is
 // drawn as it is, no Lambert, no shadow.
 
 struct MeshFrame {
@@ -37,6 +38,7 @@ struct VOut {
     @location(1) color: vec4<f32>,
     @location(2) uv: vec2<f32>,
     @location(3) shadow_clip: vec4<f32>,
+    @location(4) world: vec3<f32>,
 }
 
 @vertex
@@ -47,6 +49,7 @@ fn vs_main(v: VIn) -> VOut {
     o.normal = v.normal;
     o.color = v.color;
     o.uv = v.uv;
+    o.world = v.pos;
     return o;
 }
 
@@ -62,10 +65,18 @@ fn base_colour(i: VOut) -> vec4<f32> {
     return c;
 }
 
+// The threshold of the alpha test (0: opaque, never discarded).
+fn cut(i: VOut) -> f32 {
+    let size = vec2<f32>(textureDimensions(base_tex));
+    let t = alpha_threshold(material.params.x, i.uv, size, i.world);
+    return select(0.0, t, material.params.x > 0.0);
+}
+
 @fragment
 fn fs_main(i: VOut) -> @location(0) vec4<f32> {
+    let threshold = cut(i);
     let c = base_colour(i);
-    if c.a < material.params.x {
+    if c.a < threshold {
         discard;
     }
     let len = length(i.normal);
@@ -84,7 +95,8 @@ fn fs_main(i: VOut) -> @location(0) vec4<f32> {
 
 @fragment
 fn fs_shadow(i: VOut) {
-    if base_colour(i).a < material.params.x {
+    let threshold = cut(i);
+    if base_colour(i).a < threshold {
         discard;
     }
 }
