@@ -96,8 +96,8 @@ impl<'a> Dolly<'a> {
         self.r.lod_distance_override = lod;
         // A forced level is shown alone (coverage frames), not dissolving.
         self.r.dissolve_override = lod.map(|_| 0.0);
-        // The mesh's coverage frames (level 0 forced) sample its textures at level 0: its
-        // MIP chain draws its alpha-tested leaves 10 % thin here (`mesh_texture_level0`).
+        // The mesh's coverage frames (level 0 forced) sample its textures at level 0
+        // (`mesh_texture_level0`): its coverage without the hashed test's noise.
         self.r.mesh_texture_level0 = lod == Some(0.0);
         let stats = self.r.render(&self.target, &cam)?;
         let image = self.target.read(&self.r.gpu)?;

@@ -60,11 +60,10 @@ pub struct Renderer {
     /// LOD sweep's coverage frames need); `None`: each cloud's own.
     pub dissolve_override: Option<f32>,
     /// Sample meshes' base-colour textures at MIP level 0 only (`false`: the MIP chain, as
-    /// a viewer draws them). An alpha-tested leaf texture's MIP chain keeps the share of
-    /// texels that pass, which is not the area drawn: the oak's mesh draws 10 % less than
-    /// the ray-traced mesh at the framed distance and 38 % more at 16× (docs/viewer.md,
-    /// "Alpha-tested meshes at a distance"); level 0 alone is within 2 % at 1×–4×. The
-    /// LOD sweep's coverage reference frames draw the mesh this way.
+    /// a viewer draws them). The chain with the hashed alpha test draws an alpha-masked
+    /// mesh's coverage in expectation (docs/viewer.md, "Alpha-tested meshes at a
+    /// distance"); level 0 draws it at the distances the LOD sweep's coverage reference
+    /// frames use (the oak within 2 % at 1×–4×) without the hash's noise.
     pub mesh_texture_level0: bool,
     /// Leave out of each shadow cascade the casters outside its window (on by default;
     /// off only to check that it changes nothing).
