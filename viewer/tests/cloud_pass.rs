@@ -696,3 +696,56 @@ fn a_billboard_casts_the_same_shadow_lit_from_either_side() {
         "shadowed pixels lit from the front {front}, from behind {back}"
     );
 }
+
+/// A baked billboard in a mesh's shadow keeps the ambient share of its baked colour that a
+/// leaf lit at the mean two-sided cosine ½ has: `k = a / (a + (1 − a)/2)` (`cloud.wgsl`,
+/// `baked_shadow_factor`), 0.4615 at ambient 0.3. Scaling it by the ambient alone (0.3, as
+/// before 2026-12-06) took the ambient share of the baked colour, which already holds
+/// the ambient: the oak's shadowed cloud read 18 % darker than the mesh under its own
+/// bake light. Lit (no occluder) it keeps its baked colour.
+#[test]
+fn a_shadowed_baked_billboard_keeps_the_ambient_share_of_a_leaf() {
+    let name = "a_shadowed_baked_billboard_keeps_the_ambient_share_of_a_leaf";
+    let ambient = 0.3f32;
+    let opaque = |_: u32, _: u32| 1.0;
+    let light = Vec3::new(1.0, 0.0, 1.0).normalize();
+    let shaded = |occluded: bool| {
+        let gpu = common::gpu_or_skip(name)?;
+        let mut r = renderer(gpu, &asset(opaque, None, false), vec![Mat4::IDENTITY]);
+        r.ambient = ambient;
+        r.light_dir = light;
+        r.set_shadows(true);
+        if occluded {
+            // A 6×6 quad across the light, 6 units towards it: behind the camera.
+            let c = 6.0 * light;
+            let (u, v) = (Vec3::new(1.0, 0.0, -1.0).normalize() * 6.0, Vec3::Y * 6.0);
+            r.add_mesh(&MeshData::quad(
+                c - 0.5 * u - 0.5 * v,
+                u,
+                v,
+                [0.5, 0.5, 0.5, 1.0],
+            ))
+            .expect("occluder");
+        }
+        let (img, _) = r.render_image(&camera(64, 4.0, false)).expect("render");
+        Some(centre_mean(&img, 8))
+    };
+    let Some(lit) = shaded(false) else {
+        return;
+    };
+    let Some(dark) = shaded(true) else {
+        return;
+    };
+    let k = ambient / (ambient + 0.5 * (1.0 - ambient));
+    for ch in 0..3 {
+        let (l, d) = (lit[ch] / stored(ch), dark[ch] / stored(ch));
+        assert!(
+            (l - 1.0).abs() < 0.01,
+            "lit: channel {ch} is {l:.4} × the baked colour"
+        );
+        assert!(
+            (d - k).abs() < 0.02,
+            "shadowed: channel {ch} is {d:.4} × the baked colour, want {k:.4} (not {ambient})"
+        );
+    }
+}

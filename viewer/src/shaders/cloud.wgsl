@@ -112,9 +112,21 @@ fn visibility(i: VOut) -> f32 {
     return 1.0;
 }
 
-// Baked lighting: only the shadow scales the colour, ambient + (1 − ambient)·vis.
+// Unlit foliage vertices (a zero normal): ambient + (1 − ambient)·vis of their colour.
 fn shadow_factor(i: VOut) -> f32 {
     return frame.light.w + (1.0 - frame.light.w) * visibility(i);
+}
+
+// Baked lighting: a texel holds albedo·(ambient + (1 − ambient)·|N·L|), ambient and direct
+// light together, and in shadow only the direct part goes. With |N·L| at its mean over
+// the sphere, ½, the shadowed share is k = ambient / (ambient + (1 − ambient)/2), and the
+// texel is scaled by k + (1 − k)·vis. (Scaling it by ambient + (1 − ambient)·vis, as
+// before 2026-12-06, took the ambient share of the baked colour, not of the albedo: the
+// oak's shadowed cloud read 18 % darker than the mesh under its own bake light.)
+fn baked_shadow_factor(i: VOut) -> f32 {
+    let a = frame.light.w;
+    let k = a / max(a + 0.5 * (1.0 - a), 1e-6);
+    return k + (1.0 - k) * visibility(i);
 }
 
 // The mesh pass's light factor (mesh.wgsl fs_main, shading.wgsl's diffuse_factor):
@@ -148,7 +160,7 @@ fn fs_foliage(i: VOut) -> @location(0) vec4<f32> {
 }
 
 // Billboards: alpha-tested on the premultiplied texel, opaque output of its straight
-// colour. Baked lighting (the default): only the shadow scales it. Baked unlit with a
+// colour. Baked lighting (the default): only the shadow scales it (baked_shadow_factor). Baked unlit with a
 // normal map: lit here like meshes, N from the tangent-space normal map.
 @fragment
 fn fs_billboard(i: VOut) -> @location(0) vec4<f32> {
@@ -158,7 +170,7 @@ fn fs_billboard(i: VOut) -> @location(0) vec4<f32> {
         discard;
     }
     let albedo = c.rgb / c.a;
-    var k = shadow_factor(i);
+    var k = baked_shadow_factor(i);
     if dr.params.z > 0.5 {
         let nn = normalize(i.normal);
         let tt = normalize(i.tangent.xyz);
