@@ -44,6 +44,7 @@ use super::suite::{
     mean_errors, means_by_distance, means_by_light, reference_lighting, DistanceMeans, EvalOptions,
     Evaluator, LightMeans, MeanErrors, PreparedAsset, ReferenceView, ViewResult, EVAL_FOV_Y,
 };
+use super::volume_shadow::shadowable;
 use super::{EvalError, ImageF32};
 use crate::scene::Scene;
 use billow_core::camera::ViewSpec;
@@ -83,7 +84,9 @@ pub enum ReferenceLighting {
     /// Each light of the set in turn, as `billow view` lights each kind (`--light`,
     /// `--lights`, `--ambient`, `--shadows`; [`Evaluator::set_light`]); the means are over
     /// the set. Every light has the same ambient; `shadows`: the reference (and a cloud's
-    /// kept mesh) is ray-traced with shadows, volumes are drawn unshadowed (noted).
+    /// kept mesh) is ray-traced with shadows, a plain volume is shadowed by its own
+    /// transmittance towards the light ([`super::volume_shadow`]), pruned and shell
+    /// volumes are drawn unshadowed (noted).
     Lights {
         lights: Vec<EvalLight>,
         shadows: bool,
@@ -395,10 +398,17 @@ fn choose_lighting(
         shadows: *shadows,
     };
     let note = match asset {
-        Prepared::Volume(..) => shadows.then(|| {
-            "--shadows: the reference and meshes are shadowed, the CPU slicer draws volumes \
-             unshadowed: the errors include the shadows"
-                .to_string()
+        Prepared::Volume(_, p) => shadows.then(|| {
+            if shadowable(&p.volume, &p.cells) {
+                "--shadows: the reference is ray traced with shadows; the CPU slicer shadows \
+                 the volume by its own transmittance towards the light (a coarse MIP level \
+                 marched), not by the viewer's shadow map"
+                    .to_string()
+            } else {
+                "--shadows: the reference and meshes are shadowed, the CPU slicer draws \
+                 pruned and shell volumes unshadowed: the errors include the shadows"
+                    .to_string()
+            }
         }),
         Prepared::Cloud(..) => lit.then(|| {
             "the cloud's billboards carry the lighting they were baked with: under another \

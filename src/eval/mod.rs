@@ -20,6 +20,7 @@ pub mod slicer;
 pub mod ssim;
 pub mod suite;
 pub mod volume_sampler;
+pub mod volume_shadow;
 
 pub use error::EvalError;
 pub use evaluate::evaluate;

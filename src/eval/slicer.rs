@@ -61,6 +61,7 @@ use billow_core::slicing::{slab_fade, slice_band, slice_lod};
 use super::lighting::VolumeLight;
 use super::reference::{sample_offset, validate_camera, Sampling};
 use super::volume_sampler::{DecodedVolume, MipFilter};
+use super::volume_shadow::ShadowGrid;
 use super::{EvalError, ImageF32};
 use billow_core::camera::Camera;
 use billow_core::compositing::over;
@@ -91,6 +92,10 @@ pub struct SlicerParams {
     /// default, what the GPU viewer draws): the pixel centre only. At most 16; lowered
     /// until the image holds at most 2²⁴ samples.
     pub coverage_samples: u32,
+    /// Shadow the direct light of a lit plain volume by its own transmittance towards the
+    /// light ([`ShadowGrid`], `billow eval --shadows`); pruned and shell volumes stay
+    /// unshadowed ([`SliceStats::shadowed`] says which).
+    pub shadows: bool,
 }
 
 /// Most coverage samples per axis ([`SlicerParams::coverage_samples`]).
@@ -104,6 +109,7 @@ impl Default for SlicerParams {
             max_slices: 100_000,
             light: Some(VolumeLight::default()),
             coverage_samples: 1,
+            shadows: false,
         }
     }
 }
@@ -121,6 +127,9 @@ pub struct SliceStats {
     pub voxel_size: f32,
     pub min_spacing: f32,
     pub max_spacing: f32,
+    /// The direct light was shadowed by the volume's transmittance
+    /// ([`SlicerParams::shadows`]).
+    pub shadowed: bool,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -405,6 +414,12 @@ fn render_sliced(
         })
         .collect();
     let far_z = slices.first().map(|&(z, d)| (z, far_slab(z, d, z_max)));
+    // `--shadows`: the base part's transmittance towards the light, when it is lit.
+    let shadow = params
+        .light
+        .filter(|_| params.shadows && nmats[0].is_some())
+        .and_then(|l| ShadowGrid::for_volume(vol, cells, l.dir));
+    stats.shadowed = shadow.is_some();
     let w = camera.width as usize;
     const BATCH: usize = 1 << 16;
     let mut polys: Vec<ScreenPoly> = Vec::new();
@@ -420,6 +435,7 @@ fn render_sliced(
                     filter: params.mip_filter,
                     light: light_view,
                     depth,
+                    shadow: shadow.as_ref(),
                 };
                 if nn == 1 {
                     raster_row(row, y, polys, &ctx)
@@ -575,6 +591,8 @@ struct RowCtx<'a> {
     filter: MipFilter,
     light: Option<(Vec3, f32)>,
     depth: Option<&'a [f32]>,
+    /// The base part's transmittance towards the light (`--shadows`).
+    shadow: Option<&'a ShadowGrid>,
 }
 
 impl RowCtx<'_> {
@@ -595,10 +613,14 @@ impl RowCtx<'_> {
             let n = vol
                 .sample_normal(p.lod, uvw, self.filter)
                 .unwrap_or(Vec3::ZERO);
+            let vis = match self.shadow {
+                Some(g) if p.band == 0 => g.sample(uvw),
+                _ => 1.0,
+            };
             let k = if vol.moments {
-                moments_diffuse_factor(n, light, view, ambient, 1.0)
+                moments_diffuse_factor(n, light, view, ambient, vis)
             } else {
-                volume_diffuse_factor(shade_normal(m, n), l, ambient, 1.0)
+                volume_diffuse_factor(shade_normal(m, n), l, ambient, vis)
             };
             s = (s.truncate() * k).extend(s.w);
         }

@@ -341,7 +341,8 @@ impl<'a> Evaluator<'a> {
     /// reference is the mesh under the viewer's mesh lighting ([`Lighting::Scene`], with
     /// ray-traced shadows when `shadows`), and the slicer shades volumes that carry
     /// normals with `light` (volumes without normals show their baked colour, as the
-    /// viewer shows them).
+    /// viewer shows them), shadowed by their own transmittance when `shadows`
+    /// ([`SlicerParams::shadows`]).
     pub fn set_light(&mut self, light: &EvalLight, shadows: bool) -> Result<(), EvalError> {
         let lighting = Lighting::Scene {
             light: light.dir,
@@ -354,6 +355,7 @@ impl<'a> Evaluator<'a> {
             dir: light.dir,
             ambient: light.ambient,
         });
+        self.options.slicer.shadows = shadows;
         self.light = Some(light.name.clone());
         Ok(())
     }

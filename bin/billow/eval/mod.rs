@@ -91,8 +91,9 @@ pub struct Args {
     /// Ambient fraction of --light/--lights, 0–1.
     #[arg(long, value_name = "A", default_value_t = billow_core::shading::DEFAULT_AMBIENT)]
     ambient: f32,
-    /// With --light/--lights: shadows in the reference (ray traced towards the light) and in
-    /// the cloud's kept mesh; volumes are drawn unshadowed (noted).
+    /// With --light/--lights: shadows in the reference (ray traced towards the light), in
+    /// the cloud's kept mesh and in a plain volume (its own transmittance towards the
+    /// light); pruned and shell volumes are drawn unshadowed (noted).
     #[arg(long)]
     shadows: bool,
     /// Billboard clouds: evaluate only this LOD level, 0–(levels − 1) (0 = finest); default all levels.
