@@ -1,8 +1,8 @@
 //! The light a volume lets through to itself, for `billow eval --shadows`: per texel of
 //! one coarse MIP level, the transmittance towards the light, `T = Π (1 − αₖ)` over the
 //! level's opacity sampled one texel apart along the light (each level's alpha is the
-//! opacity of one of its texels' thickness, VB paper §3.2), from [`BIAS`] texels away (a
-//! surface one texel thick must not shadow itself: the trilinear taps one texel away
+//! opacity of one of its texels' thickness, VB paper §3.2), from [`BIAS`] level-0 texels
+//! away (a surface one texel thick must not shadow itself: trilinear taps one texel away
 //! still read it) to where the ray leaves the volume. The CPU slicer scales the
 //! direct light of every shaded sample by `T` at its texture coordinate (trilinear).
 //!
@@ -22,8 +22,9 @@ use super::volume_sampler::DecodedVolume;
 /// The finest level whose largest side is at most this many texels is marched.
 pub const MAX_SIDE: u32 = 64;
 
-/// Texels between a point and the first sample towards the light (the shadow's bias).
-pub const BIAS: f32 = 2.0;
+/// Level-0 texels between a point and the first sample towards the light (the shadow's
+/// bias; in the marched level's texels, `BIAS / 2^level`).
+pub const BIAS: f32 = 1.5;
 
 /// Transmittance towards the light at the texel centres of one MIP level.
 #[derive(Clone, Debug, PartialEq)]
@@ -85,12 +86,13 @@ impl ShadowGrid {
             return None;
         }
         let n = Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32);
+        let bias = BIAS / (level as f32).exp2();
         let plane = dims[0] * dims[1];
         let mut t = vec![1.0f32; plane * dims[2]];
         t.par_chunks_mut(plane).enumerate().for_each(|(z, out)| {
             for (i, cell) in out.iter_mut().enumerate() {
                 let (x, y) = (i % dims[0], i / dims[0]);
-                let mut p = Vec3::new(x as f32, y as f32, z as f32) + 0.5 + BIAS * step;
+                let mut p = Vec3::new(x as f32, y as f32, z as f32) + 0.5 + bias * step;
                 let mut trans = 1.0f32;
                 while p.cmpge(Vec3::ZERO).all() && p.cmplt(n).all() && trans > 1e-4 {
                     let a = vol.sample_level(level, p / n).w.clamp(0.0, 1.0);
