@@ -44,7 +44,7 @@ fn cell_box(cells: &[Prism]) -> Option<(Vec3, Vec3)> {
     let lo = pts().fold(Vec3::INFINITY, Vec3::min);
     let hi = pts().fold(Vec3::NEG_INFINITY, Vec3::max);
     let size = hi - lo;
-    if cells.is_empty() || !(size.min_element() > 0.0) || !size.is_finite() {
+    if cells.is_empty() || size.min_element() <= 0.0 || !size.is_finite() {
         return None;
     }
     let affine = cells.iter().all(|c| {
