@@ -16,7 +16,7 @@ use billow::import::{import, ImportOptions};
 use billow_core::camera::Camera;
 use billow_core::shading::{DEFAULT_AMBIENT, DEFAULT_LIGHT};
 use billow_core::Aabb;
-use common::{run, skip};
+use common::headless_shot;
 use glam::Vec3;
 
 /// A UV sphere of radius 1 with smooth normals, `n` segments around.
@@ -47,32 +47,18 @@ fn the_reference_lights_a_mesh_as_the_viewer_does() {
     let d = tmp.path();
     std::fs::write(d.join("sphere.obj"), sphere_obj(96)).unwrap();
     let size = 96;
-    let r = run(
-        &[
-            "view",
-            "sphere.obj",
-            "--headless",
-            "--screenshot",
-            "gpu.png",
-            "--size",
-            "96x96",
-            "--view",
-            "-z",
-            "--fov",
-            "45",
-            "--shadows",
-            "off",
-        ],
+    let args = ["--size", "96x96", "--view", "-z"];
+    if headless_shot(
+        "the_reference_lights_a_mesh_as_the_viewer_does",
+        "sphere.obj",
+        "gpu.png",
+        &args,
         d,
-    );
-    if r.code == Some(5) && r.stderr.contains("adapter") {
-        skip(
-            "the_reference_lights_a_mesh_as_the_viewer_does",
-            "no GPU adapter",
-        );
+    )
+    .is_none()
+    {
         return;
     }
-    assert_eq!(r.code, Some(0), "{}", r.stderr);
     let gpu = ImageF32::from_image(&image::open(d.join("gpu.png")).unwrap());
 
     let scene = import(&d.join("sphere.obj"), &ImportOptions::default())

@@ -135,6 +135,37 @@ pub fn run(args: &[&str], dir: &Path) -> Run {
     run_limited(args, dir, Duration::from_secs(120), 8 << 20)
 }
 
+/// `billow view TARGET --headless --screenshot SHOT --fov 45 --shadows off ARGS…` in `dir`
+/// (the viewer's headless picture a test compares with the CPU reference): `None`, after
+/// [`skip`], without a GPU adapter; any other failure panics.
+pub fn headless_shot(
+    test: &str,
+    target: &str,
+    shot: &str,
+    args: &[&str],
+    dir: &Path,
+) -> Option<()> {
+    let mut all = vec![
+        "view",
+        target,
+        "--headless",
+        "--screenshot",
+        shot,
+        "--fov",
+        "45",
+        "--shadows",
+        "off",
+    ];
+    all.extend_from_slice(args);
+    let r = run(&all, dir);
+    if r.code == Some(5) && r.stderr.contains("adapter") {
+        skip(test, "no GPU adapter");
+        return None;
+    }
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    Some(())
+}
+
 pub fn sha256(path: &Path) -> String {
     use sha2::{Digest, Sha256};
     let bytes = std::fs::read(path).unwrap();
