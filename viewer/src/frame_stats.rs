@@ -33,6 +33,9 @@ pub struct FrameStats {
     /// (`render::frame`'s `ShadowKey`), so no cascade was drawn and the shadow counts are
     /// those of the frame that drew it.
     pub shadow_reused: bool,
+    /// Per shadow cascade (finest first), what was drawn into it (as `shadow_casters`:
+    /// those of the frame that drew the atlas when it is reused).
+    pub shadow_cascades: Vec<CascadeStats>,
     /// Billboard quads (sides) drawn.
     pub cloud_quads: usize,
     /// Bytes written to the GPU per frame for the clouds (instance data and frame
@@ -40,4 +43,26 @@ pub struct FrameStats {
     pub cloud_bytes_uploaded: usize,
     /// Particles drawn (at the frame's time).
     pub particles: usize,
+}
+
+/// What one shadow cascade drew: load-independent counts beside the frame's wall time.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct CascadeStats {
+    /// Side of one of its texels across the light, world units.
+    pub texel: f32,
+    /// Its tile was drawn this frame (else kept from an earlier one).
+    pub drawn: bool,
+    /// Slices of the volumes drawn into it.
+    pub slices: usize,
+    /// Mesh draws and cloud instances drawn into it (a dissolving instance counts in
+    /// both its levels), and those left out (outside its window).
+    pub casters: usize,
+    pub culled: usize,
+    /// The clouds' billboard quads (the side facing the light) and foliage triangles.
+    pub cloud_quads: usize,
+    pub foliage_triangles: usize,
+    /// The area of those quads and triangles across the light, in texels: the fragments
+    /// the alpha test runs on, overlaps counted, before clipping to the window (the
+    /// cascades' cost on a software rasteriser is mostly this fill).
+    pub cloud_texels: f64,
 }

@@ -9,6 +9,7 @@ use glam::{Mat4, Vec3};
 
 use super::{FrameStats, Renderer};
 use crate::cloud_pass::{CloudFrame, LodChoice};
+use crate::frame_stats::CascadeStats;
 use crate::mesh_pass::{MeshFrame, View};
 use crate::particle_pass::LayerTargets;
 use crate::shadow::{self, ShadowMap, SHADOW_MAP_SIZE};
@@ -61,11 +62,12 @@ pub(super) struct ShadowKey {
 
 /// What the atlas holds, as [`FrameStats`]' shadow fields counted it when it was drawn;
 /// a frame that reuses the atlas reports them again (and `shadow_reused`).
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub(super) struct CasterStats {
     slices: usize,
     casters: usize,
     culled: usize,
+    cascades: Vec<CascadeStats>,
 }
 
 impl CasterStats {
@@ -74,13 +76,20 @@ impl CasterStats {
             slices: s.shadow_slices,
             casters: s.shadow_casters,
             culled: s.shadow_casters_culled,
+            cascades: s.shadow_cascades.clone(),
         }
     }
 
-    fn add_to(&self, s: &mut FrameStats) {
+    /// Adds the counts to `s`'s (`drawn`: by this frame, else reused).
+    fn add_to(&self, s: &mut FrameStats, drawn: bool) {
         s.shadow_slices += self.slices;
         s.shadow_casters += self.casters;
         s.shadow_casters_culled += self.culled;
+        s.shadow_cascades.extend(
+            self.cascades
+                .iter()
+                .map(|c| CascadeStats { drawn, ..c.clone() }),
+        );
     }
 }
 
@@ -224,7 +233,7 @@ impl Renderer {
         let mut drawn = self.shadows.drawn.borrow_mut();
         if let Some((k, counts)) = drawn.as_ref().filter(|_| self.shadows.reuse) {
             if *k == key {
-                counts.add_to(stats);
+                counts.add_to(stats, false);
                 stats.shadow_reused = true;
                 return Ok(Some((map, cs.base)));
             }
@@ -238,7 +247,7 @@ impl Renderer {
         }
         stats.cloud_bytes_uploaded += counts.cloud_bytes_uploaded;
         let counts = CasterStats::from(&counts);
-        counts.add_to(stats);
+        counts.add_to(stats, true);
         *drawn = Some((key, counts));
         Ok(Some((map, cs.base)))
     }
@@ -431,7 +440,13 @@ impl Renderer {
             None,
             Some(shadow::SHADOW_ALPHA_CUTOFF),
         )?;
-        stats.shadow_slices += plan.as_ref().map_or(0, |p| p.slice_count());
+        let mut cascade = CascadeStats {
+            texel: light.pixel_size_at(1.0),
+            drawn: true,
+            slices: plan.as_ref().map_or(0, |p| p.slice_count()),
+            ..Default::default()
+        };
+        stats.shadow_slices += cascade.slices;
         let frame = MeshFrame {
             view_proj: (light.projection() * light.view).to_cols_array_2d(),
             world_to_shadow: Mat4::IDENTITY.to_cols_array_2d(),
@@ -466,16 +481,19 @@ impl Renderer {
             for m in &self.meshes {
                 let (lo, hi) = m.bounds;
                 if seen(0.5 * (lo + hi), 0.5 * (hi - lo).length()) {
-                    stats.shadow_casters += pass.draw(&self.gpu, &mut rp, bind, none, m, true);
+                    cascade.casters += pass.draw(&self.gpu, &mut rp, bind, none, m, true);
                 } else {
-                    stats.shadow_casters_culled += m.ranges.len();
+                    cascade.culled += m.ranges.len();
                 }
             }
         }
         if let (Some(pass), Some(cf)) = (&self.cloud_pass, clouds) {
             let (cf, culled) = cf.culled(seen);
-            stats.shadow_casters += cf.instance_count();
-            stats.shadow_casters_culled += culled;
+            cascade.casters += cf.instance_count();
+            cascade.culled += culled;
+            let (quads, triangles, texels) = cf.shadow_work(self.light_dir, cascade.texel);
+            (cascade.cloud_quads, cascade.foliage_triangles) = (quads, triangles);
+            cascade.cloud_texels = texels;
             let bind = pass.frame_bind_group(&self.gpu, View::Light, &frame);
             stats.cloud_bytes_uploaded += std::mem::size_of::<MeshFrame>();
             pass.draw(&self.gpu, &mut rp, bind, none, &cf, true);
@@ -488,6 +506,9 @@ impl Renderer {
                 none,
             );
         }
+        stats.shadow_casters += cascade.casters;
+        stats.shadow_casters_culled += cascade.culled;
+        stats.shadow_cascades.push(cascade);
         Ok(())
     }
 
