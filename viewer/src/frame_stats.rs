@@ -29,9 +29,10 @@ pub struct FrameStats {
     /// the cascades, and those left out because they lie outside a cascade's window.
     pub shadow_casters: usize,
     pub shadow_casters_culled: usize,
-    /// The shadow atlas of an earlier frame was reused: nothing it depends on changed
-    /// (`render::frame`'s `ShadowKey`), so no cascade was drawn and the shadow counts are
-    /// those of the frame that drew it.
+    /// No cascade was drawn: every tile of the shadow atlas was kept from earlier
+    /// frames (nothing it depends on changed, `render::frame`'s `ShadowKey` and `Tile`,
+    /// or a far tile kept while the camera moves, `Renderer::shadow_keep_far`), and the
+    /// shadow counts are those of the frames that drew them.
     pub shadow_reused: bool,
     /// Per shadow cascade (finest first), what was drawn into it (as `shadow_casters`:
     /// those of the frame that drew the atlas when it is reused).
@@ -52,6 +53,9 @@ pub struct CascadeStats {
     pub texel: f32,
     /// Its tile was drawn this frame (else kept from an earlier one).
     pub drawn: bool,
+    /// Frames its tile has been kept while the cascade's fitted window or the clouds'
+    /// levels moved on (`Renderer::shadow_keep_far`; 0: what this frame would draw).
+    pub age: u32,
     /// Slices of the volumes drawn into it.
     pub slices: usize,
     /// Mesh draws and cloud instances drawn into it (a dissolving instance counts in
