@@ -12,7 +12,7 @@ use billow_core::Aabb;
 use billow_view::content::Content;
 use billow_view::scene::SceneFile;
 use billow_view::{FrameStats, Gpu, SliceParams, ViewCamera, ViewError};
-use glam::{Vec3, Vec4};
+use glam::{Mat4, Vec3, Vec4};
 use serde::Serialize;
 
 use crate::eval::parse_size;
@@ -116,6 +116,17 @@ pub struct Args {
     /// Headless default 1; in a window: close after N frames (default: when closed).
     #[arg(long)]
     frames: Option<u32>,
+    /// Headless: orbit the camera this many degrees a frame about the vertical axis
+    /// through its target (frame k seen from k·DEG, the first from the camera given), so
+    /// that no frame can reuse the last one's shadow atlas: what a moving camera pays.
+    /// The screenshot is the last frame's.
+    #[arg(
+        long,
+        value_name = "DEG",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
+    orbit: f32,
     /// Composite the screenshot over this opaque linear colour R,G,B, each in [0, 1] (default: keep a
     /// transparent background).
     #[arg(long, value_name = "R,G,B")]
@@ -148,6 +159,11 @@ struct Summary {
     frame_ms_first: f64,
     /// How long each start-up step took.
     startup_ms: Startup,
+    /// Per shadow cascade, in how many of the frames its tile was drawn (the others
+    /// kept it), and the mean per frame of the cloud texels drawn into the cascades
+    /// (`stats.shadow_cascades[k].cloud_texels` of the tiles drawn).
+    shadow_tiles_drawn: Vec<u32>,
+    shadow_texels_per_frame: f64,
     stats: FrameStats,
 }
 
@@ -320,6 +336,9 @@ fn check_flags(args: &Args) -> Result<((u32, u32), Spacing), CliError> {
     }
     if !args.time.is_finite() {
         return Err(bad("--time", "must be finite"));
+    }
+    if !args.orbit.is_finite() {
+        return Err(bad("--orbit", "must be finite"));
     }
     if args.frames == Some(0) {
         return Err(bad("--frames", "must be at least 1"));
@@ -516,6 +535,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
     let shot = Shot {
         content: &content,
         camera: &camera,
+        target: cam_target,
         params: (params, fov),
         size: (width, height),
         background,
@@ -528,6 +548,8 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<(), CliError> {
 struct Shot<'a> {
     content: &'a Content,
     camera: &'a ViewCamera,
+    /// What `--orbit` turns about.
+    target: Vec3,
     params: (SliceParams, f32),
     size: (u32, u32),
     background: Option<Vec3>,
@@ -554,7 +576,8 @@ fn run_headless(
     r.set_wireframe(args.wireframe);
     r.time = args.time;
     let target = billow_view::target::Target::new(&r.gpu, width, height);
-    let timed = render_frames(&mut r, &target, shot.camera, frames, &mut steps, started)?;
+    let orbit = (shot.camera, shot.target, args.orbit);
+    let timed = render_frames(&mut r, &target, orbit, frames, &mut steps, started)?;
     drop(steps);
     let startup = Startup {
         read: view_steps::ms(read_time),
@@ -580,6 +603,8 @@ fn run_headless(
         frame_ms_min: 1e3 * timed.min,
         frame_ms_first: 1e3 * timed.first.unwrap_or(0.0),
         startup_ms: startup,
+        shadow_tiles_drawn: timed.tiles_drawn,
+        shadow_texels_per_frame: timed.texels_drawn / f64::from(frames),
         stats: timed.stats,
     };
     if args.json {
@@ -593,6 +618,9 @@ fn run_headless(
 /// The frames' times (seconds) and the last frame's statistics.
 struct Timed {
     stats: FrameStats,
+    /// Per cascade, the frames that drew its tile, and the cloud texels drawn.
+    tiles_drawn: Vec<u32>,
+    texels_drawn: f64,
     total: f64,
     min: f64,
     first: Option<f64>,
@@ -600,17 +628,20 @@ struct Timed {
     first_done: Option<std::time::Duration>,
 }
 
-/// Renders `frames` frames, each timed until the GPU is done.
+/// Renders `frames` frames, each timed until the GPU is done; frame k from `camera`
+/// turned by k × `degrees` about the vertical axis through `centre` (`--orbit`).
 fn render_frames(
     r: &mut billow_view::Renderer,
     target: &billow_view::target::Target,
-    camera: &ViewCamera,
+    (camera, centre, degrees): (&ViewCamera, Vec3, f32),
     frames: u32,
     steps: &mut Steps,
     started: Instant,
 ) -> Result<Timed, CliError> {
     let mut t = Timed {
         stats: FrameStats::default(),
+        tiles_drawn: Vec::new(),
+        texels_drawn: 0.0,
         total: 0.0,
         min: f64::INFINITY,
         first: None,
@@ -621,8 +652,28 @@ fn render_frames(
             0 => "rendering the first frame".to_string(),
             _ => format!("rendering frame {} of {frames}", k + 1),
         });
+        let cam = if degrees == 0.0 {
+            *camera
+        } else {
+            let turn = Mat4::from_translation(centre)
+                * Mat4::from_rotation_y((k as f32 * degrees).to_radians())
+                * Mat4::from_translation(-centre);
+            camera.with_view(camera.view * turn)
+        };
         let t0 = Instant::now();
-        t.stats = r.render(target, camera).map_err(view_err)?;
+        t.stats = r.render(target, &cam).map_err(view_err)?;
+        let cascades = &t.stats.shadow_cascades;
+        t.tiles_drawn
+            .resize(t.tiles_drawn.len().max(cascades.len()), 0);
+        for (n, c) in t
+            .tiles_drawn
+            .iter_mut()
+            .zip(cascades)
+            .filter(|(_, c)| c.drawn)
+        {
+            *n += 1;
+            t.texels_drawn += c.cloud_texels;
+        }
         r.gpu.wait().map_err(view_err)?;
         let s = t0.elapsed().as_secs_f64();
         steps.end();

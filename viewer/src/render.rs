@@ -68,6 +68,14 @@ pub struct Renderer {
     /// Leave out of each shadow cascade the casters outside its window (on by default;
     /// off only to check that it changes nothing).
     pub shadow_culling: bool,
+    /// While the camera moves, keep the tile of shadow cascade `k ≥ 1` for up to
+    /// `2^k − 1` frames while its window still holds the receivers its cascade is
+    /// fitted to (`shadow::window_holds`: the same texels), so the far cascades are
+    /// drawn less often than the near one; what lags is the clouds' levels in the kept
+    /// tiles (docs/viewer.md, "Shadows"). On by default; off (or
+    /// `BILLOW_VIEW_SHADOW_KEEP=off`): a tile is kept only while nothing it depends on
+    /// changed, and every frame's picture is a fresh renderer's.
+    pub shadow_keep_far: bool,
     /// The cell wireframe, when on ([`Renderer::set_wireframe`]).
     lines: Option<crate::lines::LinePass>,
     /// Scene time in seconds (animated cells, particles).
@@ -105,12 +113,15 @@ struct Shadows {
     /// its 2048² atlas).
     on: bool,
     map: OnceCell<ShadowMap>,
-    /// What the atlas holds: the key of the frame that drew it and what that frame
-    /// counted (`frame::ShadowKey`); `None` after anything that changes the casters.
-    drawn: RefCell<Option<(frame::ShadowKey, frame::CasterStats)>>,
-    /// Reuse the atlas when a frame's key equals the drawn one's (on by default;
-    /// `BILLOW_VIEW_SHADOW_CACHE=off` turns it off to measure the cascades' cost).
+    /// What the atlas holds: what every tile depends on and, per cascade, what its tile
+    /// was drawn for and counted (`frame::Atlas`); `None` after anything that changes
+    /// the casters.
+    drawn: RefCell<Option<frame::Atlas>>,
+    /// Reuse the atlas's tiles (on by default; `BILLOW_VIEW_SHADOW_CACHE=off` turns it
+    /// off to measure the cascades' cost).
     pub(crate) reuse: bool,
+    /// Drawn when a frame keeps some tiles ([`shadow::tile_clear_pipeline`]).
+    tile_clear: OnceCell<wgpu::RenderPipeline>,
 }
 
 impl Shadows {
@@ -152,6 +163,7 @@ impl Renderer {
                 map: OnceCell::new(),
                 drawn: RefCell::new(None),
                 reuse: std::env::var("BILLOW_VIEW_SHADOW_CACHE").map_or(true, |v| v != "off"),
+                tile_clear: OnceCell::new(),
             },
             light_dir: billow_core::shading::DEFAULT_LIGHT.normalize(),
             ambient: billow_core::shading::DEFAULT_AMBIENT,
@@ -159,6 +171,7 @@ impl Renderer {
             dissolve_override: None,
             mesh_texture_level0: false,
             shadow_culling: true,
+            shadow_keep_far: std::env::var("BILLOW_VIEW_SHADOW_KEEP").map_or(true, |v| v != "off"),
             lines: None,
             time: 0.0,
             texture_batch,

@@ -27,7 +27,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
-use crate::layout::{comparison_sampler, depth_texture, entry, uniform};
+use crate::layout::{comparison_sampler, depth_texture, entry, shader, uniform, Pipeline};
 use crate::target::DEPTH_FORMAT;
 use crate::texture::desc_2d;
 use crate::{Gpu, ViewCamera};
@@ -105,6 +105,9 @@ pub struct Cascades {
     pub base: ViewCamera,
     pub cameras: Vec<ViewCamera>,
     pub uniform: CascadeUniform,
+    /// Per cascade: the receivers its window was fitted to (world points; empty where
+    /// the cascade is the base camera).
+    pub receivers: Vec<Vec<Vec3>>,
 }
 
 /// The atlas tile of cascade `k` in texels: (x, y, side).
@@ -175,6 +178,38 @@ impl ShadowMap {
     }
 }
 
+/// A triangle over the viewport at the far plane, written whatever the depth there.
+const TILE_CLEAR_WGSL: &str = "
+@vertex
+fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    let x = f32((i << 1u) & 2u) * 2.0 - 1.0;
+    let y = f32(i & 2u) * 2.0 - 1.0;
+    return vec4<f32>(x, y, 1.0, 1.0);
+}
+
+@fragment
+fn fs_main() {}
+";
+
+/// The depth-only pipeline that clears one tile of the atlas (drawn over the tile's
+/// viewport: a load op would clear every tile, and a frame may keep some of them).
+pub fn tile_clear_pipeline(gpu: &Gpu) -> wgpu::RenderPipeline {
+    let module = shader(&gpu.device, "shadow tile clear", &[TILE_CLEAR_WGSL]);
+    let layout = gpu
+        .device
+        .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("shadow tile clear"),
+            bind_group_layouts: &[],
+            immediate_size: 0,
+        });
+    gpu.note_built("pipeline:shadow-tile-clear");
+    Pipeline {
+        depth: Some((true, wgpu::CompareFunction::Always)),
+        ..Pipeline::new("shadow tile clear", &layout, &module)
+    }
+    .build(&gpu.device)
+}
+
 /// The frame's shadow cameras for `camera`: the base ([`light_camera_for_view`]) and
 /// up to [`CASCADES`] cascades of `size`² ([`CASCADE_RATIO`]) over the camera's depth
 /// range inside the scene's bounds `scene`, split by the practical scheme
@@ -195,6 +230,7 @@ pub fn cascades(
         d1 = d1.max(d);
     }
     let mut cameras = Vec::with_capacity(CASCADES);
+    let mut receivers = Vec::with_capacity(CASCADES);
     let (n, f) = (d0.max(camera.near), d1.min(camera.far));
     if n < f {
         // As many cascades as the depth ratio needs: one per factor of CASCADE_RATIO.
@@ -216,13 +252,26 @@ pub fn cascades(
             let pts = frustum_scene_points(&slab, scene);
             if let Some(c) = fit_light_camera(towards_light, &pts, scene, size) {
                 cameras.push(c);
+                receivers.push(pts);
             }
             prev = split;
         }
     }
     if cameras.is_empty() {
         cameras.push(base);
+        receivers.push(Vec::new());
     }
+    Cascades {
+        base,
+        uniform: cascade_uniform(&base, &cameras),
+        cameras,
+        receivers,
+    }
+}
+
+/// What receivers projecting with `base` need to look up the cascades `cameras`
+/// (finest first, cascade k in tile k).
+pub fn cascade_uniform(base: &ViewCamera, cameras: &[ViewCamera]) -> CascadeUniform {
     let mut u = CascadeUniform {
         info: [cameras.len() as f32, 0.0, 0.0, 0.0],
         ..Default::default()
@@ -238,11 +287,29 @@ pub fn cascades(
         let (x, y, _) = tile_rect(k, 1);
         u.tile[k] = [x as f32 * frac, y as f32 * frac, frac, frac];
     }
-    Cascades {
-        base,
-        cameras,
-        uniform: u,
+    u
+}
+
+/// Whether the cascade `light` (drawn for an earlier frame) still serves `receivers`
+/// as well as a cascade fitted to them: an orthographic window of the same size as
+/// `fitted` (so the same texels) that holds every receiver a texel inside its edge, as
+/// the fit leaves room for the 3×3 filter. The light's orientation and depth range
+/// are the same for every cascade of one light and one scene.
+pub fn window_holds(light: &ViewCamera, fitted: &ViewCamera, receivers: &[Vec3]) -> bool {
+    let (Some(hh), Some(fh)) = (light.ortho_half_height, fitted.ortho_half_height) else {
+        return false;
+    };
+    if hh != fh
+        || (light.width, light.near, light.far) != (fitted.width, fitted.near, fitted.far)
+        || receivers.is_empty()
+    {
+        return false;
     }
+    let inner = hh - light.pixel_size_at(1.0);
+    receivers.iter().all(|p| {
+        let q = light.to_view(*p);
+        q.x.abs() <= inner * light.aspect() && q.y.abs() <= inner
+    })
 }
 
 /// Whether a caster inside the sphere (`centre`, `radius`) can reach `light`'s window

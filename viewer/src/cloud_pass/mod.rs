@@ -201,8 +201,10 @@ pub struct CloudFrame<'a> {
     instances: wgpu::Buffer,
     /// (cloud, level, instance range).
     groups: Vec<(&'a GpuCloud, usize, std::ops::Range<u32>)>,
-    /// Per instance (buffer order): a world-space sphere holding everything it draws.
+    /// Per instance (buffer order): a world-space sphere holding everything it draws,
+    /// and its model transform.
     spheres: Vec<(Vec3, f32)>,
+    models: Vec<Mat4>,
     /// Billboard quads (sides) drawn.
     pub quads: usize,
     /// Bytes written to the GPU for this frame's clouds (instances and frame uniforms).
@@ -245,6 +247,35 @@ impl<'a> CloudFrame<'a> {
     /// Instances drawn (a dissolving instance counts in both its levels).
     pub fn instance_count(&self) -> usize {
         self.groups.iter().map(|g| g.2.len()).sum()
+    }
+
+    /// What the frame draws into a depth map seen along `-towards` with texels of side
+    /// `texel`: billboard quads (the side facing the light), foliage triangles, and their
+    /// area across the light in texels — the fragments the alpha test runs on (overlaps
+    /// counted, the window not clipped), load-independent.
+    pub fn shadow_work(&self, towards: Vec3, texel: f32) -> (usize, usize, f64) {
+        let l = towards.normalize_or(Vec3::Y);
+        let (mut quads, mut triangles, mut area) = (0, 0, 0.0f64);
+        for &(cloud, level, ref range) in &self.groups {
+            let Some(areas) = cloud.areas.get(level) else {
+                continue;
+            };
+            if level == 0 {
+                triangles += cloud.foliage_triangles as usize * range.len();
+            } else {
+                quads += cloud.quads(level) / 2 * range.len();
+            }
+            for i in range.clone() {
+                // A patch of area vector `a` covers |l · cof(M)·a| across the light.
+                let m = glam::Mat3::from_mat4(self.models[i as usize]);
+                let v = m.determinant() * (m.inverse() * l);
+                area += areas
+                    .iter()
+                    .map(|a| f64::from(v.dot(*a).abs()))
+                    .sum::<f64>();
+            }
+        }
+        (quads, triangles, area / f64::from(texel * texel).max(1e-30))
     }
 }
 
@@ -401,8 +432,8 @@ impl CloudPass {
     /// serves the shadow pass and the main pass: instance data does not depend on the
     /// view.
     pub fn frame<'a>(&self, gpu: &Gpu, draws: &[CloudDraw<'a>]) -> CloudFrame<'a> {
-        // (cloud, per level: its instances and their spheres).
-        type Level = Vec<(CloudInstance, (Vec3, f32))>;
+        // (cloud, per level: its instances, their spheres and models).
+        type Level = Vec<(CloudInstance, (Vec3, f32), Mat4)>;
         let mut clouds: Vec<(&'a GpuCloud, Vec<Level>)> = Vec::new();
         for d in draws {
             let i = match clouds.iter().position(|(c, _)| std::ptr::eq(*c, d.cloud)) {
@@ -416,16 +447,22 @@ impl CloudPass {
             let t = if dissolving { d.dissolve } else { 0.0 };
             let sphere = instance_sphere(d.cloud, d.model);
             if let Some(level) = clouds[i].1.get_mut(d.level) {
-                level.push((instance_dissolving(d.model, d.morph, t, false), sphere));
+                level.push((
+                    instance_dissolving(d.model, d.morph, t, false),
+                    sphere,
+                    d.model,
+                ));
             }
             if dissolving {
                 if let Some(next) = clouds[i].1.get_mut(d.level + 1) {
-                    next.push((instance_dissolving(d.model, d.next_morph, t, true), sphere));
+                    let inst = instance_dissolving(d.model, d.next_morph, t, true);
+                    next.push((inst, sphere, d.model));
                 }
             }
         }
         let mut data: Vec<CloudInstance> = Vec::with_capacity(draws.len());
         let mut spheres = Vec::with_capacity(draws.len());
+        let mut models = Vec::with_capacity(draws.len());
         let mut groups = Vec::new();
         let mut quads = 0;
         for (cloud, levels) in clouds {
@@ -436,6 +473,7 @@ impl CloudPass {
                 let start = data.len() as u32;
                 data.extend(inst.iter().map(|i| i.0));
                 spheres.extend(inst.iter().map(|i| i.1));
+                models.extend(inst.iter().map(|i| i.2));
                 if level > 0 {
                     quads += cloud.quads(level) * inst.len();
                 }
@@ -457,6 +495,7 @@ impl CloudPass {
             instances: held.0.clone(),
             groups,
             spheres,
+            models,
             quads,
             bytes_uploaded: std::mem::size_of_val(data.as_slice()),
         }

@@ -35,6 +35,10 @@ pub struct GpuCloud {
     pub(super) billboard_levels: Vec<Vec<QuadGroup>>,
     /// Billboards per billboard level (for the stats).
     pub billboards: Vec<u32>,
+    /// Per level (0: the foliage mesh's triangles, then one per billboard): the area
+    /// vectors (normal × area, object space) of what it draws, for the shadow pass's
+    /// counts ([`super::CloudFrame::shadow_work`]).
+    pub(super) areas: Vec<Vec<Vec3>>,
     pub foliage_triangles: u32,
     /// Billboards lit at runtime from their normal maps (baked unlit, with `ANRM`).
     pub runtime_lit: bool,
@@ -342,6 +346,12 @@ impl CloudPass {
                 });
             }
         }
+        let pos = |i: u32| Vec3::from(f.vertices[i as usize].position);
+        let mut areas = vec![f
+            .triangles
+            .iter()
+            .map(|t| 0.5 * (pos(t[1]) - pos(t[0])).cross(pos(t[2]) - pos(t[0])))
+            .collect::<Vec<Vec3>>()];
         // Billboard levels, by atlas: 4 vertices and 6 indices per quad side.
         let mut billboards = Vec::new();
         let mut billboard_levels = Vec::new();
@@ -349,6 +359,14 @@ impl CloudPass {
             let bbs = &asset.billboards
                 [l.first_billboard as usize..(l.first_billboard + l.billboard_count) as usize];
             billboards.push(l.billboard_count);
+            areas.push(
+                bbs.iter()
+                    .map(|b| {
+                        let c = b.corners.map(Vec3::from);
+                        (c[1] - c[0]).cross(c[3] - c[0])
+                    })
+                    .collect(),
+            );
             let mut groups = Vec::new();
             for a in l.first_atlas..l.first_atlas + l.atlas_count {
                 let first_index = indices.len() as u32;
@@ -447,6 +465,7 @@ impl CloudPass {
             foliage,
             billboard_levels,
             billboards,
+            areas,
             foliage_triangles: f.triangles.len() as u32,
             runtime_lit,
             centre,

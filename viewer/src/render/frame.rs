@@ -9,6 +9,7 @@ use glam::{Mat4, Vec3};
 
 use super::{FrameStats, Renderer};
 use crate::cloud_pass::{CloudFrame, LodChoice};
+use crate::frame_stats::CascadeStats;
 use crate::mesh_pass::{MeshFrame, View};
 use crate::particle_pass::LayerTargets;
 use crate::shadow::{self, ShadowMap, SHADOW_MAP_SIZE};
@@ -42,12 +43,10 @@ struct ColourPass<'a> {
     receiver: &'a wgpu::BindGroup,
 }
 
-/// Everything the shadow atlas depends on that may change from frame to frame (the
-/// content itself only changes through `&mut` methods, which forget the atlas): the
-/// light, the slicing parameters, the culling switch, the batch size, the scene time
-/// where cells are animated, the cascades' cameras (texel-snapped, so a camera that
-/// moves a little may keep the far ones) and every cloud instance's level, morph and
-/// dissolve.
+/// What every tile of the shadow atlas depends on that may change from frame to frame
+/// (the content itself only changes through `&mut` methods, which forget the atlas):
+/// the light, the slicing parameters, the culling switch, the batch size, the scene
+/// time where cells are animated, and the number of cascades.
 #[derive(Clone, Debug, PartialEq)]
 pub(super) struct ShadowKey {
     light_dir: Vec3,
@@ -55,33 +54,24 @@ pub(super) struct ShadowKey {
     culling: bool,
     texture_batch: usize,
     time: Option<f32>,
-    cameras: Vec<ViewCamera>,
+    cascades: usize,
+}
+
+/// One cascade's tile as drawn: its light camera (texel-snapped, so a camera that moves
+/// a little may keep the far ones), every cloud instance's level, morph and dissolve,
+/// and what it counted (reported again by the frames that keep it).
+#[derive(Clone, Debug)]
+pub(super) struct Tile {
+    camera: ViewCamera,
     levels: Vec<LodChoice>,
+    stats: CascadeStats,
 }
 
-/// What the atlas holds, as [`FrameStats`]' shadow fields counted it when it was drawn;
-/// a frame that reuses the atlas reports them again (and `shadow_reused`).
-#[derive(Clone, Copy, Debug, Default)]
-pub(super) struct CasterStats {
-    slices: usize,
-    casters: usize,
-    culled: usize,
-}
-
-impl CasterStats {
-    fn from(s: &FrameStats) -> CasterStats {
-        CasterStats {
-            slices: s.shadow_slices,
-            casters: s.shadow_casters,
-            culled: s.shadow_casters_culled,
-        }
-    }
-
-    fn add_to(&self, s: &mut FrameStats) {
-        s.shadow_slices += self.slices;
-        s.shadow_casters += self.casters;
-        s.shadow_casters_culled += self.culled;
-    }
+/// What the atlas holds: the key its tiles share, and each cascade's tile.
+#[derive(Clone, Debug)]
+pub(super) struct Atlas {
+    key: ShadowKey,
+    tiles: Vec<Tile>,
 }
 
 impl Renderer {
@@ -213,33 +203,88 @@ impl Renderer {
                 .iter()
                 .any(|v| v.animation.is_some())
                 .then_some(self.time),
-            cameras: cs.cameras.clone(),
-            levels,
+            cascades: cs.cameras.len(),
         };
+        let mut drawn = self.shadows.drawn.borrow_mut();
+        let old = drawn
+            .take()
+            .filter(|a| self.shadows.reuse && a.key == key)
+            .map_or_else(Vec::new, |a| a.tiles);
+        // Per cascade: its tile kept from an earlier frame, or `None` (drawn now).
+        let kept: Vec<Option<Tile>> = cs
+            .cameras
+            .iter()
+            .enumerate()
+            .map(|(k, fitted)| {
+                let t = old.get(k)?;
+                let mut t = t.clone();
+                t.stats.drawn = false;
+                if t.camera == *fitted && t.levels == levels {
+                    // What this frame would draw.
+                    t.stats.age = 0;
+                    return Some(t);
+                }
+                let young = t.stats.age + 1 < 1 << k.min(16);
+                (self.shadow_keep_far
+                    && k > 0
+                    && young
+                    && shadow::window_holds(&t.camera, fitted, &cs.receivers[k]))
+                .then(|| {
+                    t.stats.age += 1;
+                    t
+                })
+            })
+            .collect();
+        let all_drawn = kept.iter().all(Option::is_none);
+        let cameras: Vec<ViewCamera> = kept
+            .iter()
+            .zip(&cs.cameras)
+            .map(|(t, fitted)| t.as_ref().map_or(*fitted, |t| t.camera))
+            .collect();
         // The receivers' map from the base camera (fitted to the whole view, not part of
         // the key) to each cascade: written every frame.
+        let uniform = if kept.iter().any(Option::is_some) {
+            shadow::cascade_uniform(&cs.base, &cameras)
+        } else {
+            cs.uniform
+        };
         self.gpu
             .queue
-            .write_buffer(&map.cascades, 0, bytemuck::bytes_of(&cs.uniform));
-        let mut drawn = self.shadows.drawn.borrow_mut();
-        if let Some((k, counts)) = drawn.as_ref().filter(|_| self.shadows.reuse) {
-            if *k == key {
-                counts.add_to(stats);
-                stats.shadow_reused = true;
-                return Ok(Some((map, cs.base)));
-            }
+            .write_buffer(&map.cascades, 0, bytemuck::bytes_of(&uniform));
+        let mut tiles = Vec::with_capacity(kept.len());
+        for (k, t) in kept.into_iter().enumerate() {
+            let tile = match t {
+                Some(t) => t,
+                None => {
+                    let light = &cameras[k];
+                    let mut senc = self.gpu.device.create_command_encoder(&Default::default());
+                    // With every tile drawn the first clears the atlas; else each clears
+                    // its own.
+                    let clear = if all_drawn && k == 0 {
+                        Clear::Atlas
+                    } else if all_drawn {
+                        Clear::None
+                    } else {
+                        Clear::Tile
+                    };
+                    let cascade = (k, light, clear);
+                    let counts = self.shadow_pass(&mut senc, map, cascade, clouds, stats)?;
+                    self.gpu.queue.submit([senc.finish()]);
+                    Tile {
+                        camera: *light,
+                        levels: levels.clone(),
+                        stats: counts,
+                    }
+                }
+            };
+            stats.shadow_slices += tile.stats.slices;
+            stats.shadow_casters += tile.stats.casters;
+            stats.shadow_casters_culled += tile.stats.culled;
+            stats.shadow_cascades.push(tile.stats.clone());
+            tiles.push(tile);
         }
-        *drawn = None;
-        let mut counts = FrameStats::default();
-        for (k, light) in cs.cameras.iter().enumerate() {
-            let mut senc = self.gpu.device.create_command_encoder(&Default::default());
-            self.shadow_pass(&mut senc, map, k, light, clouds, &mut counts)?;
-            self.gpu.queue.submit([senc.finish()]);
-        }
-        stats.cloud_bytes_uploaded += counts.cloud_bytes_uploaded;
-        let counts = CasterStats::from(&counts);
-        counts.add_to(stats);
-        *drawn = Some((key, counts));
+        stats.shadow_reused = !tiles.iter().any(|t| t.stats.drawn);
+        *drawn = Some(Atlas { key, tiles });
         Ok(Some((map, cs.base)))
     }
 
@@ -417,11 +462,10 @@ impl Renderer {
         &self,
         enc: &mut wgpu::CommandEncoder,
         map: &ShadowMap,
-        k: usize,
-        light: &ViewCamera,
+        (k, light, clear): (usize, &ViewCamera, Clear),
         clouds: Option<&CloudFrame<'_>>,
         stats: &mut FrameStats,
-    ) -> Result<(), ViewError> {
+    ) -> Result<CascadeStats, ViewError> {
         let mut params = self.params;
         params.spacing = params.spacing.scaled(shadow::SHADOW_SPACING_BIAS);
         let plan = self.plan(
@@ -431,7 +475,12 @@ impl Renderer {
             None,
             Some(shadow::SHADOW_ALPHA_CUTOFF),
         )?;
-        stats.shadow_slices += plan.as_ref().map_or(0, |p| p.slice_count());
+        let mut cascade = CascadeStats {
+            texel: light.pixel_size_at(1.0),
+            drawn: true,
+            slices: plan.as_ref().map_or(0, |p| p.slice_count()),
+            ..Default::default()
+        };
         let frame = MeshFrame {
             view_proj: (light.projection() * light.view).to_cols_array_2d(),
             world_to_shadow: Mat4::IDENTITY.to_cols_array_2d(),
@@ -440,7 +489,7 @@ impl Renderer {
         };
         let none = &self.shadows.none.bind_group;
         let mut depth = depth_attachment(&map.view);
-        if k > 0 {
+        if clear != Clear::Atlas {
             depth.depth_ops = Some(wgpu::Operations {
                 load: wgpu::LoadOp::Load,
                 store: wgpu::StoreOp::Store,
@@ -458,6 +507,14 @@ impl Renderer {
         let (x, y, side) = shadow::tile_rect(k, map.size);
         rp.set_viewport(x as f32, y as f32, side as f32, side as f32, 0.0, 1.0);
         rp.set_scissor_rect(x, y, side, side);
+        if clear == Clear::Tile {
+            let p = self
+                .shadows
+                .tile_clear
+                .get_or_init(|| shadow::tile_clear_pipeline(&self.gpu));
+            rp.set_pipeline(p);
+            rp.draw(0..3, 0..1);
+        }
         // Casters outside the cascade's window are left out (each cascade's depth range
         // covers every caster, so only the window across the light decides).
         let seen = |c: Vec3, r: f32| !self.shadow_culling || shadow::sphere_in_window(light, c, r);
@@ -466,16 +523,19 @@ impl Renderer {
             for m in &self.meshes {
                 let (lo, hi) = m.bounds;
                 if seen(0.5 * (lo + hi), 0.5 * (hi - lo).length()) {
-                    stats.shadow_casters += pass.draw(&self.gpu, &mut rp, bind, none, m, true);
+                    cascade.casters += pass.draw(&self.gpu, &mut rp, bind, none, m, true);
                 } else {
-                    stats.shadow_casters_culled += m.ranges.len();
+                    cascade.culled += m.ranges.len();
                 }
             }
         }
         if let (Some(pass), Some(cf)) = (&self.cloud_pass, clouds) {
             let (cf, culled) = cf.culled(seen);
-            stats.shadow_casters += cf.instance_count();
-            stats.shadow_casters_culled += culled;
+            cascade.casters += cf.instance_count();
+            cascade.culled += culled;
+            let (quads, triangles, texels) = cf.shadow_work(self.light_dir, cascade.texel);
+            (cascade.cloud_quads, cascade.foliage_triangles) = (quads, triangles);
+            cascade.cloud_texels = texels;
             let bind = pass.frame_bind_group(&self.gpu, View::Light, &frame);
             stats.cloud_bytes_uploaded += std::mem::size_of::<MeshFrame>();
             pass.draw(&self.gpu, &mut rp, bind, none, &cf, true);
@@ -488,7 +548,7 @@ impl Renderer {
                 none,
             );
         }
-        Ok(())
+        Ok(cascade)
     }
 
     /// The volume plan for `camera` (cells in camera space, slices, slabs, draws),
@@ -519,6 +579,17 @@ impl Renderer {
             self.time,
         )
     }
+}
+
+/// What a cascade's pass clears before drawing.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Clear {
+    /// The whole atlas (the first cascade, when every tile is drawn).
+    Atlas,
+    /// Nothing (a later cascade of a frame that draws every tile).
+    None,
+    /// Its own tile (a frame that keeps some tiles).
+    Tile,
 }
 
 fn depth_attachment(view: &wgpu::TextureView) -> wgpu::RenderPassDepthStencilAttachment<'_> {
