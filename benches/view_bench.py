@@ -148,11 +148,14 @@ def main():
     notes = os.path.join(os.path.dirname(__file__), "view_bench_notes.md")
     if os.path.exists(notes):
         w(open(notes).read())
-    # Keep the particle-layer section (written by particle_layer_bench.py) as it is.
+    # Keep the hand-written sections and the particle-layer section (written by
+    # particle_layer_bench.py) as they are.
     prev = open(a.out).read() if os.path.exists(a.out) else ""
-    b, e = prev.find("<!-- particle-layer:begin -->"), prev.find("<!-- particle-layer:end -->")
-    if b >= 0 and e > b:
-        w(prev[b:e + len("<!-- particle-layer:end -->")])
+    for tag in ["hand-written", "particle-layer"]:
+        b = prev.find(f"<!-- {tag}:begin")
+        e = prev.find(f"<!-- {tag}:end -->")
+        if b >= 0 and e > b:
+            w(prev[b:e + len(f"<!-- {tag}:end -->")] + "\n")
     tmp = a.out + ".tmp"
     open(tmp, "w").write("\n".join(out) + "\n")
     os.replace(tmp, a.out)
