@@ -235,6 +235,7 @@ fn case(command: &str, flag: &str) -> Option<Case> {
             keyword("bogus")
         }
         ("view", "time") => both("abc", "inf"),
+        ("view", "orbit") => both("abc", "inf"),
         ("view", "lod-distance") => both("abc", "0"),
         ("view", "dissolve") => both("abc", "5"),
         ("view", "frames") => both("abc", "0"),
