@@ -7,6 +7,7 @@ mod stdout;
 mod alloc;
 mod bake_steps;
 mod bbcloud;
+mod bbcloud_args;
 mod compare;
 mod depfile;
 mod emptyspace;
@@ -22,6 +23,7 @@ mod signals;
 mod staged;
 mod target;
 mod view;
+mod view_args;
 mod view_load;
 mod view_steps;
 mod voxelize;
@@ -65,7 +67,7 @@ enum Command {
     Shell(shell::Args),
     /// Bake a mesh's foliage into a stochastic billboard cloud (+ LODs); the rest stays a mesh.
     #[command(allow_negative_numbers = true)]
-    Bbcloud(bbcloud::Args),
+    Bbcloud(bbcloud_args::Args),
     /// Compare a volume or billboard-cloud asset with its source mesh: reference vs asset renders, errors and timings per view.
     #[command(allow_negative_numbers = true)]
     Eval(eval::Args),
@@ -73,9 +75,9 @@ enum Command {
     #[command(allow_negative_numbers = true)]
     Compare(compare::Args),
     /// View a scene (.ron), volume asset or mesh with the GPU viewer; --headless --screenshot renders a PNG.
-    #[command(after_help = view::WINDOW_HELP)]
+    #[command(after_help = view_args::WINDOW_HELP)]
     #[command(allow_negative_numbers = true)]
-    View(view::Args),
+    View(view_args::Args),
     /// Remove a volume's empty space: kd-tree boxes packed with aprons into a smaller atlas.
     #[command(allow_negative_numbers = true)]
     Emptyspace(emptyspace::Args),
