@@ -1,6 +1,8 @@
 //! Shared test helpers: a GPU adapter or a documented skip, a small synthetic volume.
 #![allow(dead_code)]
 
+pub mod cloud;
+
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
