@@ -143,9 +143,13 @@ fn lambert_factor(n: vec3<f32>, i: VOut) -> f32 {
 // drawn coverage) test against the cut-off; the foliage base mesh's straight textures (plain
 // MIPs) against alpha_threshold's hash where minified.
 fn cut(i: VOut) -> f32 {
+    // A uniform branch: billboards (the shadow pass's hot path), untextured and opaque
+    // materials skip the hash and its derivatives.
+    if dr.params.y > 0.5 || dr.params.w < 0.5 || dr.params.x <= 0.0 {
+        return dr.params.x;
+    }
     let size = vec2<f32>(textureDimensions(tex));
-    let t = alpha_threshold(dr.params.x, i.uv, size, i.world);
-    return select(t, dr.params.x, dr.params.y > 0.5 || dr.params.w < 0.5 || dr.params.x <= 0.0);
+    return alpha_threshold(dr.params.x, i.uv, size, i.world);
 }
 
 // The foliage base mesh: alpha-tested, lit like meshes (two-sided Lambert + ambient).

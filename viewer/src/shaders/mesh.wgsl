@@ -67,9 +67,12 @@ fn base_colour(i: VOut) -> vec4<f32> {
 
 // The threshold of the alpha test (0: opaque, never discarded).
 fn cut(i: VOut) -> f32 {
+    // A uniform branch: opaque materials skip the hash and its derivatives.
+    if material.params.x <= 0.0 {
+        return 0.0;
+    }
     let size = vec2<f32>(textureDimensions(base_tex));
-    let t = alpha_threshold(material.params.x, i.uv, size, i.world);
-    return select(0.0, t, material.params.x > 0.0);
+    return alpha_threshold(material.params.x, i.uv, size, i.world);
 }
 
 @fragment
