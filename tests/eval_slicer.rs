@@ -528,3 +528,44 @@ fn a_cell_at_a_1e5_offset_matches_the_cell_at_the_origin() {
         );
     }
 }
+
+#[test]
+fn the_reference_skips_only_pixels_no_ray_reaches() {
+    // The cube off-centre and oblique, far, near, and with corners behind the eye (no
+    // pixel skipped): every pixel of the render (which skips the pixels outside the
+    // bounds' projection) equals its ray traced one by one.
+    let scene = cube_mesh();
+    let rr = ReferenceRenderer::new(&scene);
+    for (eye, target) in [
+        (Vec3::new(4.0, 3.0, 9.0), Vec3::new(-1.5, 0.0, 0.0)),
+        (Vec3::new(1.2, 1.4, 1.6), Vec3::new(0.0, 0.2, 0.0)),
+        (Vec3::new(0.3, 0.6, 1.05), Vec3::new(0.5, 0.5, 0.0)),
+        (Vec3::new(0.5, 1.5, 0.9), Vec3::new(0.5, 0.5, -2.0)),
+    ] {
+        let cam = Camera {
+            eye,
+            target,
+            ..front_camera(1.0, 48)
+        };
+        let img = rr.render(&cam, Sampling::Centre).unwrap();
+        let mut hit = 0;
+        for y in 0..cam.height {
+            for x in 0..cam.width {
+                let r = cam.ray(x as f32 + 0.5, y as f32 + 0.5);
+                let want = rr.trace(r.origin, r.dir, r.t_min, r.t_max);
+                assert_eq!(img.get(x, y), want, "pixel ({x}, {y}) from {eye}");
+                hit += usize::from(want.w > 0.0);
+            }
+        }
+        assert!(hit > 0, "the cube is in view from {eye}");
+    }
+}
+
+#[test]
+fn far_views_take_more_samples() {
+    let o = billow::eval::suite::EvalOptions::default();
+    let n: Vec<u32> = [0.5, 1.0, 2.0, 4.0, 16.0, 64.0]
+        .map(|f| o.samples_per_axis(f))
+        .to_vec();
+    assert_eq!(n, [4, 4, 8, 16, 16, 16]);
+}

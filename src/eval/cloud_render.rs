@@ -551,6 +551,8 @@ impl<'a> CloudRenderer<'a> {
         let mut image = ImageF32::new(camera.width, camera.height);
         let w = camera.width as usize;
         let inv = 1.0 / (n * n) as f32;
+        // The pixels the kept mesh can be seen through (every pixel where that is unknown).
+        let trunk_reach = self.trunk.pixels_reached(camera);
         let per_row: Vec<(u64, Vec<usize>)> = image
             .data
             .par_chunks_mut(w)
@@ -575,6 +577,14 @@ impl<'a> CloudRenderer<'a> {
                             .filter(|b| b.1[0] <= xf + 1.0 && xf <= b.1[2])
                             .map(|b| b.0),
                     );
+                    // Nothing to meet: no billboard's box and outside the kept mesh's.
+                    if candidates.is_empty()
+                        && trunk_reach.is_some_and(|[x0, y0, x1, y1]| {
+                            !(xu >= x0 && xu < x1 && yu >= y0 && yu < y1)
+                        })
+                    {
+                        continue;
+                    }
                     let mut acc = Vec4::ZERO;
                     for sy in 0..n {
                         for sx in 0..n {

@@ -29,7 +29,7 @@
 // `!(a < b)` comparisons are deliberate: they also catch NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use glam::{Vec3, Vec3A, Vec4};
+use glam::{Vec2, Vec3, Vec3A, Vec4};
 use obvhs::bvh2::Bvh2;
 use obvhs::ray::{Ray, RayHit};
 use rayon::prelude::*;
@@ -190,6 +190,44 @@ impl<'a> ReferenceRenderer<'a> {
         Ok(())
     }
 
+    /// The pixels `[x0, y0, x1, y1)` that a ray can hit the scene's bounds through: the
+    /// box's eight corners projected, a pixel of margin; `None` (every pixel) when a corner
+    /// is not in front of the eye; none for a scene without triangles. No ray of a pixel
+    /// outside meets a triangle, so skipping them changes no image.
+    pub(crate) fn pixels_reached(&self, camera: &Camera) -> Option<[u32; 4]> {
+        if self.scene.triangles.is_empty() {
+            return Some([0; 4]);
+        }
+        let b = &self.scene.bounds;
+        if !(b.min.cmple(b.max).all()) {
+            return None;
+        }
+        let view = camera.view();
+        let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
+        for i in 0..8 {
+            let c = Vec3::new(
+                if i & 1 == 0 { b.min.x } else { b.max.x },
+                if i & 2 == 0 { b.min.y } else { b.max.y },
+                if i & 4 == 0 { b.min.z } else { b.max.z },
+            );
+            let v = view.transform_point3(c);
+            // Only corners well in front: the projection is then exact.
+            if !(-v.z > camera.near) {
+                return None;
+            }
+            let (px, py) = camera.view_to_pixel(v)?;
+            lo = lo.min(Vec2::new(px, py));
+            hi = hi.max(Vec2::new(px, py));
+        }
+        let clamp = |v: f32, max: u32| v.clamp(0.0, max as f32) as u32;
+        Some([
+            clamp((lo.x - 1.0).floor(), camera.width),
+            clamp((lo.y - 1.0).floor(), camera.height),
+            clamp((hi.x + 1.0).ceil(), camera.width),
+            clamp((hi.y + 1.0).ceil(), camera.height),
+        ])
+    }
+
     pub fn lighting(&self) -> &Lighting {
         &self.lighting
     }
@@ -201,10 +239,14 @@ impl<'a> ReferenceRenderer<'a> {
         let mut img = ImageF32::new(camera.width, camera.height);
         let w = camera.width as usize;
         let inv = 1.0 / (n * n) as f32;
+        let reach = self.pixels_reached(camera);
         img.data.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
             let y = y as u32;
             for (x, px) in row.iter_mut().enumerate() {
                 let x = x as u32;
+                if !reach.is_none_or(|[x0, y0, x1, y1]| x >= x0 && x < x1 && y >= y0 && y < y1) {
+                    continue;
+                }
                 let mut acc = Vec4::ZERO;
                 for sy in 0..n {
                     for sx in 0..n {

@@ -56,7 +56,7 @@ pub struct Args {
     /// Image size WxH in pixels, each side 1–4096.
     #[arg(long, default_value = "128x128")]
     size: String,
-    /// Reference samples per pixel: a square number (1, 4, 9, 16, …, 256), stratified.
+    /// Reference samples per pixel at the framed distance: a square number (1, 4, 9, 16, …, 256), stratified; f× farther takes f² times as many, up to 256.
     #[arg(long, default_value_t = 16)]
     spp: u32,
     /// Slice spacing of the asset render: adaptive (the paper: one pixel's footprint, never
