@@ -225,7 +225,31 @@ pub fn render_decoded_over(
             camera.height
         )));
     }
-    render_sliced(vol, dims0, cells, camera, params, None, Some(backdrop))
+    render_sliced(
+        vol,
+        dims0,
+        cells,
+        camera,
+        params,
+        None,
+        Some(backdrop),
+        None,
+    )
+}
+
+/// [`render_decoded`] with `--shadows`' transmittance grid built once by the caller
+/// ([`ShadowGrid::for_volume`] of `vol`, `cells` and the params' light): it depends on
+/// the light alone, and a view set renders many views under one light. `None` draws no
+/// shadow. Used only where the params ask for shadows and the volume is lit.
+pub fn render_decoded_with_shadow(
+    vol: &DecodedVolume,
+    dims0: [u32; 3],
+    cells: &[Prism],
+    camera: &Camera,
+    params: &SlicerParams,
+    shadow: Option<&ShadowGrid>,
+) -> Result<SliceRender, EvalError> {
+    render_sliced(vol, dims0, cells, camera, params, None, None, Some(shadow))
 }
 
 /// Renders already-decoded levels (reuse across views) with the given cells.
@@ -251,7 +275,7 @@ pub fn render_decoded_in_depth_range(
     params: &SlicerParams,
     depth_range: Option<(f32, f32)>,
 ) -> Result<SliceRender, EvalError> {
-    render_sliced(vol, dims0, cells, camera, params, depth_range, None)
+    render_sliced(vol, dims0, cells, camera, params, depth_range, None, None)
 }
 
 fn render_sliced(
@@ -262,6 +286,8 @@ fn render_sliced(
     params: &SlicerParams,
     depth_range: Option<(f32, f32)>,
     backdrop: Option<&OpaqueBackdrop>,
+    // `Some`: the shadow grid the caller built (or `Some(None)`: none); `None`: built here.
+    given_shadow: Option<Option<&ShadowGrid>>,
 ) -> Result<SliceRender, EvalError> {
     let start = Instant::now();
     validate_camera(camera)?;
@@ -415,10 +441,18 @@ fn render_sliced(
         .collect();
     let far_z = slices.first().map(|&(z, d)| (z, far_slab(z, d, z_max)));
     // `--shadows`: the base part's transmittance towards the light, when it is lit.
-    let shadow = params
+    let built;
+    let shadow = match params
         .light
         .filter(|_| params.shadows && nmats[0].is_some())
-        .and_then(|l| ShadowGrid::for_volume(vol, cells, l.dir));
+    {
+        None => None,
+        Some(_) if given_shadow.is_some() => given_shadow.flatten(),
+        Some(l) => {
+            built = ShadowGrid::for_volume(vol, cells, l.dir);
+            built.as_ref()
+        }
+    };
     stats.shadowed = shadow.is_some();
     let w = camera.width as usize;
     const BATCH: usize = 1 << 16;
@@ -435,7 +469,7 @@ fn render_sliced(
                     filter: params.mip_filter,
                     light: light_view,
                     depth,
-                    shadow: shadow.as_ref(),
+                    shadow,
                 };
                 if nn == 1 {
                     raster_row(row, y, polys, &ctx)

@@ -10,7 +10,7 @@
 //!   Also rendered per view: the mesh with **one sample per pixel** at the pixel centre —
 //!   what a rasterizer without anti-aliasing shows — and compared with the same reference,
 //!   so the asset's error can be read against the aliasing error of drawing the mesh.
-//! - Asset: the CPU slicer ([`render_decoded`]) with the given [`SlicerParams`], its
+//! - Asset: the CPU slicer ([`render_decoded_with_shadow`]) with the given [`SlicerParams`], its
 //!   coverage samples at the reference's stratified points
 //!   ([`SlicerParams::coverage_samples`] = `reference_per_axis`): the slicer shades once per
 //!   pixel and the cells' edges are anti-aliased as the reference's geometry is.
@@ -18,6 +18,7 @@
 //!   FLIP). Means over views: RMSE, |Δα|, coverage difference, SSIM and FLIP are plain means;
 //!   the mean PSNR is the PSNR of the mean MSE (finite unless every view is exact).
 
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use billow_format::{Prism, VolumeAsset};
@@ -28,8 +29,9 @@ use super::cloud_render::{CloudRenderer, PreparedCloud};
 use super::lighting::{EvalLight, Lighting, VolumeLight};
 use super::metrics::{compare, ImageError};
 use super::reference::{ReferenceRenderer, Sampling};
-use super::slicer::{render_decoded, SlicerParams};
+use super::slicer::{render_decoded_with_shadow, SlicerParams};
 use super::volume_sampler::DecodedVolume;
+use super::volume_shadow::ShadowGrid;
 use super::{EvalError, ImageF32};
 use crate::scene::Scene;
 use billow_core::camera::{Camera, ViewSpec};
@@ -323,6 +325,9 @@ pub struct PreparedAsset {
     pub volume: DecodedVolume,
     pub dims0: [u32; 3],
     pub cells: Vec<Prism>,
+    /// `--shadows`: the last light's transmittance grid (it depends on the light alone;
+    /// one is built per light, not per view).
+    shadow: Mutex<Option<(Vec3, Option<Arc<ShadowGrid>>)>>,
 }
 
 impl PreparedAsset {
@@ -331,7 +336,22 @@ impl PreparedAsset {
             volume: DecodedVolume::decode(asset)?,
             dims0: asset.level_dims(0),
             cells: asset.cells.clone(),
+            shadow: Mutex::new(None),
         })
+    }
+
+    /// The transmittance grid towards `light` ([`ShadowGrid::for_volume`]), built once per
+    /// light.
+    fn shadow_grid(&self, light: Vec3) -> Option<Arc<ShadowGrid>> {
+        let mut cache = self.shadow.lock().unwrap_or_else(|e| e.into_inner());
+        match &*cache {
+            Some((l, grid)) if *l == light => grid.clone(),
+            _ => {
+                let grid = ShadowGrid::for_volume(&self.volume, &self.cells, light).map(Arc::new);
+                *cache = Some((light, grid.clone()));
+                grid
+            }
+        }
     }
 
     /// World size of a level-0 voxel (see [`billow_core::slicing::voxel_size`]).
@@ -430,12 +450,17 @@ impl<'a> Evaluator<'a> {
                 .samples_per_axis(reference.spec.distance_factor),
             ..self.options.slicer
         };
-        let r = render_decoded(
+        let shadow = params
+            .light
+            .filter(|_| params.shadows)
+            .and_then(|l| asset.shadow_grid(l.dir));
+        let r = render_decoded_with_shadow(
             &asset.volume,
             asset.dims0,
             &asset.cells,
             &reference.camera,
             &params,
+            shadow.as_deref(),
         )?;
         let err = compare(&reference.image, &r.image)?;
         let cam = &reference.camera;
