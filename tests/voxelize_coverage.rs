@@ -348,8 +348,14 @@ fn a_surface_with_coherent_normals_keeps_its_level_0_and_foliage_is_thinned() {
         k < 1.0 && k == k_off,
         "mean normals: k = {k}, without {k_off}"
     );
+    // Judged foliage before the bake, its opaque texels are thinned with the rest: the
+    // same coverage for a milder scale than the unjudged bake's, which thins only the
+    // partly covered texels.
     let (k, _, _) = level0(&leaves, true, true, Some(false));
-    assert_eq!(k, k_off, "moments judged foliage: k = {k}");
+    assert!(
+        k < 1.0 && k > k_off,
+        "moments judged foliage: k = {k}, unjudged {k_off}"
+    );
     let (c, surface, _) = auto(&leaves);
     assert!(
         surface == Some(false) && c.is_some_and(|c| c < AUTO_NORMALS_MIN_COHERENCE),

@@ -39,11 +39,22 @@
 //!   oak), but only ever **thinned** (`k ≤ 1`): a combine that made it denser than any
 //!   view of the mesh (`opaque`, `max` on foliage) is brought back, and one that made it
 //!   thinner (`mean` on a closed one-sided surface, `min`) is kept as combined. Expressions
-//!   and custom functions keep their level 0.
+//!   and custom functions keep their level 0. Where the volume was judged foliage before
+//!   the bake (`VoxelizeOptions::surface` = `Some(false)`: every `--normals` mode but
+//!   `on`), level 0's opaque texels are thinned with the rest, as the optical depth the
+//!   slicer gives them (`ln 510`): the same `k` everywhere in optical depth. Kept opaque, they took none of the thinning and the
+//!   partly covered texels took all of it: the generated tree's level 0 was thinned by
+//!   `k` = 0.087, its twigs (partly covered, dark bark) to a twelfth while its leaf clumps
+//!   (opaque through the combine) stayed, and it read +7.2 % in luminance under the
+//!   standard lights at 1×; with its opaque texels thinned too, `k` = 0.30, +4.9 %, RMSE
+//!   0.0377 → 0.0360 (docs/accuracy.md, "Thinning opaque texels too"). A closed surface
+//!   (`Volume::normal_coherence`) is not thinned at all, and a volume not judged before
+//!   the bake keeps its opaque texels (a small excess of coverage over a solid's
+//!   silhouette would otherwise make the whole solid translucent).
 //! - **Levels 1 and up** are matched to level 0 as rendered (after its scale), `k` in
 //!   `[1/16, 16]`: a distant volume covers what the near one does.
 //!
-//! Fully opaque texels are unchanged by any `k`: a closed surface stays closed. The level-0
+//! Above level 0, fully opaque texels are unchanged by any `k`. The level-0
 //! scale is applied to its RGBA8 bytes (a non-empty texel stays non-empty, so what
 //! `emptyspace` prunes does not change); the coarse levels of a preset are scaled before
 //! quantization. Every sum runs in a fixed order (each column front to back in increasing
@@ -237,6 +248,8 @@ const S: usize = 4;
 /// every texel face, split into the part that scales with `k` and the opaque part.
 pub struct Model {
     axes: Vec<(Vec<f64>, Vec<f64>, f64)>,
+    /// Whether the opaque texels' optical depth scales with `k` too (level 0's thinning).
+    opaque_scales: bool,
 }
 
 impl Model {
@@ -272,7 +285,10 @@ impl Model {
                 (scaled, fixed, face(c.dims, dims0, axis) / (S * S) as f64)
             })
             .collect();
-        Model { axes }
+        Model {
+            axes,
+            opaque_scales: false,
+        }
     }
 
     /// The rendered projected coverage along each axis with the optical depth scaled by
@@ -287,7 +303,11 @@ impl Model {
                     s.iter()
                         .zip(f)
                         .map(|(&s, &f)| {
-                            let t = k * s + f;
+                            let t = if self.opaque_scales {
+                                k * (s + f)
+                            } else {
+                                k * s + f
+                            };
                             if t > 0.0 {
                                 -(-t).exp_m1()
                             } else {
@@ -354,12 +374,17 @@ pub fn scale_opacity(v: glam::Vec4, k: f32) -> glam::Vec4 {
 /// An RGBA8 `SrgbPremultiplied` texel with its optical depth scaled by `k`
 /// ([`scale_opacity`] on the decoded value, encoded again). A texel with alpha 0 is kept
 /// as it is, and a non-zero alpha byte stays at least 1, so a non-empty texel stays
-/// non-empty.
-pub fn scale_rgba8(px: [u8; 4], k: f32, enc: &Encoder) -> [u8; 4] {
-    if px[3] == 0 || k == 1.0 {
+/// non-empty. An opaque texel (alpha 255) stays opaque, or with `opaque_too` is scaled
+/// as the optical depth the slicer gives it ([`MAX_OPTICAL_DEPTH`], `ln 510`).
+pub fn scale_rgba8(px: [u8; 4], k: f32, opaque_too: bool, enc: &Encoder) -> [u8; 4] {
+    if px[3] == 0 || k == 1.0 || (px[3] == 255 && !opaque_too) {
         return px;
     }
-    let a = f32::from(px[3]) / 255.0;
+    let a = if px[3] == 255 {
+        -(-MAX_OPTICAL_DEPTH as f32).exp_m1()
+    } else {
+        f32::from(px[3]) / 255.0
+    };
     let c = glam::Vec4::new(
         srgb_eotf(f32::from(px[0]) / 255.0),
         srgb_eotf(f32::from(px[1]) / 255.0),
@@ -381,6 +406,9 @@ pub struct CoverageScales {
     pub mesh: [f64; 3],
     pub level0_before: [f64; 3],
     pub level0_after: [f64; 3],
+    /// Whether level 0's opaque texels are thinned with the rest (a volume judged foliage
+    /// before the bake, `VoxelizeOptions::surface` = `Some(false)`).
+    pub level0_opaque_thinned: bool,
 }
 
 impl CoverageScales {
@@ -403,14 +431,17 @@ impl CoverageScales {
 }
 
 /// Level 0's scale (matched to `mesh`, never above 1; `thin`: whether it may be scaled at
-/// all) and its rendered coverage per axis after it, from its columns.
+/// all; `opaque_too`: whether its opaque texels are scaled too) and its rendered coverage
+/// per axis after it, from its columns.
 pub(crate) fn level0_scale(
     cols: &Columns,
     voxel: [f64; 3],
     mesh: &[f64; 3],
     thin: bool,
+    opaque_too: bool,
 ) -> (f32, [f64; 3], [f64; 3]) {
-    let model = Model::new(cols, cols.dims, voxel);
+    let mut model = Model::new(cols, cols.dims, voxel);
+    model.opaque_scales = opaque_too;
     let before = model.coverage(1.0);
     if !thin {
         return (1.0, before, before);
@@ -430,24 +461,24 @@ pub(crate) fn level_scale(
 }
 
 /// [`scale_rgba8`] over a dense RGBA8 level.
-pub(crate) fn scale_level_rgba8(bytes: &mut [u8], k: f32) {
+pub(crate) fn scale_level_rgba8(bytes: &mut [u8], k: f32, opaque_too: bool) {
     if k == 1.0 {
         return;
     }
     let enc = Encoder::get();
     bytes.par_chunks_mut(4 * 4096).for_each(|c| {
         for px in c.chunks_exact_mut(4) {
-            let v = scale_rgba8([px[0], px[1], px[2], px[3]], k, enc);
+            let v = scale_rgba8([px[0], px[1], px[2], px[3]], k, opaque_too, enc);
             px.copy_from_slice(&v);
         }
     });
 }
 
 /// [`scale_rgba8`] over a brick-sparse level's stored texels.
-pub(crate) fn scale_sparse_level(level: &mut SparseLevel, k: f32) {
+pub(crate) fn scale_sparse_level(level: &mut SparseLevel, k: f32, opaque_too: bool) {
     if k == 1.0 {
         return;
     }
     let enc = Encoder::get();
-    level.map_colour(|c| scale_rgba8(c, k, enc));
+    level.map_colour(|c| scale_rgba8(c, k, opaque_too, enc));
 }

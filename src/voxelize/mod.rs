@@ -474,7 +474,10 @@ pub fn voxelize(
             toksvig::normal_coherence(levels.get(l)?, n.get(l)?)
         },
     );
-    coverage.settle_level0(surface, |k| coverage::scale_level_rgba8(&mut levels[0], k));
+    let opaque_too = coverage.level0_opaque_thinned;
+    coverage.settle_level0(surface, |k| {
+        coverage::scale_level_rgba8(&mut levels[0], k, opaque_too)
+    });
     let moments = opts.moments && normals.is_some();
     Ok(Volume {
         grid,

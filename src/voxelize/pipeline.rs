@@ -209,8 +209,11 @@ pub(super) fn voxelize_as(
             let t = Instant::now();
             cover.mesh = coverage::mesh_coverage(&seen);
             // Level 0's scale (thinned to the mesh), then each coarser level's (to level 0).
+            let opaque_too = opts.surface == Some(false);
             let level0_scale = |cols: coverage::Columns, cover: &mut CoverageScales| {
-                let (k, before, after) = coverage::level0_scale(&cols, voxel, &cover.mesh, true);
+                let (k, before, after) =
+                    coverage::level0_scale(&cols, voxel, &cover.mesh, true, opaque_too);
+                cover.level0_opaque_thinned = opaque_too;
                 (cover.level0_before, cover.level0_after) = (before, after);
                 cover.scales.push(k);
                 k
@@ -307,13 +310,14 @@ pub(super) fn voxelize_as(
             }
             // The function's level 0 is kept; the coarser levels keep its coverage.
             let cols = coverage::Columns::from_rgba8(dims[0], &out[0]);
-            let (k, before, after) = coverage::level0_scale(&cols, voxel, &cover.mesh, false);
+            let (k, before, after) =
+                coverage::level0_scale(&cols, voxel, &cover.mesh, false, false);
             (cover.level0_before, cover.level0_after) = (before, after);
             cover.scales.push(k);
             for l in 1..out.len() {
                 let cols = coverage::Columns::from_rgba8(dims[l], &out[l]);
                 let k = coverage::level_scale(&cols, dims[0], voxel, &after);
-                coverage::scale_level_rgba8(&mut out[l], k);
+                coverage::scale_level_rgba8(&mut out[l], k, false);
                 cover.scales.push(k);
             }
             times.combine += t.elapsed().as_secs_f64();

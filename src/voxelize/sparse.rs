@@ -127,9 +127,10 @@ pub fn voxelize_sparse(
     v.normal_coherence = k;
     v.moments = opts.moments && v.has_normals();
     let level0 = v.levels.first_mut();
+    let opaque_too = v.coverage.level0_opaque_thinned;
     v.coverage.settle_level0(surface, |k| {
         if let Some(l0) = level0 {
-            super::coverage::scale_sparse_level(l0, k)
+            super::coverage::scale_sparse_level(l0, k, opaque_too)
         }
     });
     Ok(v)
