@@ -247,7 +247,7 @@ fn mib(bytes: u64) -> f64 {
 impl Estimate {
     /// Refuses atlases over [`MAX_ATLAS_BYTES`] before any heavy work (`opts` are the
     /// options the estimate was made for: with a `texel_density` the bytes are a lower
-    /// bound). [`bake`] checks the exact size again after the plane search.
+    /// bound). [`bake()`] checks the exact size again after the plane search.
     pub fn check_atlases(&self, opts: &BbcloudOptions) -> Result<(), AtlasOverLimit> {
         if self.atlas_bytes > MAX_ATLAS_BYTES {
             Err(AtlasOverLimit {

@@ -503,3 +503,128 @@ pub fn voxelize(
         normal_coherence,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A library caller gets the refusal the CLI gives, from `validate`, `voxelize` and
+    /// `bake` (before the scene is looked at: an empty one would be `EmptyScene`).
+    #[test]
+    fn options_out_of_range_are_refused_by_the_library() {
+        use crate::scene::SceneBuilder;
+        let empty = SceneBuilder::new().finish();
+        let cases = [
+            (
+                VoxelizeOptions {
+                    align: 0,
+                    ..Default::default()
+                },
+                OptionError::Align(0),
+            ),
+            (
+                VoxelizeOptions {
+                    align: MAX_AXIS + 1,
+                    ..Default::default()
+                },
+                OptionError::Align(MAX_AXIS + 1),
+            ),
+            (
+                VoxelizeOptions {
+                    memory_limit: 0,
+                    ..Default::default()
+                },
+                OptionError::MemoryLimit(0.0),
+            ),
+            (
+                VoxelizeOptions {
+                    bake: Bake::Ao {
+                        rays: 0,
+                        distance: None,
+                    },
+                    ..Default::default()
+                },
+                OptionError::AoRays(0),
+            ),
+            (
+                VoxelizeOptions {
+                    bake: Bake::Ao {
+                        rays: MAX_AO_RAYS + 1,
+                        distance: None,
+                    },
+                    ..Default::default()
+                },
+                OptionError::AoRays(MAX_AO_RAYS + 1),
+            ),
+            (
+                VoxelizeOptions {
+                    bake: Bake::Ao {
+                        rays: 8,
+                        distance: Some(-1.0),
+                    },
+                    ..Default::default()
+                },
+                OptionError::AoDistance(-1.0),
+            ),
+            (
+                VoxelizeOptions {
+                    bounds: Some(Aabb {
+                        min: Vec3::ONE,
+                        max: Vec3::ZERO,
+                    }),
+                    ..Default::default()
+                },
+                OptionError::BoundsEmpty,
+            ),
+            (
+                VoxelizeOptions {
+                    bounds: Some(Aabb {
+                        min: Vec3::ZERO,
+                        max: Vec3::splat(f32::NAN),
+                    }),
+                    ..Default::default()
+                },
+                OptionError::BoundsNotFinite,
+            ),
+        ];
+        for (opts, want) in cases {
+            let is_want =
+                |e: &VoxelizeError| matches!(e, VoxelizeError::OutOfRange(o) if *o == want);
+            let e = opts.validate().expect_err("validate");
+            assert!(is_want(&e), "validate: {e} for {want:?}");
+            let e = voxelize(&empty, &opts, &|_, _| {}).expect_err("voxelize");
+            assert!(is_want(&e), "voxelize: {e} for {want:?}");
+            let b = BakeOptions {
+                voxelize: opts,
+                ..BakeOptions::default()
+            };
+            match bake(&empty, &b, &BakeHooks::default()) {
+                Err(BakeError::Voxelize(e)) => assert!(is_want(&e), "bake: {e}"),
+                other => panic!("bake: {:?} for {want:?}", other.err()),
+            }
+        }
+        // In range, the options pass, and the bake goes on to the scene.
+        let good = VoxelizeOptions {
+            align: 8,
+            memory_limit: 1,
+            bake: Bake::Ao {
+                rays: MAX_AO_RAYS,
+                distance: Some(0.5),
+            },
+            bounds: Some(Aabb {
+                min: Vec3::ZERO,
+                max: Vec3::ONE,
+            }),
+            ..Default::default()
+        };
+        assert!(good.validate().is_ok());
+        let no_bounds = VoxelizeOptions {
+            bounds: None,
+            ..good
+        };
+        assert!(matches!(
+            voxelize(&empty, &no_bounds, &|_, _| {}),
+            Err(VoxelizeError::EmptyScene)
+        ));
+    }
+}
