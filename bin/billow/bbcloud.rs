@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use billow::bbcloud::{
     self as bb, bake, check_ambient, check_view_strength, estimate, BbcloudOptions, BbcloudStats,
-    Estimate, Flatten, Shading, Stage, ViewDirs, ViewPreference, MAX_ATLAS_BYTES,
+    Estimate, Flatten, Shading, Stage, ViewDirs, ViewPreference,
 };
 use billow::compress::{compress_cloud, Compression};
 use billow::export::gltf::cloud_gltf_bytes_with;
@@ -160,9 +160,6 @@ fn parse_view(s: &str, up: Vec3, strength: f32) -> Result<ViewPreference, CliErr
     };
     Ok(ViewPreference { dirs, strength })
 }
-
-/// A plane search expected to take longer than this (seconds) is announced with a warning.
-const SLOW_SECONDS: f64 = 60.0;
 
 /// What the flags ask for, checked before any work (the bake's own options apart).
 struct Plan {
@@ -550,29 +547,9 @@ fn bake_once(
     // What the bake will cost, before any heavy work: refused when the atlases would be
     // too large, a warning with the expected time when the plane search will be long.
     let cost = estimate(scene, opts).map_err(|e| bbcloud_error(input, &e))?;
-    let mib = |b: u64| b as f64 / f64::from(1u32 << 20);
-    if cost.atlas_bytes > MAX_ATLAS_BYTES {
-        return Err(bad(
-            if args.texel_density.is_some() {
-                "--texel-density"
-            } else {
-                "--atlas-size"
-            },
-            format!(
-                "the atlases would take {}about {:.0} MiB (peak memory about 3x that), more \
-                 than the limit of {:.0} MiB; lower --atlas-size, --texel-density, --lods or \
-                 --mip-levels (nothing was baked)",
-                if args.texel_density.is_some() {
-                    "at least "
-                } else {
-                    ""
-                },
-                mib(cost.atlas_bytes),
-                mib(MAX_ATLAS_BYTES)
-            ),
-        ));
-    }
-    if cost.search_seconds > SLOW_SECONDS {
+    cost.check_atlases(opts)
+        .map_err(|e| bad(&format!("--{}", e.option().replace('_', "-")), e))?;
+    if cost.slow_search() {
         warn(
             ctx,
             &format!(

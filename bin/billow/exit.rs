@@ -12,7 +12,7 @@ use billow::export::ExportError;
 use billow::import::{ImportError, ImportErrorKind};
 use billow::shell::ShellError;
 use billow::target_error::TargetError;
-use billow::voxelize::{CombineParseError, GridError, ResolutionError, VoxelizeError};
+use billow::voxelize::{CombineParseError, GridError, OptionError, ResolutionError, VoxelizeError};
 use billow_format::{CloudError, FormatError};
 use billow_view::ViewError;
 
@@ -68,24 +68,44 @@ impl std::fmt::Display for CliError {
     }
 }
 
+/// The `billow voxelize` flag a library [`OptionError`] is about.
+pub fn option_flag(e: &OptionError) -> &'static str {
+    match e {
+        OptionError::Align(_) => "--align",
+        OptionError::MemoryLimit(_) => "--memory-limit",
+        OptionError::AoRays(_) => "--ao-rays",
+        OptionError::AoDistance(_) => "--ao-distance",
+        OptionError::BoundsNotFinite | OptionError::BoundsEmpty => "--bounds",
+    }
+}
+
+/// An [`OptionError`] as the command's error, after its flag
+/// (`--align: must be between 1 and 2048 voxels, got 0`, exit 8).
+pub fn option_error(e: OptionError) -> CliError {
+    bad(option_flag(&e), e)
+}
+
 /// A [`VoxelizeError`] as the command's error: an option's error names the flag it came
 /// from (`--supersample: 9 is out of range (1 to 8)`), the rest the input file.
 pub fn voxelize_error(input: &str, e: &VoxelizeError) -> CliError {
     use billow::voxelize::OptionName;
+    match e {
+        VoxelizeError::OutOfRange(o) | VoxelizeError::Grid(GridError::BadAlign(o)) => {
+            return CliError::new(Code::from(e), format!("{}: {o}", option_flag(o)));
+        }
+        _ => {}
+    }
     let flag = match e {
         VoxelizeError::InvalidOption { option, .. } => Some(match option {
             OptionName::Supersample => "--supersample",
             OptionName::MipLevels => "--mips",
-            OptionName::Bake => "--bake",
             OptionName::Combine => "--combine",
         }),
         VoxelizeError::Resolution(_) | VoxelizeError::Grid(GridError::Resolution(_)) => {
             Some("--res")
         }
         VoxelizeError::Grid(GridError::BadMargin(_)) => Some("--margin"),
-        VoxelizeError::Grid(GridError::BadAlign(_) | GridError::AlignTooLarge { .. }) => {
-            Some("--align")
-        }
+        VoxelizeError::Grid(GridError::AlignTooLarge { .. }) => Some("--align"),
         _ => None,
     };
     match (flag, e) {
@@ -208,9 +228,9 @@ impl From<&VoxelizeError> for Code {
         match e {
             VoxelizeError::Resolution(r) => Code::from(r),
             VoxelizeError::Grid(g) => Code::from(g),
-            VoxelizeError::InvalidOption { .. } | VoxelizeError::TooMuchMemory { .. } => {
-                Code::BadParameter
-            }
+            VoxelizeError::InvalidOption { .. }
+            | VoxelizeError::OutOfRange(_)
+            | VoxelizeError::TooMuchMemory { .. } => Code::BadParameter,
             // A valid mesh without a triangle (points, lines, an empty scene).
             VoxelizeError::EmptyScene => Code::NothingToBake,
             VoxelizeError::InvalidScene(_) => Code::InvalidInput,

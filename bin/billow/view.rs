@@ -9,6 +9,7 @@ use billow_core::camera::{parse_direction, Camera};
 use billow_core::slicing::Spacing;
 use billow_core::Aabb;
 use billow_view::content::Content;
+use billow_view::limits::{check_background, ParamError, ViewParams};
 use billow_view::scene::SceneFile;
 use billow_view::{FrameStats, Gpu, SliceParams, ViewCamera, ViewError};
 use glam::{Mat4, Vec3, Vec4};
@@ -194,46 +195,42 @@ fn print_passes(args: &Args, passes: &[&'static str]) -> Result<(), CliError> {
     Ok(())
 }
 
+/// A [`ParamError`] as the command's error, after the flag it came from
+/// (`--fov: 200: must be in (0, 180) degrees`, exit 8).
+fn param_error(e: ParamError) -> CliError {
+    let flag = match e {
+        ParamError::Distance(_) => "--distance",
+        ParamError::Fov(_) => "--fov",
+        ParamError::LodDistance(_) => "--lod-distance",
+        ParamError::Dissolve(_) => "--dissolve",
+        ParamError::Time(_) => "--time",
+        ParamError::Orbit(_) => "--orbit",
+        ParamError::Frames => "--frames",
+        ParamError::SlabMinSlices => "--slab-min-slices",
+        ParamError::SweepFill(_) => "--sweep-fill",
+        ParamError::Background(_) => "--background",
+    };
+    bad(flag, e)
+}
+
 /// The flags' values and combinations checked, in the order their errors are reported;
 /// returns the frame size and the slice spacing.
 fn check_flags(args: &Args) -> Result<((u32, u32), Spacing), CliError> {
     let size = parse_size(&args.size)?;
     let spacing = parse_spacing(&args.spacing)?;
-    if !(args.distance.is_finite() && args.distance > 0.0) {
-        return Err(bad("--distance", "must be > 0"));
+    ViewParams {
+        distance: args.distance,
+        fov_deg: args.fov,
+        lod_distance: args.lod_distance,
+        dissolve: args.dissolve,
+        time: args.time,
+        orbit_deg: args.orbit,
+        frames: args.frames,
+        slab_min_slices: args.slab_min_slices,
+        sweep_fill: args.sweep_fill,
     }
-    if let Some(f) = args.fov {
-        if !(f > 0.0 && f < 180.0) {
-            return Err(bad("--fov", format!("{f}: must be in (0, 180) degrees")));
-        }
-    }
-    if let Some(d) = args.lod_distance {
-        if !(d > 0.0 && d.is_finite()) {
-            return Err(bad("--lod-distance", format!("{d}: must be > 0")));
-        }
-    }
-    if let Some(o) = args.dissolve {
-        if !(0.0..=4.0).contains(&o) {
-            return Err(bad("--dissolve", format!("{o}: must be in [0, 4] octaves")));
-        }
-    }
-    if !args.time.is_finite() {
-        return Err(bad("--time", "must be finite"));
-    }
-    if !args.orbit.is_finite() {
-        return Err(bad("--orbit", "must be finite"));
-    }
-    if args.frames == Some(0) {
-        return Err(bad("--frames", "must be at least 1"));
-    }
-    if args.slab_min_slices == 0 {
-        return Err(bad("--slab-min-slices", "must be at least 1"));
-    }
-    if let Some(f) = args.sweep_fill {
-        if !(f > 0.0 && f <= 4.0) {
-            return Err(bad("--sweep-fill", format!("{f}: must be in (0, 4]")));
-        }
-    }
+    .validate()
+    .map_err(param_error)?;
     check_modes(args)?;
     Ok((size, spacing))
 }
@@ -289,8 +286,8 @@ fn view_flags(
         .map(|s| parse_vec3("--background", s))
         .transpose()?
         .or(scene.background.map(Vec3::from));
-    if background.is_some_and(|b| !(b.min_element() >= 0.0 && b.max_element() <= 1.0)) {
-        return Err(bad("--background", "components must be in [0, 1]"));
+    if let Some(b) = background {
+        check_background(b.to_array()).map_err(param_error)?;
     }
     Ok((eye, look_at, view_dir, background))
 }

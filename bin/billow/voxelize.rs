@@ -7,7 +7,6 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use billow::compress::Compression;
-use billow::export::ktx2::ZSTD_LEVELS;
 use billow::export::{
     check_slices, ktx2_bytes_with, slice_bytes, slice_file_name, SliceFormat, Supercompression,
 };
@@ -16,7 +15,10 @@ use billow::presets::{resolve_volume, Preset, ResolvedVolume, VolumeFlags, Volum
 use billow::provenance::{source_info, with_companions};
 use billow::scene::Scene;
 use billow::target_error::TargetOptions;
-use billow::voxelize::{default_align, Bake, Baked, CombineFn, Resolution, VoxelizeOptions};
+use billow::voxelize::{
+    check_align, check_bounds, default_align, memory_limit_bytes, Bake, Baked, CombineFn,
+    Resolution, VoxelizeOptions,
+};
 use billow_core::Aabb;
 use billow_format::{SourceInfo, VolumeAsset, VolumeBlocks};
 use glam::Vec3;
@@ -26,7 +28,7 @@ use crate::bake_steps::{
     settings_source,
 };
 use crate::depfile;
-use crate::exit::{bad, usage, CliError, Code};
+use crate::exit::{bad, option_error, usage, CliError, Code};
 use crate::output::{peak_rss_bytes, warn};
 use crate::staged::{out_err, Staged};
 use crate::target::{target_options, TargetSummary};
@@ -67,7 +69,8 @@ pub fn options(
     })
 }
 
-/// `minx,miny,minz,maxx,maxy,maxz` → a box with min < max on every axis.
+/// `minx,miny,minz,maxx,maxy,maxz` → a box, checked by the library's rule
+/// ([`check_bounds`]: finite, min < max on every axis).
 fn parse_bounds(s: &str) -> Result<Aabb, CliError> {
     let v: Vec<f32> = s
         .split(',')
@@ -80,55 +83,33 @@ fn parse_bounds(s: &str) -> Result<Aabb, CliError> {
             format!("'{s}': expected six numbers minx,miny,minz,maxx,maxy,maxz"),
         ));
     }
-    if v.iter().any(|x| !x.is_finite()) {
-        return Err(bad(
-            "--bounds",
-            format!("'{s}': expected six finite numbers minx,miny,minz,maxx,maxy,maxz"),
-        ));
-    }
     let (min, max) = (Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5]));
-    if !min.cmplt(max).all() {
-        return Err(bad(
-            "--bounds",
-            format!("'{s}': min must be below max on every axis"),
-        ));
-    }
-    Ok(Aabb { min, max })
+    let bounds = Aabb { min, max };
+    check_bounds(&bounds).map_err(|e| bad("--bounds", format!("'{s}': {e}")))?;
+    Ok(bounds)
 }
 
-/// `--bake`, `--ao-rays`, `--ao-distance` → [`Bake`].
+/// `--bake`, `--ao-rays`, `--ao-distance` → [`Bake`], checked by the library's rule
+/// ([`Bake::validate`]).
 fn parse_bake(bake: &str, rays: u32, distance: Option<f32>) -> Result<Bake, CliError> {
-    match bake {
-        "none" if distance.is_some() => Err(bad(
-            "--ao-distance",
-            "applies to --bake ao only (nothing would use it); add --bake ao or drop it",
-        )),
-        "none" => Ok(Bake::None),
-        "ao" => {
-            if !(1..=billow::voxelize::MAX_AO_RAYS).contains(&rays) {
-                return Err(bad(
-                    "--ao-rays",
-                    format!(
-                        "must be between 1 and {}, got {rays}",
-                        billow::voxelize::MAX_AO_RAYS
-                    ),
-                ));
-            }
-            if let Some(d) = distance {
-                if !(d.is_finite() && d > 0.0) {
-                    return Err(bad(
-                        "--ao-distance",
-                        format!("must be a positive number, got {d}"),
-                    ));
-                }
-            }
-            Ok(Bake::Ao { rays, distance })
+    let bake = match bake {
+        "none" if distance.is_some() => {
+            return Err(bad(
+                "--ao-distance",
+                "applies to --bake ao only (nothing would use it); add --bake ao or drop it",
+            ))
         }
-        other => Err(usage(
-            "--bake",
-            format!("expected none or ao, got '{other}'"),
-        )),
-    }
+        "none" => Bake::None,
+        "ao" => Bake::Ao { rays, distance },
+        other => {
+            return Err(usage(
+                "--bake",
+                format!("expected none or ao, got '{other}'"),
+            ))
+        }
+    };
+    bake.validate().map_err(option_error)?;
+    Ok(bake)
 }
 
 /// What the flags ask for, checked before any work: the bake's options and the outputs'
@@ -194,30 +175,13 @@ fn volume_options(args: &Args, settings: &VolumeSettings) -> Result<VoxelizeOpti
     )?;
     opts.mip_levels = args.mips;
     if let Some(align) = args.align {
-        if !(1..=billow::voxelize::MAX_AXIS).contains(&align) {
-            return Err(bad(
-                "--align",
-                format!(
-                    "must be between 1 and {} voxels, got {align}",
-                    billow::voxelize::MAX_AXIS,
-                ),
-            ));
-        }
+        check_align(align).map_err(option_error)?;
     }
     opts.align = args
         .align
         .unwrap_or_else(|| default_align(&opts.resolution, args.bounds.is_some()));
     opts.bake = parse_bake(&args.bake, args.ao_rays, args.ao_distance)?;
-    if !(args.memory_limit.is_finite() && args.memory_limit > 0.0) {
-        return Err(bad(
-            "--memory-limit",
-            format!(
-                "must be a positive number of GiB, got {}",
-                args.memory_limit
-            ),
-        ));
-    }
-    opts.memory_limit = (args.memory_limit * (1u64 << 30) as f64).min(u64::MAX as f64) as u64;
+    opts.memory_limit = memory_limit_bytes(args.memory_limit).map_err(option_error)?;
     Ok(opts)
 }
 
@@ -226,15 +190,7 @@ fn parse_zstd(args: &Args) -> Result<Supercompression, CliError> {
     match args.ktx2_zstd {
         None => Ok(Supercompression::None),
         Some(_) if args.ktx2.is_none() => Err(usage("--ktx2-zstd", "needs --ktx2 FILE")),
-        Some(l) if !ZSTD_LEVELS.contains(&l) => Err(bad(
-            "--ktx2-zstd",
-            format!(
-                "must be a Zstandard level {}–{}, got {l}",
-                ZSTD_LEVELS.start(),
-                ZSTD_LEVELS.end()
-            ),
-        )),
-        Some(l) => Ok(Supercompression::Zstd(l)),
+        Some(l) => Supercompression::zstd(l).map_err(|e| bad("--ktx2-zstd", e)),
     }
 }
 

@@ -111,6 +111,22 @@ pub enum Supercompression {
     Zstd(i32),
 }
 
+/// A Zstandard level outside [`ZSTD_LEVELS`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("must be a Zstandard level {lo}–{hi}, got {0}", lo = ZSTD_LEVELS.start(), hi = ZSTD_LEVELS.end())]
+pub struct ZstdLevelError(pub i32);
+
+impl Supercompression {
+    /// [`Supercompression::Zstd`] at `level`, one of [`ZSTD_LEVELS`].
+    pub fn zstd(level: i32) -> Result<Self, ZstdLevelError> {
+        if ZSTD_LEVELS.contains(&level) {
+            Ok(Supercompression::Zstd(level))
+        } else {
+            Err(ZstdLevelError(level))
+        }
+    }
+}
+
 /// Writes `asset`'s colour levels as a KTX 2.0 3D texture at `path`, atomically: its BC7
 /// `blocks` when given (the asset's compressed colour levels), else the raw texels.
 /// Normals and cells are not part of the KTX file.
@@ -143,17 +159,11 @@ pub fn ktx2_bytes_with(
 ) -> Result<Vec<u8>, ExportError> {
     let dims = check_asset(asset, path)?;
     if let Supercompression::Zstd(level) = supercompression {
-        if !ZSTD_LEVELS.contains(&level) {
-            return Err(ExportError::Encode {
-                path: path.to_path_buf(),
-                format: "KTX2 (zstd)",
-                message: format!(
-                    "Zstandard level {level} is out of range ({} to {})",
-                    ZSTD_LEVELS.start(),
-                    ZSTD_LEVELS.end()
-                ),
-            });
-        }
+        Supercompression::zstd(level).map_err(|e| ExportError::Encode {
+            path: path.to_path_buf(),
+            format: "KTX2 (zstd)",
+            message: format!("level {e}"),
+        })?;
     }
     let bc = blocks.is_some();
     // The dense blocks: a GPU texture has every block (omitted ones decode to zero).
@@ -391,6 +401,19 @@ fn lcm(a: usize, b: usize) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn zstd_levels_outside_the_range_are_refused() {
+        for l in [0, -1, 23] {
+            assert_eq!(Supercompression::zstd(l), Err(ZstdLevelError(l)));
+        }
+        assert_eq!(Supercompression::zstd(1), Ok(Supercompression::Zstd(1)));
+        assert_eq!(Supercompression::zstd(22), Ok(Supercompression::Zstd(22)));
+        assert_eq!(
+            ZstdLevelError(23).to_string(),
+            "must be a Zstandard level 1–22, got 23"
+        );
+    }
 
     #[test]
     fn kvd_entries_are_padded_and_sorted() {

@@ -24,7 +24,7 @@ pub use self::gltf::{
     cloud_glb_bytes, cloud_gltf_bytes, write_cloud_glb, write_cloud_gltf, GltfAlpha, GltfContainer,
     GltfError, GltfOptions,
 };
-pub use self::ktx2::{ktx2_bytes, ktx2_bytes_with, write_ktx2, Supercompression};
+pub use self::ktx2::{ktx2_bytes, ktx2_bytes_with, write_ktx2, Supercompression, ZstdLevelError};
 pub use self::slices::{check_slices, slice_bytes, slice_file_name, write_slices, SliceFormat};
 
 /// Everything that can go wrong exporting.

@@ -35,6 +35,7 @@ use obvhs::ray::Ray;
 use rayon::prelude::*;
 
 use super::grid::GridSpec;
+use super::limits::{check_ao_distance, check_ao_rays, OptionError};
 use super::slices::DirSlices;
 use crate::bvh::scene_bvh;
 use crate::material::Shader;
@@ -55,8 +56,6 @@ pub enum Bake {
 
 /// Default number of AO rays per voxel.
 pub const DEFAULT_AO_RAYS: u32 = 32;
-/// Largest number of AO rays per voxel.
-pub const MAX_AO_RAYS: u32 = 4096;
 /// Default AO distance, as a fraction of the voxel grid's diagonal.
 pub const DEFAULT_DISTANCE_FRACTION: f32 = 0.2;
 /// PCG32 seed of the AO directions (the stream is the voxel index).
@@ -84,19 +83,14 @@ impl Bake {
         }
     }
 
-    pub(crate) fn validate(&self) -> Result<(), String> {
+    /// The rays within `1..=`[`MAX_AO_RAYS`](super::MAX_AO_RAYS) and the distance, when
+    /// given, a positive number (checked in that order).
+    pub fn validate(&self) -> Result<(), OptionError> {
         match *self {
             Bake::None => Ok(()),
             Bake::Ao { rays, distance } => {
-                if !(1..=MAX_AO_RAYS).contains(&rays) {
-                    return Err(format!("AO rays must be 1 to {MAX_AO_RAYS}, got {rays}"));
-                }
-                if let Some(d) = distance {
-                    if !(d.is_finite() && d > 0.0) {
-                        return Err(format!("AO distance must be a positive number, got {d}"));
-                    }
-                }
-                Ok(())
+                check_ao_rays(rays)?;
+                distance.map_or(Ok(()), check_ao_distance)
             }
         }
     }

@@ -156,6 +156,7 @@ pub enum BakeError {
 /// `opts.normals` says, pruned with `opts.prune`, compressed as `opts.compression` says.
 /// The asset is byte for byte what the CLI writes for the same options.
 pub fn bake(scene: &Scene, opts: &BakeOptions, hooks: &BakeHooks) -> Result<Baked, BakeError> {
+    opts.voxelize.validate()?;
     let mut vo = opts.voxelize.clone();
     let (mut asset, stats, dims, mip_count, normals, pruned) = if opts.prune {
         let es = EmptySpaceOptions {

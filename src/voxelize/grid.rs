@@ -25,8 +25,8 @@ use glam::Vec3;
 
 use billow_core::Aabb;
 
-/// Largest number of voxels along one axis.
-pub const MAX_AXIS: u32 = 2048;
+pub use super::limits::MAX_AXIS;
+use super::limits::{check_align, OptionError};
 
 /// How many voxels the volume has.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -245,8 +245,9 @@ pub enum GridError {
     BadMargin(f32),
     #[error(transparent)]
     Resolution(#[from] ResolutionError),
-    #[error("alignment must be in 1..={MAX_AXIS} voxels, got {0}")]
-    BadAlign(u32),
+    /// An alignment outside its range ([`check_align`]).
+    #[error("{name}: {0}", name = .0.option())]
+    BadAlign(#[from] OptionError),
     #[error("aligning {dims:?} to multiples of {align} exceeds {MAX_AXIS} voxels per axis")]
     AlignTooLarge { dims: [u32; 3], align: u32 },
 }
@@ -256,9 +257,7 @@ pub enum GridError {
 /// max end). `align = 1` returns `g` unchanged. With `align = 2^k` every MIP level `< k`
 /// halves exactly, which `billow emptyspace` needs for MIP-exact bricks.
 pub fn align_grid(g: &GridSpec, align: u32) -> Result<GridSpec, GridError> {
-    if align == 0 || align > MAX_AXIS {
-        return Err(GridError::BadAlign(align));
-    }
+    check_align(align)?;
     if align == 1 {
         return Ok(*g);
     }
@@ -358,7 +357,10 @@ mod tests {
             assert!(a.max()[i] >= g.max()[i] - 1e-5);
         }
         assert_eq!(align_grid(&g, 1).unwrap(), g);
-        assert!(matches!(align_grid(&g, 0), Err(GridError::BadAlign(0))));
+        assert!(matches!(
+            align_grid(&g, 0),
+            Err(GridError::BadAlign(OptionError::Align(0)))
+        ));
         let big = GridSpec {
             dims: [MAX_AXIS - 1, 4, 4],
             ..g

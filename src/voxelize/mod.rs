@@ -65,6 +65,7 @@ pub mod grid;
 pub mod grid3;
 mod lanes;
 mod level0;
+pub mod limits;
 mod memory;
 pub mod mip;
 mod normals_mode;
@@ -76,9 +77,7 @@ pub mod toksvig;
 
 use glam::{Vec3, Vec4};
 
-pub use ao::{
-    voxel_stream, AoRays, Bake, AO_SEED, DEFAULT_AO_RAYS, DEFAULT_DISTANCE_FRACTION, MAX_AO_RAYS,
-};
+pub use ao::{voxel_stream, AoRays, Bake, AO_SEED, DEFAULT_AO_RAYS, DEFAULT_DISTANCE_FRACTION};
 pub use asset::{bake_params, bake_params_for};
 pub use bake::{bake, BakeError, BakeHooks, BakeOptions, Baked};
 pub use combine::{Combine, CombineFn, CombineParseError, Preset};
@@ -87,6 +86,10 @@ pub use expr::{Expr, ExprError};
 use fragments::NormalSums;
 pub use grid::{
     default_align, fit_grid, GridError, GridSpec, Resolution, ResolutionError, MAX_AXIS, MAX_MARGIN,
+};
+pub use limits::{
+    check_align, check_ao_distance, check_ao_rays, check_bounds, check_memory_limit,
+    memory_limit_bytes, OptionError, MAX_AO_RAYS,
 };
 use memory::estimate_bytes;
 pub use memory::{estimate_peak_bytes, estimate_peak_bytes_pruned, estimate_peak_bytes_sparse};
@@ -202,6 +205,33 @@ impl Default for VoxelizeOptions {
     }
 }
 
+impl VoxelizeOptions {
+    /// Every option checked against its range, before any work: `supersample`, the
+    /// resolution, `margin`, `align`, `bounds`, `bake` and `memory_limit`, in that order
+    /// (what [`voxelize`] and [`bake()`] check first; `mip_levels` needs the grid and is
+    /// checked with it).
+    pub fn validate(&self) -> Result<(), VoxelizeError> {
+        if !(1..=MAX_SUPERSAMPLE).contains(&self.supersample) {
+            return Err(VoxelizeError::InvalidOption {
+                option: OptionName::Supersample,
+                message: format!(
+                    "{} is out of range (1 to {MAX_SUPERSAMPLE})",
+                    self.supersample
+                ),
+            });
+        }
+        self.resolution.validate()?;
+        grid::check_margin(self.margin)?;
+        check_align(self.align)?;
+        if let Some(b) = &self.bounds {
+            check_bounds(b)?;
+        }
+        self.bake.validate()?;
+        check_memory_limit(self.memory_limit)?;
+        Ok(())
+    }
+}
+
 /// The stages `progress` reports, each with a fraction in [0, 1].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Stage {
@@ -296,6 +326,9 @@ pub enum VoxelizeError {
     /// field of [`VoxelizeOptions`], so a caller can name its own flag for it.
     #[error("invalid option: {option}: {message}")]
     InvalidOption { option: OptionName, message: String },
+    /// An option outside its range ([`limits`]): [`OptionError::option`] says which field.
+    #[error("invalid option: {name}: {0}", name = .0.option())]
+    OutOfRange(#[from] OptionError),
     #[error(
         "resolution {dims:?} needs about {needed_gib:.1} GiB of memory, more than the limit of {limit_gib:.1} GiB; lower the resolution or raise the memory limit"
     )]
@@ -311,7 +344,6 @@ pub enum VoxelizeError {
 pub enum OptionName {
     Supersample,
     MipLevels,
-    Bake,
     Combine,
 }
 
@@ -320,7 +352,6 @@ impl std::fmt::Display for OptionName {
         f.write_str(match self {
             OptionName::Supersample => "supersample",
             OptionName::MipLevels => "mip_levels",
-            OptionName::Bake => "bake",
             OptionName::Combine => "combine",
         })
     }
@@ -360,15 +391,7 @@ fn check(
     opts: &VoxelizeOptions,
     sparse: bool,
 ) -> Result<(GridSpec, u32, u64), VoxelizeError> {
-    if !(1..=MAX_SUPERSAMPLE).contains(&opts.supersample) {
-        return Err(VoxelizeError::InvalidOption {
-            option: OptionName::Supersample,
-            message: format!(
-                "{} is out of range (1 to {MAX_SUPERSAMPLE})",
-                opts.supersample
-            ),
-        });
-    }
+    opts.validate()?;
     let grid = grid_for(scene, opts)?;
     let full = grid.full_mip_count();
     let mips = match opts.mip_levels {
@@ -384,12 +407,6 @@ fn check(
             })
         }
     };
-    opts.bake
-        .validate()
-        .map_err(|message| VoxelizeError::InvalidOption {
-            option: OptionName::Bake,
-            message,
-        })?;
     let need = estimate_bytes(scene, opts, &grid, mips, sparse);
     if need > opts.memory_limit {
         let gib = |b: u64| b as f64 / (1u64 << 30) as f64;
@@ -488,4 +505,129 @@ pub fn voxelize(
         coverage,
         normal_coherence,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A library caller gets the refusal the CLI gives, from `validate`, `voxelize` and
+    /// `bake` (before the scene is looked at: an empty one would be `EmptyScene`).
+    #[test]
+    fn options_out_of_range_are_refused_by_the_library() {
+        use crate::scene::SceneBuilder;
+        let empty = SceneBuilder::new().finish();
+        let cases = [
+            (
+                VoxelizeOptions {
+                    align: 0,
+                    ..Default::default()
+                },
+                OptionError::Align(0),
+            ),
+            (
+                VoxelizeOptions {
+                    align: MAX_AXIS + 1,
+                    ..Default::default()
+                },
+                OptionError::Align(MAX_AXIS + 1),
+            ),
+            (
+                VoxelizeOptions {
+                    memory_limit: 0,
+                    ..Default::default()
+                },
+                OptionError::MemoryLimit(0.0),
+            ),
+            (
+                VoxelizeOptions {
+                    bake: Bake::Ao {
+                        rays: 0,
+                        distance: None,
+                    },
+                    ..Default::default()
+                },
+                OptionError::AoRays(0),
+            ),
+            (
+                VoxelizeOptions {
+                    bake: Bake::Ao {
+                        rays: MAX_AO_RAYS + 1,
+                        distance: None,
+                    },
+                    ..Default::default()
+                },
+                OptionError::AoRays(MAX_AO_RAYS + 1),
+            ),
+            (
+                VoxelizeOptions {
+                    bake: Bake::Ao {
+                        rays: 8,
+                        distance: Some(-1.0),
+                    },
+                    ..Default::default()
+                },
+                OptionError::AoDistance(-1.0),
+            ),
+            (
+                VoxelizeOptions {
+                    bounds: Some(Aabb {
+                        min: Vec3::ONE,
+                        max: Vec3::ZERO,
+                    }),
+                    ..Default::default()
+                },
+                OptionError::BoundsEmpty,
+            ),
+            (
+                VoxelizeOptions {
+                    bounds: Some(Aabb {
+                        min: Vec3::ZERO,
+                        max: Vec3::splat(f32::NAN),
+                    }),
+                    ..Default::default()
+                },
+                OptionError::BoundsNotFinite,
+            ),
+        ];
+        for (opts, want) in cases {
+            let is_want =
+                |e: &VoxelizeError| matches!(e, VoxelizeError::OutOfRange(o) if *o == want);
+            let e = opts.validate().expect_err("validate");
+            assert!(is_want(&e), "validate: {e} for {want:?}");
+            let e = voxelize(&empty, &opts, &|_, _| {}).expect_err("voxelize");
+            assert!(is_want(&e), "voxelize: {e} for {want:?}");
+            let b = BakeOptions {
+                voxelize: opts,
+                ..BakeOptions::default()
+            };
+            match bake(&empty, &b, &BakeHooks::default()) {
+                Err(BakeError::Voxelize(e)) => assert!(is_want(&e), "bake: {e}"),
+                other => panic!("bake: {:?} for {want:?}", other.err()),
+            }
+        }
+        // In range, the options pass, and the bake goes on to the scene.
+        let good = VoxelizeOptions {
+            align: 8,
+            memory_limit: 1,
+            bake: Bake::Ao {
+                rays: MAX_AO_RAYS,
+                distance: Some(0.5),
+            },
+            bounds: Some(Aabb {
+                min: Vec3::ZERO,
+                max: Vec3::ONE,
+            }),
+            ..Default::default()
+        };
+        assert!(good.validate().is_ok());
+        let no_bounds = VoxelizeOptions {
+            bounds: None,
+            ..good
+        };
+        assert!(matches!(
+            voxelize(&empty, &no_bounds, &|_, _| {}),
+            Err(VoxelizeError::EmptyScene)
+        ));
+    }
 }

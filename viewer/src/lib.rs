@@ -24,6 +24,7 @@ pub mod error;
 pub mod frame_stats;
 pub mod gpu;
 pub mod layout;
+pub mod limits;
 pub mod lines;
 pub mod mesh_pass;
 pub mod overlay;

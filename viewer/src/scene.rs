@@ -10,6 +10,9 @@ use std::path::{Path, PathBuf};
 use glam::{Mat4, Quat, Vec3};
 use serde::Deserialize;
 
+use crate::limits::{
+    check_background, check_dissolve, check_fov, is_colour, COLOUR, DISSOLVE_OCTAVES, FOV_DEG,
+};
 use crate::ViewError;
 
 #[derive(Clone, Debug, Default, Deserialize, PartialEq)]
@@ -282,8 +285,11 @@ impl SceneFile {
             if Vec3::from(c.eye) == Vec3::from(c.target) {
                 return Err("camera.target: must differ from camera.eye".into());
             }
-            if !(c.fov_deg > 0.0 && c.fov_deg < 180.0) {
-                return Err(format!("camera.fov_deg: {} must be in (0, 180)", c.fov_deg));
+            if check_fov(c.fov_deg).is_err() {
+                return Err(format!(
+                    "camera.fov_deg: {} must be in ({}, {})",
+                    c.fov_deg, FOV_DEG.0, FOV_DEG.1
+                ));
             }
             if let Some(n) = c.near {
                 if !(n > 0.0 && n.is_finite()) {
@@ -352,10 +358,12 @@ impl SceneFile {
                     ));
                 }
             }
-            if !(0.0..=4.0).contains(&c.dissolve) {
+            if check_dissolve(c.dissolve).is_err() {
                 return Err(format!(
-                    "clouds[{i}].dissolve: {} must be in [0, 4] octaves",
-                    c.dissolve
+                    "clouds[{i}].dissolve: {} must be in [{}, {}] octaves",
+                    c.dissolve,
+                    DISSOLVE_OCTAVES.start(),
+                    DISSOLVE_OCTAVES.end()
                 ));
             }
             if !(0.0..=1.0).contains(&c.transition) {
@@ -369,9 +377,7 @@ impl SceneFile {
             check_t(&m.transform, format!("meshes[{i}].transform"))?;
         }
         if let Some(b) = &self.background {
-            if !b.iter().all(|c| (0.0..=1.0).contains(c)) {
-                return Err("background: components must be in [0, 1]".into());
-            }
+            check_background(*b).map_err(|e| format!("background: {e}"))?;
         }
         if let Some(g) = &self.ground {
             if !(g.size > 0.0 && g.size.is_finite()) {
@@ -380,8 +386,12 @@ impl SceneFile {
             if !g.height.is_finite() || !g.centre.iter().all(|c| c.is_finite()) {
                 return Err("ground: height and centre must be finite".into());
             }
-            if !g.color.iter().all(|c| (0.0..=1.0).contains(c)) {
-                return Err("ground.color: components must be in [0, 1]".into());
+            if !is_colour(g.color) {
+                return Err(format!(
+                    "ground.color: components must be in [{}, {}]",
+                    COLOUR.start(),
+                    COLOUR.end()
+                ));
             }
         }
         Ok(())

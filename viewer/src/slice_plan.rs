@@ -49,6 +49,29 @@ impl SliceParams {
                 ViewError::InvalidParam(format!("spacing {spacing} must be > 0")),
             ),
             _ => Ok(()),
-        }
+        }?;
+        crate::limits::check_slab_min_slices(self.slab_min_slices)
+            .map_err(|e| ViewError::InvalidParam(format!("slab_min_slices: {e}")))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_slab_without_slices_is_refused() {
+        let zero = SliceParams {
+            slab_min_slices: 0,
+            ..SliceParams::default()
+        };
+        assert!(
+            matches!(zero.validate(), Err(ViewError::InvalidParam(m)) if m == "slab_min_slices: must be at least 1")
+        );
+        let one = SliceParams {
+            slab_min_slices: 1,
+            ..SliceParams::default()
+        };
+        assert!(one.validate().is_ok());
     }
 }
