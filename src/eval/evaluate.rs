@@ -432,10 +432,61 @@ fn choose_lighting(
     ))
 }
 
+/// The largest image side of a view, in pixels (`--size`).
+pub const MAX_IMAGE_SIDE: u32 = 4096;
+
+/// The largest distance factor of a view (`--distances`), in framed distances.
+pub const MAX_DISTANCE_FACTOR: f32 = 1000.0;
+
+/// The smallest and largest factor of a spacing (`--spacing adaptive:B|uniform:V`).
+pub const SPACING_FACTOR: (f32, f32) = (0.01, 100.0);
+
+/// Whether `n` is a valid image side ([`MAX_IMAGE_SIDE`]).
+pub fn image_side_ok(n: u32) -> bool {
+    (1..=MAX_IMAGE_SIDE).contains(&n)
+}
+
+/// Whether `f` is a valid distance factor: finite, above 0, at most
+/// [`MAX_DISTANCE_FACTOR`].
+pub fn distance_factor_ok(f: f32) -> bool {
+    f.is_finite() && f > 0.0 && f <= MAX_DISTANCE_FACTOR
+}
+
+/// Whether `v` is a valid spacing factor ([`SPACING_FACTOR`]).
+pub fn spacing_factor_ok(v: f32) -> bool {
+    v.is_finite() && (SPACING_FACTOR.0..=SPACING_FACTOR.1).contains(&v)
+}
+
 fn check(options: &EvaluateOptions) -> Result<(), EvaluateError> {
     let bad = |m: &str| Err(EvaluateError::InvalidOption(m.to_string()));
     if options.views.is_empty() {
         return bad("no views");
+    }
+    if !(image_side_ok(options.width) && image_side_ok(options.height)) {
+        return bad(&format!(
+            "an image of {}x{}: each side must be 1 to {MAX_IMAGE_SIDE} pixels",
+            options.width, options.height
+        ));
+    }
+    if let Some(v) = options
+        .views
+        .iter()
+        .find(|v| !distance_factor_ok(v.distance_factor))
+    {
+        return bad(&format!(
+            "view {} at {}x: a factor must be above 0 and at most {MAX_DISTANCE_FACTOR}",
+            v.name, v.distance_factor
+        ));
+    }
+    let factor = match options.spacing {
+        Spacing::Adaptive { bias } => bias,
+        Spacing::Uniform { spacing } => spacing,
+    };
+    if !spacing_factor_ok(factor) {
+        return bad(&format!(
+            "a spacing factor of {factor}: it must be between {} and {}",
+            SPACING_FACTOR.0, SPACING_FACTOR.1
+        ));
     }
     if let ReferenceLighting::Lights { lights, .. } = &options.lighting {
         let Some(first) = lights.first() else {
@@ -701,5 +752,57 @@ fn level(
         slices: views.iter().map(|r| r.slices).sum(),
         fragments: views.iter().map(|r| r.fragments).sum(),
         views,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use billow_core::camera::{view_set, ViewDirections};
+
+    fn options() -> EvaluateOptions {
+        EvaluateOptions {
+            views: view_set(ViewDirections::Axes),
+            ..EvaluateOptions::default()
+        }
+    }
+
+    #[test]
+    fn options_out_of_range_are_refused() {
+        assert!(check(&options()).is_ok());
+        let refused = |o: EvaluateOptions, what: &str| match check(&o) {
+            Err(EvaluateError::InvalidOption(m)) => assert!(m.contains(what), "{m}"),
+            r => panic!("{what}: {r:?}"),
+        };
+        for (w, h) in [(0, 8), (8, MAX_IMAGE_SIDE + 1)] {
+            refused(
+                EvaluateOptions {
+                    width: w,
+                    height: h,
+                    ..options()
+                },
+                "each side must be 1 to 4096 pixels",
+            );
+        }
+        for f in [0.0, -1.0, f32::NAN, MAX_DISTANCE_FACTOR * 1.01] {
+            let mut o = options();
+            o.views[0].distance_factor = f;
+            refused(o, "a factor must be above 0 and at most 1000");
+        }
+        for spacing in [
+            Spacing::Adaptive { bias: 0.001 },
+            Spacing::Uniform { spacing: 101.0 },
+            Spacing::Adaptive {
+                bias: f32::INFINITY,
+            },
+        ] {
+            refused(
+                EvaluateOptions {
+                    spacing,
+                    ..options()
+                },
+                "must be between 0.01 and 100",
+            );
+        }
     }
 }

@@ -1,6 +1,10 @@
 //! `billow eval`'s argument parsing: the lights, image size, distances, views, slice
 //! spacing and samples per pixel, each refused with its flag's name (exit 2).
 
+use billow::eval::evaluate::{
+    distance_factor_ok, image_side_ok, spacing_factor_ok, MAX_DISTANCE_FACTOR, MAX_IMAGE_SIDE,
+    SPACING_FACTOR,
+};
 use billow::eval::lighting::{parse_light_set, EvalLight, LightSetError};
 use billow_core::camera::{parse_direction, view_directions, views_of, ViewDirections, ViewSpec};
 use billow_core::slicing::Spacing;
@@ -59,7 +63,7 @@ pub(crate) fn parse_lights(args: &Args) -> Result<Option<Vec<EvalLight>>, CliErr
         })
 }
 
-/// `WxH`, each 1..=4096.
+/// `WxH`, each 1..=[`MAX_IMAGE_SIDE`].
 pub fn parse_size(s: &str) -> Result<(u32, u32), CliError> {
     let (w, h) = s
         .split_once(['x', 'X'])
@@ -69,10 +73,10 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), CliError> {
             .trim()
             .parse()
             .map_err(|e| usage("--size", format!("'{s}': {e}")))?;
-        if !(1..=4096).contains(&n) {
+        if !image_side_ok(n) {
             return Err(bad(
                 "--size",
-                format!("'{s}': each side must be 1 to 4096 pixels"),
+                format!("'{s}': each side must be 1 to {MAX_IMAGE_SIDE} pixels"),
             ));
         }
         Ok(n)
@@ -80,7 +84,7 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), CliError> {
     Ok((p(w)?, p(h)?))
 }
 
-/// `1,4,16`: positive finite factors up to 1000.
+/// `1,4,16`: positive finite factors up to [`MAX_DISTANCE_FACTOR`].
 pub fn parse_distances(s: &str) -> Result<Vec<f32>, CliError> {
     let mut out: Vec<f32> = Vec::new();
     for part in s.split(',') {
@@ -88,10 +92,10 @@ pub fn parse_distances(s: &str) -> Result<Vec<f32>, CliError> {
             .trim()
             .parse()
             .map_err(|e| usage("--distances", format!("'{part}': {e}")))?;
-        if !(f.is_finite() && f > 0.0 && f <= 1000.0) {
+        if !distance_factor_ok(f) {
             return Err(bad(
                 "--distances",
-                format!("'{part}': a factor must be above 0 and at most 1000"),
+                format!("'{part}': a factor must be above 0 and at most {MAX_DISTANCE_FACTOR}"),
             ));
         }
         if !out.contains(&f) {
@@ -166,10 +170,13 @@ pub fn parse_spacing(s: &str) -> Result<Spacing, CliError> {
         let v: f32 = a
             .parse()
             .map_err(|e| usage("--spacing", format!("'{s}': {e}")))?;
-        if !(v.is_finite() && (0.01..=100.0).contains(&v)) {
+        if !spacing_factor_ok(v) {
             return Err(bad(
                 "--spacing",
-                format!("'{s}': the factor must be between 0.01 and 100"),
+                format!(
+                    "'{s}': the factor must be between {} and {}",
+                    SPACING_FACTOR.0, SPACING_FACTOR.1
+                ),
             ));
         }
         Ok(v)
