@@ -9,7 +9,7 @@ use billow_core::camera::{parse_direction, Camera};
 use billow_core::slicing::Spacing;
 use billow_core::Aabb;
 use billow_view::content::Content;
-use billow_view::limits::{check_background, ParamError, ViewParams};
+use billow_view::limits::{check_background, spacing_factor_ok, ParamError, ViewParams};
 use billow_view::scene::SceneFile;
 use billow_view::{FrameStats, Gpu, SliceParams, ViewCamera, ViewError};
 use glam::{Mat4, Vec3, Vec4};
@@ -87,7 +87,7 @@ fn parse_spacing(s: &str) -> Result<Spacing, CliError> {
         let v: f32 = a
             .parse()
             .map_err(|e| usage("--spacing", format!("'{s}': {e}")))?;
-        if !(v.is_finite() && v > 0.0) {
+        if !spacing_factor_ok(v) {
             return Err(bad("--spacing", format!("'{s}': must be > 0")));
         }
         Ok(v)

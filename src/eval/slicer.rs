@@ -225,16 +225,11 @@ pub fn render_decoded_over(
             camera.height
         )));
     }
-    render_sliced(
-        vol,
-        dims0,
-        cells,
-        camera,
-        params,
-        None,
-        Some(backdrop),
-        None,
-    )
+    let extras = Extras {
+        backdrop: Some(backdrop),
+        ..Extras::default()
+    };
+    render_sliced(vol, dims0, cells, camera, params, extras)
 }
 
 /// [`render_decoded`] with `--shadows`' transmittance grid built once by the caller
@@ -249,7 +244,11 @@ pub fn render_decoded_with_shadow(
     params: &SlicerParams,
     shadow: Option<&ShadowGrid>,
 ) -> Result<SliceRender, EvalError> {
-    render_sliced(vol, dims0, cells, camera, params, None, None, Some(shadow))
+    let extras = Extras {
+        shadow: Some(shadow),
+        ..Extras::default()
+    };
+    render_sliced(vol, dims0, cells, camera, params, extras)
 }
 
 /// Renders already-decoded levels (reuse across views) with the given cells.
@@ -275,7 +274,23 @@ pub fn render_decoded_in_depth_range(
     params: &SlicerParams,
     depth_range: Option<(f32, f32)>,
 ) -> Result<SliceRender, EvalError> {
-    render_sliced(vol, dims0, cells, camera, params, depth_range, None, None)
+    let extras = Extras {
+        depth_range,
+        ..Extras::default()
+    };
+    render_sliced(vol, dims0, cells, camera, params, extras)
+}
+
+/// What a render may be given besides the volume and the view.
+#[derive(Clone, Copy, Default)]
+struct Extras<'a> {
+    /// The slices' depth range (view-space distances), instead of the cells' own.
+    depth_range: Option<(f32, f32)>,
+    /// An opaque scene behind and in front of the volume.
+    backdrop: Option<&'a OpaqueBackdrop>,
+    /// `Some`: the shadow grid the caller built (or `Some(None)`: none); `None`: built
+    /// here when the params ask for shadows.
+    shadow: Option<Option<&'a ShadowGrid>>,
 }
 
 fn render_sliced(
@@ -284,11 +299,13 @@ fn render_sliced(
     cells: &[Prism],
     camera: &Camera,
     params: &SlicerParams,
-    depth_range: Option<(f32, f32)>,
-    backdrop: Option<&OpaqueBackdrop>,
-    // `Some`: the shadow grid the caller built (or `Some(None)`: none); `None`: built here.
-    given_shadow: Option<Option<&ShadowGrid>>,
+    extras: Extras,
 ) -> Result<SliceRender, EvalError> {
+    let Extras {
+        depth_range,
+        backdrop,
+        shadow: given_shadow,
+    } = extras;
     let start = Instant::now();
     validate_camera(camera)?;
     match params.spacing {

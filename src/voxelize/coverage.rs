@@ -375,7 +375,7 @@ pub fn scale_opacity(v: glam::Vec4, k: f32) -> glam::Vec4 {
 /// ([`scale_opacity`] on the decoded value, encoded again). A texel with alpha 0 is kept
 /// as it is, and a non-zero alpha byte stays at least 1, so a non-empty texel stays
 /// non-empty. An opaque texel (alpha 255) stays opaque, or with `opaque_too` is scaled
-/// as the optical depth the slicer gives it ([`MAX_OPTICAL_DEPTH`], `ln 510`).
+/// as the optical depth the slicer gives it ([`billow_core::slicing::MAX_OPTICAL_DEPTH`], `ln 510`).
 pub fn scale_rgba8(px: [u8; 4], k: f32, opaque_too: bool, enc: &Encoder) -> [u8; 4] {
     if px[3] == 0 || k == 1.0 || (px[3] == 255 && !opaque_too) {
         return px;

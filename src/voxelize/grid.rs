@@ -25,8 +25,7 @@ use glam::Vec3;
 
 use billow_core::Aabb;
 
-pub use super::limits::MAX_AXIS;
-use super::limits::{check_align, OptionError};
+use super::limits::{check_align, OptionError, MAX_AXIS};
 
 /// How many voxels the volume has.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

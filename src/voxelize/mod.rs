@@ -85,11 +85,11 @@ pub use coverage::CoverageScales;
 pub use expr::{Expr, ExprError};
 use fragments::NormalSums;
 pub use grid::{
-    default_align, fit_grid, GridError, GridSpec, Resolution, ResolutionError, MAX_AXIS, MAX_MARGIN,
+    default_align, fit_grid, GridError, GridSpec, Resolution, ResolutionError, MAX_MARGIN,
 };
 pub use limits::{
     check_align, check_ao_distance, check_ao_rays, check_bounds, check_memory_limit,
-    memory_limit_bytes, OptionError, MAX_AO_RAYS,
+    memory_limit_bytes, OptionError, MAX_AO_RAYS, MAX_AXIS,
 };
 use memory::estimate_bytes;
 pub use memory::{estimate_peak_bytes, estimate_peak_bytes_pruned, estimate_peak_bytes_sparse};

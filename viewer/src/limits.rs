@@ -71,6 +71,13 @@ impl ParamError {
 }
 
 /// A field of view, degrees, strictly inside [`FOV_DEG`].
+/// Whether `v` is a valid slice spacing factor (an adaptive spacing's bias, a uniform
+/// spacing in level-0 voxels): finite and above 0 ([`crate::SliceParams::validate`] and
+/// `billow view --spacing` both ask this).
+pub fn spacing_factor_ok(v: f32) -> bool {
+    v.is_finite() && v > 0.0
+}
+
 pub fn check_fov(fov_deg: f32) -> Result<(), ParamError> {
     if fov_deg > FOV_DEG.0 && fov_deg < FOV_DEG.1 {
         Ok(())

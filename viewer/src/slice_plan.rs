@@ -42,10 +42,10 @@ impl Default for SliceParams {
 impl SliceParams {
     pub fn validate(&self) -> Result<(), ViewError> {
         match self.spacing {
-            Spacing::Adaptive { bias } if !(bias > 0.0 && bias.is_finite()) => Err(
+            Spacing::Adaptive { bias } if !crate::limits::spacing_factor_ok(bias) => Err(
                 ViewError::InvalidParam(format!("spacing bias {bias} must be > 0")),
             ),
-            Spacing::Uniform { spacing } if !(spacing > 0.0 && spacing.is_finite()) => Err(
+            Spacing::Uniform { spacing } if !crate::limits::spacing_factor_ok(spacing) => Err(
                 ViewError::InvalidParam(format!("spacing {spacing} must be > 0")),
             ),
             _ => Ok(()),
