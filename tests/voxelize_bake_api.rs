@@ -11,6 +11,7 @@ use billow::emptyspace::{prune_sparse, EmptySpaceOptions};
 use billow::procgen::{torus, truss};
 use billow::provenance::tool_version;
 use billow::scene::{Scene, SceneBuilder};
+use billow::voxelize::toksvig::{self, NormalsJudgement};
 use billow::voxelize::{
     bake, bake_params, bake_params_for, voxelize, voxelize_sparse, BakeError, BakeHooks,
     BakeOptions, Baked, CombineFn, NormalsMode, Resolution, Stage, VoxelizeError, VoxelizeOptions,
@@ -171,6 +172,13 @@ fn pruned_by_hand(
     vo.resolution = Resolution::Longest(res);
     vo.normals = normals;
     vo.moments = false;
+    if !normals {
+        // `--normals off` judges on a coarse bake whether the mesh is a closed surface
+        // (foliage thins its opaque texels too), as `bake` does; `on` judges its own.
+        if let Ok(NormalsJudgement::Coarse(k)) = toksvig::judge_normals(scene, &vo) {
+            vo.surface = Some(toksvig::keeps(k));
+        }
+    }
     let sv = voxelize_sparse(scene, &vo, &|_, _| {}).unwrap();
     let params = bake_params_for(&sv.grid, &vo, &BTreeMap::new());
     let shell = sv.asset_shell(&tool_version(), None, params);
