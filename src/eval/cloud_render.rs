@@ -44,7 +44,9 @@ use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
 use super::lighting::Lighting;
-use super::reference::{per_axis, sample_offset, validate_camera, ReferenceRenderer, Sampling};
+use super::reference::{
+    in_rect, per_axis, sample_offset, validate_camera, ReferenceRenderer, Sampling,
+};
 use super::{EvalError, ImageF32};
 use crate::bbcloud::atlas::ALPHA_CUTOFF;
 use crate::scene::{AlphaMode, Material, Scene, Texture, Triangle, Vertex, Wrap};
@@ -578,11 +580,7 @@ impl<'a> CloudRenderer<'a> {
                             .map(|b| b.0),
                     );
                     // Nothing to meet: no billboard's box and outside the kept mesh's.
-                    if candidates.is_empty()
-                        && trunk_reach.is_some_and(|[x0, y0, x1, y1]| {
-                            !(xu >= x0 && xu < x1 && yu >= y0 && yu < y1)
-                        })
-                    {
+                    if candidates.is_empty() && trunk_reach.is_some_and(|r| !in_rect(r, xu, yu)) {
                         continue;
                     }
                     let mut acc = Vec4::ZERO;
