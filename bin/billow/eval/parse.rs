@@ -1,11 +1,11 @@
 //! `billow eval`'s argument parsing: the lights, image size, distances, views, slice
 //! spacing and samples per pixel, each refused with its flag's name (exit 2).
 
-use billow::eval::evaluate::{
+use billow::eval::lighting::{parse_light_set, EvalLight, LightSetError};
+use billow::eval::limits::{
     distance_factor_ok, image_side_ok, spacing_factor_ok, MAX_DISTANCE_FACTOR, MAX_IMAGE_SIDE,
     SPACING_FACTOR,
 };
-use billow::eval::lighting::{parse_light_set, EvalLight, LightSetError};
 use billow_core::camera::{parse_direction, view_directions, views_of, ViewDirections, ViewSpec};
 use billow_core::slicing::Spacing;
 use glam::Vec3;
