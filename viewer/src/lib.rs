@@ -40,6 +40,9 @@ pub mod scene;
 #[cfg(any(test, feature = "test-support"))]
 pub mod shading_gpu;
 pub mod shadow;
+/// Test support (feature `test-support`, on for the viewer's own tests): not part of the API.
+#[cfg(any(test, feature = "test-support"))]
+pub mod shadow_gpu;
 pub mod slab;
 pub mod slice_plan;
 pub mod target;

@@ -18,8 +18,9 @@
 //! with [`SHADOW_SPACING_BIAS`]× the viewer's spacing — fewer slices whose opacity is
 //! corrected for the larger spacing, the paper's opacity scaling (§4, Optimizations) —
 //! each slice occluding where its opacity reaches [`SHADOW_ALPHA_CUTOFF`]. Receivers
-//! (meshes, clouds, volume slices) look the map up with 3×3 PCF
-//! (`shaders/shadow_lookup.wgsl`) and scale the light by `ambient + (1 − ambient)·vis`.
+//! (meshes, clouds, volume slices) look the map up with 3×3 PCF, taken as four bilinear
+//! taps (`shaders/shadow_lookup.wgsl`), and scale the light by
+//! `ambient + (1 − ambient)·vis`.
 
 // NaN-safe range checks (`!(a <= b)` is true for NaN) are meant.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -73,15 +74,20 @@ pub const SHADOW_SPACING_BIAS: f32 = 4.0;
 ///   (the second is the thin rim the canopy does not hide, 172 pixels' worth).
 pub const SHADOW_ALPHA_CUTOFF: f32 = 0.3;
 
+/// Who reads the shadow receiver's bindings: the passes' fragment shaders, and the
+/// compute check of the lookup (`shadow_gpu`, a test support module).
+const RECEIVERS: wgpu::ShaderStages =
+    wgpu::ShaderStages::FRAGMENT.union(wgpu::ShaderStages::COMPUTE);
+
 /// Group 2 of every receiving pipeline: the depth atlas, its comparison sampler and the
 /// cascades' [`CascadeUniform`].
 pub fn receiver_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("shadow receiver"),
         entries: &[
-            entry(0, wgpu::ShaderStages::FRAGMENT, depth_texture()),
-            entry(1, wgpu::ShaderStages::FRAGMENT, comparison_sampler()),
-            entry(2, wgpu::ShaderStages::FRAGMENT, uniform(false)),
+            entry(0, RECEIVERS, depth_texture()),
+            entry(1, RECEIVERS, comparison_sampler()),
+            entry(2, RECEIVERS, uniform(false)),
         ],
     })
 }

@@ -18,7 +18,7 @@ struct ShadowCascades {
 
 // Fraction of the light reaching a point given in the base shadow camera's clip space
 // (orthographic: w = 1): the finest cascade whose window holds the point (with room for
-// the filter inside its tile), 3×3 percentage-closer filtering, the bias scaled to that
+// the filter inside its tile), 3×3 percentage-closer filtering (as 4 bilinear taps), the bias scaled to that
 // cascade's texel; 1 outside every cascade.
 fn shadow_visibility(clip: vec4<f32>, bias: f32) -> f32 {
     let ndc = clip.xyz / clip.w;
@@ -38,13 +38,22 @@ fn shadow_visibility(clip: vec4<f32>, bias: f32) -> f32 {
         }
         let uv = t.xy + vec2<f32>(c.x * 0.5 + 0.5, 0.5 - c.y * 0.5) * t.zw;
         let depth = ndc.z - bias / m.x;
-        var s = 0.0;
-        for (var dy = -1; dy <= 1; dy++) {
-            for (var dx = -1; dx <= 1; dx++) {
-                let o = vec2<f32>(f32(dx), f32(dy)) * texel;
-                s += textureSampleCompareLevel(shadow_map, shadow_smp, uv + o, depth);
-            }
-        }
+        // Nine bilinear taps one texel apart weigh the 4×4 texels around the point by
+        // [1 − f, 1, 1, f] ⊗ [1 − f, 1, 1, f] / 9 (f: the point's fraction between texel
+        // centres). Taken as four bilinear taps, each placed on a pair of texels where the
+        // ratio of their weights puts it and weighted by the pair's sum: the same filter
+        // with 4 lookups instead of 9.
+        let x = uv / texel - 0.5;
+        let i0 = floor(x);
+        let f = x - i0;
+        let wa = 2.0 - f;
+        let wb = 1.0 + f;
+        let pa = (i0 - 0.5 + 1.0 / wa) * texel;
+        let pb = (i0 + 1.5 + f / wb) * texel;
+        let s = wa.x * wa.y * textureSampleCompareLevel(shadow_map, shadow_smp, pa, depth)
+            + wb.x * wa.y * textureSampleCompareLevel(shadow_map, shadow_smp, vec2<f32>(pb.x, pa.y), depth)
+            + wa.x * wb.y * textureSampleCompareLevel(shadow_map, shadow_smp, vec2<f32>(pa.x, pb.y), depth)
+            + wb.x * wb.y * textureSampleCompareLevel(shadow_map, shadow_smp, pb, depth);
         return s / 9.0;
     }
     return 1.0;
