@@ -294,7 +294,11 @@ fn instance_sphere(cloud: &GpuCloud, model: Mat4) -> (Vec3, f32) {
 
 pub struct CloudPass {
     foliage: wgpu::RenderPipeline,
+    /// Billboards with baked lighting (the default bake): their colour scaled by the
+    /// shadow only.
     billboard: wgpu::RenderPipeline,
+    /// Billboards lit at runtime from their normal maps, made on first use.
+    billboard_lit: OnceCell<wgpu::RenderPipeline>,
     /// Alpha-tested depth only, (foliage mesh, billboards), made by the first shadow
     /// pass ([`CloudPass::shadow_pipelines`]).
     shadow: OnceCell<(wgpu::RenderPipeline, wgpu::RenderPipeline)>,
@@ -331,6 +335,7 @@ fn instance_buffer(gpu: &Gpu, capacity: u64) -> wgpu::Buffer {
 enum Kind {
     Foliage,
     Billboard,
+    BillboardLit,
     FoliageShadow,
     BillboardShadow,
 }
@@ -406,6 +411,7 @@ impl CloudPass {
         CloudPass {
             foliage,
             billboard,
+            billboard_lit: OnceCell::new(),
             shadow: OnceCell::new(),
             layout: pl,
             module,
@@ -560,9 +566,15 @@ impl CloudPass {
             let Some(atlas_groups) = cloud.billboard_levels.get(level - 1) else {
                 continue;
             };
-            rp.set_pipeline(shadow_pipelines.map_or(&self.billboard, |p| &p.1));
             rp.set_index_buffer(cloud.indices.slice(..), wgpu::IndexFormat::Uint32);
             for g in atlas_groups {
+                rp.set_pipeline(match shadow_pipelines {
+                    Some(p) => &p.1,
+                    None if g.lit => self.billboard_lit.get_or_init(|| {
+                        build_pipeline(&gpu.device, &self.layout, &self.module, Kind::BillboardLit)
+                    }),
+                    None => &self.billboard,
+                });
                 rp.set_bind_group(1, &g.bind, &[]);
                 rp.draw_indexed(g.indices.clone(), 0, range.clone());
                 n += 1;
@@ -613,17 +625,36 @@ fn build_pipeline(
             attributes: &INSTANCE_ATTRIBUTES,
         }),
     ];
-    let (label, fs, cull) = match kind {
-        Kind::Foliage => ("cloud foliage", "fs_foliage", None),
-        Kind::Billboard => ("cloud billboards", "fs_billboard", Some(wgpu::Face::Back)),
-        Kind::FoliageShadow => ("cloud foliage shadow", "fs_shadow", None),
+    let (label, vs, fs, cull) = match kind {
+        Kind::Foliage => ("cloud foliage", "vs_main", "fs_foliage", None),
+        Kind::Billboard => (
+            "cloud billboards",
+            "vs_baked",
+            "fs_baked",
+            Some(wgpu::Face::Back),
+        ),
+        Kind::BillboardLit => (
+            "cloud billboards lit",
+            "vs_main",
+            "fs_billboard",
+            Some(wgpu::Face::Back),
+        ),
+        // The shadow pass's own entry points: what the alpha test reads and nothing more.
+        Kind::FoliageShadow => (
+            "cloud foliage shadow",
+            "vs_foliage_shadow",
+            "fs_shadow",
+            None,
+        ),
         Kind::BillboardShadow => (
             "cloud billboard shadow",
-            "fs_shadow",
+            "vs_billboard_shadow",
+            "fs_billboard_shadow",
             Some(wgpu::Face::Back),
         ),
     };
     Pipeline {
+        vs,
         fs,
         buffers: &buffers,
         cull,

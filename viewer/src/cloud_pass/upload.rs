@@ -23,6 +23,8 @@ pub(super) struct MeshRange {
 pub(super) struct QuadGroup {
     pub(super) bind: wgpu::BindGroup,
     pub(super) indices: std::ops::Range<u32>,
+    /// Lit at runtime from a normal map (else baked lighting).
+    pub(super) lit: bool,
 }
 
 /// A cloud asset on the GPU.
@@ -432,6 +434,7 @@ impl CloudPass {
                             normals.unwrap_or(&self.flat_normal),
                         ),
                         indices: first_index..end,
+                        lit: normals.is_some(),
                     });
                 }
             }

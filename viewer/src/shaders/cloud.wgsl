@@ -82,32 +82,45 @@ fn dither_threshold(p: vec2<f32>) -> f32 {
 // While an instance dissolves between two levels (t > 0), a pixel shows the incoming level
 // where its threshold is below t and the outgoing one elsewhere: complementary masks.
 fn dissolved(i: VOut) -> bool {
-    let t = i.dissolve.x;
+    return dissolved_at(i.dissolve, i.clip.xy);
+}
+
+// `dissolved` of a fragment at pixel `p` with the instance's `d` = (t, incoming).
+fn dissolved_at(d: vec2<f32>, p: vec2<f32>) -> bool {
+    let t = d.x;
     if t <= 0.0 {
         return false;
     }
-    let below = dither_threshold(i.clip.xy) < t;
-    if i.dissolve.y > 0.5 {
+    let below = dither_threshold(p) < t;
+    if d.y > 0.5 {
         return !below;
     }
     return below;
 }
 
 fn texel(i: VOut) -> vec4<f32> {
+    return texel_at(i.uv);
+}
+
+fn texel_at(uv: vec2<f32>) -> vec4<f32> {
     var c = dr.color;
     if dr.params.w > 0.5 {
         if frame.flags.y > 0.5 {
-            c = c * textureSampleLevel(tex, smp, i.uv, 0.0);
+            c = c * textureSampleLevel(tex, smp, uv, 0.0);
         } else {
-            c = c * textureSample(tex, smp, i.uv);
+            c = c * textureSample(tex, smp, uv);
         }
     }
     return c;
 }
 
 fn visibility(i: VOut) -> f32 {
+    return visibility_at(i.shadow_clip);
+}
+
+fn visibility_at(shadow_clip: vec4<f32>) -> f32 {
     if frame.flags.x > 0.5 {
-        return shadow_visibility(i.shadow_clip, frame.flags.z);
+        return shadow_visibility(shadow_clip, frame.flags.z);
     }
     return 1.0;
 }
@@ -123,10 +136,10 @@ fn shadow_factor(i: VOut) -> f32 {
 // texel is scaled by k + (1 − k)·vis. (Scaling it by ambient + (1 − ambient)·vis, as
 // before 2026-12-06, took the ambient share of the baked colour, not of the albedo: the
 // oak's shadowed cloud read 18 % darker than the mesh under its own bake light.)
-fn baked_shadow_factor(i: VOut) -> f32 {
+fn baked_shadow_factor(shadow_clip: vec4<f32>) -> f32 {
     let a = frame.light.w;
     let k = a / max(a + 0.5 * (1.0 - a), 1e-6);
-    return k + (1.0 - k) * visibility(i);
+    return k + (1.0 - k) * visibility_at(shadow_clip);
 }
 
 // The mesh pass's light factor (mesh.wgsl fs_main, shading.wgsl's diffuse_factor):
@@ -143,13 +156,17 @@ fn lambert_factor(n: vec3<f32>, i: VOut) -> f32 {
 // drawn coverage) test against the cut-off; the foliage base mesh's straight textures (plain
 // MIPs) against alpha_threshold's hash where minified.
 fn cut(i: VOut) -> f32 {
-    // A uniform branch: billboards (the shadow pass's hot path), untextured and opaque
-    // materials skip the hash and its derivatives.
+    return cut_at(i.uv, i.world);
+}
+
+fn cut_at(uv: vec2<f32>, world: vec3<f32>) -> f32 {
+    // A uniform branch: billboards, untextured and opaque materials skip the hash and its
+    // derivatives.
     if dr.params.y > 0.5 || dr.params.w < 0.5 || dr.params.x <= 0.0 {
         return dr.params.x;
     }
     let size = vec2<f32>(textureDimensions(tex));
-    return alpha_threshold(dr.params.x, i.uv, size, i.world);
+    return alpha_threshold(dr.params.x, uv, size, world);
 }
 
 // The foliage base mesh: alpha-tested, lit like meshes (two-sided Lambert + ambient).
@@ -164,8 +181,9 @@ fn fs_foliage(i: VOut) -> @location(0) vec4<f32> {
 }
 
 // Billboards: alpha-tested on the premultiplied texel, opaque output of its straight
-// colour. Baked lighting (the default): only the shadow scales it (baked_shadow_factor). Baked unlit with a
-// normal map: lit here like meshes, N from the tangent-space normal map.
+// colour. Baked lighting (the default, the pipeline of vs_baked / fs_baked below): only
+// the shadow scales it (baked_shadow_factor). Baked unlit with a normal map (this one):
+// lit here like meshes, N from the tangent-space normal map.
 @fragment
 fn fs_billboard(i: VOut) -> @location(0) vec4<f32> {
     let c = texel(i);
@@ -173,25 +191,98 @@ fn fs_billboard(i: VOut) -> @location(0) vec4<f32> {
     if c.a < dr.params.x || dissolved(i) {
         discard;
     }
-    let albedo = c.rgb / c.a;
-    var k = baked_shadow_factor(i);
-    if dr.params.z > 0.5 {
-        let nn = normalize(i.normal);
-        let tt = normalize(i.tangent.xyz);
-        let bb = i.tangent.w * cross(nn, tt);
-        k = lambert_factor(t.x * tt + t.y * bb + t.z * nn, i);
-    }
-    return vec4<f32>(albedo * k, 1.0);
+    let nn = normalize(i.normal);
+    let tt = normalize(i.tangent.xyz);
+    let bb = i.tangent.w * cross(nn, tt);
+    return vec4<f32>(c.rgb / c.a * lambert_factor(t.x * tt + t.y * bb + t.z * nn, i), 1.0);
+}
+
+// Billboards with baked lighting: only what their colour needs is passed on (no normal,
+// tangent or world position), for on a software rasteriser every varying costs per
+// fragment, and no normal map is sampled.
+struct BakedOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) uv: vec2<f32>,
+    @location(1) shadow_clip: vec4<f32>,
+    @location(2) @interpolate(flat) dissolve: vec2<f32>,
+}
+
+@vertex
+fn vs_baked(v: VIn) -> BakedOut {
+    let model = mat4x4<f32>(v.m0, v.m1, v.m2, v.m3);
+    let w = model * vec4<f32>(mix(v.pos, v.target_pos, v.morph.x), 1.0);
+    var o: BakedOut;
+    o.clip = frame.view_proj * w;
+    o.shadow_clip = frame.world_to_shadow * w;
+    o.uv = v.uv;
+    o.dissolve = v.morph.yz;
+    return o;
 }
 
 @fragment
-fn fs_shadow(i: VOut) {
-    let threshold = cut(i);
+fn fs_baked(i: BakedOut) -> @location(0) vec4<f32> {
+    let c = texel_at(i.uv);
+    if c.a < dr.params.x || dissolved_at(i.dissolve, i.clip.xy) {
+        discard;
+    }
+    return vec4<f32>(c.rgb / c.a * baked_shadow_factor(i.shadow_clip), 1.0);
+}
+
+// The billboards of the shadow pass (its main fill): only what their alpha test reads is
+// passed on, for on a software rasteriser every varying costs per fragment.
+struct ShadowOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) uv: vec2<f32>,
+    @location(1) @interpolate(flat) dissolve: vec2<f32>,
+}
+
+@vertex
+fn vs_billboard_shadow(v: VIn) -> ShadowOut {
+    let model = mat4x4<f32>(v.m0, v.m1, v.m2, v.m3);
+    let w = model * vec4<f32>(mix(v.pos, v.target_pos, v.morph.x), 1.0);
+    var o: ShadowOut;
+    o.clip = frame.view_proj * w;
+    o.uv = v.uv;
+    o.dissolve = v.morph.yz;
+    return o;
+}
+
+// fs_shadow for billboards: premultiplied, textured, white (their cut-off is params.x).
+@fragment
+fn fs_billboard_shadow(i: ShadowOut) {
+    if textureSample(tex, alpha_smp, i.uv).a < dr.params.x || dissolved_at(i.dissolve, i.clip.xy) {
+        discard;
+    }
+}
+
+// The foliage mesh in the shadow pass: what its (hashed) alpha test reads.
+struct FoliageShadowOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) uv: vec2<f32>,
+    @location(1) @interpolate(flat) dissolve: vec2<f32>,
+    @location(2) world: vec3<f32>,
+}
+
+@vertex
+fn vs_foliage_shadow(v: VIn) -> FoliageShadowOut {
+    let model = mat4x4<f32>(v.m0, v.m1, v.m2, v.m3);
+    let w = model * vec4<f32>(mix(v.pos, v.target_pos, v.morph.x), 1.0);
+    var o: FoliageShadowOut;
+    o.clip = frame.view_proj * w;
+    o.uv = v.uv;
+    o.dissolve = v.morph.yz;
+    o.world = w.xyz;
+    return o;
+}
+
+@fragment
+fn fs_shadow(i: FoliageShadowOut) {
+    let threshold = cut_at(i.uv, i.world);
     var a = dr.color.a;
     if dr.params.w > 0.5 {
         a = a * textureSample(tex, alpha_smp, i.uv).a;
     }
-    if a < threshold || dissolved(i) {
+    if a < threshold || dissolved_at(i.dissolve, i.clip.xy) {
         discard;
     }
 }
