@@ -81,6 +81,31 @@ pub struct GpuMesh {
     pub ranges: Vec<(std::ops::Range<u32>, wgpu::BindGroup)>,
     /// World-space bounds (min, max).
     pub bounds: (Vec3, Vec3),
+    /// The plane every vertex lies in, `(n, d)` with `n·p = d` (`n` unit), if there is
+    /// one (a ground): a shadow cascade leaves it out when nothing lies behind it
+    /// ([`crate::Renderer::shadow_culling`]).
+    pub plane: Option<(Vec3, f32)>,
+}
+
+/// The plane all of `vertices` lie in (within 1e-5 of their extent), from the triangle of
+/// largest area; `None` for a mesh that is not flat or has no triangle of non-zero area.
+pub fn plane_of(vertices: &[MeshVertex]) -> Option<(Vec3, f32)> {
+    let p = |v: &MeshVertex| Vec3::from(v.pos);
+    let n = vertices
+        .chunks_exact(3)
+        .map(|t| (p(&t[1]) - p(&t[0])).cross(p(&t[2]) - p(&t[0])))
+        .max_by(|a, b| a.length_squared().total_cmp(&b.length_squared()))?
+        .try_normalize()?;
+    let (lo, hi) = vertices.iter().fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(lo, hi), v| (lo.min(p(v)), hi.max(p(v))),
+    );
+    let d = n.dot(p(&vertices[0]));
+    let tol = 1e-5 * (hi - lo).length().max(d.abs());
+    vertices
+        .iter()
+        .all(|v| (n.dot(p(v)) - d).abs() <= tol)
+        .then_some((n, d))
 }
 
 /// A mesh's materials, or one default material when it has none.
@@ -267,6 +292,7 @@ impl MeshPass {
         }
         Ok(GpuMesh {
             bounds,
+            plane: plane_of(&mesh.vertices[..3 * tris]),
             buffer,
             vertices: n as u32,
             triangles: tris as u32,

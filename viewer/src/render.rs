@@ -65,8 +65,9 @@ pub struct Renderer {
     /// distance"); level 0 draws it at the distances the LOD sweep's coverage reference
     /// frames use (the oak within 2 % at 1×–4×) without the hash's noise.
     pub mesh_texture_level0: bool,
-    /// Leave out of each shadow cascade the casters outside its window (on by default;
-    /// off only to check that it changes nothing).
+    /// Leave out of each shadow cascade the casters outside its window, and flat meshes
+    /// with nothing behind them from the light (a ground under the sun): on by default;
+    /// off only to check that it changes nothing.
     pub shadow_culling: bool,
     /// While the camera moves, keep the tile of shadow cascade `k ≥ 1` for up to
     /// `2^k − 1` frames while its window still holds the receivers its cascade is
@@ -441,6 +442,46 @@ impl Renderer {
             return (Vec3::splat(-1.0), Vec3::ONE);
         }
         (lo, hi)
+    }
+
+    /// Whether anything of the scene may lie on the far side of the plane `(n, d)` from
+    /// the light (`towards` it), where a flat caster in that plane could shadow it: the
+    /// corners of every mesh's bounds and of every cloud instance's caster box, and every
+    /// volume cell's corners, within 1e-4 of the scene's extent. A plane the light grazes,
+    /// or any animated volume, counts as something behind it.
+    pub(crate) fn behind_plane(&self, (n, d): (Vec3, f32), towards: Vec3) -> bool {
+        let side = n.dot(towards);
+        // Animated cells move off the positions tested here.
+        if side.abs() < 1e-6 || self.volumes.entries.iter().any(|v| v.animation.is_some()) {
+            return true;
+        }
+        let (lo, hi) = self.content_bounds();
+        let tol = 1e-4 * (hi - lo).length();
+        let behind = |p: Vec3| side.signum() * (n.dot(p) - d) < -tol;
+        let corners = |(a, b): (Vec3, Vec3)| {
+            (0..8).map(move |i| {
+                Vec3::new(
+                    if i & 1 == 0 { a.x } else { b.x },
+                    if i & 2 == 0 { a.y } else { b.y },
+                    if i & 4 == 0 { a.z } else { b.z },
+                )
+            })
+        };
+        self.meshes.iter().any(|m| corners(m.bounds).any(behind))
+            || self.clouds.iter().any(|c| {
+                c.instances
+                    .iter()
+                    .any(|m| corners(c.gpu.caster_box).any(|p| behind(m.transform_point3(p))))
+            })
+            || self.volumes.entries.iter().any(|v| {
+                v.instances.iter().any(|m| {
+                    v.bands
+                        .iter()
+                        .flat_map(|b| &b.cells)
+                        .flat_map(|c| &c.pos)
+                        .any(|p| behind(m.transform_point3(Vec3::from(*p))))
+                })
+            })
     }
 
     /// Renders into a new target and reads it back.

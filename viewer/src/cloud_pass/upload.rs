@@ -50,6 +50,9 @@ pub struct GpuCloud {
     /// Radius about `centre` of a sphere holding every vertex of every level at either
     /// end of its morph (and the bounds): what a shadow cascade culls instances by.
     pub caster_radius: f32,
+    /// Object-space box holding the bounds and every vertex of every level at either end
+    /// of its morph: what a flat caster is tested against (does a cloud lie behind it?).
+    pub caster_box: (Vec3, Vec3),
     /// The kept mesh, for the mesh pass (object space); its `textures` are left empty: the
     /// mesh pass draws it with [`GpuCloud::mesh_textures`], uploaded once for the cloud
     /// and all its instances.
@@ -448,6 +451,10 @@ impl CloudPass {
             let d = (Vec3::from(v.pos) - centre).length();
             r.max(d).max((Vec3::from(v.target) - centre).length())
         });
+        let caster_box = verts.iter().fold((lo, hi), |(a, b), v| {
+            let (p, t) = (Vec3::from(v.pos), Vec3::from(v.target));
+            (a.min(p).min(t), b.max(p).max(t))
+        });
         let n = verts.len();
         verts.resize(n.max(1), CloudVertex::default());
         let n = indices.len();
@@ -474,6 +481,7 @@ impl CloudPass {
             centre,
             radius,
             caster_radius,
+            caster_box,
             trunk: trunk_mesh(asset),
             mesh_textures,
             block_textures,

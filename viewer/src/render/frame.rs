@@ -522,7 +522,12 @@ impl Renderer {
             let bind = pass.frame_bind_group(&self.gpu, View::Light, &frame);
             for m in &self.meshes {
                 let (lo, hi) = m.bounds;
-                if seen(0.5 * (lo + hi), 0.5 * (hi - lo).length()) {
+                // A flat mesh (a ground) casts on nothing when nothing lies behind it
+                // from the light: rays towards the light never cross it.
+                let flat = self.shadow_culling
+                    && m.plane
+                        .is_some_and(|p| !self.behind_plane(p, self.light_dir));
+                if !flat && seen(0.5 * (lo + hi), 0.5 * (hi - lo).length()) {
                     cascade.casters += pass.draw(&self.gpu, &mut rp, bind, none, m, true);
                 } else {
                     cascade.culled += m.ranges.len();
