@@ -28,6 +28,20 @@ fn shadowed_on_ground(r: &mut Renderer, (x, z): (f32, f32), size: (f32, f32), li
     r.light_dir = light.normalize();
 }
 
+/// 128×96 from 1.5 units up at z = 6, looking down −z at the point (0, 0, `z`).
+fn down_the_row(z: f32) -> ViewCamera {
+    ViewCamera::look_at(
+        Vec3::new(0.0, 1.5, 6.0),
+        Vec3::new(0.0, 0.0, z),
+        Vec3::Y,
+        0.8,
+        128,
+        96,
+        0.5,
+        1000.0,
+    )
+}
+
 /// A row of upright billboards (4 units wide) every 5 units from 4 to 300 units down
 /// −z, alternately left and right of the axis, over a ground quad, seen along the row
 /// (a deep view: several cascades, instances across their windows' edges), and one
@@ -52,16 +66,7 @@ fn shadow_row(gpu: billow_view::Gpu, light: Vec3) -> (Renderer, ViewCamera) {
         .collect();
     let mut r = renderer(gpu, &asset(banded, None, false), instances);
     shadowed_on_ground(&mut r, (-200.0, 50.0), (400.0, 450.0), light);
-    let cam = ViewCamera::look_at(
-        Vec3::new(0.0, 1.5, 6.0),
-        Vec3::new(0.0, 0.0, -300.0),
-        Vec3::Y,
-        0.8,
-        128,
-        96,
-        0.5,
-        1000.0,
-    );
+    let cam = down_the_row(-300.0);
     (r, cam)
 }
 
@@ -356,16 +361,7 @@ fn a_flat_ground_is_drawn_into_the_cascades_only_when_something_lies_behind_it()
     let Some(gpu) = common::gpu_or_skip(name) else {
         return;
     };
-    let cam = ViewCamera::look_at(
-        Vec3::new(0.0, 1.5, 6.0),
-        Vec3::new(0.0, 0.0, -30.0),
-        Vec3::Y,
-        0.8,
-        128,
-        96,
-        0.5,
-        1000.0,
-    );
+    let cam = down_the_row(-30.0);
     let mut r = Renderer::new(gpu);
     // A wall standing on the ground, 10 units down the view.
     r.add_mesh(&MeshData::quad(

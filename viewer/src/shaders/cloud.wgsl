@@ -56,11 +56,17 @@ struct VOut {
     @location(5) world: vec3<f32>,
 }
 
+// A vertex's world position: slid toward its parent billboard by the instance's morph
+// factor, placed by the instance's transform.
+fn world_of(v: VIn) -> vec4<f32> {
+    let model = mat4x4<f32>(v.m0, v.m1, v.m2, v.m3);
+    return model * vec4<f32>(mix(v.pos, v.target_pos, v.morph.x), 1.0);
+}
+
 @vertex
 fn vs_main(v: VIn) -> VOut {
     let model = mat4x4<f32>(v.m0, v.m1, v.m2, v.m3);
-    let p = mix(v.pos, v.target_pos, v.morph.x);
-    let w = model * vec4<f32>(p, 1.0);
+    let w = world_of(v);
     var o: VOut;
     o.clip = frame.view_proj * w;
     o.shadow_clip = frame.world_to_shadow * w;
@@ -209,8 +215,7 @@ struct BakedOut {
 
 @vertex
 fn vs_baked(v: VIn) -> BakedOut {
-    let model = mat4x4<f32>(v.m0, v.m1, v.m2, v.m3);
-    let w = model * vec4<f32>(mix(v.pos, v.target_pos, v.morph.x), 1.0);
+    let w = world_of(v);
     var o: BakedOut;
     o.clip = frame.view_proj * w;
     o.shadow_clip = frame.world_to_shadow * w;
@@ -238,8 +243,7 @@ struct ShadowOut {
 
 @vertex
 fn vs_billboard_shadow(v: VIn) -> ShadowOut {
-    let model = mat4x4<f32>(v.m0, v.m1, v.m2, v.m3);
-    let w = model * vec4<f32>(mix(v.pos, v.target_pos, v.morph.x), 1.0);
+    let w = world_of(v);
     var o: ShadowOut;
     o.clip = frame.view_proj * w;
     o.uv = v.uv;
@@ -265,8 +269,7 @@ struct FoliageShadowOut {
 
 @vertex
 fn vs_foliage_shadow(v: VIn) -> FoliageShadowOut {
-    let model = mat4x4<f32>(v.m0, v.m1, v.m2, v.m3);
-    let w = model * vec4<f32>(mix(v.pos, v.target_pos, v.morph.x), 1.0);
+    let w = world_of(v);
     var o: FoliageShadowOut;
     o.clip = frame.view_proj * w;
     o.uv = v.uv;
