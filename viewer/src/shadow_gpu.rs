@@ -29,16 +29,10 @@ fn check(k: Case) -> Out {
 }
 ";
 
-/// Writes each pixel's depth from a storage buffer (row-major, `SIDE` texels a row).
+/// Writes each pixel's depth from a storage buffer (row-major, `SIDE` texels a row), over
+/// `fullscreen.wgsl`'s triangle.
 const FILL_WGSL: &str = "
 @group(0) @binding(0) var<storage, read> texels: array<f32>;
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
-    let x = f32((i << 1u) & 2u) * 2.0 - 1.0;
-    let y = f32(i & 2u) * 2.0 - 1.0;
-    return vec4<f32>(x, y, 0.5, 1.0);
-}
 
 @fragment
 fn fs_main(@builtin(position) p: vec4<f32>) -> @builtin(frag_depth) f32 {
@@ -92,13 +86,18 @@ pub fn shadow_visibility_on_gpu(
         }],
     });
     let side = format!("const SIDE: u32 = {size}u;\n");
-    let module = shader(device, "shadow check fill", &[&side, FILL_WGSL]);
+    let module = shader(
+        device,
+        "shadow check fill",
+        &[include_str!("shaders/fullscreen.wgsl"), &side, FILL_WGSL],
+    );
     let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some("shadow check fill"),
         bind_group_layouts: &[Some(&fill_layout)],
         immediate_size: 0,
     });
     let fill = Pipeline {
+        vs: "vs_full",
         depth: Some((true, wgpu::CompareFunction::Always)),
         ..Pipeline::new("shadow check fill", &pipeline_layout, &module)
     }
