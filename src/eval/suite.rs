@@ -354,6 +354,16 @@ impl PreparedAsset {
         }
     }
 
+    /// `--shadows`' transmittance grid for `params` ([`PreparedAsset::shadow_grid`]), only
+    /// where the slicer uses it: a light, shadows asked for, and a volume that stores
+    /// normals (one without keeps its baked colour, unshadowed).
+    fn shadow_for(&self, params: &SlicerParams) -> Option<Arc<ShadowGrid>> {
+        params
+            .light
+            .filter(|_| params.shadows && self.volume.has_normals())
+            .and_then(|l| self.shadow_grid(l.dir))
+    }
+
     /// World size of a level-0 voxel (see [`billow_core::slicing::voxel_size`]).
     pub fn voxel_size(&self) -> Option<f32> {
         billow_core::slicing::voxel_size(&self.cells, self.dims0)
@@ -450,10 +460,7 @@ impl<'a> Evaluator<'a> {
                 .samples_per_axis(reference.spec.distance_factor),
             ..self.options.slicer
         };
-        let shadow = params
-            .light
-            .filter(|_| params.shadows)
-            .and_then(|l| asset.shadow_grid(l.dir));
+        let shadow = asset.shadow_for(&params);
         let r = render_decoded_with_shadow(
             &asset.volume,
             asset.dims0,
@@ -610,6 +617,31 @@ mod tests {
         let (l, note) = reference_lighting(&asset).unwrap();
         assert_eq!(l, Lighting::Unlit);
         assert!(note.unwrap().contains("bake=gi"));
+    }
+
+    /// A volume without normals is drawn unshadowed, so no grid is built for it (one 64³
+    /// march per light, thrown away, before).
+    #[test]
+    fn no_shadow_grid_for_a_volume_without_normals() {
+        use billow_format::{ColourSpace, Header};
+        let asset = VolumeAsset {
+            header: Header::volume("test", ColourSpace::SrgbPremultiplied, [2, 2, 2], 1, false),
+            levels: vec![vec![255; 32]],
+            normals: None,
+            bands: Vec::new(),
+            cells: crate::test_support::box_prisms_z([0.0; 3], [1.0; 3], |p| p),
+        };
+        let prepared = PreparedAsset::new(&asset).unwrap();
+        let params = SlicerParams {
+            shadows: true,
+            ..SlicerParams::default()
+        };
+        assert!(prepared.shadow_for(&params).is_none());
+        let cache = prepared.shadow.lock().unwrap();
+        assert!(
+            cache.is_none(),
+            "a grid was built for a volume without normals"
+        );
     }
 
     #[test]
