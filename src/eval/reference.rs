@@ -128,12 +128,12 @@ pub(crate) fn sample_offset(
     }
 }
 
-/// Samples per axis of `sampling` (1 for the centre), checked to be 1..=64.
 /// Whether pixel `(x, y)` lies in `[x0, y0, x1, y1)` (a [`ReferenceRenderer`]'s reach).
 pub(crate) fn in_rect([x0, y0, x1, y1]: [u32; 4], x: u32, y: u32) -> bool {
     x >= x0 && x < x1 && y >= y0 && y < y1
 }
 
+/// Samples per axis of `sampling` (1 for the centre), checked to be 1..=64.
 pub(crate) fn per_axis(sampling: Sampling) -> Result<u32, EvalError> {
     match sampling {
         Sampling::Centre => Ok(1),
