@@ -87,19 +87,16 @@ pub struct GpuMesh {
     pub plane: Option<(Vec3, f32)>,
 }
 
-/// The plane all of `vertices` lie in (within 1e-5 of their extent), from the triangle of
-/// largest area; `None` for a mesh that is not flat or has no triangle of non-zero area.
-pub fn plane_of(vertices: &[MeshVertex]) -> Option<(Vec3, f32)> {
+/// The plane all of `vertices` lie in (within 1e-5 of the extent of their bounds
+/// `(lo, hi)`), from the triangle of largest area; `None` for a mesh that is not flat or
+/// has no triangle of non-zero area.
+pub fn plane_of(vertices: &[MeshVertex], (lo, hi): (Vec3, Vec3)) -> Option<(Vec3, f32)> {
     let p = |v: &MeshVertex| Vec3::from(v.pos);
     let n = vertices
         .chunks_exact(3)
         .map(|t| (p(&t[1]) - p(&t[0])).cross(p(&t[2]) - p(&t[0])))
         .max_by(|a, b| a.length_squared().total_cmp(&b.length_squared()))?
         .try_normalize()?;
-    let (lo, hi) = vertices.iter().fold(
-        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-        |(lo, hi), v| (lo.min(p(v)), hi.max(p(v))),
-    );
     let d = n.dot(p(&vertices[0]));
     let tol = 1e-5 * (hi - lo).length().max(d.abs());
     vertices
@@ -292,7 +289,7 @@ impl MeshPass {
         }
         Ok(GpuMesh {
             bounds,
-            plane: plane_of(&mesh.vertices[..3 * tris]),
+            plane: plane_of(&mesh.vertices[..3 * tris], bounds),
             buffer,
             vertices: n as u32,
             triangles: tris as u32,
